@@ -1,0 +1,150 @@
+//! Typed, validated configurations, read from TOML.
+//!
+//! Each struct rejects unknown keys when parsed and has a `check()` that names the offending
+//! field in its error (`invalid \`maze.size\`: ...`). Every field has a default, so a config
+//! file only states what it changes.
+//!
+//! ```
+//! use pbcs::config::{Check, ExploreJob};
+//!
+//! let job: ExploreJob = toml::from_str("seed = 3\n[maze]\nsize = 7\n").unwrap();
+//! job.check().unwrap();
+//! assert_eq!((job.seed, job.maze.size, job.explore.bin_side), (3, 7, 0.05));
+//!
+//! let bad: ExploreJob = toml::from_str("[maze]\nsize = 1\n").unwrap();
+//! assert!(bad.check().unwrap_err().to_string().contains("maze.size"));
+//! ```
+
+use crate::error::{Error, Result};
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Largest maze size accepted. Phase 1 and the wall grid scale with N², so the bound keeps a
+/// typo (`size = 1000`) from turning into hours of work; the paper's largest maze is 15.
+pub const MAX_MAZE_SIZE: usize = 100;
+
+/// A validated configuration.
+pub trait Check {
+    /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.
+    fn check(&self) -> Result<()>;
+}
+
+/// Reads a TOML file into a config and validates it. Unknown keys, syntax errors and
+/// unreadable files are errors that name the file (and the key, for parse errors).
+pub fn load<T: DeserializeOwned + Check>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let config: T = toml::from_str(&text).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    config.check()?;
+    Ok(config)
+}
+
+fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
+    if !(value.is_finite() && value > 0.0 && value <= max) {
+        return Err(Error::invalid(
+            field,
+            format!("must be in (0, {max}], got {value}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The maze environment (appendix "Experimental Setup"): a layout named by its size and its
+/// own maze seed, and the constants of the MDP.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MazeConfig {
+    /// N: the maze has N×N cells and the state space is [0, N]². 2 ≤ N ≤ 100.
+    pub size: usize,
+    /// Seed of the layout, independent of the run seed, so that one layout can be held fixed
+    /// while runs vary. Ignored for N = 2, whose layout is the fixed U-shape.
+    pub seed: u64,
+    /// Wall thickness (0.1 in the paper).
+    pub wall_thickness: f32,
+    /// Success radius around the target (0.2 in the paper).
+    pub target_radius: f32,
+    /// Largest absolute action component (0.1 in the paper).
+    pub max_action: f32,
+}
+
+impl Default for MazeConfig {
+    fn default() -> Self {
+        MazeConfig {
+            size: 5,
+            seed: 0,
+            wall_thickness: 0.1,
+            target_radius: 0.2,
+            max_action: 0.1,
+        }
+    }
+}
+
+impl Check for MazeConfig {
+    fn check(&self) -> Result<()> {
+        if !(2..=MAX_MAZE_SIZE).contains(&self.size) {
+            return Err(Error::invalid(
+                "maze.size",
+                format!(
+                    "must be between 2 and {MAX_MAZE_SIZE} cells, got {}",
+                    self.size
+                ),
+            ));
+        }
+        positive_finite("maze.wall_thickness", self.wall_thickness, 0.5)?;
+        positive_finite("maze.target_radius", self.target_radius, 0.5)?;
+        positive_finite("maze.max_action", self.max_action, 0.5)?;
+        Ok(())
+    }
+}
+
+/// Phase 1 (appendix algorithm "Exploration algorithm").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExploreConfig {
+    /// Side of the square state-space bins of the archive (0.05 in the paper).
+    pub bin_side: f32,
+    /// Budget of environment steps; phase 1 fails with an error if the reward is not found
+    /// within it. (The paper runs until the reward is found.)
+    pub max_steps: u64,
+}
+
+impl Default for ExploreConfig {
+    fn default() -> Self {
+        ExploreConfig {
+            bin_side: 0.05,
+            max_steps: 100_000_000,
+        }
+    }
+}
+
+impl Check for ExploreConfig {
+    fn check(&self) -> Result<()> {
+        positive_finite("explore.bin_side", self.bin_side, 1.0)?;
+        if self.max_steps == 0 {
+            return Err(Error::invalid("explore.max_steps", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// What `pbcs explore` runs: phase 1 on one maze with one run seed.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExploreJob {
+    /// The run seed; every random stream of the run derives from it (see [`crate::rng`]).
+    pub seed: u64,
+    /// The maze.
+    pub maze: MazeConfig,
+    /// Phase 1 settings.
+    pub explore: ExploreConfig,
+}
+
+impl Check for ExploreJob {
+    fn check(&self) -> Result<()> {
+        self.maze.check()?;
+        self.explore.check()
+    }
+}

@@ -1,0 +1,60 @@
+//! The environment interface: a pure step function with reset-anywhere.
+//!
+//! PBCS needs to reset the environment to any state (phase 1 resets to archived states,
+//! Backplay to states near τ_K). Here that is free: [`Env::step`] is a pure function of
+//! `(&State, action)`, as in gymnax, so "resetting" is just passing another state. Implement
+//! this trait for your own environment to run phase 1 and phase 2 on it.
+
+use rand::Rng;
+
+/// The outcome of one environment step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step<S> {
+    /// The next state s'.
+    pub state: S,
+    /// The reward R(s, a, s').
+    pub reward: f32,
+    /// Whether s' ends the episode.
+    pub terminal: bool,
+}
+
+/// An environment with continuous observations and actions and reset-anywhere.
+///
+/// Observations and actions are `f32` vectors of fixed length. The state is any cloneable
+/// value; it must compare equal to itself so that phase 1 can recognise a step that did not
+/// move.
+pub trait Env {
+    /// The full simulator state (a 2D point for the maze).
+    type State: Clone + PartialEq + std::fmt::Debug;
+
+    /// Length of the observation vector.
+    fn obs_dim(&self) -> usize;
+
+    /// Length of the action vector.
+    fn action_dim(&self) -> usize;
+
+    /// Bound `b_i` of the box action space: action component `i` lives in `[-b_i, b_i]`.
+    fn action_bound(&self, i: usize) -> f32;
+
+    /// The initial state s_0.
+    fn start(&self) -> Self::State;
+
+    /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
+    fn observe(&self, state: &Self::State, out: &mut [f32]);
+
+    /// One step from `state` with `action`. Pure: the same inputs give the same output.
+    fn step(&self, state: &Self::State, action: &[f32]) -> Step<Self::State>;
+
+    /// Column names of the observation, for CSV headers.
+    fn obs_names(&self) -> Vec<String> {
+        (0..self.obs_dim()).map(|i| format!("o{i}")).collect()
+    }
+}
+
+/// Fills `out` with an action drawn uniformly from the action box of `env`.
+pub fn random_action<E: Env + ?Sized>(env: &E, rng: &mut impl Rng, out: &mut [f32]) {
+    for (i, a) in out.iter_mut().enumerate() {
+        let b = env.action_bound(i);
+        *a = rng.random_range(-b..=b);
+    }
+}

@@ -1,0 +1,76 @@
+//! One error type for the whole crate.
+//!
+//! Every error that comes from user input names the offending field or file, so a bad
+//! config or command line is answered with a message that says what to fix.
+
+use std::path::PathBuf;
+
+/// Errors of the library. Input errors name the field (`maze.size`) or the file.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A configuration value is outside its valid range.
+    #[error("invalid `{field}`: {reason}")]
+    Invalid {
+        /// Dotted path of the field, as written in the TOML config (`maze.size`).
+        field: String,
+        /// What is wrong and what is accepted.
+        reason: String,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// A file was read but could not be parsed (syntax, unknown key, wrong type).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message, which locates the problem in the file.
+        message: String,
+    },
+    /// Phase 1 used its whole step budget without reaching a reward.
+    #[error(
+        "exploration used its budget of {steps} environment steps without reaching the target \
+         (raise `explore.max_steps`)"
+    )]
+    ExplorationBudget {
+        /// Environment steps performed.
+        steps: u64,
+    },
+    /// Writing a CSV record failed.
+    #[error("csv: {0}")]
+    Csv(#[from] csv::Error),
+    /// Rendering a picture failed.
+    #[error("plot {path}: {message}")]
+    Plot {
+        /// The picture being written.
+        path: PathBuf,
+        /// The backend's message.
+        message: String,
+    },
+}
+
+/// `Result` with the crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// Shorthand for [`Error::Invalid`].
+    pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Invalid {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Io`].
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,43 @@
+//! # pbcs — Plan, Backplay, Chain Skills, reproduced in Rust
+//!
+//! A reproduction of *PBCS: Efficient Exploration and Exploitation Using a Synergy between
+//! Reinforcement Learning and Motion Planning* (Matheron, Perrin, Sigaud, 2020).
+//!
+//! ## Where each part of the paper lives
+//!
+//! | paper | module |
+//! | --- | --- |
+//! | Appendix "Experimental Setup": the maze MDP | [`maze`] |
+//! | Background, "Reset-anywhere" | [`env`] (pure `step(&State, action)`) |
+//! | Phase 1 and appendix algorithm "Exploration algorithm" | [`explore`] |
+//! | Settings the paper gives or leaves open | [`config`] |
+//!
+//! Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
+//! result files atomically, [`plot`] draws mazes with plotters, and [`jobs`] turns a config
+//! into result files (what the `pbcs` command runs).
+//!
+//! ```
+//! use pbcs::config::ExploreJob;
+//! use pbcs::jobs::run_explore;
+//!
+//! let mut job = ExploreJob::default();
+//! job.maze.size = 2;
+//! let out = tempfile::tempdir().unwrap();
+//! let (summary, _seconds) = run_explore(&job, out.path(), |_, _| {}).unwrap();
+//! assert!(summary.trajectory_len >= 2);
+//! assert!(out.path().join("explore.png").exists());
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod config;
+pub mod env;
+pub mod error;
+pub mod explore;
+pub mod jobs;
+pub mod maze;
+pub mod plot;
+pub mod record;
+pub mod rng;
+
+pub use error::{Error, Result};

@@ -1,0 +1,167 @@
+//! The continuous maze of the paper's appendix "Experimental Setup".
+//!
+//! A maze of size N is the MDP
+//!
+//! * S = [0, N]², start s_0 = (0.5, 0.5) (centre of cell (0, 0));
+//! * A = [−0.1, 0.1]² (out-of-range actions are clipped; a NaN component counts as 0);
+//! * step(s, a) = s if the segment [s, s + a] touches a wall, else s + a;
+//! * R(s, a, s') = 1[‖s' − target‖ < 0.2] − 1[[s, s + a] touches a wall];
+//! * the episode terminates when the target is reached.
+//!
+//! Walls are boxes of thickness 0.1 centred on the grid lines between cells, extended by
+//! half the thickness at both ends so that corners are closed, plus the 4N border walls. The
+//! target is (N − 0.5, N − 0.5), or (0.5, 1.5) for the 2×2 U-shaped maze.
+//!
+//! ```
+//! use pbcs::config::MazeConfig;
+//! use pbcs::env::Env;
+//! use pbcs::maze::Maze;
+//!
+//! let maze = Maze::new(&MazeConfig { size: 2, ..MazeConfig::default() }).unwrap();
+//! let s0 = maze.start();
+//! // Moving right is free...
+//! let step = maze.step(&s0, &[0.1, 0.0]);
+//! assert_eq!((step.state.x, step.state.y, step.reward), (0.6, 0.5, 0.0));
+//! // ...but the U-shape's wall at y = 1 blocks the way up from (0.5, 0.9).
+//! let near_wall = parry2d::math::Point::new(0.5, 0.9);
+//! let step = maze.step(&near_wall, &[0.0, 0.1]);
+//! assert_eq!((step.state, step.reward), (near_wall, -1.0));
+//! ```
+
+mod layout;
+mod walls;
+
+pub use layout::{Layout, Side};
+pub use walls::{Wall, Walls};
+
+use crate::config::{Check, MazeConfig};
+use crate::env::{Env, Step};
+use crate::error::Result;
+use parry2d::math::{Point, Vector};
+
+/// A maze environment: layout, wall geometry and the constants of the MDP.
+#[derive(Debug, Clone)]
+pub struct Maze {
+    config: MazeConfig,
+    layout: Layout,
+    walls: Walls,
+    start: Point<f32>,
+    target: Point<f32>,
+}
+
+impl Maze {
+    /// Builds the maze that `config` names (size and maze seed), after validating it.
+    pub fn new(config: &MazeConfig) -> Result<Self> {
+        config.check()?;
+        let n = config.size;
+        let layout = Layout::generate(n, config.seed);
+        let half = config.wall_thickness / 2.0;
+        let walls = layout
+            .wall_segments()
+            .into_iter()
+            .map(|((x0, y0), (x1, y1))| {
+                Wall::from_corners(
+                    Point::new(x0 as f32 - half, y0 as f32 - half),
+                    Point::new(x1 as f32 + half, y1 as f32 + half),
+                )
+            })
+            .collect();
+        let walls = Walls::new(walls, Point::origin(), 1.0, n, n);
+        let target = if n == 2 {
+            Point::new(0.5, 1.5)
+        } else {
+            Point::new(n as f32 - 0.5, n as f32 - 0.5)
+        };
+        Ok(Maze {
+            config: config.clone(),
+            layout,
+            walls,
+            start: Point::new(0.5, 0.5),
+            target,
+        })
+    }
+
+    /// The configuration this maze was built from.
+    pub fn config(&self) -> &MazeConfig {
+        &self.config
+    }
+
+    /// Number of cells along a side (N).
+    pub fn size(&self) -> usize {
+        self.config.size
+    }
+
+    /// Which walls separate which cells.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The wall geometry.
+    pub fn walls(&self) -> &Walls {
+        &self.walls
+    }
+
+    /// The target position.
+    pub fn target(&self) -> Point<f32> {
+        self.target
+    }
+
+    /// Whether `p` is in the success region: ‖p − target‖ < radius (0.2 in the paper).
+    #[inline]
+    pub fn reached(&self, p: &Point<f32>) -> bool {
+        let r = self.config.target_radius;
+        (p - self.target).norm_squared() < r * r
+    }
+
+    /// The action actually applied: each component clipped to [−max_action, max_action],
+    /// NaN mapped to 0.
+    #[inline]
+    pub fn clip_action(&self, action: &[f32]) -> Vector<f32> {
+        let m = self.config.max_action;
+        let clip = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(-m, m) };
+        Vector::new(clip(action[0]), clip(action[1]))
+    }
+}
+
+impl Env for Maze {
+    type State = Point<f32>;
+
+    fn obs_dim(&self) -> usize {
+        2
+    }
+
+    fn action_dim(&self) -> usize {
+        2
+    }
+
+    fn action_bound(&self, _i: usize) -> f32 {
+        self.config.max_action
+    }
+
+    fn start(&self) -> Point<f32> {
+        self.start
+    }
+
+    #[inline]
+    fn observe(&self, state: &Point<f32>, out: &mut [f32]) {
+        out[0] = state.x;
+        out[1] = state.y;
+    }
+
+    #[inline]
+    fn step(&self, state: &Point<f32>, action: &[f32]) -> Step<Point<f32>> {
+        let next = state + self.clip_action(action);
+        let hit = self.walls.segment_hits(state, &next);
+        let state = if hit { *state } else { next };
+        let reached = self.reached(&state);
+        Step {
+            state,
+            reward: f32::from(u8::from(reached)) - f32::from(u8::from(hit)),
+            terminal: reached,
+        }
+    }
+
+    fn obs_names(&self) -> Vec<String> {
+        vec!["x".into(), "y".into()]
+    }
+}

@@ -1,0 +1,133 @@
+//! Pictures of mazes with plotters: walls, archive states, trajectories, markers.
+//!
+//! The renderers draw in maze coordinates on any plotters backend, so the same drawing code
+//! produces PNG (bitmap backend) and SVG. Text uses the DejaVu Sans font shipped in
+//! `figures/fonts/`, registered once, so no system font lookup happens.
+
+use crate::env::Env;
+use crate::error::{Error, Result};
+use crate::maze::Maze;
+use plotters::coord::types::RangedCoordf32;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: &[u8] = include_bytes!("../figures/fonts/DejaVuSans.ttf");
+
+/// Registers the bundled font as "sans-serif" (idempotent).
+pub fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .unwrap_or_else(|_| panic!("bundled font figures/fonts/DejaVuSans.ttf is invalid"));
+    });
+}
+
+/// What to draw over the maze.
+#[derive(Debug, Clone, Default)]
+pub struct MazePicture<'a> {
+    /// Title line above the maze.
+    pub title: String,
+    /// Faint points (archive states, visited states).
+    pub points: &'a [(f32, f32)],
+    /// Red polylines (phase-1 trajectory).
+    pub red_paths: Vec<&'a [(f32, f32)]>,
+}
+
+type Chart<'b, DB> = ChartContext<'b, DB, Cartesian2d<RangedCoordf32, RangedCoordf32>>;
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Draws `picture` over `maze` on `area`.
+fn draw<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    maze: &Maze,
+    picture: &MazePicture,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    area.fill(&WHITE)?;
+    let n = maze.size() as f32;
+    let margin = 0.1;
+    let mut builder = ChartBuilder::on(&area);
+    builder.margin(10);
+    if !picture.title.is_empty() {
+        builder.caption(&picture.title, ("sans-serif", 18));
+    }
+    let mut chart: Chart<DB> = builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
+    // Faint archive / visited points.
+    let faint = RGBColor(70, 110, 200).mix(0.25);
+    chart.draw_series(
+        picture
+            .points
+            .iter()
+            .map(|&(x, y)| Pixel::new((x, y), faint)),
+    )?;
+    // Walls.
+    chart.draw_series(maze.walls().walls().iter().map(|w| {
+        let b = w.aabb();
+        Rectangle::new([(b.mins.x, b.mins.y), (b.maxs.x, b.maxs.y)], BLACK.filled())
+    }))?;
+    // Trajectories.
+    for path in &picture.red_paths {
+        chart.draw_series(LineSeries::new(path.iter().copied(), RED.stroke_width(2)))?;
+    }
+    // Target region and start.
+    let t = maze.target();
+    let r = maze.config().target_radius;
+    let ring: Vec<(f32, f32)> = (0..=64)
+        .map(|i| {
+            let a = i as f32 / 64.0 * std::f32::consts::TAU;
+            (t.x + r * a.cos(), t.y + r * a.sin())
+        })
+        .collect();
+    chart.draw_series(std::iter::once(Polygon::new(
+        ring.clone(),
+        RGBColor(0, 160, 0).mix(0.35).filled(),
+    )))?;
+    chart.draw_series(LineSeries::new(ring, RGBColor(0, 120, 0).stroke_width(2)))?;
+    let s = maze.start();
+    chart.draw_series(std::iter::once(Circle::new((s.x, s.y), 5, BLUE.filled())))?;
+    area.present()
+}
+
+
+/// Pixel size of a maze picture: 40 px per cell, between 400 and 1200 px.
+fn side_px(maze: &Maze) -> u32 {
+    (maze.size() as u32 * 40).clamp(400, 1200)
+}
+
+/// Renders `picture` over `maze` to a PNG file and an SVG file (both written atomically).
+/// The SVG draws at most `svg_max_points` of the faint points (a deterministic stride), so that
+/// it stays small for archives of millions of states; the PNG draws them all.
+pub fn render_maze(
+    maze: &Maze,
+    picture: &MazePicture,
+    png: &Path,
+    svg: &Path,
+    svg_max_points: usize,
+) -> Result<()> {
+    register_font();
+    let side = side_px(maze);
+    let size = (side, side + if picture.title.is_empty() { 0 } else { 30 });
+    crate::record::write_atomic_via_path(png, |tmp| {
+        let root = BitMapBackend::new(tmp, size).into_drawing_area();
+        draw(root, maze, picture).map_err(|e| plot_err(png, e))
+    })?;
+    let stride = picture.points.len().div_ceil(svg_max_points.max(1)).max(1);
+    let thinned: Vec<(f32, f32)> = picture.points.iter().step_by(stride).copied().collect();
+    let svg_picture = MazePicture {
+        points: &thinned,
+        ..picture.clone()
+    };
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        draw(root, maze, &svg_picture).map_err(|e| plot_err(svg, e))?;
+    }
+    crate::record::write_atomic(svg, |out| out.write_all(text.as_bytes()))
+}
