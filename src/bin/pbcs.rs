@@ -23,13 +23,13 @@ enum Command {
         #[arg(long)]
         config: Option<PathBuf>,
         /// Maze size N (2..=100); overrides `maze.size`.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         maze: Option<usize>,
         /// Maze layout seed; overrides `maze.seed`.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         maze_seed: Option<u64>,
         /// Run seed; overrides `seed`.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>].
         #[arg(long)]

@@ -10,7 +10,7 @@
 //! Walls are closed sets: a segment that merely touches a wall (ends on its face, slides along
 //! it, passes through a corner point) is blocked.
 
-use parry2d::bounding_volume::Aabb;
+use parry2d::bounding_volume::{Aabb, BoundingVolume};
 use parry2d::math::{Isometry, Point};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Cuboid;
@@ -125,15 +125,18 @@ impl Walls {
     /// Whether the closed segment `[from, to]` touches a wall (grid candidates only).
     #[inline]
     pub fn segment_hits(&self, from: &Point<f32>, to: &Point<f32>) -> bool {
-        let (x0, x1, y0, y1) = self.cell_range(&Aabb::new(from.inf(to), from.sup(to)));
+        let bounds = Aabb::new(from.inf(to), from.sup(to));
+        let (x0, x1, y0, y1) = self.cell_range(&bounds);
         let ray = Ray::new(*from, to - from);
         for cy in y0..=y1 {
             for cx in x0..=x1 {
                 let c = cy * self.cols + cx;
                 let (lo, hi) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                // Boxes that do not overlap the segment's bounding box cannot touch it; the
+                // comparison is exact and skips most of parry's slab tests (two divisions).
                 if self.cell_aabbs[lo..hi]
                     .iter()
-                    .any(|aabb| box_touches_segment(aabb, &ray, to))
+                    .any(|aabb| aabb.intersects(&bounds) && box_touches_segment(aabb, &ray, to))
                 {
                     return true;
                 }

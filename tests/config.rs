@@ -1,0 +1,110 @@
+//! Bad input is rejected with a message that names the field or file, never a panic.
+
+use pbcs::config::{load, ExploreJob};
+use std::path::PathBuf;
+use std::process::Command;
+
+fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("job.toml");
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
+fn load_err(text: &str) -> String {
+    let (_dir, path) = write(text);
+    load::<ExploreJob>(&path).unwrap_err().to_string()
+}
+
+#[test]
+fn maze_size_out_of_range_names_the_field() {
+    for size in [0, 1, 101, 1_000_000] {
+        let msg = load_err(&format!("[maze]\nsize = {size}\n"));
+        assert!(msg.contains("maze.size") && msg.contains(&size.to_string()), "{msg}");
+    }
+}
+
+#[test]
+fn negative_or_zero_radius_thickness_action_bin_are_rejected() {
+    for (text, field) in [
+        ("[maze]\ntarget_radius = -0.2\n", "maze.target_radius"),
+        ("[maze]\nwall_thickness = 0.0\n", "maze.wall_thickness"),
+        ("[maze]\nmax_action = nan\n", "maze.max_action"),
+        ("[explore]\nbin_side = -0.05\n", "explore.bin_side"),
+        ("[explore]\nmax_steps = 0\n", "explore.max_steps"),
+    ] {
+        let msg = load_err(text);
+        assert!(msg.contains(field), "{text:?}: {msg}");
+    }
+}
+
+#[test]
+fn unknown_keys_are_rejected() {
+    let msg = load_err("[maze]\nsize = 5\ncolour = 3\n");
+    assert!(msg.contains("unknown field") && msg.contains("colour"), "{msg}");
+    let msg = load_err("sed = 3\n");
+    assert!(msg.contains("unknown field") && msg.contains("sed"), "{msg}");
+}
+
+#[test]
+fn negative_seed_and_bad_syntax_are_parse_errors_naming_the_file() {
+    let msg = load_err("seed = -1\n");
+    assert!(msg.contains("job.toml") && msg.contains("seed"), "{msg}");
+    let msg = load_err("[maze\nsize = 5\n");
+    assert!(msg.contains("job.toml"), "{msg}");
+}
+
+#[test]
+fn unreadable_file_names_the_path() {
+    let msg = load::<ExploreJob>(std::path::Path::new("/nonexistent/job.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("/nonexistent/job.toml"), "{msg}");
+}
+
+fn pbcs(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic on {args:?}: {stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+#[test]
+fn the_command_line_rejects_bad_input_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let (code, err) = pbcs(&["explore", "--maze", "1", "--seed", "0", "--out", out]);
+    assert!(code != 0 && err.contains("maze.size"), "{code} {err}");
+    let (code, err) = pbcs(&["explore", "--maze", "5", "--seed", "-1", "--out", out]);
+    assert!(code != 0 && err.contains("--seed"), "{code} {err}");
+    let (code, err) = pbcs(&["explore", "--config", "/nonexistent.toml", "--out", out]);
+    assert!(code != 0 && err.contains("/nonexistent.toml"), "{code} {err}");
+    let (_tmp, path) = write("[maze]\nsize = 5\nbogus = 1\n");
+    let (code, err) = pbcs(&["explore", "--config", path.to_str().unwrap(), "--out", out]);
+    assert!(code != 0 && err.contains("bogus"), "{code} {err}");
+    // Nothing was written by the failed runs.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn the_command_line_runs_a_small_maze() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let (code, err) = pbcs(&[
+        "explore",
+        "--maze",
+        "3",
+        "--seed",
+        "4",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for f in ["summary.csv", "trajectory.csv", "archive.csv", "explore.png", "explore.svg"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+}
