@@ -142,4 +142,3 @@ fn main() {
     phase1_table();
     phase1_large_archive();
 }
-

@@ -158,7 +158,8 @@ impl<S: Clone> Archive<S> {
             None => {
                 let b = self.bin_usage.push();
                 self.bins.push(Bin::default());
-                self.bin_of_key.insert(self.key.clone().into_boxed_slice(), b);
+                self.bin_of_key
+                    .insert(self.key.clone().into_boxed_slice(), b);
                 b
             }
         };
@@ -300,8 +301,7 @@ pub fn explore<E: Env>(
         let step = env.step(archive.state(chosen), &action);
         if step.reward > 0.0 {
             let mut ids = archive.path_to(chosen);
-            let mut states: Vec<E::State> =
-                ids.iter().map(|&i| archive.state(i).clone()).collect();
+            let mut states: Vec<E::State> = ids.iter().map(|&i| archive.state(i).clone()).collect();
             let mut actions: Vec<Vec<f32>> =
                 ids.drain(1..).map(|i| archive.action(i).to_vec()).collect();
             states.push(step.state);

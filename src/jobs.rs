@@ -66,7 +66,9 @@ pub fn run_explore(
         path: out.join("config.toml"),
         message: e.to_string(),
     })?;
-    write_atomic(&out.join("config.toml"), |w| w.write_all(config_text.as_bytes()))?;
+    write_atomic(&out.join("config.toml"), |w| {
+        w.write_all(config_text.as_bytes())
+    })?;
     write_record(&out.join("summary.csv"), &summary)?;
     write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
     write_archive_csv(&maze, &found, &out.join("archive.csv"))?;
@@ -137,12 +139,7 @@ fn render_exploration(
             (s.x, s.y)
         })
         .collect();
-    let path: Vec<(f32, f32)> = found
-        .trajectory
-        .states
-        .iter()
-        .map(|s| (s.x, s.y))
-        .collect();
+    let path: Vec<(f32, f32)> = found.trajectory.states.iter().map(|s| (s.x, s.y)).collect();
     let picture = MazePicture {
         title: format!(
             "maze {} (layout {}), seed {}: {} steps, |τ| = {}",

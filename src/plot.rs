@@ -58,7 +58,8 @@ fn draw<DB: DrawingBackend>(
     if !picture.title.is_empty() {
         builder.caption(&picture.title, ("sans-serif", 18));
     }
-    let mut chart: Chart<DB> = builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
+    let mut chart: Chart<DB> =
+        builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
     // Faint archive / visited points.
     let faint = RGBColor(70, 110, 200).mix(0.25);
     chart.draw_series(
@@ -94,7 +95,6 @@ fn draw<DB: DrawingBackend>(
     chart.draw_series(std::iter::once(Circle::new((s.x, s.y), 5, BLUE.filled())))?;
     area.present()
 }
-
 
 /// Pixel size of a maze picture: 40 px per cell, between 400 and 1200 px.
 fn side_px(maze: &Maze) -> u32 {

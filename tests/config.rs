@@ -20,7 +20,10 @@ fn load_err(text: &str) -> String {
 fn maze_size_out_of_range_names_the_field() {
     for size in [0, 1, 101, 1_000_000] {
         let msg = load_err(&format!("[maze]\nsize = {size}\n"));
-        assert!(msg.contains("maze.size") && msg.contains(&size.to_string()), "{msg}");
+        assert!(
+            msg.contains("maze.size") && msg.contains(&size.to_string()),
+            "{msg}"
+        );
     }
 }
 
@@ -41,9 +44,15 @@ fn negative_or_zero_radius_thickness_action_bin_are_rejected() {
 #[test]
 fn unknown_keys_are_rejected() {
     let msg = load_err("[maze]\nsize = 5\ncolour = 3\n");
-    assert!(msg.contains("unknown field") && msg.contains("colour"), "{msg}");
+    assert!(
+        msg.contains("unknown field") && msg.contains("colour"),
+        "{msg}"
+    );
     let msg = load_err("sed = 3\n");
-    assert!(msg.contains("unknown field") && msg.contains("sed"), "{msg}");
+    assert!(
+        msg.contains("unknown field") && msg.contains("sed"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -81,7 +90,10 @@ fn the_command_line_rejects_bad_input_with_a_clear_message() {
     let (code, err) = pbcs(&["explore", "--maze", "5", "--seed", "-1", "--out", out]);
     assert!(code != 0 && err.contains("--seed"), "{code} {err}");
     let (code, err) = pbcs(&["explore", "--config", "/nonexistent.toml", "--out", out]);
-    assert!(code != 0 && err.contains("/nonexistent.toml"), "{code} {err}");
+    assert!(
+        code != 0 && err.contains("/nonexistent.toml"),
+        "{code} {err}"
+    );
     let (_tmp, path) = write("[maze]\nsize = 5\nbogus = 1\n");
     let (code, err) = pbcs(&["explore", "--config", path.to_str().unwrap(), "--out", out]);
     assert!(code != 0 && err.contains("bogus"), "{code} {err}");
@@ -104,7 +116,27 @@ fn the_command_line_runs_a_small_maze() {
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    for f in ["summary.csv", "trajectory.csv", "archive.csv", "explore.png", "explore.svg"] {
+    for f in [
+        "summary.csv",
+        "trajectory.csv",
+        "archive.csv",
+        "explore.png",
+        "explore.svg",
+    ] {
         assert!(out.join(f).exists(), "{f} missing");
     }
+}
+
+#[test]
+fn every_experiment_file_parses_and_checks() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            load::<ExploreJob>(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        }
+    }
+    assert!(n >= 1, "no experiment file found in {}", dir.display());
 }

@@ -20,13 +20,22 @@ fn check_phase1(size: usize, maze_seed: u64, seed: u64) {
     assert_eq!(tau.states[0], maze.start(), "τ_0 is the start");
     assert_eq!(tau.actions.len(), tau.len() - 1);
     let last = tau.states.last().unwrap();
-    assert!((last - maze.target()).norm() < 0.2, "τ_N within 0.2 of the target");
+    assert!(
+        (last - maze.target()).norm() < 0.2,
+        "τ_N within 0.2 of the target"
+    );
     // Replaying the recorded actions reproduces τ step by step, without a collision, and only
     // the last step is rewarded.
     for (i, a) in tau.actions.iter().enumerate() {
         let step = maze.step(&tau.states[i], a);
-        assert_eq!(step.state, tau.states[i + 1], "step {i} of size {size} seed {seed}");
-        assert!(!maze.walls().segment_hits(&tau.states[i], &tau.states[i + 1]));
+        assert_eq!(
+            step.state,
+            tau.states[i + 1],
+            "step {i} of size {size} seed {seed}"
+        );
+        assert!(!maze
+            .walls()
+            .segment_hits(&tau.states[i], &tau.states[i + 1]));
         let last_step = i + 1 == tau.actions.len();
         assert_eq!(step.reward, if last_step { 1.0 } else { 0.0 });
         assert_eq!(step.terminal, last_step);

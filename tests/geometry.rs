@@ -19,7 +19,13 @@ fn p(x: f32, y: f32) -> Point<f32> {
 
 /// One box [1, 2] × [1, 2] on a 4×4 grid of unit cells.
 fn unit_box() -> Walls {
-    Walls::new(vec![Wall::from_corners(p(1.0, 1.0), p(2.0, 2.0))], p(0.0, 0.0), 1.0, 4, 4)
+    Walls::new(
+        vec![Wall::from_corners(p(1.0, 1.0), p(2.0, 2.0))],
+        p(0.0, 0.0),
+        1.0,
+        4,
+        4,
+    )
 }
 
 #[test]
@@ -59,8 +65,14 @@ fn segment_grazing_a_wall_end_touches_only_through_the_corner_point() {
 fn segment_starting_inside_a_wall_is_blocked() {
     let w = unit_box();
     assert!(w.segment_hits(&p(1.5, 1.5), &p(2.5, 1.5)));
-    assert!(w.segment_hits(&p(1.5, 1.5), &p(1.5, 1.5)), "zero-length inside");
-    assert!(!w.segment_hits(&p(0.5, 0.5), &p(0.5, 0.5)), "zero-length outside");
+    assert!(
+        w.segment_hits(&p(1.5, 1.5), &p(1.5, 1.5)),
+        "zero-length inside"
+    );
+    assert!(
+        !w.segment_hits(&p(0.5, 0.5), &p(0.5, 0.5)),
+        "zero-length outside"
+    );
     assert!(w.contains_point(&p(1.0, 1.0)) && w.contains_point(&p(1.5, 1.5)));
     assert!(!w.contains_point(&p(0.9375, 1.5)));
 }
@@ -84,7 +96,13 @@ fn no_squeezing_between_two_boxes_that_share_a_corner() {
 #[test]
 fn walls_beyond_the_grid_are_still_found() {
     // The grid covers [0, 2]²; the wall and the segment lie right of it.
-    let w = Walls::new(vec![Wall::from_corners(p(3.0, 0.0), p(4.0, 1.0))], p(0.0, 0.0), 1.0, 2, 2);
+    let w = Walls::new(
+        vec![Wall::from_corners(p(3.0, 0.0), p(4.0, 1.0))],
+        p(0.0, 0.0),
+        1.0,
+        2,
+        2,
+    );
     assert!(w.segment_hits(&p(3.5, -1.0), &p(3.5, 0.5)));
     assert!(!w.segment_hits(&p(4.5, -1.0), &p(4.5, 0.5)));
 }
@@ -122,7 +140,10 @@ fn border_walls_block_leaving_the_square() {
 fn actions_are_clipped_and_nan_is_zero() {
     let m = maze(5, 0);
     let s0 = m.start();
-    assert_eq!(m.step(&s0, &[5.0, -7.0]).state, s0 + m.clip_action(&[0.1, -0.1]));
+    assert_eq!(
+        m.step(&s0, &[5.0, -7.0]).state,
+        s0 + m.clip_action(&[0.1, -0.1])
+    );
     assert_eq!(m.step(&s0, &[f32::NAN, 0.05]).state, p(0.5, 0.55));
     assert_eq!(m.step(&s0, &[f32::INFINITY, 0.0]).state, p(0.6, 0.5));
 }
@@ -147,13 +168,20 @@ fn grid_agrees_with_brute_force_on_random_segments() {
         let n = size as f32;
         let mut hits = 0;
         for _ in 0..200_000 {
-            let a = p(rng.random_range(-0.2..n + 0.2), rng.random_range(-0.2..n + 0.2));
+            let a = p(
+                rng.random_range(-0.2..n + 0.2),
+                rng.random_range(-0.2..n + 0.2),
+            );
             let b = a + parry2d::math::Vector::new(
                 rng.random_range(-0.15..0.15),
                 rng.random_range(-0.15..0.15),
             );
             let fast = m.walls().segment_hits(&a, &b);
-            assert_eq!(fast, m.walls().segment_hits_brute_force(&a, &b), "{a} -> {b}");
+            assert_eq!(
+                fast,
+                m.walls().segment_hits_brute_force(&a, &b),
+                "{a} -> {b}"
+            );
             hits += usize::from(fast);
         }
         // Both answers occur, so the agreement is not vacuous.

@@ -8,7 +8,11 @@ fn every_cell_is_reachable_and_the_maze_is_a_tree() {
     for size in [2usize, 3, 5, 7, 10, 15, 30, 50] {
         for seed in 0..5 {
             let l = Layout::generate(size, seed);
-            assert_eq!(l.reachable_from_start(), size * size, "size {size} seed {seed}");
+            assert_eq!(
+                l.reachable_from_start(),
+                size * size,
+                "size {size} seed {seed}"
+            );
             // A spanning tree of the N×N grid opens N² − 1 of its 2N(N − 1) interior sides.
             assert_eq!(
                 l.interior_walls(),
@@ -30,15 +34,23 @@ fn same_seed_same_maze() {
 fn different_seeds_give_different_mazes() {
     // A 3×3 grid has only 192 spanning trees, so two seeds may well share a layout there;
     // ask only for variety.
-    let small: std::collections::HashSet<String> =
-        (0..10).map(|s| format!("{:?}", Layout::generate(3, s))).collect();
-    assert!(small.len() >= 5, "only {} layouts of size 3 from 10 seeds", small.len());
+    let small: std::collections::HashSet<String> = (0..10)
+        .map(|s| format!("{:?}", Layout::generate(3, s)))
+        .collect();
+    assert!(
+        small.len() >= 5,
+        "only {} layouts of size 3 from 10 seeds",
+        small.len()
+    );
     // From size 5 on (over 10^11 spanning trees), ten seeds must give ten layouts.
     for size in [5, 10, 15, 30] {
         let layouts: Vec<Layout> = (0..10).map(|s| Layout::generate(size, s)).collect();
         for i in 0..layouts.len() {
             for j in i + 1..layouts.len() {
-                assert_ne!(layouts[i], layouts[j], "size {size}: seeds {i} and {j} collide");
+                assert_ne!(
+                    layouts[i], layouts[j],
+                    "size {size}: seeds {i} and {j} collide"
+                );
             }
         }
     }
@@ -48,7 +60,10 @@ fn different_seeds_give_different_mazes() {
 fn the_2x2_maze_is_the_u_shape_whatever_the_seed() {
     for seed in 0..5 {
         let l = Layout::generate(2, seed);
-        assert!(l.has_wall(0, 0, Side::North), "wall between (0,0) and (0,1)");
+        assert!(
+            l.has_wall(0, 0, Side::North),
+            "wall between (0,0) and (0,1)"
+        );
         assert!(!l.has_wall(0, 0, Side::East));
         assert!(!l.has_wall(1, 0, Side::North));
         assert!(!l.has_wall(1, 1, Side::West));

@@ -8,7 +8,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "pbcs", version, about = "PBCS (Matheron, Perrin, Sigaud 2020) reproduced")]
+#[command(
+    name = "pbcs",
+    version,
+    about = "PBCS (Matheron, Perrin, Sigaud 2020) reproduced"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -114,7 +118,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 summary.archive_bins,
                 job.explore.bin_side
             );
-            println!("wrote {}/{{summary,trajectory,archive}}.csv, explore.png, explore.svg", out.display());
+            println!(
+                "wrote {}/{{summary,trajectory,archive}}.csv, explore.png, explore.svg",
+                out.display()
+            );
             Ok(())
         }
     }

@@ -173,4 +173,3 @@ impl Walls {
 fn box_touches_segment(aabb: &Aabb, ray: &Ray, to: &Point<f32>) -> bool {
     aabb.intersects_local_ray(ray, 1.0) || aabb.contains_local_point(to)
 }
-
