@@ -39,6 +39,13 @@ pub trait Env {
     /// The initial state s_0.
     fn start(&self) -> Self::State;
 
+    /// A start state for a training or evaluation episode. Defaults to the fixed
+    /// [`Env::start`]; environments with a start distribution override it.
+    fn sample_start(&self, rng: &mut crate::rng::Rng) -> Self::State {
+        let _ = rng;
+        self.start()
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 

@@ -35,9 +35,13 @@ pub mod env;
 pub mod error;
 pub mod explore;
 pub mod jobs;
+pub mod learner;
 pub mod maze;
+pub mod nn;
 pub mod plot;
 pub mod record;
 pub mod rng;
+pub mod toy;
+pub mod train;
 
 pub use error::{Error, Result};

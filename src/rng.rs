@@ -43,6 +43,8 @@ pub enum Stream {
     Start = 6,
     /// Evaluation episodes.
     Eval = 7,
+    /// Inside a learner update: TD3's target-smoothing noise, the argmax actor's samples.
+    Update = 8,
 }
 
 /// A run seed, from which every stream of the run is derived.

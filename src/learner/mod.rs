@@ -1,0 +1,480 @@
+//! Off-policy actor-critic learning: TD3, with DDPG as a preset and the argmax actor as a
+//! variant of the same update.
+//!
+//! As in Stable-Baselines3, DDPG is TD3 with three knobs turned off: one critic instead of
+//! two (no clipped double-Q), a policy delay of 1, and no target-policy smoothing. The argmax
+//! actor ("(am)" in the paper, from "The problem with DDPG", Matheron et al. 2019) replaces
+//! the deterministic policy gradient by a regression of π(s) onto argmax_a Q(s, a) estimated
+//! from uniformly sampled actions. [`Learner::update`] is the whole algorithm on one screen.
+
+pub mod noise;
+pub mod replay;
+
+use crate::config::Check;
+use crate::error::{Error, Result};
+use crate::nn::{Adam, Head, Mlp, Workspace};
+use crate::rng::{Rng, Seeds, Stream};
+use noise::NoiseKind;
+use rand::Rng as _;
+use rand_distr::{Distribution, StandardNormal};
+use replay::Batch;
+use serde::{Deserialize, Serialize};
+
+/// The base algorithm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Algo {
+    /// DDPG (Lillicrap et al. 2015): TD3 with 1 critic, policy delay 1, no target smoothing.
+    Ddpg,
+    /// TD3 (Fujimoto et al. 2018): 2 critics, policy delay 2, target smoothing 0.2 / 0.5.
+    Td3,
+}
+
+/// How the actor is trained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActorUpdate {
+    /// Deterministic policy gradient: ascend Q(s, π(s)).
+    Gradient,
+    /// Regress π(s) onto argmax over `argmax_samples` uniform actions of Q(s, a).
+    Argmax,
+}
+
+/// Hyper-parameters of the learner (validated by [`Check::check`]). Noise levels are
+/// fractions of the action bound.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LearnerConfig {
+    /// DDPG or TD3: sets the defaults of the four TD3 knobs below when they are left unset.
+    pub algo: Algo,
+    /// Hidden layer widths of actor and critics.
+    pub hidden: Vec<usize>,
+    /// Adam learning rate of the actor.
+    pub actor_lr: f32,
+    /// Adam learning rate of the critics.
+    pub critic_lr: f32,
+    /// Discount γ ∈ [0, 1).
+    pub gamma: f32,
+    /// Target networks' soft-update rate τ ∈ (0, 1].
+    pub tau: f32,
+    /// Mini-batch size.
+    pub batch_size: usize,
+    /// Replay capacity (transitions).
+    pub replay_size: usize,
+    /// Critics (1: DDPG, 2: TD3's clipped double-Q).
+    pub n_critics: Option<usize>,
+    /// Critic updates per actor and target update (1: DDPG, 2: TD3).
+    pub policy_delay: Option<usize>,
+    /// σ of the target-policy smoothing noise (0: DDPG, 0.2: TD3).
+    pub target_noise: Option<f32>,
+    /// Clip of the target-policy smoothing noise (TD3: 0.5).
+    pub target_noise_clip: Option<f32>,
+    /// Gradient (DDPG/TD3) or argmax actor update.
+    pub actor_update: ActorUpdate,
+    /// Uniform action samples per state for the argmax actor.
+    pub argmax_samples: usize,
+    /// Exploration noise process.
+    pub noise: NoiseKind,
+    /// σ of the exploration noise.
+    pub noise_sigma: f32,
+    /// θ of the Ornstein–Uhlenbeck process.
+    pub noise_theta: f32,
+}
+
+impl Default for LearnerConfig {
+    fn default() -> Self {
+        LearnerConfig {
+            algo: Algo::Ddpg,
+            hidden: vec![64, 64],
+            actor_lr: 1e-3,
+            critic_lr: 1e-3,
+            gamma: 0.99,
+            tau: 0.005,
+            batch_size: 64,
+            replay_size: 1_000_000,
+            n_critics: None,
+            policy_delay: None,
+            target_noise: None,
+            target_noise_clip: None,
+            actor_update: ActorUpdate::Gradient,
+            argmax_samples: 64,
+            noise: NoiseKind::Gaussian,
+            noise_sigma: 0.1,
+            noise_theta: 0.15,
+        }
+    }
+}
+
+impl LearnerConfig {
+    /// The DDPG preset.
+    pub fn ddpg() -> Self {
+        LearnerConfig::default()
+    }
+
+    /// The TD3 preset.
+    pub fn td3() -> Self {
+        LearnerConfig {
+            algo: Algo::Td3,
+            ..LearnerConfig::default()
+        }
+    }
+
+    /// The four TD3 knobs, from the preset where unset:
+    /// `(n_critics, policy_delay, target_noise, target_noise_clip)`.
+    pub fn knobs(&self) -> (usize, usize, f32, f32) {
+        let (c, d, s, k) = match self.algo {
+            Algo::Ddpg => (1, 1, 0.0, 0.0),
+            Algo::Td3 => (2, 2, 0.2, 0.5),
+        };
+        (
+            self.n_critics.unwrap_or(c),
+            self.policy_delay.unwrap_or(d),
+            self.target_noise.unwrap_or(s),
+            self.target_noise_clip.unwrap_or(k),
+        )
+    }
+}
+
+impl Check for LearnerConfig {
+    fn check(&self) -> Result<()> {
+        let pos = |field: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(field, format!("must be positive, got {v}")))
+            }
+        };
+        pos("learner.actor_lr", self.actor_lr)?;
+        pos("learner.critic_lr", self.critic_lr)?;
+        if !(self.gamma >= 0.0 && self.gamma < 1.0) {
+            return Err(Error::invalid(
+                "learner.gamma",
+                format!("must be in [0, 1), got {}", self.gamma),
+            ));
+        }
+        if !(self.tau > 0.0 && self.tau <= 1.0) {
+            return Err(Error::invalid(
+                "learner.tau",
+                format!("must be in (0, 1], got {}", self.tau),
+            ));
+        }
+        if self.batch_size == 0 {
+            return Err(Error::invalid("learner.batch_size", "must be at least 1"));
+        }
+        if self.replay_size < self.batch_size {
+            return Err(Error::invalid(
+                "learner.replay_size",
+                "must be at least learner.batch_size",
+            ));
+        }
+        if self.hidden.is_empty() || self.hidden.contains(&0) {
+            return Err(Error::invalid(
+                "learner.hidden",
+                "needs at least one layer, all widths positive",
+            ));
+        }
+        let (critics, delay, smooth, clip) = self.knobs();
+        if !(1..=2).contains(&critics) {
+            return Err(Error::invalid("learner.n_critics", "must be 1 or 2"));
+        }
+        if delay == 0 {
+            return Err(Error::invalid("learner.policy_delay", "must be at least 1"));
+        }
+        for (field, v) in [
+            ("learner.target_noise", smooth),
+            ("learner.target_noise_clip", clip),
+            ("learner.noise_sigma", self.noise_sigma),
+            ("learner.noise_theta", self.noise_theta),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(field, format!("must be ≥ 0, got {v}")));
+            }
+        }
+        if self.actor_update == ActorUpdate::Argmax && self.argmax_samples == 0 {
+            return Err(Error::invalid(
+                "learner.argmax_samples",
+                "must be at least 1 for the argmax actor",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Losses of one update (for logging).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Losses {
+    /// Mean squared TD error of the first critic.
+    pub critic: f32,
+    /// Actor loss (−mean Q, or the argmax regression error); `None` on delayed steps.
+    pub actor: Option<f32>,
+}
+
+/// Scratch buffers of the update, kept to allocate nothing per step.
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    ws_actor: Workspace,
+    ws_actor_target: Workspace,
+    ws_critic: Workspace,
+    ws_act: Workspace,
+    sa: Vec<f32>,
+    y: Vec<f32>,
+    q_next: Vec<f32>,
+    dq: Vec<f32>,
+    dsa: Vec<f32>,
+    da: Vec<f32>,
+    grad_actor: Vec<f32>,
+    grad_critic: Vec<f32>,
+    target_a: Vec<f32>,
+}
+
+/// Actor, critics, their targets and optimisers.
+#[derive(Debug, Clone)]
+pub struct Learner {
+    config: LearnerConfig,
+    obs_dim: usize,
+    bounds: Vec<f32>,
+    /// The policy π.
+    pub actor: Mlp,
+    actor_target: Mlp,
+    actor_opt: Adam,
+    /// The critics Q_1 (and Q_2 for TD3).
+    pub critics: Vec<Mlp>,
+    critic_targets: Vec<Mlp>,
+    critic_opts: Vec<Adam>,
+    rng: Rng,
+    updates: u64,
+    s: Scratch,
+}
+
+/// Concatenates row-major `x` (n × dx) and `y` (n × dy) into `out` (n × (dx + dy)).
+fn concat_rows(x: &[f32], dx: usize, y: &[f32], dy: usize, out: &mut Vec<f32>) {
+    out.clear();
+    for (xr, yr) in x.chunks_exact(dx).zip(y.chunks_exact(dy)) {
+        out.extend_from_slice(xr);
+        out.extend_from_slice(yr);
+    }
+}
+
+impl Learner {
+    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`.
+    /// All weights come from the [`Stream::Init`] stream of `seeds`; the update's own noise
+    /// from [`Stream::Update`].
+    pub fn new(
+        config: &LearnerConfig,
+        obs_dim: usize,
+        bounds: &[f32],
+        seeds: &Seeds,
+    ) -> Result<Self> {
+        config.check()?;
+        let act_dim = bounds.len();
+        let mut init = seeds.stream(Stream::Init);
+        let mut sizes = vec![obs_dim];
+        sizes.extend(&config.hidden);
+        sizes.push(act_dim);
+        let actor = Mlp::new(&sizes, Head::Tanh(bounds.to_vec()), &mut init);
+        sizes[0] = obs_dim + act_dim;
+        *sizes.last_mut().unwrap() = 1;
+        let (n_critics, ..) = config.knobs();
+        let critics: Vec<Mlp> = (0..n_critics)
+            .map(|_| Mlp::new(&sizes, Head::Linear, &mut init))
+            .collect();
+        Ok(Learner {
+            config: config.clone(),
+            obs_dim,
+            bounds: bounds.to_vec(),
+            actor_target: actor.clone(),
+            actor_opt: Adam::new(actor.params.len(), config.actor_lr),
+            critic_targets: critics.clone(),
+            critic_opts: critics
+                .iter()
+                .map(|c| Adam::new(c.params.len(), config.critic_lr))
+                .collect(),
+            actor,
+            critics,
+            rng: seeds.stream(Stream::Update),
+            updates: 0,
+            s: Scratch::default(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &LearnerConfig {
+        &self.config
+    }
+
+    /// Updates done so far.
+    pub fn updates(&self) -> u64 {
+        self.updates
+    }
+
+    /// Greedy actions π(s) for a batch of `n` observations (one forward pass).
+    pub fn act(&mut self, obs: &[f32], n: usize) -> &[f32] {
+        self.actor.forward(obs, n, &mut self.s.ws_act)
+    }
+
+    /// One TD3 update on a mini-batch (DDPG when the knobs say so; argmax actor when
+    /// configured). Returns the losses.
+    pub fn update(&mut self, b: &Batch) -> Losses {
+        let (n, o, a) = (b.len, self.obs_dim, self.bounds.len());
+        let (_, policy_delay, ..) = self.config.knobs();
+
+        // 1. TD target: y = r + γ·(1 − done)·min_i Q'_i(s', clip(π'(s') + clip(ε, −c, c))).
+        self.compute_td_targets(b, true);
+        let s = &mut self.s;
+
+        // 2. Critics: minimise mean (Q_i(s, a) − y)².
+        concat_rows(&b.obs, o, &b.act, a, &mut s.sa);
+        let mut critic_loss = 0.0;
+        for (i, (critic, opt)) in self
+            .critics
+            .iter_mut()
+            .zip(&mut self.critic_opts)
+            .enumerate()
+        {
+            let q = critic.forward(&s.sa, n, &mut s.ws_critic);
+            s.dq.clear();
+            s.dq.extend(q.iter().zip(&s.y).map(|(q, y)| 2.0 * (q - y) / n as f32));
+            if i == 0 {
+                critic_loss = q
+                    .iter()
+                    .zip(&s.y)
+                    .map(|(q, y)| (q - y) * (q - y))
+                    .sum::<f32>()
+                    / n as f32;
+            }
+            s.grad_critic.resize(critic.params.len(), 0.0);
+            critic.backward(&mut s.ws_critic, &s.dq, Some(&mut s.grad_critic), None);
+            opt.step(&mut critic.params, &s.grad_critic);
+        }
+        self.updates += 1;
+        if !self.updates.is_multiple_of(policy_delay as u64) {
+            return Losses {
+                critic: critic_loss,
+                actor: None,
+            };
+        }
+
+        // 3. Actor.
+        let pi = self.actor.forward(&b.obs, n, &mut s.ws_actor).to_vec();
+        s.da.clear();
+        s.da.resize(n * a, 0.0);
+        let actor_loss = match self.config.actor_update {
+            ActorUpdate::Gradient => {
+                // Ascend Q_1(s, π(s)): ∂(−mean Q)/∂π(s) = −(1/n)·∂Q_1/∂a.
+                concat_rows(&b.obs, o, &pi, a, &mut s.sa);
+                let q = self.critics[0].forward(&s.sa, n, &mut s.ws_critic);
+                let loss = -q.iter().sum::<f32>() / n as f32;
+                s.dq.clear();
+                s.dq.resize(n, -1.0 / n as f32);
+                s.dsa.resize(n * (o + a), 0.0);
+                self.critics[0].backward(&mut s.ws_critic, &s.dq, None, Some(&mut s.dsa));
+                for (da, row) in s.da.chunks_exact_mut(a).zip(s.dsa.chunks_exact(o + a)) {
+                    da.copy_from_slice(&row[o..]);
+                }
+                loss
+            }
+            ActorUpdate::Argmax => {
+                // a*(s) = argmax over k uniform actions of Q_1(s, a); minimise mean ‖π(s) − a*‖².
+                let k = self.config.argmax_samples;
+                s.sa.clear();
+                for obs in b.obs.chunks_exact(o) {
+                    for _ in 0..k {
+                        s.sa.extend_from_slice(obs);
+                        for &bound in &self.bounds {
+                            s.sa.push(self.rng.random_range(-bound..=bound));
+                        }
+                    }
+                }
+                let q = self.critics[0].forward(&s.sa, n * k, &mut s.ws_critic);
+                let mut loss = 0.0;
+                for i in 0..n {
+                    let best = (0..k)
+                        .max_by(|&x, &y| q[i * k + x].total_cmp(&q[i * k + y]))
+                        .unwrap();
+                    let row = (i * k + best) * (o + a);
+                    for j in 0..a {
+                        let diff = pi[i * a + j] - s.sa[row + o + j];
+                        loss += diff * diff / n as f32;
+                        s.da[i * a + j] = 2.0 * diff / n as f32;
+                    }
+                }
+                loss
+            }
+        };
+        s.grad_actor.resize(self.actor.params.len(), 0.0);
+        self.actor
+            .backward(&mut s.ws_actor, &s.da, Some(&mut s.grad_actor), None);
+        self.actor_opt.step(&mut self.actor.params, &s.grad_actor);
+
+        // 4. Targets: θ' ← τ·θ + (1 − τ)·θ'.
+        let tau = self.config.tau;
+        self.actor_target.soft_update_from(&self.actor, tau);
+        for (t, c) in self.critic_targets.iter_mut().zip(&self.critics) {
+            t.soft_update_from(c, tau);
+        }
+        Losses {
+            critic: critic_loss,
+            actor: Some(actor_loss),
+        }
+    }
+
+    /// TD3's target actions for a batch of next observations: π'(s') plus the smoothing
+    /// noise clip(σ·b·z, −c·b, c·b) per component (b the bound), clipped to the bounds. With
+    /// σ = 0 (DDPG) this is π'(s').
+    pub fn smoothed_target_actions(&mut self, next_obs: &[f32], n: usize) -> &[f32] {
+        let (_, _, sigma, clip) = self.config.knobs();
+        let s = &mut self.s;
+        s.target_a.clear();
+        s.target_a.extend_from_slice(self.actor_target.forward(
+            next_obs,
+            n,
+            &mut s.ws_actor_target,
+        ));
+        if sigma > 0.0 {
+            for row in s.target_a.chunks_exact_mut(self.bounds.len()) {
+                for (x, &b) in row.iter_mut().zip(&self.bounds) {
+                    let z: f32 = StandardNormal.sample(&mut self.rng);
+                    *x = (*x + (sigma * b * z).clamp(-clip * b, clip * b)).clamp(-b, b);
+                }
+            }
+        }
+        &s.target_a
+    }
+
+    /// Fills the scratch `y` with y = r + γ·(1 − done)·min_i Q'_i(s', a'), where a' are the
+    /// smoothed target actions (`smooth`) or plain π'(s').
+    fn compute_td_targets(&mut self, b: &Batch, smooth: bool) {
+        let (n, o, a) = (b.len, self.obs_dim, self.bounds.len());
+        if smooth {
+            self.smoothed_target_actions(&b.next_obs, n);
+        } else {
+            let s = &mut self.s;
+            s.target_a.clear();
+            s.target_a.extend_from_slice(self.actor_target.forward(
+                &b.next_obs,
+                n,
+                &mut s.ws_actor_target,
+            ));
+        }
+        let s = &mut self.s;
+        concat_rows(&b.next_obs, o, &s.target_a, a, &mut s.sa);
+        s.q_next.clear();
+        s.q_next.resize(n, f32::INFINITY);
+        for target in &self.critic_targets {
+            let q = target.forward(&s.sa, n, &mut s.ws_critic);
+            for (m, q) in s.q_next.iter_mut().zip(q) {
+                *m = m.min(*q);
+            }
+        }
+        let gamma = self.config.gamma;
+        s.y.clear();
+        s.y.extend((0..n).map(|i| b.rew[i] + gamma * (1.0 - b.done[i]) * s.q_next[i]));
+    }
+
+    /// The TD targets y of a batch under the current target networks, without smoothing
+    /// noise (exposed for tests of the terminal mask).
+    pub fn td_targets(&mut self, b: &Batch) -> Vec<f32> {
+        self.compute_td_targets(b, false);
+        self.s.y.clone()
+    }
+}

@@ -1,0 +1,423 @@
+//! Multi-layer perceptrons on flat `f32` buffers: forward, backward, Adam, soft updates.
+//!
+//! Every learner update runs one actor and one or two critics forward and backward, once per
+//! environment step, so this is the hot path of the project. The networks are plain ReLU MLPs
+//! whose parameters live in one flat vector; a layer is one matrix product
+//! ([`matrixmultiply::sgemm`]) plus a bias and an activation, so a whole update does no
+//! allocation and no per-operation bookkeeping. candle is kept for what it does well: its
+//! autograd is the oracle the tests check these gradients against ([`candle_ref`]), and
+//! safetensors is the file format of saved policies ([`Mlp::save`], [`Mlp::load`],
+//! [`candle_ref::load_module`]).
+//!
+//! Layout of the parameters: for each layer l (fan-in `i`, fan-out `o`), the weight matrix
+//! W_l (i × o, row-major, so a layer computes Y = X·W + b on row-major batches) then the bias
+//! b_l (o).
+//!
+//! ```
+//! use pbcs::nn::{Head, Mlp, Workspace};
+//! use pbcs::rng::{Seeds, Stream};
+//!
+//! let mut rng = Seeds::new(0).stream(Stream::Init);
+//! let actor = Mlp::new(&[2, 16, 16, 2], Head::Tanh(vec![0.1, 0.1]), &mut rng);
+//! let mut ws = Workspace::default();
+//! let a = actor.forward(&[0.5, 0.5, 1.5, 2.5], 2, &mut ws); // a batch of two states
+//! assert_eq!(a.len(), 4);
+//! assert!(a.iter().all(|x| x.abs() <= 0.1));
+//! ```
+
+pub mod candle_ref;
+
+use crate::error::{Error, Result};
+use crate::rng::Rng;
+use rand::Rng as _;
+use std::path::Path;
+
+/// The output layer's activation.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Head {
+    /// Identity (critics).
+    Linear,
+    /// `scale_i · tanh(z_i)` (actors: scaled to the action bounds).
+    Tanh(Vec<f32>),
+}
+
+/// A ReLU multi-layer perceptron with flat parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mlp {
+    sizes: Vec<usize>,
+    head: Head,
+    /// All weights and biases, layer by layer (see the module docs for the layout).
+    pub params: Vec<f32>,
+}
+
+/// Activations kept by [`Mlp::forward`] for [`Mlp::backward`], and scratch buffers. One per
+/// network and use, reused across calls so the hot path allocates nothing.
+#[derive(Debug, Clone, Default)]
+pub struct Workspace {
+    /// `acts[0]` is the input batch, `acts[l]` the output of layer l.
+    acts: Vec<Vec<f32>>,
+    delta: Vec<f32>,
+    delta_prev: Vec<f32>,
+    batch: usize,
+}
+
+/// C = A·B + beta·C for row-major or transposed operands given by their strides:
+/// A is m×k with strides (rsa, csa), B is k×n with (rsb, csb), C is m×n row-major.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn gemm(
+    m: usize,
+    k: usize,
+    n: usize,
+    a: &[f32],
+    (rsa, csa): (usize, usize),
+    b: &[f32],
+    (rsb, csb): (usize, usize),
+    beta: f32,
+    c: &mut [f32],
+) {
+    let last = |rows: usize, cols: usize, rs: usize, cs: usize| {
+        if rows == 0 || cols == 0 {
+            0
+        } else {
+            (rows - 1) * rs + (cols - 1) * cs + 1
+        }
+    };
+    assert!(a.len() >= last(m, k, rsa, csa), "gemm: A too short");
+    assert!(b.len() >= last(k, n, rsb, csb), "gemm: B too short");
+    assert!(c.len() >= m * n, "gemm: C too short");
+    // SAFETY: the asserts above keep every index that sgemm reads or writes in bounds.
+    unsafe {
+        matrixmultiply::sgemm(
+            m,
+            k,
+            n,
+            1.0,
+            a.as_ptr(),
+            rsa as isize,
+            csa as isize,
+            b.as_ptr(),
+            rsb as isize,
+            csb as isize,
+            beta,
+            c.as_mut_ptr(),
+            n as isize,
+            1,
+        );
+    }
+}
+
+impl Mlp {
+    /// A network with layer sizes `sizes` (input, hidden..., output), initialised as
+    /// PyTorch's `nn.Linear` does — W and b uniform in ±1/√fan_in — from `rng`, so a seed
+    /// fixes every weight.
+    pub fn new(sizes: &[usize], head: Head, rng: &mut Rng) -> Self {
+        assert!(
+            sizes.len() >= 2 && sizes.iter().all(|&s| s > 0),
+            "bad sizes"
+        );
+        if let Head::Tanh(scale) = &head {
+            assert_eq!(scale.len(), *sizes.last().unwrap(), "one scale per output");
+        }
+        let n: usize = sizes.windows(2).map(|w| w[0] * w[1] + w[1]).sum();
+        let mut params = Vec::with_capacity(n);
+        for w in sizes.windows(2) {
+            let bound = 1.0 / (w[0] as f32).sqrt();
+            for _ in 0..w[0] * w[1] + w[1] {
+                params.push(rng.random_range(-bound..bound));
+            }
+        }
+        Mlp {
+            sizes: sizes.to_vec(),
+            head,
+            params,
+        }
+    }
+
+    /// Layer sizes (input, hidden..., output).
+    pub fn sizes(&self) -> &[usize] {
+        &self.sizes
+    }
+
+    /// The output activation.
+    pub fn head(&self) -> &Head {
+        &self.head
+    }
+
+    /// Input width.
+    pub fn input_dim(&self) -> usize {
+        self.sizes[0]
+    }
+
+    /// Output width.
+    pub fn output_dim(&self) -> usize {
+        *self.sizes.last().unwrap()
+    }
+
+    /// Number of layers (weight matrices).
+    pub fn layers(&self) -> usize {
+        self.sizes.len() - 1
+    }
+
+    /// Offsets of W_l and b_l in [`Mlp::params`].
+    pub fn offsets(&self, l: usize) -> (usize, usize) {
+        let before: usize = self.sizes[..l + 1]
+            .windows(2)
+            .map(|w| w[0] * w[1] + w[1])
+            .sum();
+        (before, before + self.sizes[l] * self.sizes[l + 1])
+    }
+
+    /// Multiply-adds of one forward pass per sample (the backward pass costs about twice).
+    pub fn macs_per_sample(&self) -> usize {
+        self.sizes.windows(2).map(|w| w[0] * w[1]).sum()
+    }
+
+    /// Runs the batch `x` (`batch` rows of [`Mlp::input_dim`]) forward; returns the output
+    /// (`batch` rows of [`Mlp::output_dim`]) and keeps the activations in `ws` for
+    /// [`Mlp::backward`].
+    pub fn forward<'w>(&self, x: &[f32], batch: usize, ws: &'w mut Workspace) -> &'w [f32] {
+        assert_eq!(x.len(), batch * self.input_dim(), "forward: input size");
+        let layers = self.layers();
+        ws.acts.resize_with(layers + 1, Vec::new);
+        ws.batch = batch;
+        ws.acts[0].clear();
+        ws.acts[0].extend_from_slice(x);
+        for l in 0..layers {
+            let (fan_in, fan_out) = (self.sizes[l], self.sizes[l + 1]);
+            let (w, b) = self.offsets(l);
+            let (before, after) = ws.acts.split_at_mut(l + 1);
+            let input = &before[l];
+            let out = &mut after[0];
+            out.clear();
+            for _ in 0..batch {
+                out.extend_from_slice(&self.params[b..b + fan_out]);
+            }
+            gemm(
+                batch,
+                fan_in,
+                fan_out,
+                input,
+                (fan_in, 1),
+                &self.params[w..b],
+                (fan_out, 1),
+                1.0,
+                out,
+            );
+            if l + 1 < layers {
+                out.iter_mut().for_each(|v| *v = v.max(0.0));
+            } else if let Head::Tanh(scale) = &self.head {
+                for row in out.chunks_exact_mut(fan_out) {
+                    for (v, s) in row.iter_mut().zip(scale) {
+                        *v = s * v.tanh();
+                    }
+                }
+            }
+        }
+        &ws.acts[layers]
+    }
+
+    /// Back-propagates `dy` = ∂L/∂output through the batch of the last [`Mlp::forward`] in
+    /// `ws`. Writes ∂L/∂params into `grad` if given (overwritten, same layout as the
+    /// parameters) and ∂L/∂input into `dx` if given.
+    pub fn backward(
+        &self,
+        ws: &mut Workspace,
+        dy: &[f32],
+        mut grad: Option<&mut [f32]>,
+        mut dx: Option<&mut [f32]>,
+    ) {
+        let batch = ws.batch;
+        let layers = self.layers();
+        assert_eq!(dy.len(), batch * self.output_dim(), "backward: dy size");
+        if let Some(g) = &grad {
+            assert_eq!(g.len(), self.params.len(), "backward: grad size");
+        }
+        // δ_L = ∂L/∂z_L.
+        ws.delta.clear();
+        ws.delta.extend_from_slice(dy);
+        if let Head::Tanh(scale) = &self.head {
+            let out = self.output_dim();
+            for (drow, yrow) in ws
+                .delta
+                .chunks_exact_mut(out)
+                .zip(ws.acts[layers].chunks_exact(out))
+            {
+                for ((d, y), s) in drow.iter_mut().zip(yrow).zip(scale) {
+                    let t = y / s;
+                    *d *= s * (1.0 - t * t);
+                }
+            }
+        }
+        for l in (0..layers).rev() {
+            let (fan_in, fan_out) = (self.sizes[l], self.sizes[l + 1]);
+            let (w, b) = self.offsets(l);
+            if let Some(grad) = grad.as_deref_mut() {
+                // ∂L/∂W_l = A_{l-1}ᵀ · δ_l ; ∂L/∂b_l = Σ_rows δ_l.
+                gemm(
+                    fan_in,
+                    batch,
+                    fan_out,
+                    &ws.acts[l],
+                    (1, fan_in),
+                    &ws.delta,
+                    (fan_out, 1),
+                    0.0,
+                    &mut grad[w..b],
+                );
+                let gb = &mut grad[b..b + fan_out];
+                gb.fill(0.0);
+                for row in ws.delta.chunks_exact(fan_out) {
+                    for (g, d) in gb.iter_mut().zip(row) {
+                        *g += d;
+                    }
+                }
+            }
+            if l == 0 && dx.is_none() {
+                break;
+            }
+            // ∂L/∂A_{l-1} = δ_l · W_lᵀ, then through the ReLU of layer l-1.
+            ws.delta_prev.clear();
+            ws.delta_prev.resize(batch * fan_in, 0.0);
+            gemm(
+                batch,
+                fan_out,
+                fan_in,
+                &ws.delta,
+                (fan_out, 1),
+                &self.params[w..b],
+                (1, fan_out),
+                0.0,
+                &mut ws.delta_prev,
+            );
+            if l == 0 {
+                if let Some(dx) = dx.take() {
+                    dx.copy_from_slice(&ws.delta_prev);
+                }
+                break;
+            }
+            for (d, a) in ws.delta_prev.iter_mut().zip(&ws.acts[l]) {
+                if *a <= 0.0 {
+                    *d = 0.0;
+                }
+            }
+            std::mem::swap(&mut ws.delta, &mut ws.delta_prev);
+        }
+    }
+
+    /// Polyak averaging of a target network: θ' ← τ·θ + (1 − τ)·θ'.
+    pub fn soft_update_from(&mut self, online: &Mlp, tau: f32) {
+        for (t, o) in self.params.iter_mut().zip(&online.params) {
+            *t += tau * (o - *t);
+        }
+    }
+
+    /// Tensor names and shapes in the safetensors file: `l{i}.weight` (fan-in × fan-out, as
+    /// stored here) and `l{i}.bias`.
+    fn tensor_names(&self) -> Vec<(String, Vec<usize>)> {
+        (0..self.layers())
+            .flat_map(|l| {
+                [
+                    (
+                        format!("l{l}.weight"),
+                        vec![self.sizes[l], self.sizes[l + 1]],
+                    ),
+                    (format!("l{l}.bias"), vec![self.sizes[l + 1]]),
+                ]
+            })
+            .collect()
+    }
+
+    /// Saves the parameters as safetensors (atomically).
+    pub fn save(&self, path: &Path) -> Result<()> {
+        candle_ref::save(self, path)
+    }
+
+    /// Loads parameters saved by [`Mlp::save`] into a network of this shape. A missing file,
+    /// a corrupt file, or tensors of other names or shapes are errors naming the file.
+    pub fn load(&mut self, path: &Path) -> Result<()> {
+        let params = candle_ref::load_params(path, &self.tensor_names())?;
+        if params.len() != self.params.len() {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                message: "parameter count does not match the network".into(),
+            });
+        }
+        self.params = params;
+        Ok(())
+    }
+}
+
+/// Adam (Kingma & Ba) without weight decay.
+///
+/// Moments that decay below `f32::MIN_POSITIVE` are flushed to zero: the moments of dead ReLU
+/// units shrink geometrically (×0.9 and ×0.999 per step), become subnormal after a few
+/// thousand updates, and subnormal arithmetic is slow enough on x86 to slow the whole update
+/// by 1.5–1.7×. A moment that small changes no parameter (lr·m̂/(√v̂ + ε) with ε = 1e-8 is
+/// far below one ulp of any weight), so flushing it changes no result that matters.
+#[derive(Debug, Clone)]
+pub struct Adam {
+    /// Learning rate.
+    pub lr: f32,
+    /// β1.
+    pub beta1: f32,
+    /// β2.
+    pub beta2: f32,
+    /// ε.
+    pub eps: f32,
+    m: Vec<f32>,
+    v: Vec<f32>,
+    t: i32,
+}
+
+impl Adam {
+    /// Adam for `n` parameters with the usual β1 = 0.9, β2 = 0.999, ε = 1e-8.
+    pub fn new(n: usize, lr: f32) -> Self {
+        Adam {
+            lr,
+            beta1: 0.9,
+            beta2: 0.999,
+            eps: 1e-8,
+            m: vec![0.0; n],
+            v: vec![0.0; n],
+            t: 0,
+        }
+    }
+
+    /// One step: θ ← θ − lr · m̂ / (√v̂ + ε).
+    pub fn step(&mut self, params: &mut [f32], grad: &[f32]) {
+        self.t += 1;
+        let (b1, b2) = (self.beta1, self.beta2);
+        let c1 = 1.0 - b1.powi(self.t);
+        let c2 = 1.0 - b2.powi(self.t);
+        let step = self.lr / c1;
+        let c2_sqrt = c2.sqrt();
+        for (((p, g), m), v) in params
+            .iter_mut()
+            .zip(grad)
+            .zip(self.m.iter_mut())
+            .zip(self.v.iter_mut())
+        {
+            let mut mi = b1 * *m + (1.0 - b1) * g;
+            let mut vi = b2 * *v + (1.0 - b2) * g * g;
+            if mi.abs() < f32::MIN_POSITIVE {
+                mi = 0.0;
+            }
+            if vi < f32::MIN_POSITIVE {
+                vi = 0.0;
+            }
+            *m = mi;
+            *v = vi;
+            *p -= step * mi / (vi.sqrt() / c2_sqrt + self.eps);
+        }
+    }
+
+    /// Number of subnormal values among the moments (the bench reports it).
+    pub fn subnormal_moments(&self) -> usize {
+        self.m
+            .iter()
+            .chain(&self.v)
+            .filter(|x| x.is_subnormal())
+            .count()
+    }
+}
