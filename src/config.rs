@@ -16,6 +16,8 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::learner::LearnerConfig;
+use crate::train::TrainConfig;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -146,5 +148,28 @@ impl Check for ExploreJob {
     fn check(&self) -> Result<()> {
         self.maze.check()?;
         self.explore.check()
+    }
+}
+
+/// What `pbcs train` runs: a vanilla baseline (DDPG, TD3, or the argmax actor) on one maze's
+/// own reward.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainJob {
+    /// The run seed.
+    pub seed: u64,
+    /// The maze.
+    pub maze: MazeConfig,
+    /// The learner's hyper-parameters.
+    pub learner: LearnerConfig,
+    /// The training schedule.
+    pub train: TrainConfig,
+}
+
+impl Check for TrainJob {
+    fn check(&self) -> Result<()> {
+        self.maze.check()?;
+        self.learner.check()?;
+        self.train.check()
     }
 }

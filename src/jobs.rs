@@ -4,7 +4,7 @@
 //! Result files are CSV (deterministic: same config, same bytes) written atomically; the
 //! wall-clock time of a job lives beside them in `timing.toml`, never inside a CSV.
 
-use crate::config::{Check, ExploreJob};
+use crate::config::{Check, ExploreJob, TrainJob};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
@@ -12,6 +12,7 @@ use crate::maze::Maze;
 use crate::plot::{render_maze, MazePicture};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
+use crate::train::train_vanilla;
 use parry2d::math::Point;
 use serde::Serialize;
 use std::path::Path;
@@ -73,13 +74,29 @@ pub fn run_explore(
     write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
     write_archive_csv(&maze, &found, &out.join("archive.csv"))?;
     render_exploration(&maze, &found, job, out)?;
-    let timing = format!(
-        "# wall-clock time of phase 1 (not deterministic, hence not in the CSVs)\n\
-         wall_seconds = {seconds:.6}\nsteps_per_second = {:.0}\n",
-        found.env_steps as f64 / seconds.max(1e-9)
-    );
-    write_atomic(&out.join("timing.toml"), |w| w.write_all(timing.as_bytes()))?;
+    write_timing(out, seconds, found.env_steps)?;
     Ok((summary, seconds))
+}
+
+/// Writes the resolved job as `config.toml`, so that `--config` re-runs exactly this job.
+fn write_config<T: Serialize>(job: &T, out: &Path) -> Result<()> {
+    let path = out.join("config.toml");
+    let text = toml::to_string(job).map_err(|e| Error::Parse {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    write_atomic(&path, |w| w.write_all(text.as_bytes()))
+}
+
+/// Writes `timing.toml`: wall-clock data, which is not deterministic and so never goes into
+/// a CSV.
+fn write_timing(out: &Path, seconds: f64, env_steps: u64) -> Result<()> {
+    let text = format!(
+        "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n\
+         wall_seconds = {seconds:.6}\nsteps_per_second = {:.0}\n",
+        env_steps as f64 / seconds.max(1e-9)
+    );
+    write_atomic(&out.join("timing.toml"), |w| w.write_all(text.as_bytes()))
 }
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
@@ -142,7 +159,7 @@ fn render_exploration(
     let path: Vec<(f32, f32)> = found.trajectory.states.iter().map(|s| (s.x, s.y)).collect();
     let picture = MazePicture {
         title: format!(
-            "maze {} (layout {}), seed {}: {} steps, |τ| = {}",
+            "phase 1, maze {} (layout {}), seed {}: {} steps, |τ| = {}",
             job.maze.size,
             job.maze.seed,
             job.seed,
@@ -151,6 +168,7 @@ fn render_exploration(
         ),
         points: &points,
         red_paths: vec![&path],
+        ..MazePicture::default()
     };
     render_maze(
         maze,
@@ -159,4 +177,100 @@ fn render_exploration(
         &out.join("explore.svg"),
         SVG_MAX_POINTS,
     )
+}
+
+/// The one-row summary of a vanilla training run (`summary.csv`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrainSummary {
+    /// Maze size N.
+    pub maze: usize,
+    /// Maze layout seed.
+    pub maze_seed: u64,
+    /// Run seed.
+    pub seed: u64,
+    /// `ddpg` or `td3`.
+    pub algo: String,
+    /// `gradient` or `argmax`.
+    pub actor_update: String,
+    /// Environment steps.
+    pub env_steps: u64,
+    /// Training episodes begun.
+    pub episodes: u64,
+    /// Greedy success at the last evaluation.
+    pub final_success: f32,
+    /// Best greedy success over all evaluations.
+    pub best_success: f32,
+    /// Bins of side `train.visit_bin` visited during training.
+    pub visited_bins: usize,
+}
+
+/// Trains the vanilla baseline of `job` on the maze's own reward and writes into `out`:
+/// `config.toml`, `summary.csv`, `evals.csv` (one row per evaluation), `visited.csv` (lower-left
+/// corners of visited bins), `actor.safetensors`, `train.png`, `train.svg`, `timing.toml`.
+pub fn run_train(
+    job: &TrainJob,
+    out: &Path,
+    progress: impl FnMut(u64, f32),
+) -> Result<(TrainSummary, f64)> {
+    job.check()?;
+    let maze = Maze::new(&job.maze)?;
+    let clock = Instant::now();
+    let result = train_vanilla(
+        &maze,
+        &job.learner,
+        &job.train,
+        &Seeds::new(job.seed),
+        progress,
+    )?;
+    let seconds = clock.elapsed().as_secs_f64();
+    let summary = TrainSummary {
+        maze: job.maze.size,
+        maze_seed: job.maze.seed,
+        seed: job.seed,
+        algo: job.learner.algo.name().to_string(),
+        actor_update: job.learner.actor_update.name().to_string(),
+        env_steps: job.train.steps,
+        episodes: result.episodes,
+        final_success: result.evals.last().map_or(0.0, |e| e.success),
+        best_success: result.evals.iter().map(|e| e.success).fold(0.0, f32::max),
+        visited_bins: result.visited.len(),
+    };
+    write_config(job, out)?;
+    write_record(&out.join("summary.csv"), &summary)?;
+    crate::record::write_records(&out.join("evals.csv"), &result.evals)?;
+    let side = job.train.visit_bin;
+    let corners: Vec<(f32, f32)> = result
+        .visited
+        .iter()
+        .map(|b| (b[0] as f32 * side, b[1] as f32 * side))
+        .collect();
+    write_csv(
+        &out.join("visited.csv"),
+        &["x".to_string(), "y".to_string()],
+        corners.iter().map(|(x, y)| [x.to_string(), y.to_string()]),
+    )?;
+    result.learner.actor.save(&out.join("actor.safetensors"))?;
+    let picture = MazePicture {
+        title: format!(
+            "{} on maze {} (layout {}), seed {}: {} steps, success {}",
+            summary.algo,
+            job.maze.size,
+            job.maze.seed,
+            job.seed,
+            job.train.steps,
+            summary.final_success
+        ),
+        red_area: &corners,
+        red_area_side: side,
+        ..MazePicture::default()
+    };
+    render_maze(
+        &maze,
+        &picture,
+        &out.join("train.png"),
+        &out.join("train.svg"),
+        SVG_MAX_POINTS,
+    )?;
+    write_timing(out, seconds, job.train.steps)?;
+    Ok((summary, seconds))
 }

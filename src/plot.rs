@@ -33,6 +33,10 @@ pub struct MazePicture<'a> {
     pub points: &'a [(f32, f32)],
     /// Red polylines (phase-1 trajectory).
     pub red_paths: Vec<&'a [(f32, f32)]>,
+    /// Red filled squares of the given side, by lower-left corner (the explored area).
+    pub red_area: &'a [(f32, f32)],
+    /// Side of the `red_area` squares.
+    pub red_area_side: f32,
 }
 
 type Chart<'b, DB> = ChartContext<'b, DB, Cartesian2d<RangedCoordf32, RangedCoordf32>>;
@@ -56,7 +60,7 @@ fn draw<DB: DrawingBackend>(
     let mut builder = ChartBuilder::on(&area);
     builder.margin(10);
     if !picture.title.is_empty() {
-        builder.caption(&picture.title, ("sans-serif", 18));
+        builder.caption(&picture.title, ("sans-serif", 14));
     }
     let mut chart: Chart<DB> =
         builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
@@ -67,6 +71,15 @@ fn draw<DB: DrawingBackend>(
             .points
             .iter()
             .map(|&(x, y)| Pixel::new((x, y), faint)),
+    )?;
+    // Explored area.
+    let side = picture.red_area_side;
+    let area_colour = RGBColor(220, 40, 40).mix(0.6);
+    chart.draw_series(
+        picture
+            .red_area
+            .iter()
+            .map(|&(x, y)| Rectangle::new([(x, y), (x + side, y + side)], area_colour.filled())),
     )?;
     // Walls.
     chart.draw_series(maze.walls().walls().iter().map(|w| {
@@ -102,8 +115,8 @@ fn side_px(maze: &Maze) -> u32 {
 }
 
 /// Renders `picture` over `maze` to a PNG file and an SVG file (both written atomically).
-/// The SVG draws at most `svg_max_points` of the faint points (a deterministic stride), so that
-/// it stays small for archives of millions of states; the PNG draws them all.
+/// The SVG draws at most `svg_max_points` of the faint points and of the area squares (a
+/// deterministic stride), so that it stays small for millions of states; the PNG draws all.
 pub fn render_maze(
     maze: &Maze,
     picture: &MazePicture,
@@ -118,10 +131,14 @@ pub fn render_maze(
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
         draw(root, maze, picture).map_err(|e| plot_err(png, e))
     })?;
-    let stride = picture.points.len().div_ceil(svg_max_points.max(1)).max(1);
-    let thinned: Vec<(f32, f32)> = picture.points.iter().step_by(stride).copied().collect();
+    let thin = |v: &[(f32, f32)]| -> Vec<(f32, f32)> {
+        let stride = v.len().div_ceil(svg_max_points.max(1)).max(1);
+        v.iter().step_by(stride).copied().collect()
+    };
+    let (points, area) = (thin(picture.points), thin(picture.red_area));
     let svg_picture = MazePicture {
-        points: &thinned,
+        points: &points,
+        red_area: &area,
         ..picture.clone()
     };
     let mut text = String::new();

@@ -92,3 +92,15 @@ pub fn write_record<T: serde::Serialize>(path: &Path, record: &T) -> Result<()> 
         Ok(())
     })
 }
+
+/// Writes serde records (header from the first) as a CSV file, atomically.
+pub fn write_records<T: serde::Serialize>(path: &Path, records: &[T]) -> Result<()> {
+    write_atomic(path, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        for r in records {
+            w.serialize(r)?;
+        }
+        w.flush()?;
+        Ok(())
+    })
+}

@@ -1,6 +1,6 @@
 //! Bad input is rejected with a message that names the field or file, never a panic.
 
-use pbcs::config::{load, ExploreJob};
+use pbcs::config::{load, ExploreJob, TrainJob};
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -133,10 +133,40 @@ fn every_experiment_file_parses_and_checks() {
     let mut n = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "toml") {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.starts_with("explore") && name.ends_with(".toml") {
             load::<ExploreJob>(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        } else if name.starts_with("baseline") && name.ends_with(".toml") {
+            load::<TrainJob>(&path).unwrap_or_else(|e| panic!("{e}"));
             n += 1;
         }
     }
-    assert!(n >= 1, "no experiment file found in {}", dir.display());
+    assert!(n >= 2, "experiment files missing in {}", dir.display());
+}
+
+#[test]
+fn train_rejects_bad_learner_settings_and_runs_a_small_case() {
+    let (_tmp, path) = write("[learner]\ngamma = 1.5\n");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = out.to_str().unwrap();
+    let (code, err) = pbcs(&["train", "--config", path.to_str().unwrap(), "--out", o]);
+    assert!(code != 0 && err.contains("learner.gamma"), "{code} {err}");
+    let (code, err) = pbcs(&["train", "--algo", "sac", "--out", o]);
+    assert!(code != 0 && err.contains("sac"), "{code} {err}");
+    let (code, err) = pbcs(&[
+        "train", "--algo", "td3", "--maze", "2", "--seed", "1", "--steps", "1500", "--quiet",
+        "--out", o,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for f in [
+        "summary.csv",
+        "evals.csv",
+        "visited.csv",
+        "actor.safetensors",
+        "train.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
 }

@@ -70,3 +70,38 @@ fn the_maze_seed_changes_the_layout_not_the_run_seed() {
     let m3 = Maze::new(&MazeConfig { seed: 1, ..base }).unwrap();
     assert_ne!(m1.layout(), m3.layout());
 }
+
+#[test]
+fn vanilla_training_is_byte_identical_per_seed() {
+    use pbcs::config::TrainJob;
+    use pbcs::jobs::run_train;
+    let mut job = TrainJob::default();
+    job.maze.size = 2;
+    job.seed = 3;
+    job.train.steps = 3_000;
+    job.train.learning_starts = 1_000;
+    job.train.eval_every = 1_000;
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run_train(&job, a.path(), |_, _| {}).unwrap();
+    run_train(&job, b.path(), |_, _| {}).unwrap();
+    for f in [
+        "config.toml",
+        "summary.csv",
+        "evals.csv",
+        "visited.csv",
+        "actor.safetensors",
+        "train.png",
+        "train.svg",
+    ] {
+        let (x, y) = (
+            std::fs::read(a.path().join(f)).unwrap(),
+            std::fs::read(b.path().join(f)).unwrap(),
+        );
+        assert!(
+            !x.is_empty() && x == y,
+            "{f} differs between two runs of one seed"
+        );
+    }
+    let evals = std::fs::read_to_string(a.path().join("evals.csv")).unwrap();
+    assert_eq!(evals.lines().count(), 4, "header + 3 evaluations:\n{evals}");
+}

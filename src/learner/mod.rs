@@ -30,6 +30,16 @@ pub enum Algo {
     Td3,
 }
 
+impl Algo {
+    /// The config spelling: `ddpg` or `td3`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Algo::Ddpg => "ddpg",
+            Algo::Td3 => "td3",
+        }
+    }
+}
+
 /// How the actor is trained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -38,6 +48,16 @@ pub enum ActorUpdate {
     Gradient,
     /// Regress π(s) onto argmax over `argmax_samples` uniform actions of Q(s, a).
     Argmax,
+}
+
+impl ActorUpdate {
+    /// The config spelling: `gradient` or `argmax`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ActorUpdate::Gradient => "gradient",
+            ActorUpdate::Argmax => "argmax",
+        }
+    }
 }
 
 /// Hyper-parameters of the learner (validated by [`Check::check`]). Noise levels are

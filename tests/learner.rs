@@ -1,0 +1,265 @@
+//! TD3/DDPG: TD targets, target smoothing, learning on the 1-D toy, determinism, bad input.
+
+use pbcs::config::Check;
+use pbcs::learner::replay::Batch;
+use pbcs::learner::{ActorUpdate, Learner, LearnerConfig};
+use pbcs::rng::Seeds;
+use pbcs::toy::Toy1D;
+use pbcs::train::{train_vanilla, TrainConfig};
+
+fn batch_of_two(done: [f32; 2]) -> Batch {
+    Batch {
+        len: 2,
+        obs: vec![0.3, 0.4, 0.3, 0.4],
+        act: vec![0.05, -0.02, 0.05, -0.02],
+        rew: vec![1.0, 1.0],
+        next_obs: vec![0.35, 0.38, 0.35, 0.38],
+        done: done.to_vec(),
+    }
+}
+
+#[test]
+fn terminal_transitions_stop_bootstrapping() {
+    for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
+        let mut l = Learner::new(&cfg, 2, &[0.1, 0.1], &Seeds::new(0)).unwrap();
+        let y = l.td_targets(&batch_of_two([1.0, 0.0]));
+        assert_eq!(y[0], 1.0, "terminal: y = r exactly");
+        assert!(
+            (y[1] - 1.0).abs() > 1e-6,
+            "non-terminal: y = r + γ·Q'(s', π'(s'))"
+        );
+    }
+}
+
+#[test]
+fn time_limit_truncation_is_not_terminal() {
+    // Episodes of at most 5 steps on the toy: most end by truncation. Only the transitions
+    // that reach x = 0 are stored as terminal, and every ended episode is one or the other.
+    let train = TrainConfig {
+        steps: 2_000,
+        max_episode_steps: 5,
+        learning_starts: 2_000,
+        eval_every: 2_000,
+        ..TrainConfig::default()
+    };
+    let out = train_vanilla(
+        &Toy1D,
+        &LearnerConfig::ddpg(),
+        &train,
+        &Seeds::new(1),
+        |_, _| {},
+    )
+    .unwrap();
+    assert!(out.truncated_episodes > 100, "{}", out.truncated_episodes);
+    assert!(out.terminal_transitions > 0);
+    let ended = out.episodes - 1; // the last episode is still running
+    assert_eq!(out.terminal_transitions + out.truncated_episodes, ended);
+}
+
+#[test]
+fn target_smoothing_noise_is_clipped() {
+    let next_obs: Vec<f32> = (0..200).map(|i| (i % 17) as f32 * 0.1).collect();
+    let n = 100;
+    let plain = {
+        let mut ddpg =
+            Learner::new(&LearnerConfig::ddpg(), 2, &[0.1, 0.3], &Seeds::new(2)).unwrap();
+        ddpg.smoothed_target_actions(&next_obs, n).to_vec()
+    };
+    // Same weights (same seed), TD3 with a huge σ: every sample is clipped to ±c·bound.
+    let cfg = LearnerConfig {
+        n_critics: Some(1),
+        target_noise: Some(10.0),
+        target_noise_clip: Some(0.5),
+        ..LearnerConfig::td3()
+    };
+    let mut td3 = Learner::new(&cfg, 2, &[0.1, 0.3], &Seeds::new(2)).unwrap();
+    let noisy = td3.smoothed_target_actions(&next_obs, n).to_vec();
+    let mut moved = 0;
+    for (i, (x, p)) in noisy.iter().zip(&plain).enumerate() {
+        let bound = [0.1f32, 0.3][i % 2];
+        assert!(x.abs() <= bound, "outside the action bounds: {x}");
+        assert!(
+            (x - p).abs() <= 0.5 * bound + 1e-6,
+            "noise not clipped: {x} vs {p}"
+        );
+        moved += usize::from((x - p).abs() > 1e-4);
+    }
+    assert!(moved > 150, "the noise is there: {moved} of 200 moved");
+}
+
+/// DDPG and TD3 learn the 1-D toy. Criterion: greedy success ≥ 90 % over 100 random starts
+/// after 3 000 environment steps (500 of them random warm-up), for at least 8 of 10 seeds.
+/// Confidence: if each seed independently succeeded with probability 0.95, this test would
+/// fail with probability P(Binomial(10, 0.95) ≤ 7) ≈ 1.2 %; the seeds are fixed, so the
+/// outcome itself is deterministic. Contrast: untrained policies (evaluated at the end of
+/// the warm-up) reach 90 % on at most 2 of the same 10 seeds (measured: 1).
+#[test]
+fn ddpg_and_td3_learn_the_1d_toy() {
+    let schedule = |steps| TrainConfig {
+        steps,
+        max_episode_steps: 50,
+        learning_starts: 500,
+        eval_every: steps,
+        eval_episodes: 100,
+        visit_bin: 0.05,
+    };
+    for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
+        let solved = |steps| {
+            (0..10)
+                .filter(|&seed| {
+                    let out =
+                        train_vanilla(&Toy1D, &cfg, &schedule(steps), &Seeds::new(seed), |_, _| {})
+                            .unwrap();
+                    out.evals.last().unwrap().success >= 0.9
+                })
+                .count()
+        };
+        let (before, after) = (solved(500), solved(3_000));
+        assert!(
+            before <= 2,
+            "{:?}: {before} seeds succeed untrained",
+            cfg.algo
+        );
+        assert!(
+            after >= 8,
+            "{:?}: only {after} of 10 seeds learned",
+            cfg.algo
+        );
+    }
+}
+
+#[test]
+fn the_argmax_actor_learns_the_1d_toy_too() {
+    let cfg = LearnerConfig {
+        actor_update: ActorUpdate::Argmax,
+        argmax_samples: 16,
+        ..LearnerConfig::ddpg()
+    };
+    let train = TrainConfig {
+        steps: 3_000,
+        max_episode_steps: 50,
+        learning_starts: 500,
+        eval_every: 3_000,
+        eval_episodes: 100,
+        visit_bin: 0.05,
+    };
+    let solved = (0..5)
+        .filter(|&seed| {
+            let out = train_vanilla(&Toy1D, &cfg, &train, &Seeds::new(seed), |_, _| {}).unwrap();
+            out.evals.last().unwrap().success >= 0.9
+        })
+        .count();
+    assert!(solved >= 4, "argmax actor: {solved} of 5 seeds");
+}
+
+#[test]
+fn same_seed_same_weights_and_evaluations() {
+    let train = TrainConfig {
+        steps: 1_500,
+        max_episode_steps: 50,
+        learning_starts: 300,
+        eval_every: 500,
+        eval_episodes: 10,
+        visit_bin: 0.05,
+    };
+    let run = || {
+        train_vanilla(
+            &Toy1D,
+            &LearnerConfig::td3(),
+            &train,
+            &Seeds::new(7),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let (a, b) = (run(), run());
+    assert_eq!(a.evals, b.evals);
+    assert_eq!(a.visited, b.visited);
+    assert_eq!(a.learner.actor.params, b.learner.actor.params);
+    assert_eq!(a.learner.critics[1].params, b.learner.critics[1].params);
+    let c = train_vanilla(
+        &Toy1D,
+        &LearnerConfig::td3(),
+        &train,
+        &Seeds::new(8),
+        |_, _| {},
+    )
+    .unwrap();
+    assert_ne!(a.learner.actor.params, c.learner.actor.params);
+}
+
+#[test]
+fn invalid_hyper_parameters_are_rejected_with_the_field() {
+    let cases: Vec<(LearnerConfig, &str)> = vec![
+        (
+            LearnerConfig {
+                actor_lr: -1e-3,
+                ..Default::default()
+            },
+            "learner.actor_lr",
+        ),
+        (
+            LearnerConfig {
+                critic_lr: 0.0,
+                ..Default::default()
+            },
+            "learner.critic_lr",
+        ),
+        (
+            LearnerConfig {
+                gamma: 1.0,
+                ..Default::default()
+            },
+            "learner.gamma",
+        ),
+        (
+            LearnerConfig {
+                gamma: -0.1,
+                ..Default::default()
+            },
+            "learner.gamma",
+        ),
+        (
+            LearnerConfig {
+                batch_size: 0,
+                ..Default::default()
+            },
+            "learner.batch_size",
+        ),
+        (
+            LearnerConfig {
+                tau: 0.0,
+                ..Default::default()
+            },
+            "learner.tau",
+        ),
+        (
+            LearnerConfig {
+                hidden: vec![64, 0],
+                ..Default::default()
+            },
+            "learner.hidden",
+        ),
+        (
+            LearnerConfig {
+                n_critics: Some(3),
+                ..Default::default()
+            },
+            "learner.n_critics",
+        ),
+        (
+            LearnerConfig {
+                actor_update: ActorUpdate::Argmax,
+                argmax_samples: 0,
+                ..Default::default()
+            },
+            "learner.argmax_samples",
+        ),
+    ];
+    for (cfg, field) in cases {
+        let msg = cfg.check().unwrap_err().to_string();
+        assert!(msg.contains(field), "{field}: {msg}");
+        let err = Learner::new(&cfg, 2, &[0.1, 0.1], &Seeds::new(0)).unwrap_err();
+        assert!(err.to_string().contains(field));
+    }
+}
