@@ -6,7 +6,7 @@ CARGO ?= cargo
 help:
 	@echo "make demo   explore a 10x10 maze and draw it (out/explore/...)"
 	@echo "make test   run the test suite (the README's test command)"
-	@echo "make bench  phase-1 speed: env steps/s, phase-1 steps/s, steps to the target"
+	@echo "make bench  phase-1 speed, and learner update cost (fused vs candle)"
 	@echo "make lint   rustfmt and clippy"
 	@echo "make ci     what CI runs (.ci/run)"
 
@@ -21,6 +21,7 @@ test:
 
 bench:
 	$(CARGO) bench --locked --bench phase1
+	$(CARGO) bench --locked --bench learner
 
 lint:
 	$(CARGO) fmt --all -- --check

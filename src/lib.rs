@@ -11,8 +11,10 @@
 //! | Background, "Reset-anywhere" | [`env`] (pure `step(&State, action)`) |
 //! | Phase 1 and appendix algorithm "Exploration algorithm" | [`explore`] |
 //! | Settings the paper gives or leaves open | [`config`] |
+//! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
+//! | Results table, "Vanilla" columns | [`train`] (training on the environment's own reward) |
 //!
-//! Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
+//! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
 //! result files atomically, [`plot`] draws mazes with plotters, and [`jobs`] turns a config
 //! into result files (what the `pbcs` command runs).
 //!

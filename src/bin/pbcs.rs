@@ -114,6 +114,13 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // One thread per process (use cores for seeds): pin candle's thread pool before any candle
+    // call, unless the user chose otherwise. Our own kernels are single-threaded.
+    for var in ["RAYON_NUM_THREADS", "CANDLE_NUM_THREADS"] {
+        if std::env::var_os(var).is_none() {
+            std::env::set_var(var, "1");
+        }
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

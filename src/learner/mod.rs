@@ -327,6 +327,16 @@ impl Learner {
         self.updates
     }
 
+    /// Subnormal values among all Adam moments (0 while the flush works; see [`Adam`]).
+    pub fn subnormal_moments(&self) -> usize {
+        self.actor_opt.subnormal_moments()
+            + self
+                .critic_opts
+                .iter()
+                .map(Adam::subnormal_moments)
+                .sum::<usize>()
+    }
+
     /// Greedy actions π(s) for a batch of `n` observations (one forward pass).
     pub fn act(&mut self, obs: &[f32], n: usize) -> &[f32] {
         self.actor.forward(obs, n, &mut self.s.ws_act)
