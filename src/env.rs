@@ -46,6 +46,20 @@ pub trait Env {
         self.start()
     }
 
+    /// A state drawn uniformly from the ball of radius `radius` around `center` (in
+    /// observation space): Backplay's starts in B_ε(τ_K), which are usually states never
+    /// visited. The default cannot make new states and returns `center`; environments that can
+    /// should override it. The state may be one the agent cannot leave (inside a wall).
+    fn sample_ball(
+        &self,
+        center: &Self::State,
+        radius: f32,
+        rng: &mut crate::rng::Rng,
+    ) -> Self::State {
+        let _ = (radius, rng);
+        center.clone()
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 

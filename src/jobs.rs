@@ -4,11 +4,12 @@
 //! Result files are CSV (deterministic: same config, same bytes) written atomically; the
 //! wall-clock time of a job lives beside them in `timing.toml`, never inside a CSV.
 
-use crate::config::{Check, ExploreJob, TrainJob};
+use crate::config::{Check, ExploreJob, RunJob, TrainJob};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
+use crate::pbcs::{chain_skills, Progress, SkillChain, StartMode};
 use crate::plot::{render_maze, MazePicture};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
@@ -273,4 +274,195 @@ pub fn run_train(
     )?;
     write_timing(out, seconds, job.train.steps)?;
     Ok((summary, seconds))
+}
+
+/// The per-run record of PBCS (`record.csv`): every count the results table needs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunRecord {
+    /// Maze size N.
+    pub maze: usize,
+    /// Maze layout seed.
+    pub maze_seed: u64,
+    /// Run seed.
+    pub seed: u64,
+    /// `pbcs` or `pbcs_no_chaining`.
+    pub variant: String,
+    /// `ddpg`, `td3`, with `_am` for the argmax actor.
+    pub learner: String,
+    /// `ball` or `exact` starts.
+    pub starts: String,
+    /// γ of the learner.
+    pub gamma: f32,
+    /// ε.
+    pub epsilon: f32,
+    /// Whether the chain reaches the target in at least 95 % of the evaluation episodes.
+    pub solved: bool,
+    /// Fraction of evaluation episodes that reached the target.
+    pub success_rate: f32,
+    /// Why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
+    pub failure: String,
+    /// Environment steps of phase 1.
+    pub phase1_steps: u64,
+    /// Environment steps of phase-2 training episodes.
+    pub train_steps: u64,
+    /// Environment steps of Backplay's tests.
+    pub test_steps: u64,
+    /// phase1 + train + test (evaluation episodes are not counted).
+    pub total_steps: u64,
+    /// Skills in the chain.
+    pub skills: usize,
+    /// States of the phase-1 trajectory τ.
+    pub trajectory_len: usize,
+}
+
+/// Chain rollouts drawn in the picture.
+const DRAWN_ROLLOUTS: usize = 10;
+
+/// Runs PBCS for `job` and writes into `out`: `config.toml`, `record.csv`, `skills.csv` (one row
+/// per skill: K, T, ball), `trajectory.csv`, `chain/` (the saved chain), `run.png`, `run.svg`,
+/// `timing.toml`. `progress(skill, report)` is called during phase 2.
+pub fn run_pbcs(
+    job: &RunJob,
+    out: &Path,
+    progress: impl FnMut(usize, Progress),
+) -> Result<(RunRecord, f64)> {
+    job.check()?;
+    let maze = Maze::new(&job.maze)?;
+    let seeds = Seeds::new(job.seed);
+    let clock = Instant::now();
+    let mut rng = seeds.stream(Stream::Explore);
+    let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
+    let tau = &found.trajectory.states;
+    let phase2 = chain_skills(
+        &maze,
+        tau,
+        &job.learner,
+        &job.phase2,
+        &seeds,
+        found.env_steps,
+        progress,
+    )?;
+    // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
+    let mut rng_eval = seeds.stream(Stream::Eval);
+    let mut rollouts = Vec::new();
+    let mut wins = 0;
+    if phase2.failure.is_none() && !phase2.chain.skills.is_empty() {
+        for _ in 0..job.phase2.eval_episodes {
+            let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng_eval);
+            let r = phase2.chain.run(&maze, start, job.phase2.eval_max_steps);
+            wins += usize::from(r.success);
+            if rollouts.len() < DRAWN_ROLLOUTS {
+                rollouts.push(r.states);
+            }
+        }
+    }
+    let seconds = clock.elapsed().as_secs_f64();
+    let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
+    let lc = &job.learner;
+    let record = RunRecord {
+        maze: job.maze.size,
+        maze_seed: job.maze.seed,
+        seed: job.seed,
+        variant: if job.phase2.chaining {
+            "pbcs"
+        } else {
+            "pbcs_no_chaining"
+        }
+        .into(),
+        learner: format!(
+            "{}{}",
+            lc.algo.name(),
+            if lc.actor_update == crate::learner::ActorUpdate::Argmax {
+                "_am"
+            } else {
+                ""
+            }
+        ),
+        starts: match job.phase2.start {
+            StartMode::Ball => "ball",
+            StartMode::Exact => "exact",
+        }
+        .into(),
+        gamma: lc.gamma,
+        epsilon: job.phase2.epsilon,
+        solved: phase2.failure.is_none() && success_rate >= 0.95,
+        success_rate,
+        failure: phase2
+            .failure
+            .map(|f| match f {
+                crate::pbcs::Failure::BackplayFailed => "backplay_failed",
+                crate::pbcs::Failure::NoChaining => "no_chaining",
+                crate::pbcs::Failure::Budget => "budget",
+            })
+            .unwrap_or("")
+            .into(),
+        phase1_steps: found.env_steps,
+        train_steps: phase2.steps.train,
+        test_steps: phase2.steps.test,
+        total_steps: found.env_steps + phase2.steps.train + phase2.steps.test,
+        skills: phase2.chain.skills.len(),
+        trajectory_len: tau.len(),
+    };
+    write_config(job, out)?;
+    write_record(&out.join("record.csv"), &record)?;
+    write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
+    write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
+    phase2.chain.save(&out.join("chain"))?;
+    let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+    let red = xy(tau);
+    let picture = MazePicture {
+        title: format!(
+            "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, success {}",
+            record.variant,
+            record.learner,
+            job.maze.size,
+            job.maze.seed,
+            job.seed,
+            record.total_steps,
+            record.skills,
+            success_rate
+        ),
+        red_paths: vec![&red],
+        green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+        circles: phase2
+            .chain
+            .skills
+            .iter()
+            .map(|s| {
+                (
+                    (s.activation.center[0], s.activation.center[1]),
+                    s.activation.radius,
+                )
+            })
+            .collect(),
+        ..MazePicture::default()
+    };
+    render_maze(
+        &maze,
+        &picture,
+        &out.join("run.png"),
+        &out.join("run.svg"),
+        SVG_MAX_POINTS,
+    )?;
+    write_timing(out, seconds, record.total_steps)?;
+    Ok((record, seconds))
+}
+
+/// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target
+/// index), ball centre and radius.
+fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
+    let header: Vec<String> = ["skill", "start_index", "target_index", "x", "y", "radius"]
+        .map(String::from)
+        .to_vec();
+    let rows = chain.skills.iter().enumerate().map(|(i, s)| {
+        [
+            i.to_string(),
+            s.start_index.to_string(),
+            s.target_index.to_string(),
+            s.activation.center[0].to_string(),
+            s.activation.center[1].to_string(),
+            s.activation.radius.to_string(),
+        ]
+    });
+    write_csv(path, &header, rows)
 }

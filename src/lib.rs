@@ -40,6 +40,7 @@ pub mod jobs;
 pub mod learner;
 pub mod maze;
 pub mod nn;
+pub mod pbcs;
 pub mod plot;
 pub mod record;
 pub mod rng;

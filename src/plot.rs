@@ -37,6 +37,10 @@ pub struct MazePicture<'a> {
     pub red_area: &'a [(f32, f32)],
     /// Side of the `red_area` squares.
     pub red_area_side: f32,
+    /// Green polylines (rollouts of a policy or chain).
+    pub green_paths: Vec<Vec<(f32, f32)>>,
+    /// Purple circles (centre, radius): activation sets.
+    pub circles: Vec<((f32, f32), f32)>,
 }
 
 type Chart<'b, DB> = ChartContext<'b, DB, Cartesian2d<RangedCoordf32, RangedCoordf32>>;
@@ -89,6 +93,22 @@ fn draw<DB: DrawingBackend>(
     // Trajectories.
     for path in &picture.red_paths {
         chart.draw_series(LineSeries::new(path.iter().copied(), RED.stroke_width(2)))?;
+    }
+    for path in &picture.green_paths {
+        chart.draw_series(LineSeries::new(
+            path.iter().copied(),
+            RGBColor(0, 170, 0).stroke_width(2),
+        ))?;
+    }
+    let purple = RGBColor(140, 40, 200);
+    for &((cx, cy), r) in &picture.circles {
+        let ring: Vec<(f32, f32)> = (0..=48)
+            .map(|i| {
+                let a = i as f32 / 48.0 * std::f32::consts::TAU;
+                (cx + r * a.cos(), cy + r * a.sin())
+            })
+            .collect();
+        chart.draw_series(LineSeries::new(ring, purple.stroke_width(2)))?;
     }
     // Target region and start.
     let t = maze.target();

@@ -69,6 +69,16 @@ impl Seeds {
         self.substream(stream, 0)
     }
 
+    /// The seeds of sub-run `index` (phase 2 gives each skill a fresh learner whose weights
+    /// and update noise come from its own seeds). Index 0 is the run itself.
+    pub fn skill(&self, index: u32) -> Seeds {
+        if index == 0 {
+            return *self;
+        }
+        let mut rng = self.substream(Stream::Init, index);
+        Seeds::new(rand::RngCore::next_u64(&mut rng))
+    }
+
     /// The `index`-th generator of one consumer, for consumers that need many independent
     /// generators (one per skill, one per evaluation episode, ...).
     pub fn substream(&self, stream: Stream, index: u32) -> Rng {

@@ -5,7 +5,7 @@
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use pbcs::config::{self, Check, ExploreJob, MazeConfig, TrainJob};
+use pbcs::config::{self, Check, ExploreJob, MazeConfig, RunJob, TrainJob};
 use pbcs::learner::{ActorUpdate, Algo};
 use serde::de::DeserializeOwned;
 use std::path::PathBuf;
@@ -111,6 +111,27 @@ enum Command {
         #[arg(long)]
         steps: Option<u64>,
     },
+    /// PBCS: phase 1, then phase 2 (Backplay, shaped training, skill chaining); evaluate the
+    /// chain; write the record, the chain and a picture.
+    Run {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Learner preset; overrides `learner.algo`.
+        #[arg(long, value_parser = ["ddpg", "td3"])]
+        algo: Option<String>,
+        /// Actor update; overrides `learner.actor_update`.
+        #[arg(long, value_parser = ["gradient", "argmax"])]
+        actor: Option<String>,
+        /// PBCS without skill chaining (fail when a second skill would be needed).
+        #[arg(long)]
+        no_chaining: bool,
+        /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
+        #[arg(long)]
+        exact_starts: bool,
+        /// Discount γ; overrides `learner.gamma`.
+        #[arg(long)]
+        gamma: Option<f32>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -139,7 +160,104 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             actor,
             steps,
         } => train(&run, algo.as_deref(), actor.as_deref(), steps),
+        Command::Run {
+            run,
+            algo,
+            actor,
+            no_chaining,
+            exact_starts,
+            gamma,
+        } => {
+            let mut job: RunJob = run.load(|j: &mut RunJob| (&mut j.maze, &mut j.seed))?;
+            set_learner(&mut job.learner, algo.as_deref(), actor.as_deref());
+            if no_chaining {
+                job.phase2.chaining = false;
+            }
+            if exact_starts {
+                job.phase2.start = pbcs::pbcs::StartMode::Exact;
+            }
+            if let Some(g) = gamma {
+                job.learner.gamma = g;
+            }
+            pbcs_run(&run, &job)
+        }
     }
+}
+
+fn set_learner(l: &mut pbcs::learner::LearnerConfig, algo: Option<&str>, actor: Option<&str>) {
+    match algo {
+        Some("ddpg") => l.algo = Algo::Ddpg,
+        Some("td3") => l.algo = Algo::Td3,
+        _ => {}
+    }
+    match actor {
+        Some("gradient") => l.actor_update = ActorUpdate::Gradient,
+        Some("argmax") => l.actor_update = ActorUpdate::Argmax,
+        _ => {}
+    }
+}
+
+fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
+    job.check()?;
+    let mut suffix = String::new();
+    if !job.phase2.chaining {
+        suffix.push_str("-nochain");
+    }
+    if job.phase2.start == pbcs::pbcs::StartMode::Exact {
+        suffix.push_str("-exact");
+    }
+    let out = run.out_dir("run", &job.maze, job.seed, &suffix);
+    let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
+    let (record, seconds) = pbcs::jobs::run_pbcs(job, &out, |skill, p| {
+        let steps = p.steps.train + p.steps.test;
+        bar.set_message(format!(
+            "skill {skill}: K {} → T {}, {} {:.0} %, this skill's env steps {}",
+            p.k,
+            p.t,
+            if p.test { "test" } else { "train" },
+            100.0 * p.success,
+            steps,
+        ));
+        bar.tick();
+    })
+    .with_context(|| format!("PBCS on maze {} seed {}", job.maze.size, job.seed))?;
+    bar.finish_and_clear();
+    println!(
+        "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {} over {} \
+         episodes, {} skills{}",
+        record.variant,
+        record.learner,
+        record.maze,
+        record.maze_seed,
+        record.seed,
+        if record.solved {
+            "SOLVED"
+        } else {
+            "not solved"
+        },
+        record.success_rate,
+        job.phase2.eval_episodes,
+        record.skills,
+        if record.failure.is_empty() {
+            String::new()
+        } else {
+            format!(", stopped: {}", record.failure)
+        }
+    );
+    println!(
+        "env steps: phase 1 {}, training {}, tests {}, total {}; |τ| = {}; {:.1} s",
+        record.phase1_steps,
+        record.train_steps,
+        record.test_steps,
+        record.total_steps,
+        record.trajectory_len,
+        seconds
+    );
+    println!(
+        "wrote {}/{{record,skills,trajectory}}.csv, chain/, run.png, run.svg",
+        out.display()
+    );
+    Ok(())
 }
 
 fn explore(run: &RunArgs) -> anyhow::Result<()> {
@@ -184,16 +302,7 @@ fn train(
     steps: Option<u64>,
 ) -> anyhow::Result<()> {
     let mut job: TrainJob = run.load(|j: &mut TrainJob| (&mut j.maze, &mut j.seed))?;
-    match algo {
-        Some("ddpg") => job.learner.algo = Algo::Ddpg,
-        Some("td3") => job.learner.algo = Algo::Td3,
-        _ => {}
-    }
-    match actor {
-        Some("gradient") => job.learner.actor_update = ActorUpdate::Gradient,
-        Some("argmax") => job.learner.actor_update = ActorUpdate::Argmax,
-        _ => {}
-    }
+    set_learner(&mut job.learner, algo, actor);
     if let Some(s) = steps {
         job.train.steps = s;
     }

@@ -167,4 +167,23 @@ impl Env for Maze {
     fn obs_names(&self) -> Vec<String> {
         vec!["x".into(), "y".into()]
     }
+
+    /// Uniform in the disc (r = radius·√u, angle uniform), clamped to [0, N]² so that a start
+    /// never lies outside the outer walls (it may lie inside a wall, where it cannot move, as
+    /// the paper notes).
+    fn sample_ball(
+        &self,
+        center: &Point<f32>,
+        radius: f32,
+        rng: &mut crate::rng::Rng,
+    ) -> Point<f32> {
+        use rand::Rng as _;
+        let r = radius * rng.random::<f32>().sqrt();
+        let angle = rng.random::<f32>() * std::f32::consts::TAU;
+        let n = self.size() as f32;
+        Point::new(
+            (center.x + r * angle.cos()).clamp(0.0, n),
+            (center.y + r * angle.sin()).clamp(0.0, n),
+        )
+    }
 }

@@ -1,0 +1,67 @@
+//! Prints every Backplay event of one PBCS run (tests and training rounds), for diagnosis.
+//! `cargo run --release --example phase2_trace -- MAZE SEED [CONFIG.toml]`
+use pbcs::config::{self, RunJob};
+use pbcs::env::Env;
+use pbcs::explore::explore;
+use pbcs::maze::Maze;
+use pbcs::pbcs::chain_skills;
+use pbcs::rng::{Seeds, Stream};
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let mut job: RunJob = match args.get(3) {
+        Some(p) => config::load(std::path::Path::new(p))?,
+        None => RunJob::default(),
+    };
+    job.maze.size = args.get(1).map_or(Ok(2), |s| s.parse())?;
+    job.seed = args.get(2).map_or(Ok(0), |s| s.parse())?;
+    let maze = Maze::new(&job.maze)?;
+    let seeds = Seeds::new(job.seed);
+    let found = explore(
+        &maze,
+        &job.explore,
+        &mut seeds.stream(Stream::Explore),
+        |_, _| {},
+    )?;
+    let tau = &found.trajectory.states;
+    println!("phase 1: {} steps, |τ| = {}", found.env_steps, tau.len());
+    let t0 = std::time::Instant::now();
+    let out = chain_skills(
+        &maze,
+        tau,
+        &job.learner,
+        &job.phase2,
+        &seeds,
+        found.env_steps,
+        |n, p| {
+            println!(
+                "{:7.1}s skill {n} K {:4} T {:4} {} {:.2} steps {}/{}",
+                t0.elapsed().as_secs_f64(),
+                p.k,
+                p.t,
+                if p.test { "TEST " } else { "train" },
+                p.success,
+                p.steps.train,
+                p.steps.test
+            );
+        },
+    )?;
+    println!(
+        "failure {:?}, skills {}",
+        out.failure,
+        out.chain.skills.len()
+    );
+    for s in &out.chain.skills {
+        println!(
+            "  K {} -> T {} at {:?}",
+            s.start_index, s.target_index, s.activation.center
+        );
+    }
+    let r = out.chain.run(&maze, maze.start(), 5000);
+    println!(
+        "chain from s0: success {} in {} steps",
+        r.success,
+        r.skill_used.len()
+    );
+    Ok(())
+}

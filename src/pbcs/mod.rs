@@ -1,0 +1,424 @@
+//! Phase 2 of PBCS: Backplay, shaped training and skill chaining (the paper's Algorithms 1–3).
+//!
+//! * [`backplay::backplay`] — Algorithm 2, over the [`backplay::Backplayer`] interface;
+//! * [`shaped::SkillTask`] — Algorithm 3 (training with the shaped reward) and Backplay's
+//!   greedy tests, for one skill;
+//! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
+//!   collecting skills backwards, then reversing them;
+//! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
+//!   executing it uses π_0 until the state enters A_1, then π_1, and so on.
+
+pub mod backplay;
+pub mod shaped;
+
+use crate::config::Check;
+use crate::env::Env;
+use crate::error::{Error, Result};
+use crate::learner::{Learner, LearnerConfig};
+use crate::nn::Mlp;
+use crate::rng::{Seeds, Stream};
+use serde::{Deserialize, Serialize};
+use shaped::{dist, SkillTask, StepCounts};
+use std::path::Path;
+
+/// Where Backplay's episodes start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartMode {
+    /// Uniformly in B_ε(τ_K), as the paper requires (appendix "Need for resetting in unseen
+    /// states").
+    Ball,
+    /// Exactly at τ_K (the failure that appendix explains).
+    Exact,
+}
+
+/// Phase-2 settings (α, β, ε, ...), validated by [`Check::check`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Phase2Config {
+    /// α: consecutive non-improvements of the training success that end training at one K.
+    pub alpha: usize,
+    /// β: episodes per test and per training round.
+    pub beta: usize,
+    /// ε: radius of the start balls, target balls and activation balls.
+    pub epsilon: f32,
+    /// Step limit of a training or test episode.
+    pub max_steps: usize,
+    /// Skill chaining on (PBCS) or off (PBCS without skill chaining: fail when a second skill
+    /// would be needed).
+    pub chaining: bool,
+    /// Starts in B_ε(τ_K) (the paper) or exactly at τ_K.
+    pub start: StartMode,
+    /// How far K moves back after each step of Backplay (1: the paper).
+    pub k_step: usize,
+    /// Budget of environment steps for the whole run (phase 1 included); the run fails when
+    /// it is exceeded.
+    pub max_env_steps: u64,
+    /// Episodes of the final evaluation of the chain (from starts uniform in B_ε(s_0)).
+    pub eval_episodes: usize,
+    /// Step limit of an evaluation episode of the chain.
+    pub eval_max_steps: usize,
+}
+
+impl Default for Phase2Config {
+    fn default() -> Self {
+        Phase2Config {
+            alpha: 10,
+            beta: 50,
+            epsilon: 0.1,
+            max_steps: 50,
+            chaining: true,
+            start: StartMode::Ball,
+            k_step: 1,
+            max_env_steps: 50_000_000,
+            eval_episodes: 100,
+            eval_max_steps: 5_000,
+        }
+    }
+}
+
+impl Check for Phase2Config {
+    fn check(&self) -> Result<()> {
+        for (field, v) in [
+            ("phase2.alpha", self.alpha),
+            ("phase2.beta", self.beta),
+            ("phase2.max_steps", self.max_steps),
+            ("phase2.k_step", self.k_step),
+            ("phase2.eval_episodes", self.eval_episodes),
+            ("phase2.eval_max_steps", self.eval_max_steps),
+        ] {
+            if v == 0 {
+                return Err(Error::invalid(field, "must be at least 1"));
+            }
+        }
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!("must be positive, got {}", self.epsilon),
+            ));
+        }
+        if self.max_env_steps == 0 {
+            return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// A progress report from inside Backplay.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Current K.
+    pub k: usize,
+    /// Current T.
+    pub t: usize,
+    /// A test (true) or a training round (false).
+    pub test: bool,
+    /// Its success fraction.
+    pub success: f32,
+    /// Steps spent by the current skill so far.
+    pub steps: StepCounts,
+}
+
+/// A closed ball in observation space.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Ball {
+    /// Centre.
+    pub center: Vec<f32>,
+    /// Radius.
+    pub radius: f32,
+}
+
+impl Ball {
+    /// Whether `obs` is in the ball (d ≤ radius).
+    pub fn contains(&self, obs: &[f32]) -> bool {
+        dist(&self.center, obs) <= self.radius
+    }
+}
+
+/// A skill: a policy and its activation set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skill {
+    /// π_i.
+    pub policy: Mlp,
+    /// A_i = B_ε(τ_{K_i}).
+    pub activation: Ball,
+    /// K_i: the index on τ of the ball's centre.
+    pub start_index: usize,
+    /// The index on τ of the skill's target (the next skill's K, or N for the last one).
+    pub target_index: usize,
+}
+
+/// A chain of skills in execution order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SkillChain {
+    /// π_0 … π_n with A_0 … A_n.
+    pub skills: Vec<Skill>,
+}
+
+/// One execution of a chain.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rollout<S> {
+    /// Visited states, start included.
+    pub states: Vec<S>,
+    /// Index of the skill that chose each action (one per step).
+    pub skill_used: Vec<usize>,
+    /// Whether the environment's reward was reached.
+    pub success: bool,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Manifest {
+    skills: Vec<ManifestSkill>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct ManifestSkill {
+    file: String,
+    center: Vec<f32>,
+    radius: f32,
+    start_index: usize,
+    target_index: usize,
+    sizes: Vec<usize>,
+    action_bounds: Vec<f32>,
+}
+
+impl SkillChain {
+    /// Executes the chain from `start`: π_0 until the state enters A_1, then π_1, and so on,
+    /// until the environment's positive reward or `max_steps` steps.
+    pub fn run<E: Env>(&self, env: &E, start: E::State, max_steps: usize) -> Rollout<E::State> {
+        let mut obs = vec![0.0; env.obs_dim()];
+        let mut ws = crate::nn::Workspace::default();
+        let mut i = 0;
+        let mut s = start;
+        let mut out = Rollout {
+            states: vec![s.clone()],
+            skill_used: Vec::new(),
+            success: false,
+        };
+        for _ in 0..max_steps {
+            env.observe(&s, &mut obs);
+            while i + 1 < self.skills.len() && self.skills[i + 1].activation.contains(&obs) {
+                i += 1;
+            }
+            let action = self.skills[i].policy.forward(&obs, 1, &mut ws);
+            let step = env.step(&s, action);
+            out.skill_used.push(i);
+            s = step.state;
+            out.states.push(s.clone());
+            if step.reward > 0.0 && step.terminal {
+                out.success = true;
+                break;
+            }
+        }
+        out
+    }
+
+    /// Saves the chain into `dir`: `skill{i}.safetensors` per policy and `manifest.toml`
+    /// (activation balls, trajectory indices, network shapes).
+    pub fn save(&self, dir: &Path) -> Result<()> {
+        let mut manifest = Manifest { skills: Vec::new() };
+        for (i, skill) in self.skills.iter().enumerate() {
+            let file = format!("skill{i}.safetensors");
+            skill.policy.save(&dir.join(&file))?;
+            let bounds = match skill.policy.head() {
+                crate::nn::Head::Tanh(b) => b.clone(),
+                crate::nn::Head::Linear => Vec::new(),
+            };
+            manifest.skills.push(ManifestSkill {
+                file,
+                center: skill.activation.center.clone(),
+                radius: skill.activation.radius,
+                start_index: skill.start_index,
+                target_index: skill.target_index,
+                sizes: skill.policy.sizes().to_vec(),
+                action_bounds: bounds,
+            });
+        }
+        let text = toml::to_string(&manifest).map_err(|e| Error::Parse {
+            path: dir.join("manifest.toml"),
+            message: e.to_string(),
+        })?;
+        crate::record::write_atomic(&dir.join("manifest.toml"), |w| w.write_all(text.as_bytes()))
+    }
+
+    /// Loads a chain saved by [`SkillChain::save`].
+    pub fn load(dir: &Path) -> Result<Self> {
+        let path = dir.join("manifest.toml");
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let manifest: Manifest = toml::from_str(&text).map_err(|e| Error::Parse {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        let mut skills = Vec::new();
+        for m in manifest.skills {
+            let mut rng = Seeds::new(0).stream(Stream::Init);
+            let head = if m.action_bounds.is_empty() {
+                crate::nn::Head::Linear
+            } else {
+                crate::nn::Head::Tanh(m.action_bounds.clone())
+            };
+            let mut policy = Mlp::new(&m.sizes, head, &mut rng);
+            policy.load(&dir.join(&m.file))?;
+            skills.push(Skill {
+                policy,
+                activation: Ball {
+                    center: m.center,
+                    radius: m.radius,
+                },
+                start_index: m.start_index,
+                target_index: m.target_index,
+            });
+        }
+        Ok(SkillChain { skills })
+    }
+}
+
+/// Why phase 2 did not produce a chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Failure {
+    /// Backplay solved no K at all for some skill.
+    BackplayFailed,
+    /// A second skill would have been needed with chaining off.
+    NoChaining,
+    /// The step budget `phase2.max_env_steps` ran out.
+    Budget,
+}
+
+/// The output of phase 2.
+#[derive(Debug, Clone)]
+pub struct Phase2Outcome {
+    /// The chain (complete when `failure` is `None`; the skills found so far otherwise).
+    pub chain: SkillChain,
+    /// Why it stopped early, if it did.
+    pub failure: Option<Failure>,
+    /// Environment steps of training and of tests.
+    pub steps: StepCounts,
+}
+
+/// Algorithm 1 on any [`backplay::Backplayer`]: skills are found backwards from T = N and
+/// returned in execution order as `(K_i, T_i, π_i)`.
+///
+/// ```text
+/// T = N
+/// while T > 0:
+///     (π_n, T) = Backplay(τ_0 … τ_T);  A_n = B_ε(τ_T);  n += 1
+/// reverse π and A
+/// ```
+///
+/// `next(n, T)` makes the fresh learning problem of skill n (a new DDPG each time);
+/// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
+/// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
+/// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run
+/// with [`Failure::NoChaining`].
+#[allow(clippy::type_complexity)]
+pub fn skill_chaining<B: backplay::Backplayer>(
+    n: usize,
+    alpha: usize,
+    k_step: usize,
+    chaining: bool,
+    mut next: impl FnMut(usize, usize) -> Result<B>,
+    mut finished: impl FnMut(B),
+) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
+    let mut skills = Vec::new();
+    let mut t = n;
+    let mut failure = None;
+    while t > 0 {
+        let mut b = next(skills.len(), t)?;
+        let found = backplay::backplay(&mut b, t, alpha, k_step);
+        let exhausted = b.exhausted();
+        finished(b);
+        match found {
+            _ if exhausted => {
+                failure = Some(Failure::Budget);
+                break;
+            }
+            None => {
+                failure = Some(Failure::BackplayFailed);
+                break;
+            }
+            Some((k, policy)) => {
+                skills.push((k, t, policy));
+                if k > 0 && !chaining {
+                    failure = Some(Failure::NoChaining);
+                    break;
+                }
+                t = k;
+            }
+        }
+    }
+    skills.reverse();
+    Ok((skills, failure))
+}
+
+/// Phase 2 on a trajectory τ: [`skill_chaining`] with a [`SkillTask`] (fresh learner, shaped
+/// reward, starts in B_ε(τ_K)) per skill.
+///
+/// Skill n's learner is initialised from the run's seeds for sub-run n, and its starts, noise
+/// and replay sampling read substream n; `spent` is the step count already used (phase 1),
+/// charged against `config.max_env_steps`.
+pub fn chain_skills<E: Env>(
+    env: &E,
+    tau: &[E::State],
+    learner: &LearnerConfig,
+    config: &Phase2Config,
+    seeds: &Seeds,
+    spent: u64,
+    mut progress: impl FnMut(usize, Progress),
+) -> Result<Phase2Outcome> {
+    config.check()?;
+    let bounds: Vec<f32> = (0..env.action_dim()).map(|i| env.action_bound(i)).collect();
+    let obs: Vec<Vec<f32>> = tau
+        .iter()
+        .map(|s| {
+            let mut o = vec![0.0; env.obs_dim()];
+            env.observe(s, &mut o);
+            o
+        })
+        .collect();
+    let mut steps = StepCounts::default();
+    let spent_cell = std::cell::Cell::new(spent);
+    let progress = std::cell::RefCell::new(&mut progress);
+    let (found, failure) = skill_chaining(
+        tau.len() - 1,
+        config.alpha,
+        config.k_step,
+        config.chaining,
+        |n, t| {
+            let n32 = n as u32;
+            let learner = Learner::new(learner, env.obs_dim(), &bounds, &seeds.skill(n32))?;
+            let rngs = [
+                seeds.substream(Stream::Start, n32),
+                seeds.substream(Stream::Noise, n32),
+                seeds.substream(Stream::Replay, n32),
+            ];
+            let budget = config.max_env_steps.saturating_sub(spent_cell.get());
+            let mut task = SkillTask::new(env, config, tau, &obs, t, learner, rngs, budget);
+            let progress = &progress;
+            task.on_event = Some(Box::new(move |p: Progress| (progress.borrow_mut())(n, p)));
+            Ok(task)
+        },
+        |task| {
+            steps.train += task.steps.train;
+            steps.test += task.steps.test;
+            spent_cell.set(spent_cell.get() + task.steps.train + task.steps.test);
+        },
+    )?;
+    let skills = found
+        .into_iter()
+        .map(|(k, t, policy)| Skill {
+            policy,
+            activation: Ball {
+                center: obs[k].clone(),
+                radius: config.epsilon,
+            },
+            start_index: k,
+            target_index: t,
+        })
+        .collect();
+    Ok(Phase2Outcome {
+        chain: SkillChain { skills },
+        failure,
+        steps,
+    })
+}
