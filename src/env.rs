@@ -60,6 +60,15 @@ pub trait Env {
         center.clone()
     }
 
+    /// A short sequence of actions that takes `from` to (within rounding of) `to`, if the
+    /// environment knows one (a straight line in the maze). Only used to shorten phase-1
+    /// trajectories before phase 2 (an option of ours, off in the paper's preset). The default
+    /// knows none.
+    fn connect(&self, from: &Self::State, to: &Self::State) -> Option<Vec<Vec<f32>>> {
+        let _ = (from, to);
+        None
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 

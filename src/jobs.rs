@@ -313,6 +313,8 @@ pub struct RunRecord {
     pub skills: usize,
     /// States of the phase-1 trajectory τ.
     pub trajectory_len: usize,
+    /// States of the trajectory phase 2 worked on (τ, or τ shortened).
+    pub phase2_trajectory_len: usize,
 }
 
 /// Chain rollouts drawn in the picture.
@@ -332,7 +334,13 @@ pub fn run_pbcs(
     let clock = Instant::now();
     let mut rng = seeds.stream(Stream::Explore);
     let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-    let tau = &found.trajectory.states;
+    let short;
+    let tau = if job.phase2.shorten {
+        short = crate::explore::shorten(&maze, &found.trajectory);
+        &short.states
+    } else {
+        &found.trajectory.states
+    };
     let phase2 = chain_skills(
         &maze,
         tau,
@@ -401,7 +409,8 @@ pub fn run_pbcs(
         test_steps: phase2.steps.test,
         total_steps: found.env_steps + phase2.steps.train + phase2.steps.test,
         skills: phase2.chain.skills.len(),
-        trajectory_len: tau.len(),
+        trajectory_len: found.trajectory.len(),
+        phase2_trajectory_len: tau.len(),
     };
     write_config(job, out)?;
     write_record(&out.join("record.csv"), &record)?;

@@ -93,3 +93,36 @@ fn archive_counters_follow_the_selection_rule() {
     // Each environment step selected exactly one state (the last step's state included).
     assert_eq!(total_state_usage, found.env_steps);
 }
+
+#[test]
+fn shortened_trajectories_are_real_steps_and_much_shorter() {
+    use pbcs::explore::shorten;
+    for size in [2, 5, 10, 15] {
+        let maze = Maze::new(&MazeConfig {
+            size,
+            ..MazeConfig::default()
+        })
+        .unwrap();
+        let mut rng = Seeds::new(1).stream(Stream::Explore);
+        let tau = explore(&maze, &ExploreConfig::default(), &mut rng, |_, _| {})
+            .unwrap()
+            .trajectory;
+        let short = shorten(&maze, &tau);
+        assert_eq!(short.states[0], tau.states[0]);
+        assert!(
+            maze.reached(short.states.last().unwrap()),
+            "size {size}: ends at the target"
+        );
+        for (i, a) in short.actions.iter().enumerate() {
+            let step = maze.step(&short.states[i], a);
+            assert_eq!(step.state, short.states[i + 1], "size {size} step {i}");
+            assert!(step.reward >= 0.0, "size {size} step {i} hits a wall");
+        }
+        assert!(
+            short.len() * 2 < tau.len(),
+            "size {size}: {} -> {} states",
+            tau.len(),
+            short.len()
+        );
+    }
+}

@@ -294,3 +294,62 @@ fn a_saved_chain_loads_and_runs_the_same() {
         .to_string();
     assert!(err.contains("manifest.toml"), "{err}");
 }
+
+mod end_to_end {
+    use pbcs::config::RunJob;
+    use pbcs::jobs::run_pbcs;
+
+    fn job(seed: u64) -> RunJob {
+        let mut job = RunJob::default();
+        job.maze.size = 2;
+        job.seed = seed;
+        job
+    }
+
+    /// The default (faithful) preset solves the 2×2 maze: at least 2 of seeds 0, 1, 2 within a
+    /// budget of 1M environment steps (the paper used 321k on its one seed).
+    #[test]
+    fn pbcs_solves_maze_2_for_most_seeds() {
+        let mut solved = 0;
+        let mut report = Vec::new();
+        for seed in 0..3 {
+            let mut j = job(seed);
+            j.phase2.max_env_steps = 1_000_000;
+            let dir = tempfile::tempdir().unwrap();
+            let (r, _) = run_pbcs(&j, dir.path(), |_, _| {}).unwrap();
+            report.push(format!(
+                "seed {seed}: solved {} success {} steps {} skills {} failure '{}'",
+                r.solved, r.success_rate, r.total_steps, r.skills, r.failure
+            ));
+            solved += usize::from(r.solved);
+        }
+        assert!(solved >= 2, "{report:#?}");
+    }
+
+    /// Same seed, same bytes: the whole pipeline (phase 1, phase 2, evaluation, files). A small
+    /// budget keeps it quick; the budget failure is itself deterministic.
+    #[test]
+    fn pbcs_run_is_byte_identical_per_seed() {
+        let mut j = job(5);
+        j.phase2.max_env_steps = 30_000;
+        let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let (ra, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
+        run_pbcs(&j, b.path(), |_, _| {}).unwrap();
+        assert!(ra.total_steps > 0);
+        for f in [
+            "record.csv",
+            "skills.csv",
+            "trajectory.csv",
+            "config.toml",
+            "run.png",
+            "run.svg",
+            "chain/manifest.toml",
+        ] {
+            let (x, y) = (
+                std::fs::read(a.path().join(f)).unwrap(),
+                std::fs::read(b.path().join(f)).unwrap(),
+            );
+            assert!(x == y, "{f} differs between two runs of one seed");
+        }
+    }
+}

@@ -208,15 +208,24 @@ fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
     }
     let out = run.out_dir("run", &job.maze, job.seed, &suffix);
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
+    let clock = std::time::Instant::now();
+    // Steps of the skills already finished, and the running skill's latest count.
+    let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
     let (record, seconds) = pbcs::jobs::run_pbcs(job, &out, |skill, p| {
-        let steps = p.steps.train + p.steps.test;
+        if skill != current_skill {
+            finished += current;
+            current_skill = skill;
+        }
+        current = p.steps.train + p.steps.test;
+        let total = finished + current;
         bar.set_message(format!(
-            "skill {skill}: K {} → T {}, {} {:.0} %, this skill's env steps {}",
+            "skill {skill}: K {} → T {}, {} {:.0} %, {} phase-2 env steps ({:.0} steps/s)",
             p.k,
             p.t,
             if p.test { "test" } else { "train" },
             100.0 * p.success,
-            steps,
+            total,
+            total as f64 / clock.elapsed().as_secs_f64().max(1e-9)
         ));
         bar.tick();
     })

@@ -168,6 +168,20 @@ impl Env for Maze {
         vec!["x".into(), "y".into()]
     }
 
+    /// The straight line from `from` to `to` in equal steps of at most `max_action` per axis,
+    /// when the whole segment touches no wall and is at most 2 units long.
+    fn connect(&self, from: &Point<f32>, to: &Point<f32>) -> Option<Vec<Vec<f32>>> {
+        let d = to - from;
+        if d.norm_squared() > 4.0 || self.walls.segment_hits(from, to) {
+            return None;
+        }
+        let steps = (d.x.abs().max(d.y.abs()) / self.config.max_action)
+            .ceil()
+            .max(1.0);
+        let a = vec![d.x / steps, d.y / steps];
+        Some(vec![a; steps as usize])
+    }
+
     /// Uniform in the disc (r = radius·√u, angle uniform), clamped to [0, N]² so that a start
     /// never lies outside the outer walls (it may lie inside a wall, where it cannot move, as
     /// the paper notes).

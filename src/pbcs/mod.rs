@@ -51,6 +51,9 @@ pub struct Phase2Config {
     pub start: StartMode,
     /// How far K moves back after each step of Backplay (1: the paper).
     pub k_step: usize,
+    /// Shorten τ before phase 2 by cutting the random walk's detours
+    /// ([`crate::explore::shorten`]); off in the paper's procedure.
+    pub shorten: bool,
     /// Budget of environment steps for the whole run (phase 1 included); the run fails when
     /// it is exceeded.
     pub max_env_steps: u64,
@@ -70,6 +73,7 @@ impl Default for Phase2Config {
             chaining: true,
             start: StartMode::Ball,
             k_step: 1,
+            shorten: false,
             max_env_steps: 50_000_000,
             eval_episodes: 100,
             eval_max_steps: 5_000,

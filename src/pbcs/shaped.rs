@@ -30,7 +30,8 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
 }
 
 /// The shaped reward of Algorithm 3: 10 when s' ∈ B_ε(τ_T), else Φ(s') − Φ(s) with the
-/// potential Φ(s) = 1 / d(s, τ_T).
+/// potential Φ(s) = 1 / d(s, τ_T). (The episode loop also gives 10 when the last skill reaches
+/// the environment's reward.)
 #[inline]
 pub fn shaped_reward(d_s: f32, d_next: f32, epsilon: f32) -> f32 {
     if d_next <= epsilon {
@@ -139,6 +140,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         );
         let bounds: Vec<f32> = (0..act_dim).map(|i| self.env.action_bound(i)).collect();
         let target = &self.obs[self.t];
+        let final_skill = self.t + 1 == self.states.len();
         let mut states = self.starts(k);
         let mut running: Vec<usize> = (0..states.len()).collect();
         let mut successes = 0usize;
@@ -169,11 +171,25 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 let step = self.env.step(&states[lane], a);
                 self.env.observe(&step.state, &mut next_obs);
                 let (d_s, d_next) = (dist(o, target), dist(&next_obs, target));
-                let reached = d_next <= eps;
+                // The goal is B_ε(τ_T); for the last skill (T = N) it is the environment's own
+                // reward, because B_ε(τ_N) can stick out of the rewarded region (τ_N is merely
+                // the first state found inside it). Reaching the reward ends any episode, and
+                // so does any other terminal state (as a failure).
+                let rewarded = step.terminal && step.reward > 0.0;
+                let reached = if final_skill {
+                    rewarded
+                } else {
+                    d_next <= eps || rewarded
+                };
                 if learn {
                     self.steps.train += 1;
-                    let r = shaped_reward(d_s, d_next, eps);
-                    self.replay.push(o, a, r, &next_obs, reached);
+                    let r = if reached {
+                        10.0
+                    } else {
+                        shaped_reward(d_s, d_next, eps)
+                    };
+                    self.replay
+                        .push(o, a, r, &next_obs, reached || step.terminal);
                     if self.replay.len() >= self.learner.config().batch_size {
                         self.replay.sample(
                             self.learner.config().batch_size,
@@ -185,10 +201,11 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 } else {
                     self.steps.test += 1;
                 }
+                let ended = step.terminal;
                 states[lane] = step.state;
                 if reached {
                     successes += 1;
-                } else {
+                } else if !ended {
                     still.push(lane);
                 }
             }
