@@ -325,6 +325,49 @@ pub fn explore<E: Env>(
     })
 }
 
+/// Shortens a trajectory by cutting its detours: from each kept state, go to the farthest
+/// later state of τ that [`Env::connect`] links it to, by the actions it gives, keeping the
+/// states those steps actually land on. The result starts at τ_0, ends within rounding of τ_N,
+/// and every transition is a real step of the environment. With the default `connect` (no
+/// link known) τ is returned unchanged. An improvement of ours, off in the paper's preset.
+///
+/// ```
+/// use pbcs::config::{ExploreConfig, MazeConfig};
+/// use pbcs::explore::{explore, shorten};
+/// use pbcs::maze::Maze;
+/// use pbcs::rng::{Seeds, Stream};
+///
+/// let maze = Maze::new(&MazeConfig { size: 5, ..Default::default() }).unwrap();
+/// let tau = explore(&maze, &ExploreConfig::default(), &mut Seeds::new(0).stream(Stream::Explore), |_, _| {})
+///     .unwrap()
+///     .trajectory;
+/// let short = shorten(&maze, &tau);
+/// assert!(short.len() < tau.len() / 2);
+/// assert!(maze.reached(short.states.last().unwrap()));
+/// ```
+pub fn shorten<E: Env>(env: &E, tau: &Trajectory<E::State>) -> Trajectory<E::State> {
+    let n = tau.states.len();
+    let mut states = vec![tau.states[0].clone()];
+    let mut actions = Vec::new();
+    let mut i = 0;
+    while i + 1 < n {
+        let cur = states.last().unwrap().clone();
+        // The farthest j that `connect` reaches; τ's own action always reaches i + 1.
+        let (j, path) = (i + 1..n)
+            .rev()
+            .find_map(|j| env.connect(&cur, &tau.states[j]).map(|p| (j, p)))
+            .unwrap_or_else(|| (i + 1, vec![tau.actions[i].clone()]));
+        let mut s = cur;
+        for a in path {
+            s = env.step(&s, &a).state;
+            states.push(s.clone());
+            actions.push(a);
+        }
+        i = j;
+    }
+    Trajectory { states, actions }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -373,47 +416,4 @@ mod tests {
             assert!((9_500..=10_500).contains(&h), "{hits:?}");
         }
     }
-}
-
-/// Shortens a trajectory by cutting its detours: from each kept state, go to the farthest
-/// later state of τ that [`Env::connect`] links it to, by the actions it gives, keeping the
-/// states those steps actually land on. The result starts at τ_0, ends within rounding of τ_N,
-/// and every transition is a real step of the environment. With the default `connect` (no
-/// link known) τ is returned unchanged. An improvement of ours, off in the paper's preset.
-///
-/// ```
-/// use pbcs::config::{ExploreConfig, MazeConfig};
-/// use pbcs::explore::{explore, shorten};
-/// use pbcs::maze::Maze;
-/// use pbcs::rng::{Seeds, Stream};
-///
-/// let maze = Maze::new(&MazeConfig { size: 5, ..Default::default() }).unwrap();
-/// let tau = explore(&maze, &ExploreConfig::default(), &mut Seeds::new(0).stream(Stream::Explore), |_, _| {})
-///     .unwrap()
-///     .trajectory;
-/// let short = shorten(&maze, &tau);
-/// assert!(short.len() < tau.len() / 2);
-/// assert!(maze.reached(short.states.last().unwrap()));
-/// ```
-pub fn shorten<E: Env>(env: &E, tau: &Trajectory<E::State>) -> Trajectory<E::State> {
-    let n = tau.states.len();
-    let mut states = vec![tau.states[0].clone()];
-    let mut actions = Vec::new();
-    let mut i = 0;
-    while i + 1 < n {
-        let cur = states.last().unwrap().clone();
-        // The farthest j that `connect` reaches; τ's own action always reaches i + 1.
-        let (j, path) = (i + 1..n)
-            .rev()
-            .find_map(|j| env.connect(&cur, &tau.states[j]).map(|p| (j, p)))
-            .unwrap_or_else(|| (i + 1, vec![tau.actions[i].clone()]));
-        let mut s = cur;
-        for a in path {
-            s = env.step(&s, &a).state;
-            states.push(s.clone());
-            actions.push(a);
-        }
-        i = j;
-    }
-    Trajectory { states, actions }
 }
