@@ -277,7 +277,7 @@ pub fn run_train(
 }
 
 /// The per-run record of PBCS (`record.csv`): every count the results table needs.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct RunRecord {
     /// Maze size N.
     pub maze: usize,
@@ -474,4 +474,91 @@ fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
         ]
     });
     write_csv(path, &header, rows)
+}
+
+/// The paper's PBCS step counts (results table, one seed each), by maze size.
+pub fn paper_pbcs_steps(maze: usize) -> Option<u64> {
+    match maze {
+        2 => Some(321_000),
+        5 => Some(5_000_000),
+        7 => Some(6_000_000),
+        10 => Some(8_000_000),
+        15 => Some(22_000_000),
+        _ => None,
+    }
+}
+
+/// Runs PBCS for every (size, seed) of a grid into `out/maze<N>-s<S>/`, `jobs` runs at a time
+/// (one thread each), skipping cells whose `record.csv` already exists (an interrupted sweep
+/// resumes). Returns every record, in (size, seed) order, and the wall seconds of each run
+/// (read back from `timing.toml` for skipped cells, `NaN` if absent).
+pub fn run_grid(
+    base: &RunJob,
+    sizes: &[usize],
+    seeds: &[u64],
+    out: &Path,
+    jobs: usize,
+    on_done: impl Fn(&RunRecord, f64) + Sync,
+) -> Result<Vec<(RunRecord, f64)>> {
+    let cells: Vec<(usize, u64)> = sizes
+        .iter()
+        .flat_map(|&n| seeds.iter().map(move |&s| (n, s)))
+        .collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: std::sync::Mutex<Vec<Option<Result<(RunRecord, f64)>>>> =
+        std::sync::Mutex::new((0..cells.len()).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some(&(n, seed)) = cells.get(i) else {
+                    break;
+                };
+                let mut job = base.clone();
+                job.maze.size = n;
+                job.seed = seed;
+                let dir = out.join(format!("maze{n}-s{seed}"));
+                let r = read_record(&dir)
+                    .transpose()
+                    .unwrap_or_else(|| run_pbcs(&job, &dir, |_, _| {}));
+                if let Ok((rec, secs)) = &r {
+                    on_done(rec, *secs);
+                }
+                results.lock().unwrap()[i] = Some(r);
+            });
+        }
+    });
+    results
+        .into_inner()
+        .unwrap()
+        .into_iter()
+        .map(|r| r.expect("every cell ran"))
+        .collect()
+}
+
+/// The record of a finished run in `dir`, if there is one.
+fn read_record(dir: &Path) -> Result<Option<(RunRecord, f64)>> {
+    let path = dir.join("record.csv");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let mut reader = csv::Reader::from_path(&path).map_err(Error::Csv)?;
+    let record: RunRecord = reader
+        .deserialize()
+        .next()
+        .ok_or_else(|| Error::Parse {
+            path: path.clone(),
+            message: "empty record".into(),
+        })?
+        .map_err(Error::Csv)?;
+    let seconds = std::fs::read_to_string(dir.join("timing.toml"))
+        .ok()
+        .and_then(|t| {
+            t.lines().find_map(|l| {
+                l.strip_prefix("wall_seconds = ")
+                    .and_then(|v| v.trim().parse().ok())
+            })
+        })
+        .unwrap_or(f64::NAN);
+    Ok(Some((record, seconds)))
 }

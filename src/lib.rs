@@ -44,6 +44,7 @@ pub mod pbcs;
 pub mod plot;
 pub mod record;
 pub mod rng;
+pub mod stats;
 pub mod toy;
 pub mod train;
 

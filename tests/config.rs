@@ -1,6 +1,6 @@
 //! Bad input is rejected with a message that names the field or file, never a panic.
 
-use pbcs::config::{load, ExploreJob, TrainJob};
+use pbcs::config::{load, ExploreJob, RunJob, TrainJob};
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -137,12 +137,15 @@ fn every_experiment_file_parses_and_checks() {
         if name.starts_with("explore") && name.ends_with(".toml") {
             load::<ExploreJob>(&path).unwrap_or_else(|e| panic!("{e}"));
             n += 1;
+        } else if name.starts_with("pbcs") && name.ends_with(".toml") {
+            load::<RunJob>(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
         } else if name.starts_with("baseline") && name.ends_with(".toml") {
             load::<TrainJob>(&path).unwrap_or_else(|e| panic!("{e}"));
             n += 1;
         }
     }
-    assert!(n >= 2, "experiment files missing in {}", dir.display());
+    assert!(n >= 4, "experiment files missing in {}", dir.display());
 }
 
 #[test]

@@ -132,6 +132,25 @@ enum Command {
         #[arg(long)]
         gamma: Option<f32>,
     },
+    /// The PBCS results table: `pbcs run` for every maze size × seed (resumable: finished runs
+    /// are read back, not re-run), then solved counts and step statistics beside the paper's.
+    Table {
+        /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_faithful.toml).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Maze sizes.
+        #[arg(long, value_delimiter = ',', default_value = "2,5,7,10,15")]
+        sizes: Vec<usize>,
+        /// Number of seeds: runs seeds 0..SEEDS.
+        #[arg(long, default_value_t = 10)]
+        seeds: u64,
+        /// Runs at a time (one thread each).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Output folder [default: out/table/<config file stem or "default">].
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -181,7 +200,87 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             pbcs_run(&run, &job)
         }
+        Command::Table {
+            config,
+            sizes,
+            seeds,
+            jobs,
+            out,
+        } => table(config.as_deref(), &sizes, seeds, jobs, out),
     }
+}
+
+fn table(
+    config: Option<&std::path::Path>,
+    sizes: &[usize],
+    seeds: u64,
+    jobs: usize,
+    out: Option<PathBuf>,
+) -> anyhow::Result<()> {
+    let job: RunJob = match config {
+        Some(p) => config::load(p)?,
+        None => RunJob::default(),
+    };
+    for &n in sizes {
+        let mut j = job.clone();
+        j.maze.size = n;
+        j.check()?;
+    }
+    let name = config
+        .and_then(|p| p.file_stem())
+        .map_or("default".to_string(), |s| s.to_string_lossy().into_owned());
+    let out = out.unwrap_or_else(|| PathBuf::from(format!("out/table/{name}")));
+    let seed_list: Vec<u64> = (0..seeds).collect();
+    let total = (sizes.len() * seed_list.len()) as u64;
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}")
+            .expect("valid template"),
+    );
+    let results = pbcs::jobs::run_grid(&job, sizes, &seed_list, &out, jobs, |r, secs| {
+        bar.inc(1);
+        bar.set_message(format!(
+            "maze {} seed {}: {} in {} steps ({secs:.0} s)",
+            r.maze,
+            r.seed,
+            if r.solved { "solved" } else { "not solved" },
+            r.total_steps
+        ));
+    })?;
+    bar.finish_and_clear();
+    let records: Vec<_> = results.iter().map(|(r, _)| r.clone()).collect();
+    pbcs::record::write_records(&out.join("records.csv"), &records)?;
+    println!(
+        "{} ({}), seeds 0..{seeds}; runs in {}",
+        name,
+        records.first().map_or("", |r| r.variant.as_str()),
+        out.display()
+    );
+    println!("| maze | solved | env steps, median [min, max] | paper | median / paper | skills, median | wall s, median |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for &n in sizes {
+        let rows: Vec<&(pbcs::jobs::RunRecord, f64)> =
+            results.iter().filter(|(r, _)| r.maze == n).collect();
+        let mut steps: Vec<f64> = rows.iter().map(|(r, _)| r.total_steps as f64).collect();
+        let mut skills: Vec<f64> = rows.iter().map(|(r, _)| r.skills as f64).collect();
+        let mut secs: Vec<f64> = rows.iter().map(|(_, s)| *s).collect();
+        let med = |v: &mut Vec<f64>| pbcs::stats::median(v);
+        let solved = rows.iter().filter(|(r, _)| r.solved).count();
+        let paper = pbcs::jobs::paper_pbcs_steps(n);
+        let m = med(&mut steps);
+        println!(
+            "| {n} | {solved}/{} | {:.0} [{:.0}, {:.0}] | {} | {} | {:.0} | {:.0} |",
+            rows.len(),
+            m,
+            steps.first().copied().unwrap_or(f64::NAN),
+            steps.last().copied().unwrap_or(f64::NAN),
+            paper.map_or("-".into(), |p| p.to_string()),
+            paper.map_or("-".into(), |p| format!("{:.2}", m / p as f64)),
+            med(&mut skills),
+            med(&mut secs),
+        );
+    }
+    Ok(())
 }
 
 fn set_learner(l: &mut pbcs::learner::LearnerConfig, algo: Option<&str>, actor: Option<&str>) {
