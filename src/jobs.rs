@@ -488,6 +488,9 @@ pub fn paper_pbcs_steps(maze: usize) -> Option<u64> {
     }
 }
 
+/// A finished cell of a grid: its record and wall seconds, or its error.
+type CellResult = Result<(RunRecord, f64)>;
+
 /// Runs PBCS for every (size, seed) of a grid into `out/maze<N>-s<S>/`, `jobs` runs at a time
 /// (one thread each), skipping cells whose `record.csv` already exists (an interrupted sweep
 /// resumes). Returns every record, in (size, seed) order, and the wall seconds of each run
@@ -505,7 +508,7 @@ pub fn run_grid(
         .flat_map(|&n| seeds.iter().map(move |&s| (n, s)))
         .collect();
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let results: std::sync::Mutex<Vec<Option<Result<(RunRecord, f64)>>>> =
+    let results: std::sync::Mutex<Vec<Option<CellResult>>> =
         std::sync::Mutex::new((0..cells.len()).map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..jobs.max(1) {
