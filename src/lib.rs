@@ -13,6 +13,8 @@
 //! | Settings the paper gives or leaves open | [`config`] |
 //! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
 //! | Results table, "Vanilla" columns | [`train`] (training on the environment's own reward) |
+//! | Phase 2: Algorithm 1 (skill chaining), 2 (Backplay), 3 (training with reward shaping) | [`pbcs`] |
+//! | Wilson score intervals (appendix on γ) | [`stats`] |
 //!
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
 //! result files atomically, [`plot`] draws mazes with plotters, and [`jobs`] turns a config
