@@ -60,12 +60,17 @@ pub trait Env {
         center.clone()
     }
 
-    /// A short sequence of actions that takes `from` to (within rounding of) `to`, if the
-    /// environment knows one (a straight line in the maze). Only used to shorten phase-1
-    /// trajectories before phase 2 (an option of ours, off in the paper's preset). The default
-    /// knows none.
-    fn connect(&self, from: &Self::State, to: &Self::State) -> Option<Vec<Vec<f32>>> {
-        let _ = (from, to);
+    /// A short sequence of actions that takes `from` to (within rounding of) `to` while staying
+    /// at least `clearance` away from anything that blocks, if the environment knows one (a
+    /// straight line in the maze). Only used to shorten phase-1 trajectories before phase 2
+    /// (an option of ours, off in the paper's preset). The default knows none.
+    fn connect(
+        &self,
+        from: &Self::State,
+        to: &Self::State,
+        clearance: f32,
+    ) -> Option<Vec<Vec<f32>>> {
+        let _ = (from, to, clearance);
         None
     }
 

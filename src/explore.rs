@@ -326,8 +326,9 @@ pub fn explore<E: Env>(
 }
 
 /// Shortens a trajectory by cutting its detours: from each kept state, go to the farthest
-/// later state of τ that [`Env::connect`] links it to, by the actions it gives, keeping the
-/// states those steps actually land on. The result starts at τ_0, ends within rounding of τ_N,
+/// later state of τ that [`Env::connect`] links it to while keeping `clearance` from walls
+/// (phase 2 passes ε, so that the start balls B_ε(τ_K) along new segments miss the walls), by
+/// the actions it gives, keeping the states those steps actually land on. The result starts at τ_0, ends within rounding of τ_N,
 /// and every transition is a real step of the environment. With the default `connect` (no
 /// link known) τ is returned unchanged. An improvement of ours, off in the paper's preset.
 ///
@@ -341,11 +342,15 @@ pub fn explore<E: Env>(
 /// let tau = explore(&maze, &ExploreConfig::default(), &mut Seeds::new(0).stream(Stream::Explore), |_, _| {})
 ///     .unwrap()
 ///     .trajectory;
-/// let short = shorten(&maze, &tau);
+/// let short = shorten(&maze, &tau, 0.1);
 /// assert!(short.len() < tau.len() / 2);
 /// assert!(maze.reached(short.states.last().unwrap()));
 /// ```
-pub fn shorten<E: Env>(env: &E, tau: &Trajectory<E::State>) -> Trajectory<E::State> {
+pub fn shorten<E: Env>(
+    env: &E,
+    tau: &Trajectory<E::State>,
+    clearance: f32,
+) -> Trajectory<E::State> {
     let n = tau.states.len();
     let mut states = vec![tau.states[0].clone()];
     let mut actions = Vec::new();
@@ -355,7 +360,7 @@ pub fn shorten<E: Env>(env: &E, tau: &Trajectory<E::State>) -> Trajectory<E::Sta
         // The farthest j that `connect` reaches; τ's own action always reaches i + 1.
         let (j, path) = (i + 1..n)
             .rev()
-            .find_map(|j| env.connect(&cur, &tau.states[j]).map(|p| (j, p)))
+            .find_map(|j| env.connect(&cur, &tau.states[j], clearance).map(|p| (j, p)))
             .unwrap_or_else(|| (i + 1, vec![tau.actions[i].clone()]));
         let mut s = cur;
         for a in path {

@@ -336,7 +336,7 @@ pub fn run_pbcs(
     let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
     let short;
     let tau = if job.phase2.shorten {
-        short = crate::explore::shorten(&maze, &found.trajectory);
+        short = crate::explore::shorten(&maze, &found.trajectory, job.phase2.epsilon);
         &short.states
     } else {
         &found.trajectory.states

@@ -237,3 +237,16 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn clearance_query_grows_walls_by_the_margin() {
+    let w = unit_box();
+    // Parallel to the bottom face, 1/16 below it.
+    let (a, b) = (p(1.25, 0.9375), p(1.75, 0.9375));
+    assert!(!w.segment_hits_with_margin(&a, &b, 0.03125));
+    assert!(w.segment_hits_with_margin(&a, &b, 0.125));
+    assert!(
+        w.segment_hits_with_margin(&a, &b, 0.0625),
+        "exactly at the margin: touching"
+    );
+}

@@ -169,10 +169,11 @@ impl Env for Maze {
     }
 
     /// The straight line from `from` to `to` in equal steps of at most `max_action` per axis,
-    /// when the whole segment touches no wall and is at most 2 units long.
-    fn connect(&self, from: &Point<f32>, to: &Point<f32>) -> Option<Vec<Vec<f32>>> {
+    /// when the whole segment stays `clearance` away from every wall (walls grown by the
+    /// clearance on each side) and is at most 2 units long.
+    fn connect(&self, from: &Point<f32>, to: &Point<f32>, clearance: f32) -> Option<Vec<Vec<f32>>> {
         let d = to - from;
-        if d.norm_squared() > 4.0 || self.walls.segment_hits(from, to) {
+        if d.norm_squared() > 4.0 || self.walls.segment_hits_with_margin(from, to, clearance) {
             return None;
         }
         let steps = (d.x.abs().max(d.y.abs()) / self.config.max_action)

@@ -154,6 +154,28 @@ impl Walls {
             .any(|w| box_touches_segment(&w.aabb(), &ray, to))
     }
 
+    /// Whether the segment touches a wall grown by `margin` on every side (a clearance test;
+    /// not on the hot path).
+    pub fn segment_hits_with_margin(
+        &self,
+        from: &Point<f32>,
+        to: &Point<f32>,
+        margin: f32,
+    ) -> bool {
+        let bounds = Aabb::new(from.inf(to), from.sup(to)).loosened(margin);
+        let (x0, x1, y0, y1) = self.cell_range(&bounds);
+        let ray = Ray::new(*from, to - from);
+        (y0..=y1).any(|cy| {
+            (x0..=x1).any(|cx| {
+                let c = cy * self.cols + cx;
+                let (lo, hi) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                self.cell_aabbs[lo..hi]
+                    .iter()
+                    .any(|b| box_touches_segment(&b.loosened(margin), &ray, to))
+            })
+        })
+    }
+
     /// Whether `p` lies inside or on a wall.
     pub fn contains_point(&self, p: &Point<f32>) -> bool {
         let aabb = Aabb::new(*p, *p);
