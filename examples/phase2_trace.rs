@@ -23,7 +23,12 @@ fn main() -> anyhow::Result<()> {
         &mut seeds.stream(Stream::Explore),
         |_, _| {},
     )?;
-    let tau = &found.trajectory.states;
+    let short = pbcs::explore::shorten(&maze, &found.trajectory, job.phase2.epsilon);
+    let tau = if job.phase2.shorten {
+        &short.states
+    } else {
+        &found.trajectory.states
+    };
     println!("phase 1: {} steps, |τ| = {}", found.env_steps, tau.len());
     let t0 = std::time::Instant::now();
     let out = chain_skills(

@@ -4,7 +4,7 @@
 use pbcs::env::{Env, Step};
 use pbcs::nn::{Head, Mlp};
 use pbcs::pbcs::backplay::{backplay, Backplayer};
-use pbcs::pbcs::{skill_chaining, Ball, Failure, Skill, SkillChain};
+use pbcs::pbcs::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 use std::collections::HashMap;
 
@@ -44,7 +44,7 @@ fn always_successful_walks_to_zero_without_training() {
         tests: (0..5).map(|k| (k, vec![1.0])).collect(),
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 5, 10, 1), Some((0, 0)));
+    assert_eq!(backplay(&mut b, 5, 10, 1, false), Some((0, 0)));
     assert_eq!(
         b.calls,
         [
@@ -65,7 +65,7 @@ fn training_stops_after_alpha_non_improvements() {
         train: vec![0.2, 0.5, 0.5, 0.4, 0.3, 0.9],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 3, 1), Some((0, 5)));
+    assert_eq!(backplay(&mut b, 3, 3, 1, false), Some((0, 5)));
     assert_eq!(
         b.calls,
         [
@@ -91,7 +91,7 @@ fn never_successful_returns_the_last_kept_skill() {
         train: vec![0.1; 10],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 5, 2, 1), Some((4, 0)));
+    assert_eq!(backplay(&mut b, 5, 2, 1, false), Some((4, 0)));
     assert_eq!(b.calls.last().unwrap(), "test 3 = 0");
 }
 
@@ -104,7 +104,7 @@ fn sometimes_successful_is_not_kept_and_k_goes_on() {
         train: vec![0.5, 0.5, 0.0, 0.0],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 2, 1), Some((1, 3)));
+    assert_eq!(backplay(&mut b, 3, 2, 1, false), Some((1, 3)));
     assert!(b.calls.contains(&"test 2 = 0.6".to_string()));
 }
 
@@ -115,10 +115,37 @@ fn never_successful_without_a_kept_skill_goes_on_and_may_fail() {
         train: vec![0.0; 100],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 2, 1), None);
+    assert_eq!(backplay(&mut b, 3, 2, 1, false), None);
     // Every K was tried, each with α = 2 training rounds (0.0 is a first best, then 2 misses).
     assert_eq!(b.calls.iter().filter(|c| c.starts_with("test")).count(), 6);
     assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 9);
+}
+
+#[test]
+fn early_stop_ends_training_at_a_confirmed_100_percent() {
+    // Training hits 100 % at its 2nd round; the test right after confirms it, so training
+    // stops there (without early stop it would run α = 3 more rounds).
+    let script = || Scripted {
+        tests: HashMap::from([(1, vec![0.5, 1.0, 1.0]), (0, vec![1.0])]),
+        train: vec![0.5, 1.0, 1.0, 1.0, 1.0, 1.0],
+        ..Default::default()
+    };
+    let mut b = script();
+    assert_eq!(backplay(&mut b, 2, 3, 1, true), Some((0, 2)));
+    assert_eq!(
+        b.calls,
+        [
+            "test 1 = 0.5",
+            "train 1 = 0.5",
+            "train 1 = 1",
+            "test 1 = 1",
+            "test 1 = 1",
+            "test 0 = 1"
+        ]
+    );
+    let mut b = script();
+    backplay(&mut b, 2, 3, 1, false);
+    assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 5);
 }
 
 #[test]
@@ -127,7 +154,7 @@ fn k_step_walks_back_faster_but_still_ends_at_zero() {
         tests: (0..10).map(|k| (k, vec![1.0])).collect(),
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 10, 10, 4), Some((0, 0)));
+    assert_eq!(backplay(&mut b, 10, 10, 4, false), Some((0, 0)));
     assert_eq!(
         b.calls,
         ["test 9 = 1", "test 5 = 1", "test 1 = 1", "test 0 = 1"]
@@ -160,11 +187,13 @@ impl Backplayer for Reach {
 #[test]
 fn skill_chaining_follows_tau_backwards_then_reverses() {
     let mut made = Vec::new();
+    let config = Phase2Config {
+        alpha: 2,
+        ..Phase2Config::default()
+    };
     let (skills, failure) = skill_chaining(
         35,
-        2,
-        1,
-        true,
+        &config,
         |n, t| {
             made.push((n, t));
             Ok(Reach { t, reach: 10 })
@@ -185,12 +214,17 @@ fn skill_chaining_follows_tau_backwards_then_reverses() {
 
 #[test]
 fn without_chaining_a_second_skill_is_a_failure() {
+    let config = Phase2Config {
+        alpha: 2,
+        chaining: false,
+        ..Phase2Config::default()
+    };
     let (skills, failure) =
-        skill_chaining(35, 2, 1, false, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
+        skill_chaining(35, &config, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
     assert_eq!(failure, Some(Failure::NoChaining));
     assert_eq!(skills.len(), 1);
     let (skills, failure) =
-        skill_chaining(8, 2, 1, false, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
+        skill_chaining(8, &config, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
     assert_eq!(
         (skills.len(), failure),
         (1, None),

@@ -46,11 +46,23 @@ pub enum Event {
 
 /// Runs Algorithm 3 ([`Backplayer::train`]) from τ_k until its success fails to beat its best
 /// `alpha` times in a row ("until performance stabilizes"). Returns (rounds, best).
-pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, alpha: usize) -> (usize, f32) {
+///
+/// With `early_stop` (an option of ours, off in the paper's procedure), a round at 100 % is
+/// followed by a greedy test, and a 100 % test ends training at once: DDPG trained on past
+/// success tends to drift away from it during the α further rounds.
+pub fn train_until_stable<B: Backplayer>(
+    b: &mut B,
+    k: usize,
+    alpha: usize,
+    early_stop: bool,
+) -> (usize, f32) {
     let (mut best, mut misses, mut rounds) = (f32::NEG_INFINITY, 0, 0);
     while misses < alpha {
         let p = b.train(k);
         rounds += 1;
+        if early_stop && p >= 1.0 && b.test(k) >= 1.0 {
+            return (rounds, p);
+        }
         if p > best {
             best = p;
             misses = 0;
@@ -79,12 +91,14 @@ pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, alpha: usize) -> (
 ///
 /// The paper loops `while K > 0`; then K_s ≥ 1 always and Algorithm 1 (`while T > 0`) would
 /// never end, so we let K reach 0 (the start τ_0). `k_step` walks K back by more than one
-/// index at a time (1 is the paper's walk; larger steps are our option, never the default).
+/// index at a time (1 is the paper's walk; larger steps are our option, never the default);
+/// `early_stop` is explained at [`train_until_stable`].
 pub fn backplay<B: Backplayer>(
     b: &mut B,
     t: usize,
     alpha: usize,
     k_step: usize,
+    early_stop: bool,
 ) -> Option<(usize, B::Policy)> {
     assert!(t >= 1 && k_step >= 1);
     let mut kept: Option<(usize, B::Policy)> = None;
@@ -96,7 +110,7 @@ pub fn backplay<B: Backplayer>(
         if success >= 1.0 {
             kept = Some((ku, b.policy()));
         } else {
-            let (rounds, best) = train_until_stable(b, ku, alpha);
+            let (rounds, best) = train_until_stable(b, ku, alpha, early_stop);
             let success = b.test(ku);
             b.observe(Event::Trained {
                 k: ku,

@@ -54,6 +54,9 @@ pub struct Phase2Config {
     /// Shorten τ before phase 2 by cutting the random walk's detours
     /// ([`crate::explore::shorten`]); off in the paper's procedure.
     pub shorten: bool,
+    /// End training at K as soon as a round at 100 % is confirmed by a 100 % greedy test
+    /// ([`backplay::train_until_stable`]); off in the paper's procedure.
+    pub early_stop: bool,
     /// Budget of environment steps for the whole run (phase 1 included); the run fails when
     /// it is exceeded.
     pub max_env_steps: u64,
@@ -74,6 +77,7 @@ impl Default for Phase2Config {
             start: StartMode::Ball,
             k_step: 1,
             shorten: false,
+            early_stop: false,
             max_env_steps: 50_000_000,
             eval_episodes: 100,
             eval_max_steps: 5_000,
@@ -310,6 +314,7 @@ pub struct Phase2Outcome {
 /// reverse π and A
 /// ```
 ///
+/// α, the K step, early stopping and chaining come from `config`.
 /// `next(n, T)` makes the fresh learning problem of skill n (a new DDPG each time);
 /// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
 /// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
@@ -318,9 +323,7 @@ pub struct Phase2Outcome {
 #[allow(clippy::type_complexity)]
 pub fn skill_chaining<B: backplay::Backplayer>(
     n: usize,
-    alpha: usize,
-    k_step: usize,
-    chaining: bool,
+    config: &Phase2Config,
     mut next: impl FnMut(usize, usize) -> Result<B>,
     mut finished: impl FnMut(B),
 ) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
@@ -329,7 +332,7 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     let mut failure = None;
     while t > 0 {
         let mut b = next(skills.len(), t)?;
-        let found = backplay::backplay(&mut b, t, alpha, k_step);
+        let found = backplay::backplay(&mut b, t, config.alpha, config.k_step, config.early_stop);
         let exhausted = b.exhausted();
         finished(b);
         match found {
@@ -343,7 +346,7 @@ pub fn skill_chaining<B: backplay::Backplayer>(
             }
             Some((k, policy)) => {
                 skills.push((k, t, policy));
-                if k > 0 && !chaining {
+                if k > 0 && !config.chaining {
                     failure = Some(Failure::NoChaining);
                     break;
                 }
@@ -385,9 +388,7 @@ pub fn chain_skills<E: Env>(
     let progress = std::cell::RefCell::new(&mut progress);
     let (found, failure) = skill_chaining(
         tau.len() - 1,
-        config.alpha,
-        config.k_step,
-        config.chaining,
+        config,
         |n, t| {
             let n32 = n as u32;
             let learner = Learner::new(learner, env.obs_dim(), &bounds, &seeds.skill(n32))?;
