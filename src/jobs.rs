@@ -334,13 +334,7 @@ pub fn run_pbcs(
     let clock = Instant::now();
     let mut rng = seeds.stream(Stream::Explore);
     let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-    let short;
-    let tau = if job.phase2.shorten {
-        short = crate::explore::shorten(&maze, &found.trajectory, job.phase2.epsilon);
-        &short.states
-    } else {
-        &found.trajectory.states
-    };
+    let tau = &crate::pbcs::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
     let phase2 = chain_skills(
         &maze,
         tau,

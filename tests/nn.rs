@@ -95,6 +95,27 @@ fn assert_close(a: &[f32], b: &[f32], tol: f32, what: &str) {
     }
 }
 
+/// candle's gradients of `vars`, flattened in the fused network's parameter layout.
+fn flat_grads(
+    grads: &candle_core::backprop::GradStore,
+    vars: &[(candle_core::Var, candle_core::Var)],
+) -> Vec<f32> {
+    let mut out = Vec::new();
+    for (w, b) in vars {
+        out.extend(
+            grads
+                .get(w.as_tensor())
+                .unwrap()
+                .flatten_all()
+                .unwrap()
+                .to_vec1::<f32>()
+                .unwrap(),
+        );
+        out.extend(grads.get(b.as_tensor()).unwrap().to_vec1::<f32>().unwrap());
+    }
+    out
+}
+
 /// The critic regression loss and the actor's DPG loss: fused gradients equal candle's
 /// autograd on the same weights and batch.
 #[test]
@@ -136,19 +157,7 @@ fn fused_gradients_equal_candle_autograd() {
         .mean_all()
         .unwrap();
     let grads = loss.backward().unwrap();
-    let mut gc = Vec::new();
-    for (w, b) in &cv {
-        gc.extend(
-            grads
-                .get(w.as_tensor())
-                .unwrap()
-                .flatten_all()
-                .unwrap()
-                .to_vec1::<f32>()
-                .unwrap(),
-        );
-        gc.extend(grads.get(b.as_tensor()).unwrap().to_vec1::<f32>().unwrap());
-    }
+    let gc = flat_grads(&grads, &cv);
     assert_close(&g, &gc, 1e-4, "critic grad");
 
     // Actor: L = −mean Q(s, π(s)), gradient into the actor through the critic.
@@ -185,19 +194,7 @@ fn fused_gradients_equal_candle_autograd() {
     let q = cm.forward(&Tensor::cat(&[&st, &pit], 1).unwrap()).unwrap();
     let loss = q.mean_all().unwrap().neg().unwrap();
     let grads = loss.backward().unwrap();
-    let mut gac = Vec::new();
-    for (w, b) in &av {
-        gac.extend(
-            grads
-                .get(w.as_tensor())
-                .unwrap()
-                .flatten_all()
-                .unwrap()
-                .to_vec1::<f32>()
-                .unwrap(),
-        );
-        gac.extend(grads.get(b.as_tensor()).unwrap().to_vec1::<f32>().unwrap());
-    }
+    let gac = flat_grads(&grads, &av);
     assert_close(&ga, &gac, 1e-4, "actor grad");
 }
 

@@ -88,6 +88,32 @@ impl RunArgs {
     }
 }
 
+/// Learner flags shared by `train` and `run`.
+#[derive(Args)]
+struct LearnerArgs {
+    /// Learner preset; overrides `learner.algo`.
+    #[arg(long, value_parser = ["ddpg", "td3"])]
+    algo: Option<String>,
+    /// Actor update; overrides `learner.actor_update`.
+    #[arg(long, value_parser = ["gradient", "argmax"])]
+    actor: Option<String>,
+}
+
+impl LearnerArgs {
+    fn apply(&self, l: &mut pbcs::learner::LearnerConfig) {
+        match self.algo.as_deref() {
+            Some("ddpg") => l.algo = Algo::Ddpg,
+            Some("td3") => l.algo = Algo::Td3,
+            _ => {}
+        }
+        match self.actor.as_deref() {
+            Some("gradient") => l.actor_update = ActorUpdate::Gradient,
+            Some("argmax") => l.actor_update = ActorUpdate::Argmax,
+            _ => {}
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Phase 1: explore a maze until the target is reached; write the trajectory, the archive
@@ -101,12 +127,8 @@ enum Command {
     Train {
         #[command(flatten)]
         run: RunArgs,
-        /// Learner preset; overrides `learner.algo`.
-        #[arg(long, value_parser = ["ddpg", "td3"])]
-        algo: Option<String>,
-        /// Actor update; overrides `learner.actor_update`.
-        #[arg(long, value_parser = ["gradient", "argmax"])]
-        actor: Option<String>,
+        #[command(flatten)]
+        learner: LearnerArgs,
         /// Environment steps; overrides `train.steps`.
         #[arg(long)]
         steps: Option<u64>,
@@ -116,12 +138,8 @@ enum Command {
     Run {
         #[command(flatten)]
         run: RunArgs,
-        /// Learner preset; overrides `learner.algo`.
-        #[arg(long, value_parser = ["ddpg", "td3"])]
-        algo: Option<String>,
-        /// Actor update; overrides `learner.actor_update`.
-        #[arg(long, value_parser = ["gradient", "argmax"])]
-        actor: Option<String>,
+        #[command(flatten)]
+        learner: LearnerArgs,
         /// PBCS without skill chaining (fail when a second skill would be needed).
         #[arg(long)]
         no_chaining: bool,
@@ -175,20 +193,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Explore { run } => explore(&run),
         Command::Train {
             run,
-            algo,
-            actor,
+            learner,
             steps,
-        } => train(&run, algo.as_deref(), actor.as_deref(), steps),
+        } => train(&run, &learner, steps),
         Command::Run {
             run,
-            algo,
-            actor,
+            learner,
             no_chaining,
             exact_starts,
             gamma,
         } => {
             let mut job: RunJob = run.load(|j: &mut RunJob| (&mut j.maze, &mut j.seed))?;
-            set_learner(&mut job.learner, algo.as_deref(), actor.as_deref());
+            learner.apply(&mut job.learner);
             if no_chaining {
                 job.phase2.chaining = false;
             }
@@ -281,19 +297,6 @@ fn table(
         );
     }
     Ok(())
-}
-
-fn set_learner(l: &mut pbcs::learner::LearnerConfig, algo: Option<&str>, actor: Option<&str>) {
-    match algo {
-        Some("ddpg") => l.algo = Algo::Ddpg,
-        Some("td3") => l.algo = Algo::Td3,
-        _ => {}
-    }
-    match actor {
-        Some("gradient") => l.actor_update = ActorUpdate::Gradient,
-        Some("argmax") => l.actor_update = ActorUpdate::Argmax,
-        _ => {}
-    }
 }
 
 fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
@@ -403,14 +406,9 @@ fn explore(run: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn train(
-    run: &RunArgs,
-    algo: Option<&str>,
-    actor: Option<&str>,
-    steps: Option<u64>,
-) -> anyhow::Result<()> {
+fn train(run: &RunArgs, learner: &LearnerArgs, steps: Option<u64>) -> anyhow::Result<()> {
     let mut job: TrainJob = run.load(|j: &mut TrainJob| (&mut j.maze, &mut j.seed))?;
-    set_learner(&mut job.learner, algo, actor);
+    learner.apply(&mut job.learner);
     if let Some(s) = steps {
         job.train.steps = s;
     }

@@ -304,6 +304,20 @@ pub struct Phase2Outcome {
     pub steps: StepCounts,
 }
 
+/// The trajectory phase 2 works on: τ itself, or τ shortened with clearance ε when
+/// `config.shorten` is on.
+pub fn phase2_trajectory<E: Env>(
+    env: &E,
+    tau: &crate::explore::Trajectory<E::State>,
+    config: &Phase2Config,
+) -> crate::explore::Trajectory<E::State> {
+    if config.shorten {
+        crate::explore::shorten(env, tau, config.epsilon)
+    } else {
+        tau.clone()
+    }
+}
+
 /// Algorithm 1 on any [`backplay::Backplayer`]: skills are found backwards from T = N and
 /// returned in execution order as `(K_i, T_i, π_i)`.
 ///
