@@ -515,7 +515,7 @@ pub fn run_grid(
                 job.maze.size = n;
                 job.seed = seed;
                 let dir = out.join(format!("maze{n}-s{seed}"));
-                let r = read_record(&dir)
+                let r = read_record(&dir, &job)
                     .transpose()
                     .unwrap_or_else(|| run_pbcs(&job, &dir, |_, _| {}));
                 if let Ok((rec, secs)) = &r {
@@ -533,11 +533,26 @@ pub fn run_grid(
         .collect()
 }
 
-/// The record of a finished run in `dir`, if there is one.
-fn read_record(dir: &Path) -> Result<Option<(RunRecord, f64)>> {
+/// The record of a finished run of `job` in `dir`, if there is one. A finished run of another
+/// config in that folder is an error (results of two configs are never mixed).
+fn read_record(dir: &Path, job: &RunJob) -> Result<Option<(RunRecord, f64)>> {
     let path = dir.join("record.csv");
     if !path.exists() {
         return Ok(None);
+    }
+    let stored_path = dir.join("config.toml");
+    let stored = std::fs::read_to_string(&stored_path).map_err(|e| Error::io(&stored_path, e))?;
+    let expected = toml::to_string(job).map_err(|e| Error::Parse {
+        path: stored_path.clone(),
+        message: e.to_string(),
+    })?;
+    if stored != expected {
+        return Err(Error::Parse {
+            path: stored_path,
+            message: "this folder holds a finished run of another config; choose another --out \
+                      or remove it"
+                .into(),
+        });
     }
     let mut reader = csv::Reader::from_path(&path).map_err(Error::Csv)?;
     let record: RunRecord = reader

@@ -360,6 +360,25 @@ mod end_to_end {
         assert!(solved >= 2, "{report:#?}");
     }
 
+    /// A grid resumes: finished cells are read back (same records), and a folder of another
+    /// config is refused rather than mixed in.
+    #[test]
+    fn grid_resumes_and_refuses_another_config() {
+        let mut j = job(0);
+        j.phase2.max_env_steps = 5_000;
+        let dir = tempfile::tempdir().unwrap();
+        let first = pbcs::jobs::run_grid(&j, &[2], &[0, 1], dir.path(), 2, |_, _| {}).unwrap();
+        assert_eq!(first.len(), 2);
+        let again = pbcs::jobs::run_grid(&j, &[2], &[0, 1], dir.path(), 1, |_, _| {}).unwrap();
+        let records = |v: &[(pbcs::jobs::RunRecord, f64)]| {
+            v.iter().map(|(r, _)| r.clone()).collect::<Vec<_>>()
+        };
+        assert_eq!(records(&first), records(&again));
+        j.phase2.epsilon = 0.15;
+        let err = pbcs::jobs::run_grid(&j, &[2], &[0], dir.path(), 1, |_, _| {}).unwrap_err();
+        assert!(err.to_string().contains("another config"), "{err}");
+    }
+
     /// Same seed, same bytes: the whole pipeline (phase 1, phase 2, evaluation, files). A small
     /// budget keeps it quick; the budget failure is itself deterministic.
     #[test]
