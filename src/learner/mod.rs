@@ -245,6 +245,7 @@ struct Scratch {
     grad_actor: Vec<f32>,
     grad_critic: Vec<f32>,
     target_a: Vec<f32>,
+    pi: Vec<f32>,
 }
 
 /// Actor, critics, their targets and optimisers.
@@ -385,13 +386,14 @@ impl Learner {
         }
 
         // 3. Actor.
-        let pi = self.actor.forward(&b.obs, n, &mut s.ws_actor).to_vec();
+        s.pi.clear();
+        s.pi.extend_from_slice(self.actor.forward(&b.obs, n, &mut s.ws_actor));
         s.da.clear();
         s.da.resize(n * a, 0.0);
         let actor_loss = match self.config.actor_update {
             ActorUpdate::Gradient => {
                 // Ascend Q_1(s, π(s)): ∂(−mean Q)/∂π(s) = −(1/n)·∂Q_1/∂a.
-                concat_rows(&b.obs, o, &pi, a, &mut s.sa);
+                concat_rows(&b.obs, o, &s.pi, a, &mut s.sa);
                 let q = self.critics[0].forward(&s.sa, n, &mut s.ws_critic);
                 let loss = -q.iter().sum::<f32>() / n as f32;
                 s.dq.clear();
@@ -423,7 +425,7 @@ impl Learner {
                         .unwrap();
                     let row = (i * k + best) * (o + a);
                     for j in 0..a {
-                        let diff = pi[i * a + j] - s.sa[row + o + j];
+                        let diff = s.pi[i * a + j] - s.sa[row + o + j];
                         loss += diff * diff / n as f32;
                         s.da[i * a + j] = 2.0 * diff / n as f32;
                     }
