@@ -23,12 +23,7 @@ fn main() -> anyhow::Result<()> {
         &mut seeds.stream(Stream::Explore),
         |_, _| {},
     )?;
-    let short = pbcs::explore::shorten(&maze, &found.trajectory, job.phase2.epsilon);
-    let tau = if job.phase2.shorten {
-        &short.states
-    } else {
-        &found.trajectory.states
-    };
+    let tau = &pbcs::pbcs::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
     println!("phase 1: {} steps, |τ| = {}", found.env_steps, tau.len());
     let t0 = std::time::Instant::now();
     let out = chain_skills(
