@@ -1,14 +1,34 @@
 # Everyday commands. `make help` lists them.
 CARGO ?= cargo
+# Runs at a time for `make results` (one core each).
+JOBS ?= 2
+# A profile of the experiment files (`smoke`, `full`); empty: the committed grids.
+PROFILE ?=
+EXPERIMENTS ?= table gamma unseen
 
-.PHONY: help build demo test bench lint ci clean
+PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
+RESULTS = $(if $(PROFILE),results-$(PROFILE),results)
+# The figures build has polars (aggregation); the other commands do not need it.
+PBCS_POLARS = $(CARGO) run --release --locked --features polars --quiet --
+PBCS = target/release/pbcs
+
+.PHONY: help build demo test bench lint ci clean figures results results-parallel cell \
+        commands paper check-paper smoke
 
 help:
-	@echo "make demo   explore a 10x10 maze and draw it (out/explore/...)"
-	@echo "make test   run the test suite (the README's test command)"
-	@echo "make bench  phase-1 speed, and learner update cost (fused vs candle)"
-	@echo "make lint   rustfmt and clippy"
-	@echo "make ci     what CI runs (.ci/run)"
+	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
+	@echo "make test      run the test suite (the README's test command)"
+	@echo "make figures   tables, figures and the report's LaTeX from the committed raw CSVs"
+	@echo "               (results/raw -> results/tables, results/figures, paper/generated)"
+	@echo "make results   re-run every experiment (resumable; JOBS=2; PROFILE=smoke|full)"
+	@echo "make results-parallel   the same through make -j\$$JOBS, one rule per (cell, seed)"
+	@echo "make commands  print one command per (cell, seed), for a cluster's job array"
+	@echo "make cell EXP=table CELL=pbcs-maze2 [SEED=3]   re-run one table cell and compare"
+	@echo "make paper     build paper/report.pdf (needs latexmk + texlive)"
+	@echo "make smoke     the whole pipeline on the smoke profile (what CI runs)"
+	@echo "make bench     phase-1 speed, and learner update cost (fused vs candle)"
+	@echo "make lint      rustfmt and clippy"
+	@echo "make ci        what CI runs (.ci/run)"
 
 build:
 	$(CARGO) build --release --locked
@@ -30,5 +50,39 @@ lint:
 ci:
 	bash .ci/run
 
+# Aggregation with polars, then plotters; trains nothing (about a minute after the build).
+figures:
+	$(PBCS_POLARS) aggregate $(PROFILE_FLAG)
+	$(PBCS_POLARS) figures $(PROFILE_FLAG)
+
+$(PBCS):
+	$(CARGO) build --release --locked
+
+results: $(PBCS)
+	for e in $(EXPERIMENTS); do $(PBCS) exp run experiments/$$e.toml --jobs $(JOBS) $(PROFILE_FLAG) || exit 1; done
+
+results-parallel: $(PBCS)
+	mkdir -p target
+	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) > target/runs-$$e.mk || exit 1; \
+	  $(MAKE) -f target/runs-$$e.mk -j$(JOBS) PBCS=$(PBCS) || exit 1; done
+
+commands: $(PBCS)
+	@for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml $(PROFILE_FLAG); done
+
+cell: $(PBCS)
+	@test -n "$(EXP)" -a -n "$(CELL)" || { echo "usage: make cell EXP=table CELL=pbcs-maze2 [SEED=3]"; exit 2; }
+	$(PBCS) exp check experiments/$(EXP).toml --cell $(CELL) $(if $(SEED),--seed $(SEED),) --jobs $(JOBS) $(PROFILE_FLAG)
+
+paper: figures
+	cd paper && latexmk -pdf -interaction=nonstopmode report.tex
+
+# Every file the report includes exists (CI runs this after `make figures`).
+check-paper:
+	bash paper/check-includes.sh
+
+smoke:
+	$(MAKE) results PROFILE=smoke
+	$(MAKE) figures PROFILE=smoke
+
 clean:
-	rm -rf out
+	rm -rf out results-*

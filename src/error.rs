@@ -44,6 +44,14 @@ pub enum Error {
     /// Writing a CSV record failed.
     #[error("csv: {0}")]
     Csv(#[from] csv::Error),
+    /// Aggregating results failed (polars), or its numbers disagreed with the plain check.
+    #[error("aggregate {experiment}: {message}")]
+    Aggregate {
+        /// The experiment.
+        experiment: String,
+        /// What went wrong.
+        message: String,
+    },
     /// Rendering a picture failed.
     #[error("plot {path}: {message}")]
     Plot {

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
 use crate::pbcs::{chain_skills, Progress, SkillChain, StartMode};
-use crate::plot::{render_maze, MazePicture};
+use crate::plot::{render_maze, MazePicture, PictureData};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::train::train_vanilla;
@@ -203,6 +203,8 @@ pub struct TrainSummary {
     pub best_success: f32,
     /// Bins of side `train.visit_bin` visited during training.
     pub visited_bins: usize,
+    /// Environment steps at the first evaluation whose greedy success was ≥ 95 %, if any.
+    pub first_success_steps: Option<u64>,
 }
 
 /// Trains the vanilla baseline of `job` on the maze's own reward and writes into `out`:
@@ -235,6 +237,11 @@ pub fn run_train(
         final_success: result.evals.last().map_or(0.0, |e| e.success),
         best_success: result.evals.iter().map(|e| e.success).fold(0.0, f32::max),
         visited_bins: result.visited.len(),
+        first_success_steps: result
+            .evals
+            .iter()
+            .find(|e| e.success >= 0.95)
+            .map(|e| e.steps),
     };
     write_config(job, out)?;
     write_record(&out.join("summary.csv"), &summary)?;
@@ -251,23 +258,24 @@ pub fn run_train(
         corners.iter().map(|(x, y)| [x.to_string(), y.to_string()]),
     )?;
     result.learner.actor.save(&out.join("actor.safetensors"))?;
-    let picture = MazePicture {
-        title: format!(
-            "{} on maze {} (layout {}), seed {}: {} steps, success {}",
-            summary.algo,
-            job.maze.size,
-            job.maze.seed,
-            job.seed,
-            job.train.steps,
-            summary.final_success
-        ),
-        red_area: &corners,
+    let data = PictureData {
+        red_area: corners,
         red_area_side: side,
-        ..MazePicture::default()
+        ..PictureData::default()
     };
+    data.write_csv(&out.join("picture.csv"))?;
+    let title = format!(
+        "{} on maze {} (layout {}), seed {}: {} steps, success {}",
+        summary.algo,
+        job.maze.size,
+        job.maze.seed,
+        job.seed,
+        job.train.steps,
+        summary.final_success
+    );
     render_maze(
         &maze,
-        &picture,
+        &data.picture(title),
         &out.join("train.png"),
         &out.join("train.svg"),
         SVG_MAX_POINTS,
@@ -412,20 +420,8 @@ pub fn run_pbcs(
     write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
     phase2.chain.save(&out.join("chain"))?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
-    let red = xy(tau);
-    let picture = MazePicture {
-        title: format!(
-            "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, success {}",
-            record.variant,
-            record.learner,
-            job.maze.size,
-            job.maze.seed,
-            job.seed,
-            record.total_steps,
-            record.skills,
-            success_rate
-        ),
-        red_paths: vec![&red],
+    let data = PictureData {
+        red_paths: vec![xy(tau)],
         green_paths: rollouts.iter().map(|r| xy(r)).collect(),
         circles: phase2
             .chain
@@ -438,11 +434,23 @@ pub fn run_pbcs(
                 )
             })
             .collect(),
-        ..MazePicture::default()
+        ..PictureData::default()
     };
+    data.write_csv(&out.join("picture.csv"))?;
+    let title = format!(
+        "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, success {}",
+        record.variant,
+        record.learner,
+        job.maze.size,
+        job.maze.seed,
+        job.seed,
+        record.total_steps,
+        record.skills,
+        success_rate
+    );
     render_maze(
         &maze,
-        &picture,
+        &data.picture(title),
         &out.join("run.png"),
         &out.join("run.svg"),
         SVG_MAX_POINTS,

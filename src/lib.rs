@@ -34,10 +34,14 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "polars")]
+pub mod aggregate;
 pub mod config;
 pub mod env;
 pub mod error;
+pub mod experiment;
 pub mod explore;
+pub mod figures;
 pub mod jobs;
 pub mod learner;
 pub mod maze;
@@ -45,8 +49,10 @@ pub mod nn;
 pub mod pbcs;
 pub mod plot;
 pub mod record;
+pub mod report;
 pub mod rng;
 pub mod stats;
+pub mod tables;
 pub mod toy;
 pub mod train;
 

@@ -52,8 +52,8 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
     }
 }
 
-/// Draws `picture` over `maze` on `area`.
-fn draw<DB: DrawingBackend>(
+/// Draws `picture` over `maze` on `area` (any plotters backend; the caller presents it).
+pub fn draw_maze<DB: DrawingBackend>(
     area: DrawingArea<DB, Shift>,
     maze: &Maze,
     picture: &MazePicture,
@@ -126,7 +126,44 @@ fn draw<DB: DrawingBackend>(
     chart.draw_series(LineSeries::new(ring, RGBColor(0, 120, 0).stroke_width(2)))?;
     let s = maze.start();
     chart.draw_series(std::iter::once(Circle::new((s.x, s.y), 5, BLUE.filled())))?;
-    area.present()
+    Ok(())
+}
+
+/// A figure that can draw itself on any plotters backend, so that one drawing routine gives
+/// both the PNG and the SVG file ([`render_figure`]).
+pub trait Figure {
+    /// Pixel size (width, height).
+    fn size(&self) -> (u32, u32);
+    /// Draws the figure on `area` (filled white already).
+    fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+}
+
+/// Renders `figure` to `<stem>.png` and `<stem>.svg` (atomically), returning both paths.
+pub fn render_figure<F: Figure>(figure: &F, stem: &Path) -> Result<[std::path::PathBuf; 2]> {
+    register_font();
+    let png = stem.with_extension("png");
+    let svg = stem.with_extension("svg");
+    let size = figure.size();
+    crate::record::write_atomic_via_path(&png, |tmp| {
+        let root = BitMapBackend::new(tmp, size).into_drawing_area();
+        root.fill(&WHITE)
+            .and_then(|()| figure.draw(&root))
+            .and_then(|()| root.present())
+            .map_err(|e| plot_err(&png, e))
+    })?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        root.fill(&WHITE)
+            .and_then(|()| figure.draw(&root))
+            .and_then(|()| root.present())
+            .map_err(|e| plot_err(&svg, e))?;
+    }
+    crate::record::write_atomic(&svg, |out| out.write_all(text.as_bytes()))?;
+    Ok([png, svg])
 }
 
 /// Pixel size of a maze picture: 40 px per cell, between 400 and 1200 px.
@@ -149,7 +186,9 @@ pub fn render_maze(
     let size = (side, side + if picture.title.is_empty() { 0 } else { 30 });
     crate::record::write_atomic_via_path(png, |tmp| {
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
-        draw(root, maze, picture).map_err(|e| plot_err(png, e))
+        draw_maze(root.clone(), maze, picture)
+            .and_then(|()| root.present())
+            .map_err(|e| plot_err(png, e))
     })?;
     let thin = |v: &[(f32, f32)]| -> Vec<(f32, f32)> {
         let stride = v.len().div_ceil(svg_max_points.max(1)).max(1);
@@ -164,7 +203,131 @@ pub fn render_maze(
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        draw(root, maze, &svg_picture).map_err(|e| plot_err(svg, e))?;
+        draw_maze(root.clone(), maze, &svg_picture)
+            .and_then(|()| root.present())
+            .map_err(|e| plot_err(svg, e))?;
     }
     crate::record::write_atomic(svg, |out| out.write_all(text.as_bytes()))
+}
+
+/// The owned content of a [`MazePicture`], as stored in a run's `picture.csv`, so that figures
+/// can be drawn again from committed results without re-running anything.
+///
+/// The CSV has one row per point: `layer, index, x, y, r`, where `layer` is `point`, `red`
+/// (polyline `index`), `area` (square of side `r` at lower-left corner `(x, y)`), `green`
+/// (polyline `index`) or `circle` (centre `(x, y)`, radius `r`).
+///
+/// ```
+/// use pbcs::plot::PictureData;
+///
+/// let data = PictureData {
+///     red_paths: vec![vec![(0.5, 0.5), (0.6, 0.5)]],
+///     circles: vec![((1.0, 1.5), 0.1)],
+///     ..PictureData::default()
+/// };
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("picture.csv");
+/// data.write_csv(&path).unwrap();
+/// assert_eq!(PictureData::read_csv(&path).unwrap(), data);
+/// ```
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PictureData {
+    /// Faint points.
+    pub points: Vec<(f32, f32)>,
+    /// Red polylines.
+    pub red_paths: Vec<Vec<(f32, f32)>>,
+    /// Red squares by lower-left corner.
+    pub red_area: Vec<(f32, f32)>,
+    /// Side of the red squares.
+    pub red_area_side: f32,
+    /// Green polylines.
+    pub green_paths: Vec<Vec<(f32, f32)>>,
+    /// Purple circles.
+    pub circles: Vec<((f32, f32), f32)>,
+}
+
+impl PictureData {
+    /// A picture of this data with `title`.
+    pub fn picture(&self, title: String) -> MazePicture<'_> {
+        MazePicture {
+            title,
+            points: &self.points,
+            red_paths: self.red_paths.iter().map(Vec::as_slice).collect(),
+            red_area: &self.red_area,
+            red_area_side: self.red_area_side,
+            green_paths: self.green_paths.clone(),
+            circles: self.circles.clone(),
+        }
+    }
+
+    /// Writes the data as CSV (atomically).
+    pub fn write_csv(&self, path: &Path) -> Result<()> {
+        let header: Vec<String> = ["layer", "index", "x", "y", "r"].map(String::from).to_vec();
+        let mut rows: Vec<[String; 5]> = Vec::new();
+        let row = |layer: &str, i: usize, (x, y): (f32, f32), r: f32| {
+            [
+                layer.into(),
+                i.to_string(),
+                x.to_string(),
+                y.to_string(),
+                r.to_string(),
+            ]
+        };
+        rows.extend(self.points.iter().map(|&p| row("point", 0, p, 0.0)));
+        for (i, path) in self.red_paths.iter().enumerate() {
+            rows.extend(path.iter().map(|&p| row("red", i, p, 0.0)));
+        }
+        rows.extend(
+            self.red_area
+                .iter()
+                .map(|&p| row("area", 0, p, self.red_area_side)),
+        );
+        for (i, path) in self.green_paths.iter().enumerate() {
+            rows.extend(path.iter().map(|&p| row("green", i, p, 0.0)));
+        }
+        rows.extend(self.circles.iter().map(|&(c, r)| row("circle", 0, c, r)));
+        crate::record::write_csv(path, &header, rows)
+    }
+
+    /// Reads data written by [`PictureData::write_csv`].
+    pub fn read_csv(path: &Path) -> Result<PictureData> {
+        let mut reader = csv::Reader::from_path(path)?;
+        let mut data = PictureData::default();
+        let bad = |line: u64, what: &str| Error::Parse {
+            path: path.to_path_buf(),
+            message: format!("line {line}: {what}"),
+        };
+        let push = |paths: &mut Vec<Vec<(f32, f32)>>, i: usize, p| {
+            if paths.len() <= i {
+                paths.resize(i + 1, Vec::new());
+            }
+            paths[i].push(p);
+        };
+        for (line, rec) in reader.records().enumerate() {
+            let rec = rec?;
+            let line = line as u64 + 2;
+            let num = |k: usize| -> Result<f32> {
+                rec.get(k)
+                    .and_then(|v| v.parse().ok())
+                    .ok_or_else(|| bad(line, "expected a number"))
+            };
+            let i: usize = rec
+                .get(1)
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| bad(line, "expected an index"))?;
+            let (p, r) = ((num(2)?, num(3)?), num(4)?);
+            match rec.get(0) {
+                Some("point") => data.points.push(p),
+                Some("red") => push(&mut data.red_paths, i, p),
+                Some("area") => {
+                    data.red_area.push(p);
+                    data.red_area_side = r;
+                }
+                Some("green") => push(&mut data.green_paths, i, p),
+                Some("circle") => data.circles.push((p, r)),
+                _ => return Err(bad(line, "unknown layer")),
+            }
+        }
+        Ok(data)
+    }
 }

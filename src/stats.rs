@@ -35,3 +35,23 @@ pub fn wilson(k: u64, n: u64, z: f64) -> (f64, f64) {
     let half = z * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt() / denom;
     ((centre - half).max(0.0), (centre + half).min(1.0))
 }
+
+/// The `q`-quantile of `v` with linear interpolation between order statistics (numpy's and
+/// polars' `linear` method: position q·(n − 1)); NaN for an empty slice. Sorts `v`.
+///
+/// ```
+/// let mut v = vec![4.0, 1.0, 3.0, 2.0];
+/// assert_eq!(pbcs::stats::quantile(&mut v, 0.25), 1.75);
+/// assert_eq!(pbcs::stats::quantile(&mut v, 0.5), 2.5);
+/// assert_eq!(pbcs::stats::quantile(&mut v, 1.0), 4.0);
+/// ```
+pub fn quantile(v: &mut [f64], q: f64) -> f64 {
+    assert!((0.0..=1.0).contains(&q), "quantile: q must be in [0, 1]");
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let pos = q * (v.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+}

@@ -37,3 +37,35 @@ fn median_of_odd_even_and_empty() {
     assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
     assert!(median(&mut []).is_nan());
 }
+
+#[test]
+fn quantile_matches_linear_interpolation() {
+    use pbcs::stats::quantile;
+    // numpy.quantile([10, 20, 30, 40, 50], [0, .25, .5, .9, 1]) = [10, 20, 30, 46, 50]
+    let mut v = vec![50.0, 10.0, 40.0, 20.0, 30.0];
+    for (q, want) in [
+        (0.0, 10.0),
+        (0.25, 20.0),
+        (0.5, 30.0),
+        (0.9, 46.0),
+        (1.0, 50.0),
+    ] {
+        assert!((quantile(&mut v, q) - want).abs() < 1e-12, "q = {q}");
+    }
+    assert_eq!(quantile(&mut [7.0], 0.75), 7.0);
+    assert!(quantile(&mut [], 0.5).is_nan());
+}
+
+#[test]
+fn wilson_narrows_with_n_and_is_monotone_in_k() {
+    // Same rate, more trials: a narrower interval. More successes: both ends move up.
+    let width = |k, n| {
+        let (lo, hi) = wilson(k, n, 1.96);
+        hi - lo
+    };
+    assert!(width(5, 10) > width(50, 100) && width(50, 100) > width(500, 1000));
+    for k in 0..20 {
+        let (a, b) = (wilson(k, 20, 1.96), wilson(k + 1, 20, 1.96));
+        assert!(b.0 > a.0 && b.1 > a.1, "{k}/20");
+    }
+}

@@ -169,6 +169,130 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Experiments as data (experiments/*.toml): run a grid of (cell, seed) pairs into
+    /// results/raw/, list its commands, or re-run one cell and compare with the committed rows.
+    Exp {
+        #[command(subcommand)]
+        command: ExpCommand,
+    },
+    /// Aggregate every experiment's raw rows with polars into results/tables/<experiment>.csv
+    /// (needs the `polars` cargo feature: `make figures` turns it on).
+    Aggregate {
+        #[command(flatten)]
+        set: SetArgs,
+    },
+    /// Draw every figure and write the report's LaTeX from results/tables/ and the raw picture
+    /// data (trains nothing).
+    Figures {
+        #[command(flatten)]
+        set: SetArgs,
+        /// Figure folder [default: <results>/figures].
+        #[arg(long)]
+        figures: Option<PathBuf>,
+        /// Folder of the generated LaTeX [default: paper/generated, or <results>/tex for a
+        /// profile].
+        #[arg(long)]
+        tex: Option<PathBuf>,
+    },
+}
+
+/// All experiment files of a folder, one profile, one results folder.
+#[derive(Args)]
+struct SetArgs {
+    /// Folder of the experiment files.
+    #[arg(long, default_value = "experiments")]
+    experiments: PathBuf,
+    /// Profile (`smoke`, `full`); none: the committed grids.
+    #[arg(long)]
+    profile: Option<String>,
+    /// Results folder [default: results, or results-<profile>].
+    #[arg(long)]
+    results: Option<PathBuf>,
+}
+
+impl SetArgs {
+    fn load(&self) -> anyhow::Result<(Vec<pbcs::experiment::Experiment>, PathBuf)> {
+        let mut exps = Vec::new();
+        for f in pbcs::experiment::experiment_files(&self.experiments)? {
+            exps.push(pbcs::experiment::Experiment::load(
+                &f,
+                self.profile.as_deref(),
+            )?);
+        }
+        let results = self.results.clone().unwrap_or_else(|| match &self.profile {
+            None => PathBuf::from("results"),
+            Some(p) => PathBuf::from(format!("results-{p}")),
+        });
+        Ok((exps, results))
+    }
+}
+
+/// Which experiment, which profile, where its results live.
+#[derive(Args)]
+struct ExpArgs {
+    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml).
+    file: PathBuf,
+    /// A profile of the file (`smoke`, `full`); none: the committed grid.
+    #[arg(long)]
+    profile: Option<String>,
+    /// Results folder [default: results, or results-<profile> for a profile].
+    #[arg(long)]
+    results: Option<PathBuf>,
+}
+
+impl ExpArgs {
+    fn load(&self) -> anyhow::Result<(pbcs::experiment::Experiment, PathBuf)> {
+        let exp = pbcs::experiment::Experiment::load(&self.file, self.profile.as_deref())?;
+        let results = self.results.clone().unwrap_or_else(|| match &self.profile {
+            None => PathBuf::from("results"),
+            Some(p) => PathBuf::from(format!("results-{p}")),
+        });
+        Ok((exp, results))
+    }
+}
+
+#[derive(Subcommand)]
+enum ExpCommand {
+    /// Run every unfinished (cell, seed) pair (or one cell / one seed), `--jobs` at a time.
+    Run {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// Only this cell (`<method>-maze<N>`, see `pbcs exp list`).
+        #[arg(long)]
+        cell: Option<String>,
+        /// Only this seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Runs at a time (one thread each; the bytes written do not depend on it).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+    },
+    /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
+    /// `# done` after finished ones.
+    List {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// Print a makefile instead: one rule per (cell, seed) whose target is the raw row, so
+        /// `make -f runs.mk -j N` runs N at a time and skips finished ones.
+        #[arg(long)]
+        make: bool,
+    },
+    /// Re-run one cell (all its seeds, or one) in a scratch folder and compare with the
+    /// committed raw rows: byte for byte, and if they differ, whether the new success rate lies
+    /// inside the committed Wilson 95 % interval. Exits with an error if it does not.
+    Check {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// The cell (`<method>-maze<N>`).
+        #[arg(long)]
+        cell: String,
+        /// Only this seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Runs at a time.
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+    },
 }
 
 fn main() -> ExitCode {
@@ -223,6 +347,333 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             jobs,
             out,
         } => table(config.as_deref(), &sizes, seeds, jobs, out),
+        Command::Aggregate { set } => aggregate(&set),
+        Command::Figures { set, figures, tex } => make_figures(&set, figures, tex),
+        Command::Exp { command } => match command {
+            ExpCommand::Run {
+                exp,
+                cell,
+                seed,
+                jobs,
+            } => exp_run(&exp, cell.as_deref(), seed, jobs),
+            ExpCommand::List { exp, make } => exp_list(&exp, make),
+            ExpCommand::Check {
+                exp,
+                cell,
+                seed,
+                jobs,
+            } => exp_check(&exp, &cell, seed, jobs),
+        },
+    }
+}
+
+#[cfg(feature = "polars")]
+fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
+    let (exps, results) = set.load()?;
+    for exp in &exps {
+        let rows = pbcs::experiment::read_raw(exp, &results)?;
+        if rows.is_empty() {
+            println!(
+                "{}: no raw rows in {}, skipped",
+                exp.name,
+                results.display()
+            );
+            continue;
+        }
+        let stats = pbcs::aggregate::aggregate(exp, &rows)?;
+        pbcs::report::write_tables(exp, &results, &stats, &rows)?;
+        let expected = exp.cells.len() as u64 * exp.seed_count;
+        println!(
+            "{}: {} of {} runs in {} cells → {} (polars; checked against the plain computation)",
+            exp.name,
+            rows.len(),
+            expected,
+            stats.len(),
+            pbcs::tables::table_path(&results, &exp.name).display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "polars"))]
+fn aggregate(_: &SetArgs) -> anyhow::Result<()> {
+    anyhow::bail!(
+        "this build has no polars: build with `--features polars` (as `make figures` does), \
+         or use the committed tables in results/tables/"
+    )
+}
+
+fn make_figures(
+    set: &SetArgs,
+    figures: Option<PathBuf>,
+    tex: Option<PathBuf>,
+) -> anyhow::Result<()> {
+    let (exps, results) = set.load()?;
+    let figures = figures.unwrap_or_else(|| results.join("figures"));
+    let tex = tex.unwrap_or_else(|| match &set.profile {
+        None => PathBuf::from("paper/generated"),
+        Some(_) => results.join("tex"),
+    });
+    let mut loaded = Vec::new();
+    for exp in exps {
+        let path = pbcs::tables::table_path(&results, &exp.name);
+        if !path.exists() {
+            println!("{}: no table at {}, skipped", exp.name, path.display());
+            continue;
+        }
+        let stats = pbcs::tables::read_table(&path)?;
+        println!("\n{} — {}", exp.name, exp.title);
+        println!("| cell | solved | Wilson 95 % | env steps median [q1, q3] | paper |");
+        println!("| --- | --- | --- | --- | --- |");
+        for s in &stats {
+            println!(
+                "| {} | {}/{} | [{:.2}, {:.2}] | {} [{}, {}] | {} |",
+                s.cell,
+                s.successes,
+                s.n,
+                s.wilson_lo,
+                s.wilson_hi,
+                pbcs::figures::human_steps(s.steps_median),
+                pbcs::figures::human_steps(s.steps_q1),
+                pbcs::figures::human_steps(s.steps_q3),
+                s.paper_steps.map_or("-".into(), |p| format!(
+                    "{} {}",
+                    pbcs::figures::human_steps(p as f64),
+                    if s.paper_solved == Some(true) {
+                        "S"
+                    } else {
+                        "F"
+                    }
+                ))
+            );
+        }
+        loaded.push((exp, stats));
+    }
+    let files = pbcs::report::render_all(&loaded, &results, &figures, &tex)?;
+    let named = |n: &str| {
+        loaded
+            .iter()
+            .find(|(e, _)| e.name == n)
+            .map_or(Vec::new(), |(_, s)| s.clone())
+    };
+    println!("\nthe paper's claims against our tables:");
+    for c in pbcs::report::claims(&named("table"), &named("gamma"), &named("unseen")) {
+        println!(
+            "- {} — {}: {}",
+            c.id,
+            c.verdict.word().to_uppercase(),
+            c.ours
+        );
+    }
+    println!(
+        "\nwrote {} files into {} and {}",
+        files.len(),
+        figures.display(),
+        tex.display()
+    );
+    Ok(())
+}
+
+fn run_bar(total: u64) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}")
+            .expect("valid template"),
+    );
+    bar
+}
+
+fn describe(row: &pbcs::experiment::RawRow) -> String {
+    format!(
+        "{} seed {}: {} (success {:.2}) in {} env steps{}",
+        row.cell,
+        row.seed,
+        if row.solved { "solved" } else { "not solved" },
+        row.success_rate,
+        row.env_steps,
+        if row.failure.is_empty() {
+            String::new()
+        } else {
+            format!(", {}", row.failure)
+        }
+    )
+}
+
+fn exp_run(
+    args: &ExpArgs,
+    cell: Option<&str>,
+    seed: Option<u64>,
+    jobs: usize,
+) -> anyhow::Result<()> {
+    use pbcs::experiment::{plan, sweep, Event};
+    let (exp, results) = args.load()?;
+    let runs = plan(&exp, cell, seed)?;
+    let bar = run_bar(runs.len() as u64);
+    let steps = std::sync::atomic::AtomicU64::new(0);
+    let clock = std::time::Instant::now();
+    let (ran, skipped) = (
+        std::sync::atomic::AtomicUsize::new(0),
+        std::sync::atomic::AtomicUsize::new(0),
+    );
+    let rows = sweep(&exp, &runs, &results, jobs, |_, event| {
+        bar.inc(1);
+        match event {
+            Event::Skipped(_) => {
+                skipped.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            }
+            Event::Ran(row, secs) => {
+                ran.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let total = steps.fetch_add(row.env_steps, std::sync::atomic::Ordering::SeqCst)
+                    + row.env_steps;
+                bar.println(format!("{} ({secs:.0} s)", describe(row)));
+                bar.set_message(format!(
+                    "{:.0} env steps/s",
+                    total as f64 / clock.elapsed().as_secs_f64().max(1e-9)
+                ));
+            }
+        }
+    })?;
+    bar.finish_and_clear();
+    println!(
+        "{} ({}): {} runs, {} ran now, {} were finished; raw rows in {}",
+        exp.name,
+        exp.profile.as_deref().unwrap_or("committed grid"),
+        rows.len(),
+        ran.into_inner(),
+        skipped.into_inner(),
+        results.join("raw").join(&exp.name).display()
+    );
+    println!("| cell | solved | env steps, median |");
+    println!("| --- | --- | --- |");
+    for c in &exp.cells {
+        let mut v: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.cell == c.id)
+            .map(|r| r.env_steps as f64)
+            .collect();
+        if v.is_empty() {
+            continue;
+        }
+        let solved = rows.iter().filter(|r| r.cell == c.id && r.solved).count();
+        println!(
+            "| {} | {solved}/{} | {:.0} |",
+            c.id,
+            v.len(),
+            pbcs::stats::median(&mut v)
+        );
+    }
+    Ok(())
+}
+
+fn exp_list(args: &ExpArgs, make: bool) -> anyhow::Result<()> {
+    let (exp, results) = args.load()?;
+    let runs = pbcs::experiment::plan(&exp, None, None)?;
+    let profile = args
+        .profile
+        .as_ref()
+        .map_or(String::new(), |p| format!(" --profile {p}"));
+    let results_flag = args
+        .results
+        .as_ref()
+        .map_or(String::new(), |r| format!(" --results {}", r.display()));
+    if make {
+        let target = |p: &pbcs::experiment::Pending| {
+            exp.cell_dir(&results, p.cell)
+                .join(format!("s{}.csv", p.seed))
+        };
+        println!(
+            "# generated by `pbcs exp list --make {}`",
+            args.file.display()
+        );
+        println!("PBCS ?= target/release/pbcs");
+        println!(
+            ".PHONY: all\nall:{}",
+            runs.iter()
+                .map(|p| format!(" \\\n  {}", target(p).display()))
+                .collect::<String>()
+        );
+        for p in &runs {
+            println!(
+                "{}:\n\t$(PBCS) exp run {}{profile}{results_flag} --cell {} --seed {} --jobs 1 >/dev/null",
+                target(p).display(),
+                args.file.display(),
+                p.cell.id,
+                p.seed
+            );
+        }
+        return Ok(());
+    }
+    for p in runs {
+        let done =
+            pbcs::experiment::read_finished(p.cell, p.seed, &exp.cell_dir(&results, p.cell))?
+                .is_some();
+        println!(
+            "pbcs exp run {}{profile}{results_flag} --cell {} --seed {} --jobs 1{}",
+            args.file.display(),
+            p.cell.id,
+            p.seed,
+            if done { "  # done" } else { "" }
+        );
+    }
+    Ok(())
+}
+
+fn exp_check(args: &ExpArgs, cell: &str, seed: Option<u64>, jobs: usize) -> anyhow::Result<()> {
+    use pbcs::experiment::{plan, read_finished, sweep};
+    let (exp, results) = args.load()?;
+    let runs = plan(&exp, Some(cell), seed)?;
+    let c = exp.cell(cell)?;
+    let committed_dir = exp.cell_dir(&results, c);
+    let mut committed = Vec::new();
+    for p in &runs {
+        match read_finished(p.cell, p.seed, &committed_dir)? {
+            Some(r) => committed.push(r),
+            None => anyhow::bail!(
+                "no committed row for cell {cell} seed {} in {}",
+                p.seed,
+                committed_dir.display()
+            ),
+        }
+    }
+    let scratch = tempfile::tempdir()?;
+    let bar = run_bar(runs.len() as u64);
+    let fresh = sweep(&exp, &runs, scratch.path(), jobs, |_, _| bar.inc(1))?;
+    bar.finish_and_clear();
+    let fresh_dir = exp.cell_dir(scratch.path(), c);
+    let mut identical = 0;
+    for (p, (old, new)) in runs.iter().zip(committed.iter().zip(&fresh)) {
+        let name = format!("s{}.csv", p.seed);
+        let same =
+            std::fs::read(committed_dir.join(&name))? == std::fs::read(fresh_dir.join(&name))?;
+        identical += usize::from(same);
+        println!(
+            "seed {}: {} — committed: {}; now: {}",
+            p.seed,
+            if same { "identical bytes" } else { "DIFFERENT" },
+            describe(old),
+            describe(new)
+        );
+    }
+    let n = runs.len() as u64;
+    let k_old = committed.iter().filter(|r| r.solved).count() as u64;
+    let k_new = fresh.iter().filter(|r| r.solved).count() as u64;
+    let (lo, hi) = pbcs::stats::wilson(k_old, n, 1.96);
+    println!(
+        "cell {cell}: {identical}/{n} rows identical byte for byte; solved committed {k_old}/{n} \
+         (Wilson 95 % [{lo:.3}, {hi:.3}]), now {k_new}/{n}"
+    );
+    if identical as u64 == n {
+        println!("MATCH: the committed rows are reproduced exactly");
+        return Ok(());
+    }
+    let rate = k_new as f64 / n as f64;
+    if (lo..=hi).contains(&rate) {
+        println!("DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed interval");
+        Ok(())
+    } else {
+        anyhow::bail!(
+            "the new success rate {rate:.2} lies outside the committed interval [{lo:.3}, {hi:.3}]"
+        )
     }
 }
 

@@ -1,0 +1,151 @@
+//! Aggregation of raw results with polars (cargo feature `polars`): raw rows → per-cell
+//! statistics ([`CellStats`]): n, successes, Wilson 95 % interval, median and quartiles of
+//! environment steps, and the paper's figure beside ours.
+//!
+//! polars does the grouping and the order statistics; the Wilson interval is computed from its
+//! counts. Every number is then checked against the plain-Rust computation of
+//! [`crate::tables::cell_stats`], and a disagreement is an error: the two implementations keep
+//! each other honest every time `make figures` runs.
+
+use crate::error::{Error, Result};
+use crate::experiment::{Experiment, RawRow};
+use crate::stats::wilson;
+use crate::tables::{cell_stats, CellStats, Z95};
+use polars::prelude::*;
+
+fn err(exp: &Experiment, e: impl std::fmt::Display) -> Error {
+    Error::Aggregate {
+        experiment: exp.name.clone(),
+        message: e.to_string(),
+    }
+}
+
+/// The raw rows as a polars DataFrame (one row per run).
+pub fn raw_frame(rows: &[RawRow]) -> PolarsResult<DataFrame> {
+    df!(
+        "cell" => rows.iter().map(|r| r.cell.clone()).collect::<Vec<_>>(),
+        "seed" => rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
+        "solved" => rows.iter().map(|r| f64::from(u8::from(r.solved))).collect::<Vec<_>>(),
+        "env_steps" => rows.iter().map(|r| r.env_steps as f64).collect::<Vec<_>>(),
+        "skills" => rows.iter().map(|r| r.skills as f64).collect::<Vec<_>>(),
+        "success_rate" => rows.iter().map(|r| f64::from(r.success_rate)).collect::<Vec<_>>(),
+        "budget" => rows.iter().map(|r| r.budget as f64).collect::<Vec<_>>(),
+    )
+}
+
+/// Per-cell aggregates of the raw frame, one row per cell (sorted by cell id).
+pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
+    let steps = || col("env_steps");
+    frame
+        .lazy()
+        .group_by([col("cell")])
+        .agg([
+            len().cast(DataType::Float64).alias("n"),
+            col("solved").sum().alias("successes"),
+            steps().median().alias("steps_median"),
+            steps()
+                .quantile(lit(0.25), QuantileMethod::Linear)
+                .alias("steps_q1"),
+            steps()
+                .quantile(lit(0.75), QuantileMethod::Linear)
+                .alias("steps_q3"),
+            steps().min().alias("steps_min"),
+            steps().max().alias("steps_max"),
+            steps()
+                .filter(col("solved").eq(lit(1.0)))
+                .median()
+                .alias("solved_steps_median"),
+            col("skills").median().alias("skills_median"),
+            col("success_rate").median().alias("success_rate_median"),
+            col("budget").first().alias("budget"),
+        ])
+        .sort(["cell"], SortMultipleOptions::default())
+        .collect()
+}
+
+/// Aggregates `rows` of `exp` with polars into one [`CellStats`] per cell with runs, in the
+/// experiment's cell order, and checks every number against the plain-Rust computation.
+pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
+    let grouped = raw_frame(rows)
+        .and_then(group_cells)
+        .map_err(|e| err(exp, e))?;
+    let cells = grouped
+        .column("cell")
+        .and_then(|c| c.str().cloned())
+        .map_err(|e| err(exp, e))?;
+    let num = |name: &str, i: usize| -> Result<Option<f64>> {
+        grouped
+            .column(name)
+            .and_then(|c| c.f64().map(|c| c.get(i)))
+            .map_err(|e| err(exp, e))
+    };
+    let mut out = Vec::new();
+    for c in &exp.cells {
+        let Some(i) = (0..grouped.height()).find(|&i| cells.get(i) == Some(c.id.as_str())) else {
+            continue;
+        };
+        let get = |name: &str| -> Result<f64> {
+            num(name, i)?.ok_or_else(|| err(exp, format!("{}: no `{name}`", c.id)))
+        };
+        let (n, k) = (get("n")? as u64, get("successes")? as u64);
+        let (lo, hi) = wilson(k, n, Z95);
+        out.push(CellStats {
+            experiment: exp.name.clone(),
+            cell: c.id.clone(),
+            method: c.method.clone(),
+            label: c.label.clone(),
+            maze: c.maze,
+            n,
+            successes: k,
+            success_rate: k as f64 / n as f64,
+            wilson_lo: lo,
+            wilson_hi: hi,
+            steps_median: get("steps_median")?,
+            steps_q1: get("steps_q1")?,
+            steps_q3: get("steps_q3")?,
+            steps_min: get("steps_min")?,
+            steps_max: get("steps_max")?,
+            solved_steps_median: num("solved_steps_median", i)?,
+            skills_median: get("skills_median")?,
+            success_rate_median: get("success_rate_median")?,
+            budget: get("budget")? as u64,
+            paper_steps: c.paper_steps,
+            paper_solved: c.paper_solved,
+        });
+    }
+    let plain = cell_stats(exp, rows);
+    if !same(&out, &plain) {
+        return Err(err(
+            exp,
+            format!("polars and the plain computation disagree:\n{out:?}\n{plain:?}"),
+        ));
+    }
+    Ok(out)
+}
+
+/// Equal up to floating-point noise (relative 1e-9).
+fn same(a: &[CellStats], b: &[CellStats]) -> bool {
+    let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0);
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.cell == y.cell
+                && (x.n, x.successes, x.budget) == (y.n, y.successes, y.budget)
+                && [
+                    (x.steps_median, y.steps_median),
+                    (x.steps_q1, y.steps_q1),
+                    (x.steps_q3, y.steps_q3),
+                    (x.steps_min, y.steps_min),
+                    (x.steps_max, y.steps_max),
+                    (x.skills_median, y.skills_median),
+                    (x.success_rate_median, y.success_rate_median),
+                    (x.wilson_lo, y.wilson_lo),
+                ]
+                .iter()
+                .all(|&(p, q)| close(p, q))
+                && match (x.solved_steps_median, y.solved_steps_median) {
+                    (Some(p), Some(q)) => close(p, q),
+                    (None, None) => true,
+                    _ => false,
+                }
+        })
+}

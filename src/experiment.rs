@@ -1,0 +1,727 @@
+//! Experiments as data: one TOML file per paper artifact, a grid of cells (maze × method)
+//! run over a range of seeds, each (cell, seed) an independent deterministic run that writes
+//! its own raw CSV row.
+//!
+//! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
+//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`), the mazes, the
+//! seeds, and named profiles (`smoke` for CI, `full` for the paper's budgets) that override
+//! seeds, mazes and fields. Resolving a cell is a deep merge of TOML tables in this order:
+//! base file ← method `set` ← profile's table for the method's kind; then `maze.size` and
+//! `seed` are set. The merged table is parsed with unknown keys denied, so a typo in an
+//! experiment file is an error that names the method.
+//!
+//! ```
+//! use pbcs::experiment::Experiment;
+//!
+//! let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), Some("smoke"))
+//!     .unwrap();
+//! assert!(exp.cells.iter().any(|c| c.id == "pbcs-maze2"));
+//! assert_eq!(exp.seeds(), vec![0]);
+//! ```
+//!
+//! Raw results of a run of cell `c` with seed `s` live in `<results>/raw/<experiment>/<c>/`:
+//! `s<s>.csv` (one [`RawRow`], written last, so its presence means the run finished),
+//! `s<s>.toml` (the resolved job: `pbcs run --config` or `pbcs train --config` re-runs it),
+//! `s<s>.timing.toml` (wall clock, not deterministic, hence beside the CSV), `s<s>.evals.csv`
+//! (vanilla: the learning curve) and, for picture seeds, `s<s>.picture.csv` (what the figures
+//! draw).
+
+use crate::config::{Check, RunJob, TrainJob};
+use crate::error::{Error, Result};
+use crate::jobs::{run_pbcs, run_train};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// What a method runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// A vanilla baseline on the maze's own reward ([`TrainJob`], `pbcs train`).
+    Vanilla,
+    /// PBCS, phase 1 then phase 2 ([`RunJob`], `pbcs run`).
+    Pbcs,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Vanilla => "vanilla",
+            Kind::Pbcs => "pbcs",
+        }
+    }
+}
+
+/// One method (a column of the results table, a bar of the γ study) as written in the file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MethodSpec {
+    name: String,
+    #[serde(default)]
+    label: Option<String>,
+    kind: Kind,
+    /// Base config, relative to the experiment file's folder.
+    base: PathBuf,
+    #[serde(default)]
+    set: toml::Table,
+    /// The paper's environment steps for this method, by maze size (as a string key).
+    #[serde(default)]
+    paper_steps: BTreeMap<String, u64>,
+    /// Whether the paper's run solved the maze, by maze size.
+    #[serde(default)]
+    paper_solved: BTreeMap<String, bool>,
+}
+
+/// A named profile: smaller (`smoke`) or larger (`full`) versions of the same grid.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileSpec {
+    #[serde(default)]
+    description: String,
+    seeds: Option<u64>,
+    mazes: Option<Vec<usize>>,
+    picture_seeds: Option<Vec<u64>>,
+    #[serde(default)]
+    vanilla: toml::Table,
+    #[serde(default)]
+    pbcs: toml::Table,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExperimentSpec {
+    title: String,
+    #[serde(default)]
+    description: String,
+    seeds: u64,
+    #[serde(default)]
+    first_seed: u64,
+    #[serde(default = "default_picture_seeds")]
+    picture_seeds: Vec<u64>,
+    mazes: Vec<usize>,
+    #[serde(rename = "method")]
+    methods: Vec<MethodSpec>,
+    #[serde(default, rename = "profile")]
+    profiles: BTreeMap<String, ProfileSpec>,
+}
+
+fn default_picture_seeds() -> Vec<u64> {
+    vec![0]
+}
+
+/// A resolved job of either kind.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Job {
+    /// `pbcs train`.
+    Vanilla(TrainJob),
+    /// `pbcs run`.
+    Pbcs(RunJob),
+}
+
+impl Job {
+    /// The job with run seed `seed`.
+    pub fn with_seed(&self, seed: u64) -> Job {
+        match self {
+            Job::Vanilla(j) => Job::Vanilla(TrainJob { seed, ..j.clone() }),
+            Job::Pbcs(j) => Job::Pbcs(RunJob { seed, ..j.clone() }),
+        }
+    }
+
+    /// The job as TOML (what `--config` reads back).
+    pub fn to_toml(&self) -> String {
+        match self {
+            Job::Vanilla(j) => toml::to_string(j),
+            Job::Pbcs(j) => toml::to_string(j),
+        }
+        .expect("jobs serialise to TOML")
+    }
+
+    fn check(&self) -> Result<()> {
+        match self {
+            Job::Vanilla(j) => j.check(),
+            Job::Pbcs(j) => j.check(),
+        }
+    }
+}
+
+/// One cell of the grid: a method on a maze.
+#[derive(Debug, Clone)]
+pub struct Cell {
+    /// `<method>-maze<N>`: the cell's folder name and its name on the command line.
+    pub id: String,
+    /// Method name.
+    pub method: String,
+    /// Method label for figures and tables.
+    pub label: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// The resolved job (run seed 0; [`Job::with_seed`] gives the others).
+    pub job: Job,
+    /// The paper's environment steps for this cell, if it reports them.
+    pub paper_steps: Option<u64>,
+    /// Whether the paper's run solved this cell, if it reports it.
+    pub paper_solved: Option<bool>,
+}
+
+/// A resolved experiment: every cell's job, the seeds, the profile.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// The file stem (`table` for `experiments/table.toml`): the name of its raw folder.
+    pub name: String,
+    /// Title, for tables and figures.
+    pub title: String,
+    /// What the experiment shows.
+    pub description: String,
+    /// The profile applied, if any.
+    pub profile: Option<String>,
+    /// First run seed.
+    pub first_seed: u64,
+    /// Number of seeds.
+    pub seed_count: u64,
+    /// Seeds whose runs also keep the picture data.
+    pub picture_seeds: Vec<u64>,
+    /// Maze sizes, in order.
+    pub mazes: Vec<usize>,
+    /// Methods (name, label), in order.
+    pub methods: Vec<(String, String)>,
+    /// Cells, maze-major in the file's order of mazes and methods.
+    pub cells: Vec<Cell>,
+}
+
+/// Merges `from` into `into`: tables merge key by key, anything else replaces.
+fn merge(into: &mut toml::Table, from: &toml::Table) {
+    for (k, v) in from {
+        match (into.get_mut(k), v) {
+            (Some(toml::Value::Table(a)), toml::Value::Table(b)) => merge(a, b),
+            _ => {
+                into.insert(k.clone(), v.clone());
+            }
+        }
+    }
+}
+
+fn parse_err(path: &Path, message: impl Into<String>) -> Error {
+    Error::Parse {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+impl Experiment {
+    /// Reads and resolves an experiment file under `profile` (None: the committed grid).
+    /// Every cell's job is validated; duplicate method names, an unknown profile, an empty
+    /// grid and keys that a job does not have are errors naming the method or field.
+    pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let spec: ExperimentSpec =
+            toml::from_str(&text).map_err(|e| parse_err(path, e.to_string()))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .ok_or_else(|| parse_err(path, "no file name"))?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        let prof = match profile {
+            None => ProfileSpec::default(),
+            Some(p) => spec.profiles.get(p).cloned().ok_or_else(|| {
+                Error::invalid(
+                    "profile",
+                    format!(
+                        "{} has no profile `{p}` (it has: {})",
+                        path.display(),
+                        spec.profiles.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                )
+            })?,
+        };
+        let seed_count = prof.seeds.unwrap_or(spec.seeds);
+        if seed_count == 0 {
+            return Err(Error::invalid("seeds", "must be at least 1"));
+        }
+        let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
+        if mazes.is_empty() {
+            return Err(Error::invalid("mazes", "must name at least one maze size"));
+        }
+        if mazes.iter().collect::<BTreeSet<_>>().len() != mazes.len() {
+            return Err(Error::invalid("mazes", "maze sizes must be unique"));
+        }
+        if spec.methods.is_empty() {
+            return Err(Error::invalid("method", "an experiment needs a [[method]]"));
+        }
+        let mut names = BTreeSet::new();
+        for m in &spec.methods {
+            if m.name.is_empty()
+                || !m
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
+            {
+                return Err(Error::invalid(
+                    "method.name",
+                    format!("`{}`: use letters, digits and `_` only", m.name),
+                ));
+            }
+            if !names.insert(m.name.clone()) {
+                return Err(Error::invalid(
+                    "method.name",
+                    format!("`{}` appears twice", m.name),
+                ));
+            }
+            for key in m.paper_steps.keys().chain(m.paper_solved.keys()) {
+                if !key.parse::<usize>().is_ok_and(|n| spec.mazes.contains(&n)) {
+                    return Err(Error::invalid(
+                        "method.paper_steps",
+                        format!("method `{}`: `{key}` is not one of `mazes`", m.name),
+                    ));
+                }
+            }
+        }
+        // Resolve each method once, then each cell.
+        let mut methods = Vec::new();
+        let mut cells = Vec::new();
+        let mut resolved = Vec::new();
+        for m in &spec.methods {
+            let base_path = folder.join(&m.base);
+            let base_text =
+                std::fs::read_to_string(&base_path).map_err(|e| Error::io(&base_path, e))?;
+            let mut table: toml::Table =
+                toml::from_str(&base_text).map_err(|e| parse_err(&base_path, e.to_string()))?;
+            merge(&mut table, &m.set);
+            merge(
+                &mut table,
+                match m.kind {
+                    Kind::Vanilla => &prof.vanilla,
+                    Kind::Pbcs => &prof.pbcs,
+                },
+            );
+            let what = |e: toml::de::Error| {
+                parse_err(
+                    path,
+                    format!("method `{}` ({} job): {e}", m.name, m.kind.name()),
+                )
+            };
+            let job = match m.kind {
+                Kind::Vanilla => Job::Vanilla(toml::Value::Table(table).try_into().map_err(what)?),
+                Kind::Pbcs => Job::Pbcs(toml::Value::Table(table).try_into().map_err(what)?),
+            };
+            let label = m.label.clone().unwrap_or_else(|| m.name.clone());
+            methods.push((m.name.clone(), label.clone()));
+            resolved.push((m, label, job));
+        }
+        for &n in &mazes {
+            for (m, label, job) in &resolved {
+                let job = match job {
+                    Job::Vanilla(j) => {
+                        let mut j = j.clone();
+                        j.maze.size = n;
+                        j.seed = 0;
+                        Job::Vanilla(j)
+                    }
+                    Job::Pbcs(j) => {
+                        let mut j = j.clone();
+                        j.maze.size = n;
+                        j.seed = 0;
+                        Job::Pbcs(j)
+                    }
+                };
+                job.check().map_err(|e| match e {
+                    Error::Invalid { field, reason } => Error::Invalid {
+                        field,
+                        reason: format!("{reason} (method `{}`, maze {n})", m.name),
+                    },
+                    other => other,
+                })?;
+                cells.push(Cell {
+                    id: format!("{}-maze{n}", m.name),
+                    method: m.name.clone(),
+                    label: label.clone(),
+                    maze: n,
+                    job,
+                    paper_steps: m.paper_steps.get(&n.to_string()).copied(),
+                    paper_solved: m.paper_solved.get(&n.to_string()).copied(),
+                });
+            }
+        }
+        Ok(Experiment {
+            name,
+            title: spec.title,
+            description: if prof.description.is_empty() {
+                spec.description
+            } else {
+                format!("{} ({})", spec.description, prof.description)
+            },
+            profile: profile.map(String::from),
+            first_seed: spec.first_seed,
+            seed_count,
+            picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
+            mazes,
+            methods,
+            cells,
+        })
+    }
+
+    /// The run seeds, in order.
+    pub fn seeds(&self) -> Vec<u64> {
+        (self.first_seed..self.first_seed + self.seed_count).collect()
+    }
+
+    /// The cell called `id`, or an error listing the cells.
+    pub fn cell(&self, id: &str) -> Result<&Cell> {
+        self.cells.iter().find(|c| c.id == id).ok_or_else(|| {
+            Error::invalid(
+                "cell",
+                format!(
+                    "experiment `{}` has no cell `{id}` (it has: {})",
+                    self.name,
+                    self.cells
+                        .iter()
+                        .map(|c| c.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })
+    }
+
+    /// The folder of a cell's raw results under `results`.
+    pub fn cell_dir(&self, results: &Path, cell: &Cell) -> PathBuf {
+        results.join("raw").join(&self.name).join(&cell.id)
+    }
+}
+
+/// One run's raw result: the row every table and figure is computed from. Vanilla and PBCS
+/// runs share the columns; a column that does not apply holds 0 or is empty.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RawRow {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cell id (`<method>-maze<N>`).
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// `vanilla` or `pbcs`.
+    pub kind: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// Maze layout seed.
+    pub maze_seed: u64,
+    /// Run seed.
+    pub seed: u64,
+    /// `ddpg`, `td3`, with `_am` for the argmax actor.
+    pub learner: String,
+    /// γ.
+    pub gamma: f32,
+    /// PBCS: whether skill chaining was on.
+    pub chaining: bool,
+    /// PBCS: `ball` or `exact` starts; empty for vanilla.
+    pub starts: String,
+    /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
+    /// vanilla, the final greedy evaluation does.
+    pub solved: bool,
+    /// Success rate of that evaluation.
+    pub success_rate: f32,
+    /// Environment steps used (PBCS: phase 1 + training + tests; vanilla: the budget).
+    pub env_steps: u64,
+    /// The step budget of the run (PBCS: `phase2.max_env_steps`; vanilla: `train.steps`).
+    pub budget: u64,
+    /// Vanilla: environment steps at the first successful greedy evaluation, if any.
+    pub first_success_steps: Option<u64>,
+    /// PBCS: steps of phase 1.
+    pub phase1_steps: u64,
+    /// PBCS: steps of phase-2 training episodes.
+    pub train_steps: u64,
+    /// PBCS: steps of Backplay's tests.
+    pub test_steps: u64,
+    /// PBCS: skills in the chain.
+    pub skills: usize,
+    /// PBCS: why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
+    pub failure: String,
+}
+
+/// Raw file names of one run.
+fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
+    dir.join(format!("s{seed}{suffix}"))
+}
+
+/// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last). Runs in a
+/// scratch folder; only the raw files are kept.
+pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Result<RawRow> {
+    let job = cell.job.with_seed(seed);
+    let scratch = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
+    let tmp = scratch.path();
+    let mut keep = vec![("timing.toml", ".timing.toml")];
+    let row = match &job {
+        Job::Vanilla(j) => {
+            let (s, _) = run_train(j, tmp, |_, _| {})?;
+            keep.push(("evals.csv", ".evals.csv"));
+            RawRow {
+                experiment: exp.name.clone(),
+                cell: cell.id.clone(),
+                method: cell.method.clone(),
+                kind: "vanilla".into(),
+                maze: s.maze,
+                maze_seed: s.maze_seed,
+                seed,
+                learner: format!(
+                    "{}{}",
+                    s.algo,
+                    if s.actor_update == "argmax" {
+                        "_am"
+                    } else {
+                        ""
+                    }
+                ),
+                gamma: j.learner.gamma,
+                chaining: false,
+                starts: String::new(),
+                solved: s.final_success >= 0.95,
+                success_rate: s.final_success,
+                env_steps: s.env_steps,
+                budget: j.train.steps,
+                first_success_steps: s.first_success_steps,
+                phase1_steps: 0,
+                train_steps: 0,
+                test_steps: 0,
+                skills: 0,
+                failure: String::new(),
+            }
+        }
+        Job::Pbcs(j) => {
+            let (r, _) = run_pbcs(j, tmp, |_, _| {})?;
+            RawRow {
+                experiment: exp.name.clone(),
+                cell: cell.id.clone(),
+                method: cell.method.clone(),
+                kind: "pbcs".into(),
+                maze: r.maze,
+                maze_seed: r.maze_seed,
+                seed,
+                learner: r.learner,
+                gamma: r.gamma,
+                chaining: j.phase2.chaining,
+                starts: r.starts,
+                solved: r.solved,
+                success_rate: r.success_rate,
+                env_steps: r.total_steps,
+                budget: j.phase2.max_env_steps,
+                first_success_steps: None,
+                phase1_steps: r.phase1_steps,
+                train_steps: r.train_steps,
+                test_steps: r.test_steps,
+                skills: r.skills,
+                failure: r.failure,
+            }
+        }
+    };
+    if exp.picture_seeds.contains(&seed) {
+        keep.push(("picture.csv", ".picture.csv"));
+    }
+    for (from, suffix) in keep {
+        let to = run_file(dir, seed, suffix);
+        let src = tmp.join(from);
+        crate::record::write_atomic(&to, |w| {
+            let bytes = std::fs::read(&src)?;
+            w.write_all(&bytes)
+        })?;
+    }
+    let config = job.to_toml();
+    crate::record::write_atomic(&run_file(dir, seed, ".toml"), |w| {
+        w.write_all(config.as_bytes())
+    })?;
+    crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
+    Ok(row)
+}
+
+/// The finished raw row of (cell, seed) in `dir`, if there is one. A finished run of another
+/// config is an error: results of two configs are never mixed.
+pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow>> {
+    let path = run_file(dir, seed, ".csv");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let config_path = run_file(dir, seed, ".toml");
+    let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
+    if stored != cell.job.with_seed(seed).to_toml() {
+        return Err(parse_err(
+            &config_path,
+            "this finished run used another config than the experiment file now gives; \
+             remove the cell's folder to re-run it, or restore the experiment file",
+        ));
+    }
+    read_row(&path).map(Some)
+}
+
+/// Reads one raw row file.
+pub fn read_row(path: &Path) -> Result<RawRow> {
+    let mut reader = csv::Reader::from_path(path).map_err(Error::Csv)?;
+    reader
+        .deserialize()
+        .next()
+        .ok_or_else(|| parse_err(path, "empty raw row file"))?
+        .map_err(Error::Csv)
+}
+
+/// Wall seconds of a finished run, from its timing file (None if absent).
+pub fn read_wall_seconds(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> Option<f64> {
+    let text =
+        std::fs::read_to_string(run_file(&exp.cell_dir(results, cell), seed, ".timing.toml"))
+            .ok()?;
+    text.lines().find_map(|l| {
+        l.strip_prefix("wall_seconds = ")
+            .and_then(|v| v.trim().parse().ok())
+    })
+}
+
+/// Path of the picture data of (cell, seed), if it was kept.
+pub fn picture_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    run_file(&exp.cell_dir(results, cell), seed, ".picture.csv")
+}
+
+/// Path of the learning curve of a vanilla (cell, seed).
+pub fn evals_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    run_file(&exp.cell_dir(results, cell), seed, ".evals.csv")
+}
+
+/// A (cell, seed) pair of a sweep.
+#[derive(Debug, Clone)]
+pub struct Pending<'a> {
+    /// The cell.
+    pub cell: &'a Cell,
+    /// The run seed.
+    pub seed: u64,
+}
+
+/// What happened to one (cell, seed) of a sweep.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// It was already finished and was read back.
+    Skipped(RawRow),
+    /// It ran now, in this many wall seconds.
+    Ran(RawRow, f64),
+}
+
+/// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
+/// (one thread each; each run is single-threaded and deterministic, so the bytes do not
+/// depend on `jobs`). `on_event` is called as each pair finishes. Returns the rows in the
+/// order of `runs`; the first error stops handing out new runs and is returned.
+pub fn sweep(
+    exp: &Experiment,
+    runs: &[Pending],
+    results: &Path,
+    jobs: usize,
+    on_event: impl Fn(&Pending, &Event) + Sync,
+) -> Result<Vec<RawRow>> {
+    // Finished runs first (cheap), so that a config mismatch is reported before any work.
+    let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());
+    for p in runs {
+        let dir = exp.cell_dir(results, p.cell);
+        let done = read_finished(p.cell, p.seed, &dir)?;
+        if let Some(r) = &done {
+            on_event(p, &Event::Skipped(r.clone()));
+        }
+        rows.push(done);
+    }
+    let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
+    let next = AtomicUsize::new(0);
+    let rows = Mutex::new(rows);
+    let first_error: Mutex<Option<Error>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1) {
+            scope.spawn(|| loop {
+                if first_error.lock().unwrap().is_some() {
+                    break;
+                }
+                let Some(&i) = todo.get(next.fetch_add(1, Ordering::SeqCst)) else {
+                    break;
+                };
+                let p = &runs[i];
+                let clock = std::time::Instant::now();
+                match run_cell_seed(exp, p.cell, p.seed, &exp.cell_dir(results, p.cell)) {
+                    Ok(row) => {
+                        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
+                        rows.lock().unwrap()[i] = Some(row);
+                    }
+                    Err(e) => {
+                        let mut slot = first_error.lock().unwrap();
+                        if slot.is_none() {
+                            *slot = Some(Error::invalid(
+                                "run",
+                                format!("cell {} seed {}: {e}", p.cell.id, p.seed),
+                            ));
+                        }
+                    }
+                }
+            });
+        }
+    });
+    if let Some(e) = first_error.into_inner().unwrap() {
+        return Err(e);
+    }
+    Ok(rows
+        .into_inner()
+        .unwrap()
+        .into_iter()
+        .map(|r| r.expect("every run finished"))
+        .collect())
+}
+
+/// Every (cell, seed) of the experiment, or of one cell, or one seed.
+pub fn plan<'a>(
+    exp: &'a Experiment,
+    cell: Option<&str>,
+    seed: Option<u64>,
+) -> Result<Vec<Pending<'a>>> {
+    let cells: Vec<&Cell> = match cell {
+        Some(id) => vec![exp.cell(id)?],
+        None => exp.cells.iter().collect(),
+    };
+    let seeds = match seed {
+        Some(s) => {
+            if !exp.seeds().contains(&s) {
+                return Err(Error::invalid(
+                    "seed",
+                    format!(
+                        "{s} is outside the experiment's seeds {}..{}",
+                        exp.first_seed,
+                        exp.first_seed + exp.seed_count
+                    ),
+                ));
+            }
+            vec![s]
+        }
+        None => exp.seeds(),
+    };
+    Ok(cells
+        .into_iter()
+        .flat_map(|c| seeds.iter().map(move |&s| Pending { cell: c, seed: s }))
+        .collect())
+}
+
+/// All finished raw rows of the experiment under `results`, in (cell, seed) order; missing
+/// runs are left out (and counted by the caller through `n`).
+pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
+    let mut rows = Vec::new();
+    for p in plan(exp, None, None)? {
+        if let Some(r) = read_finished(p.cell, p.seed, &exp.cell_dir(results, p.cell))? {
+            rows.push(r);
+        }
+    }
+    Ok(rows)
+}
+
+/// The experiment files under `dir` (every `*.toml` with a `[[method]]`), sorted.
+pub fn experiment_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+            if text.lines().any(|l| l.trim() == "[[method]]") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}

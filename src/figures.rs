@@ -1,0 +1,517 @@
+//! The paper's figures, drawn with plotters from the aggregated tables and the raw picture
+//! data (no training): the results grid, the enlarged results, the γ study with Wilson error
+//! bars, the reset-in-unseen-states contrast and the vanilla learning curves.
+//!
+//! Every figure is written as PNG and SVG with the bundled font (see [`crate::plot`]).
+
+use crate::error::{Error, Result};
+use crate::experiment::{evals_file, picture_file, Cell, Experiment, Job};
+use crate::maze::Maze;
+use crate::plot::{draw_maze, render_figure, Figure, PictureData};
+use crate::tables::CellStats;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+type DrawResult<DB> =
+    std::result::Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+const GREEN_BG: RGBColor = RGBColor(46, 160, 67);
+const RED_BG: RGBColor = RGBColor(200, 50, 50);
+/// Colours of methods in bar charts and curves (colour-blind-safe Okabe–Ito).
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(0, 114, 178),
+    RGBColor(230, 159, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(86, 180, 233),
+    RGBColor(213, 94, 0),
+];
+
+/// `1234567` → `1.23M`, `171000` → `171k`.
+pub fn human_steps(steps: f64) -> String {
+    if !steps.is_finite() {
+        "–".into()
+    } else if steps >= 1e6 {
+        format!("{:.2}M", steps / 1e6)
+    } else if steps >= 1e3 {
+        format!("{:.0}k", steps / 1e3)
+    } else {
+        format!("{steps:.0}")
+    }
+}
+
+/// The maze of a cell.
+pub fn cell_maze(cell: &Cell) -> Result<Maze> {
+    Maze::new(match &cell.job {
+        Job::Vanilla(j) => &j.maze,
+        Job::Pbcs(j) => &j.maze,
+    })
+}
+
+/// The picture data of a cell's first picture seed, if it was kept.
+fn cell_picture(exp: &Experiment, results: &Path, cell: &Cell) -> Result<Option<PictureData>> {
+    let Some(&seed) = exp.picture_seeds.first() else {
+        return Ok(None);
+    };
+    let path = picture_file(exp, results, cell, seed);
+    if !path.exists() {
+        return Ok(None);
+    }
+    PictureData::read_csv(&path).map(Some)
+}
+
+fn stats_of<'a>(stats: &'a [CellStats], cell: &Cell) -> Option<&'a CellStats> {
+    stats.iter().find(|s| s.cell == cell.id)
+}
+
+/// A cell's one-line summary: `7/10 solved · median 171k`.
+fn summary(s: &CellStats) -> String {
+    format!(
+        "{}/{} solved · {}",
+        s.successes,
+        s.n,
+        human_steps(s.steps_median)
+    )
+}
+
+fn centred_text<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    size: u32,
+    colour: &RGBColor,
+) -> DrawResult<DB> {
+    let (w, h) = area.dim_in_pixel();
+    let style = TextStyle::from(("sans-serif", size).into_font())
+        .color(colour)
+        .pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Center,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+    area.draw_text(text, &style, (w as i32 / 2, h as i32 / 2))
+}
+
+/// The results table as a grid of pictures: rows = maze sizes, columns = methods; each cell
+/// shows the first picture seed's run and is labelled with its solved count and median steps
+/// on a green (most seeds solved) or red background.
+pub struct ResultsGrid {
+    cells: Vec<Vec<Option<(Maze, PictureData, CellStats)>>>,
+    rows: Vec<String>,
+    columns: Vec<String>,
+}
+
+const GRID_CELL: u32 = 280;
+const GRID_LABEL: u32 = 26;
+
+impl ResultsGrid {
+    /// Collects the grid of `exp` from its table and picture data.
+    pub fn new(exp: &Experiment, results: &Path, stats: &[CellStats]) -> Result<ResultsGrid> {
+        let mut cells = Vec::new();
+        for &n in &exp.mazes {
+            let mut row = Vec::new();
+            for (m, _) in &exp.methods {
+                let cell = exp
+                    .cells
+                    .iter()
+                    .find(|c| c.maze == n && &c.method == m)
+                    .expect("every maze × method is a cell");
+                row.push(
+                    match (stats_of(stats, cell), cell_picture(exp, results, cell)?) {
+                        (Some(s), Some(p)) => Some((cell_maze(cell)?, p, s.clone())),
+                        _ => None,
+                    },
+                );
+            }
+            cells.push(row);
+        }
+        Ok(ResultsGrid {
+            cells,
+            rows: exp.mazes.iter().map(|n| format!("{n}×{n}")).collect(),
+            columns: exp.methods.iter().map(|(_, l)| l.clone()).collect(),
+        })
+    }
+}
+
+impl Figure for ResultsGrid {
+    fn size(&self) -> (u32, u32) {
+        (
+            70 + GRID_CELL * self.columns.len() as u32,
+            40 + (GRID_CELL + GRID_LABEL) * self.rows.len() as u32,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (header, body) = root.split_vertically(40);
+        let (_, header) = header.split_horizontally(70);
+        for (area, label) in header
+            .split_evenly((1, self.columns.len()))
+            .iter()
+            .zip(&self.columns)
+        {
+            centred_text(area, label, 18, &BLACK)?;
+        }
+        let (left, grid) = body.split_horizontally(70);
+        for (area, label) in left
+            .split_evenly((self.rows.len(), 1))
+            .iter()
+            .zip(&self.rows)
+        {
+            centred_text(area, label, 18, &BLACK)?;
+        }
+        let areas = grid.split_evenly((self.rows.len(), self.columns.len()));
+        for (area, cell) in areas.iter().zip(self.cells.iter().flatten()) {
+            let (band, picture) = area.split_vertically(GRID_LABEL);
+            match cell {
+                Some((maze, data, s)) => {
+                    let colour = if 2 * s.successes > s.n {
+                        GREEN_BG
+                    } else {
+                        RED_BG
+                    };
+                    band.fill(&colour)?;
+                    centred_text(&band, &summary(s), 15, &WHITE)?;
+                    draw_maze(picture, maze, &data.picture(String::new()))?;
+                }
+                None => {
+                    band.fill(&RGBColor(150, 150, 150))?;
+                    centred_text(&band, "no runs yet", 15, &WHITE)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Bars of success rate per maze and method with Wilson 95 % error bars (the γ study).
+pub struct SuccessBars {
+    title: String,
+    mazes: Vec<usize>,
+    methods: Vec<(String, String)>,
+    stats: Vec<CellStats>,
+}
+
+impl SuccessBars {
+    /// The bar chart of `exp`.
+    pub fn new(exp: &Experiment, stats: &[CellStats]) -> SuccessBars {
+        SuccessBars {
+            title: exp.title.clone(),
+            mazes: exp.mazes.clone(),
+            methods: exp.methods.clone(),
+            stats: stats.to_vec(),
+        }
+    }
+}
+
+impl Figure for SuccessBars {
+    fn size(&self) -> (u32, u32) {
+        ((260 * self.mazes.len() as u32 + 200).max(700), 520)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let groups = self.mazes.len() as f64;
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..groups, 0.0..1.05)?;
+        let mazes = self.mazes.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(self.mazes.len() * 2 + 1)
+            .x_label_formatter(&move |x: &f64| {
+                let i = x.floor() as usize;
+                if (x - x.floor() - 0.5).abs() < 1e-6 && i < mazes.len() {
+                    format!("maze {0}×{0}", mazes[i])
+                } else {
+                    String::new()
+                }
+            })
+            .y_desc("success rate (Wilson 95 % interval)")
+            .label_style(("sans-serif", 15))
+            .draw()?;
+        let m = self.methods.len() as f64;
+        let width = 0.8 / m;
+        for (j, (name, label)) in self.methods.iter().enumerate() {
+            let colour = PALETTE[j % PALETTE.len()];
+            let bars: Vec<(f64, &CellStats)> = self
+                .mazes
+                .iter()
+                .enumerate()
+                .filter_map(|(g, &n)| {
+                    self.stats
+                        .iter()
+                        .find(|s| s.maze == n && &s.method == name)
+                        .map(|s| (g as f64 + 0.1 + j as f64 * width, s))
+                })
+                .collect();
+            chart
+                .draw_series(bars.iter().map(|&(x, s)| {
+                    Rectangle::new(
+                        [(x + 0.1 * width, 0.0), (x + 0.9 * width, s.success_rate)],
+                        colour.filled(),
+                    )
+                }))?
+                .label(label.as_str())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled())
+                });
+            for &(x, s) in &bars {
+                let c = x + 0.5 * width;
+                let cap = 0.15 * width;
+                for seg in [
+                    [(c, s.wilson_lo), (c, s.wilson_hi)],
+                    [(c - cap, s.wilson_lo), (c + cap, s.wilson_lo)],
+                    [(c - cap, s.wilson_hi), (c + cap, s.wilson_hi)],
+                ] {
+                    chart.draw_series(std::iter::once(PathElement::new(
+                        seg.to_vec(),
+                        BLACK.stroke_width(2),
+                    )))?;
+                }
+                chart.draw_series(std::iter::once(Text::new(
+                    format!("{}/{}", s.successes, s.n),
+                    (x + 0.2 * width, (s.success_rate + 0.03).min(1.0)),
+                    ("sans-serif", 13),
+                )))?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 15))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Maze pictures side by side, each with a title (the unseen-states contrast).
+pub struct Panels {
+    panels: Vec<(Maze, PictureData, String)>,
+}
+
+impl Figure for Panels {
+    fn size(&self) -> (u32, u32) {
+        (520 * self.panels.len() as u32, 560)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        for (area, (maze, data, title)) in root
+            .split_evenly((1, self.panels.len()))
+            .iter()
+            .zip(&self.panels)
+        {
+            draw_maze(area.clone(), maze, &data.picture(title.clone()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Learning curves of vanilla baselines: fraction of seeds whose greedy policy reaches the
+/// target at each evaluation, one panel per method, one line per maze.
+pub struct Curves {
+    /// (method label, [(maze, [(steps, fraction of seeds)])]).
+    panels: Vec<(String, Vec<(usize, Vec<(f64, f64)>)>)>,
+    max_steps: f64,
+    seeds: u64,
+}
+
+impl Curves {
+    /// The curves of the vanilla methods of `exp`, from each seed's `evals.csv`.
+    pub fn new(exp: &Experiment, results: &Path) -> Result<Option<Curves>> {
+        let mut panels = Vec::new();
+        let mut max_steps: f64 = 1.0;
+        for (m, label) in &exp.methods {
+            let mut lines = Vec::new();
+            for c in exp.cells.iter().filter(|c| &c.method == m) {
+                if !matches!(c.job, Job::Vanilla(_)) {
+                    continue;
+                }
+                // steps → (successful seeds, seeds)
+                let mut by_step: std::collections::BTreeMap<u64, (u64, u64)> = Default::default();
+                for seed in exp.seeds() {
+                    let path = evals_file(exp, results, c, seed);
+                    if !path.exists() {
+                        continue;
+                    }
+                    let mut reader = csv::Reader::from_path(&path)?;
+                    for rec in reader.deserialize::<EvalPoint>() {
+                        let e = rec?;
+                        let slot = by_step.entry(e.steps).or_default();
+                        slot.0 += u64::from(e.success >= 0.95);
+                        slot.1 += 1;
+                    }
+                }
+                if by_step.is_empty() {
+                    continue;
+                }
+                let line: Vec<(f64, f64)> = by_step
+                    .iter()
+                    .map(|(&s, &(k, n))| (s as f64, k as f64 / n as f64))
+                    .collect();
+                max_steps = max_steps.max(line.last().map_or(1.0, |p| p.0));
+                lines.push((c.maze, line));
+            }
+            if !lines.is_empty() {
+                panels.push((label.clone(), lines));
+            }
+        }
+        Ok((!panels.is_empty()).then_some(Curves {
+            panels,
+            max_steps,
+            seeds: exp.seed_count,
+        }))
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct EvalPoint {
+    steps: u64,
+    success: f32,
+}
+
+impl Figure for Curves {
+    fn size(&self) -> (u32, u32) {
+        (560 * self.panels.len() as u32, 440)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        for (area, (label, lines)) in root
+            .split_evenly((1, self.panels.len()))
+            .iter()
+            .zip(&self.panels)
+        {
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    format!(
+                        "{label}: greedy success over training ({} seeds)",
+                        self.seeds
+                    ),
+                    ("sans-serif", 17),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(55)
+                .build_cartesian_2d(0.0..self.max_steps, -0.02..1.02)?;
+            chart
+                .configure_mesh()
+                .x_desc("environment steps")
+                .y_desc("fraction of seeds reaching the target")
+                .x_label_formatter(&|x| human_steps(*x))
+                .label_style(("sans-serif", 13))
+                .draw()?;
+            for (i, (maze, line)) in lines.iter().enumerate() {
+                let colour = PALETTE[i % PALETTE.len()];
+                chart
+                    .draw_series(LineSeries::new(
+                        line.iter().copied(),
+                        colour.stroke_width(2),
+                    ))?
+                    .label(format!("maze {maze}×{maze}"))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.9))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()?;
+        }
+        Ok(())
+    }
+}
+
+/// Draws every figure of `exp` whose data exists into `out`, returning the files written.
+/// Which figures an experiment gets depends on its name: `table` (grid, enlarged pictures,
+/// learning curves), `gamma` (bars), `unseen` (panels, bars); any other experiment gets bars.
+pub fn render_experiment(
+    exp: &Experiment,
+    results: &Path,
+    stats: &[CellStats],
+    out: &Path,
+) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    match exp.name.as_str() {
+        "table" => {
+            let grid = ResultsGrid::new(exp, results, stats)?;
+            files.extend(render_figure(&grid, &out.join("results_grid"))?);
+            for c in exp.cells.iter().filter(|c| c.method == "pbcs") {
+                let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?)
+                else {
+                    continue;
+                };
+                let maze = cell_maze(c)?;
+                let title = format!(
+                    "PBCS, maze {0}×{0}, seed {1}: phase-1 τ (red), chain rollouts (green), \
+                     activation balls (purple) — {2}",
+                    c.maze,
+                    exp.picture_seeds[0],
+                    summary(s)
+                );
+                let stem = out.join(format!("results_maze{}", c.maze));
+                crate::plot::render_maze(
+                    &maze,
+                    &data.picture(title),
+                    &stem.with_extension("png"),
+                    &stem.with_extension("svg"),
+                    20_000,
+                )?;
+                files.push(stem.with_extension("png"));
+                files.push(stem.with_extension("svg"));
+            }
+            if let Some(curves) = Curves::new(exp, results)? {
+                files.extend(render_figure(&curves, &out.join("curves"))?);
+            }
+        }
+        "unseen" => {
+            // The maze where the two methods differ most (first on ties).
+            let pick = exp.mazes.iter().copied().max_by_key(|&n| {
+                let rate = |m: &str| {
+                    stats
+                        .iter()
+                        .find(|s| s.maze == n && s.method == m)
+                        .map_or(0, |s| s.successes as i64)
+                };
+                ((rate("ball") - rate("exact")).abs(), -(n as i64))
+            });
+            if let Some(n) = pick {
+                let mut panels = Vec::new();
+                for c in exp.cells.iter().filter(|c| c.maze == n) {
+                    if let (Some(s), Some(data)) =
+                        (stats_of(stats, c), cell_picture(exp, results, c)?)
+                    {
+                        panels.push((cell_maze(c)?, data, format!("{}: {}", c.label, summary(s))));
+                    }
+                }
+                if !panels.is_empty() {
+                    files.extend(render_figure(&Panels { panels }, &out.join("unseen"))?);
+                }
+            }
+            files.extend(render_figure(
+                &SuccessBars::new(exp, stats),
+                &out.join("unseen_bars"),
+            )?);
+        }
+        name => {
+            files.extend(render_figure(
+                &SuccessBars::new(exp, stats),
+                &out.join(name),
+            )?);
+        }
+    }
+    Ok(files)
+}
+
+/// An error for a figure that needs data that is missing.
+pub fn missing(what: &str, path: &Path) -> Error {
+    Error::Parse {
+        path: path.to_path_buf(),
+        message: format!("{what} is missing (run the experiment, then `make figures`)"),
+    }
+}

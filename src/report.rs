@@ -1,0 +1,639 @@
+//! The paper's claims checked against our tables, and the generated LaTeX of the reproduction
+//! report (`paper/generated/*.tex`): no number in the report is typed by hand.
+//!
+//! A claim is judged with 95 % Wilson score intervals: a method *fails reliably* on a maze when
+//! the upper end of its success interval is below 1/2, *solves reliably* when the lower end is
+//! above 1/2, and one method *beats* another when their intervals are disjoint. Anything else
+//! is *inconclusive*.
+
+use crate::figures::human_steps;
+use crate::tables::CellStats;
+use std::fmt::Write as _;
+
+/// How our data stands to a claim of the paper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Our data supports the claim at 95 %.
+    Agrees,
+    /// Our data supports the opposite at 95 %.
+    Disagrees,
+    /// Neither.
+    Inconclusive,
+    /// The paper makes no claim (it shows the experiment without stating a result).
+    NoClaim,
+}
+
+impl Verdict {
+    /// A word for tables.
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Agrees => "agrees",
+            Verdict::Disagrees => "disagrees",
+            Verdict::Inconclusive => "inconclusive",
+            Verdict::NoClaim => "no claim in the paper",
+        }
+    }
+}
+
+/// One claim of the paper, our numbers, and the verdict.
+#[derive(Debug, Clone)]
+pub struct Claim {
+    /// Short id (`vanilla_ddpg_fails`).
+    pub id: &'static str,
+    /// What the paper says.
+    pub paper: String,
+    /// What our data says, with numbers.
+    pub ours: String,
+    /// How they relate.
+    pub verdict: Verdict,
+}
+
+/// Fails reliably: Wilson upper end below 1/2.
+pub fn fails(s: &CellStats) -> bool {
+    s.wilson_hi < 0.5
+}
+
+/// Solves reliably: Wilson lower end above 1/2.
+pub fn solves(s: &CellStats) -> bool {
+    s.wilson_lo > 0.5
+}
+
+/// `a` beats `b`: the intervals are disjoint with `a` above.
+pub fn beats(a: &CellStats, b: &CellStats) -> bool {
+    a.wilson_lo > b.wilson_hi
+}
+
+fn k_of_n(s: &CellStats) -> String {
+    format!(
+        "{}/{} [{:.2}, {:.2}]",
+        s.successes, s.n, s.wilson_lo, s.wilson_hi
+    )
+}
+
+fn cells<'a>(stats: &'a [CellStats], method: &str) -> Vec<&'a CellStats> {
+    stats.iter().filter(|s| s.method == method).collect()
+}
+
+fn find<'a>(stats: &'a [CellStats], method: &str, maze: usize) -> Option<&'a CellStats> {
+    stats.iter().find(|s| s.method == method && s.maze == maze)
+}
+
+/// Pools a method's cells over mazes (counts added; interval recomputed).
+fn pooled(stats: &[CellStats], method: &str) -> Option<CellStats> {
+    let c = cells(stats, method);
+    let first = (*c.first()?).clone();
+    let (k, n) = c
+        .iter()
+        .fold((0, 0), |(k, n), s| (k + s.successes, n + s.n));
+    let (lo, hi) = crate::stats::wilson(k, n, crate::tables::Z95);
+    Some(CellStats {
+        successes: k,
+        n,
+        success_rate: k as f64 / n as f64,
+        wilson_lo: lo,
+        wilson_hi: hi,
+        cell: format!("{method}-pooled"),
+        ..first
+    })
+}
+
+/// "Method fails on every maze" over all of its cells.
+fn fails_everywhere(
+    id: &'static str,
+    paper: &str,
+    stats: &[CellStats],
+    method: &str,
+) -> Option<Claim> {
+    let c = cells(stats, method);
+    if c.is_empty() {
+        return None;
+    }
+    let verdict = if c.iter().all(|s| fails(s)) {
+        Verdict::Agrees
+    } else if c.iter().any(|s| solves(s)) {
+        Verdict::Disagrees
+    } else {
+        Verdict::Inconclusive
+    };
+    let ours = c
+        .iter()
+        .map(|s| {
+            format!(
+                "maze {}: {} solved within {} steps",
+                s.maze,
+                k_of_n(s),
+                human_steps(s.budget as f64)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    Some(Claim {
+        id,
+        paper: paper.into(),
+        ours,
+        verdict,
+    })
+}
+
+/// Evaluates the paper's claims on our tables (any of them may be empty: its claims are then
+/// left out).
+pub fn claims(table: &[CellStats], gamma: &[CellStats], unseen: &[CellStats]) -> Vec<Claim> {
+    let mut out = Vec::new();
+    out.extend(fails_everywhere(
+        "vanilla_ddpg_fails",
+        "Vanilla DDPG does not reach the target on any maze (1M steps, one seed per maze).",
+        table,
+        "ddpg",
+    ));
+    out.extend(fails_everywhere(
+        "vanilla_td3_fails",
+        "Vanilla TD3 does not reach the target on any maze (1M steps, one seed per maze).",
+        table,
+        "td3",
+    ));
+    out.extend(fails_everywhere(
+        "no_chaining_fails",
+        "PBCS without skill chaining fails on every maze, 2×2 included.",
+        table,
+        "pbcs_no_chaining",
+    ));
+    let pbcs = cells(table, "pbcs");
+    if !pbcs.is_empty() {
+        let verdict = if pbcs.iter().all(|s| solves(s)) {
+            Verdict::Agrees
+        } else if pbcs.iter().any(|s| fails(s)) {
+            Verdict::Disagrees
+        } else {
+            Verdict::Inconclusive
+        };
+        out.push(Claim {
+            id: "pbcs_solves_all",
+            paper: "PBCS solves every maze (2×2 to 15×15; one seed each, up to 22M steps).".into(),
+            ours: pbcs
+                .iter()
+                .map(|s| {
+                    format!(
+                        "maze {}: {} within {} steps",
+                        s.maze,
+                        k_of_n(s),
+                        human_steps(s.budget as f64)
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; "),
+            verdict,
+        });
+        let mut parts = Vec::new();
+        let mut verdicts = Vec::new();
+        for s in &pbcs {
+            if let Some(nc) = find(table, "pbcs_no_chaining", s.maze) {
+                parts.push(format!(
+                    "maze {}: PBCS {} vs without chaining {}",
+                    s.maze,
+                    k_of_n(s),
+                    k_of_n(nc)
+                ));
+                verdicts.push(if beats(s, nc) {
+                    Verdict::Agrees
+                } else if beats(nc, s) {
+                    Verdict::Disagrees
+                } else {
+                    Verdict::Inconclusive
+                });
+            }
+        }
+        if !verdicts.is_empty() {
+            out.push(Claim {
+                id: "chaining_helps",
+                paper: "Skill chaining is what lets PBCS solve mazes that PBCS without chaining \
+                        fails on."
+                    .into(),
+                ours: parts.join("; "),
+                verdict: if verdicts.contains(&Verdict::Disagrees) {
+                    Verdict::Disagrees
+                } else if verdicts.contains(&Verdict::Agrees) {
+                    Verdict::Agrees
+                } else {
+                    Verdict::Inconclusive
+                },
+            });
+        }
+        let mut parts = Vec::new();
+        let mut below = Vec::new();
+        for s in &pbcs {
+            if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
+                parts.push(format!(
+                    "maze {}: median {} over {} solved runs vs the paper's {}",
+                    s.maze,
+                    human_steps(m),
+                    s.successes,
+                    human_steps(p as f64)
+                ));
+                below.push(m < p as f64);
+            }
+        }
+        if !below.is_empty() {
+            out.push(Claim {
+                id: "pbcs_steps",
+                paper: "PBCS's environment steps: 321k, 5M, 6M, 8M, 22M for the five sizes.".into(),
+                ours: format!(
+                    "{} (sizes with no solved run have no median)",
+                    parts.join("; ")
+                ),
+                verdict: if below.iter().all(|&b| b) {
+                    Verdict::Agrees
+                } else {
+                    Verdict::Inconclusive
+                },
+            });
+        }
+    }
+    if let (Some(g9), Some(g99)) = (pooled(gamma, "g090"), pooled(gamma, "g099")) {
+        let per_maze = cells(gamma, "g090")
+            .iter()
+            .filter_map(|s| {
+                find(gamma, "g099", s.maze).map(|t| {
+                    format!(
+                        "maze {}: γ = 0.9 {} vs γ = 0.99 {}",
+                        s.maze,
+                        k_of_n(s),
+                        k_of_n(t)
+                    )
+                })
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        out.push(Claim {
+            id: "gamma_lower_better",
+            paper: "On small mazes, lowering γ from 0.99 to 0.9 raises the success rate of PBCS \
+                    without skill chaining."
+                .into(),
+            ours: format!("{per_maze}; pooled: {} vs {}", k_of_n(&g9), k_of_n(&g99)),
+            verdict: if beats(&g9, &g99) {
+                Verdict::Agrees
+            } else if beats(&g99, &g9) {
+                Verdict::Disagrees
+            } else {
+                Verdict::Inconclusive
+            },
+        });
+    }
+    if let (Some(am), Some(g)) = (pooled(gamma, "g099_am"), pooled(gamma, "g099")) {
+        let am9 = pooled(gamma, "g090_am");
+        out.push(Claim {
+            id: "argmax_actor",
+            paper: "The argmax actor tests whether a weak reward signal (γ close to 1) hampers \
+                    DDPG's actor update; the paper shows the bars without discussing them."
+                .into(),
+            ours: format!(
+                "pooled over mazes: γ = 0.99 (am) {} vs γ = 0.99 {}{}",
+                k_of_n(&am),
+                k_of_n(&g),
+                am9.map_or(String::new(), |a| format!("; γ = 0.9 (am) {}", k_of_n(&a)))
+            ),
+            verdict: Verdict::NoClaim,
+        });
+    }
+    if let (Some(ball), Some(exact)) = (pooled(unseen, "ball"), pooled(unseen, "exact")) {
+        out.push(Claim {
+            id: "unseen_states",
+            paper: "Starting Backplay's episodes exactly on τ fails: the policy meets states it \
+                    never saw; starts sampled in B_ε(τ_K) avoid this."
+                .into(),
+            ours: format!(
+                "pooled over mazes: ε-ball starts {} vs exact starts {}",
+                k_of_n(&ball),
+                k_of_n(&exact)
+            ),
+            verdict: if beats(&ball, &exact) {
+                Verdict::Agrees
+            } else if beats(&exact, &ball) {
+                Verdict::Disagrees
+            } else {
+                Verdict::Inconclusive
+            },
+        });
+    }
+    out
+}
+
+/// Escapes text for LaTeX (pdflatex): special characters, and the Greek letters and symbols
+/// our labels use.
+pub fn tex(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars() {
+        match c {
+            '\\' => out.push_str("\\textbackslash{}"),
+            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
+                out.push('\\');
+                out.push(c);
+            }
+            '~' => out.push_str("\\textasciitilde{}"),
+            '^' => out.push_str("\\textasciicircum{}"),
+            'γ' => out.push_str("$\\gamma$"),
+            'ε' => out.push_str("$\\varepsilon$"),
+            'τ' => out.push_str("$\\tau$"),
+            'α' => out.push_str("$\\alpha$"),
+            'β' => out.push_str("$\\beta$"),
+            'π' => out.push_str("$\\pi$"),
+            '×' => out.push_str("$\\times$"),
+            '·' => out.push_str("$\\cdot$"),
+            '–' => out.push_str("--"),
+            '—' => out.push_str("---"),
+            '≤' => out.push_str("$\\le$"),
+            '≥' => out.push_str("$\\ge$"),
+            '∈' => out.push_str("$\\in$"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+const GENERATED: &str = "% Generated by `pbcs figures` from results/tables/*.csv. Do not edit.\n";
+
+/// `numbers.tex`: every statistic of every cell as `\res{<experiment>:<cell>:<field>}`.
+pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
+    let mut s = String::from(GENERATED);
+    s.push_str("\\providecommand{\\res}[1]{\\csname res:#1\\endcsname}\n");
+    for (exp, rows) in tables {
+        for r in rows {
+            let fields: Vec<(&str, String)> = vec![
+                ("n", r.n.to_string()),
+                ("successes", r.successes.to_string()),
+                ("rate", format!("{:.2}", r.success_rate)),
+                ("lo", format!("{:.2}", r.wilson_lo)),
+                ("hi", format!("{:.2}", r.wilson_hi)),
+                ("median", human_steps(r.steps_median)),
+                ("q1", human_steps(r.steps_q1)),
+                ("q3", human_steps(r.steps_q3)),
+                (
+                    "solvedmedian",
+                    r.solved_steps_median.map_or("--".into(), human_steps),
+                ),
+                ("skills", format!("{}", r.skills_median)),
+                ("budget", human_steps(r.budget as f64)),
+                (
+                    "paper",
+                    r.paper_steps.map_or("--".into(), |p| human_steps(p as f64)),
+                ),
+            ];
+            for (f, v) in fields {
+                let _ = writeln!(
+                    s,
+                    "\\expandafter\\def\\csname res:{exp}:{}:{f}\\endcsname{{{}}}",
+                    r.cell,
+                    tex(&v)
+                );
+            }
+        }
+    }
+    s
+}
+
+/// The results table: rows = mazes, columns = methods; each entry "k/n solved, median steps"
+/// with the paper's "steps S/F" below it.
+pub fn results_table_tex(
+    rows: &[CellStats],
+    mazes: &[usize],
+    methods: &[(String, String)],
+) -> String {
+    let mut s = String::from(GENERATED);
+    let _ = writeln!(s, "\\begin{{tabular}}{{r{}}}", "c".repeat(methods.len()));
+    s.push_str("\\toprule\nmaze");
+    for (_, label) in methods {
+        let _ = write!(s, " & {}", tex(label));
+    }
+    s.push_str(" \\\\\n\\midrule\n");
+    for &n in mazes {
+        let _ = write!(s, "${n}\\times{n}$");
+        for (m, _) in methods {
+            match find(rows, m, n) {
+                Some(c) => {
+                    let _ = write!(
+                        s,
+                        " & {}/{} \\textcolor{{gray}}{{[{:.2}, {:.2}]}}, {}",
+                        c.successes,
+                        c.n,
+                        c.wilson_lo,
+                        c.wilson_hi,
+                        human_steps(c.steps_median)
+                    );
+                }
+                None => s.push_str(" & --"),
+            }
+        }
+        s.push_str(" \\\\\n");
+        for (m, _) in methods {
+            let paper = find(rows, m, n).and_then(|c| {
+                c.paper_steps.map(|p| {
+                    format!(
+                        "{} {}",
+                        human_steps(p as f64),
+                        match c.paper_solved {
+                            Some(true) => "S",
+                            Some(false) => "F",
+                            None => "",
+                        }
+                    )
+                })
+            });
+            let _ = write!(
+                s,
+                " & \\textit{{\\small paper: {}}}",
+                paper.unwrap_or_else(|| "--".into())
+            );
+        }
+        s.push_str(" \\\\[2pt]\n");
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    s
+}
+
+/// One row per cell: n, solved with its interval, steps median [q1, q3], min–max, skills, the
+/// step budget, and the paper's figure.
+pub fn cells_table_tex(rows: &[CellStats]) -> String {
+    let mut s = String::from(GENERATED);
+    s.push_str("\\begin{tabular}{llrrcrrrrl}\n\\toprule\n");
+    s.push_str(
+        "method & maze & $n$ & solved & Wilson 95\\,\\% & median & $[q_1, q_3]$ & \
+         min--max & skills & paper \\\\\n\\midrule\n",
+    );
+    for c in rows {
+        let _ = writeln!(
+            s,
+            "{} & {} & {} & {} & [{:.2}, {:.2}] & {} & [{}, {}] & {}--{} & {} & {} \\\\",
+            tex(&c.label),
+            c.maze,
+            c.n,
+            c.successes,
+            c.wilson_lo,
+            c.wilson_hi,
+            human_steps(c.steps_median),
+            human_steps(c.steps_q1),
+            human_steps(c.steps_q3),
+            human_steps(c.steps_min),
+            human_steps(c.steps_max),
+            c.skills_median,
+            c.paper_steps.map_or("--".into(), |p| format!(
+                "{}{}",
+                human_steps(p as f64),
+                match c.paper_solved {
+                    Some(true) => " S",
+                    Some(false) => " F",
+                    None => "",
+                }
+            )),
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    s
+}
+
+/// The claims, one row each: the paper's statement, our numbers, the verdict.
+pub fn claims_tex(claims: &[Claim]) -> String {
+    let mut s = String::from(GENERATED);
+    s.push_str("\\begin{description}\n");
+    for c in claims {
+        let _ = writeln!(
+            s,
+            "\\item[\\texttt{{{}}}: {}.] \\emph{{Paper:}} {} \\emph{{Ours:}} {}.",
+            tex(c.id),
+            tex(c.verdict.word()),
+            tex(&c.paper),
+            tex(&c.ours)
+        );
+    }
+    s.push_str("\\end{description}\n");
+    s
+}
+
+/// Writes an experiment's table (`<results>/tables/<name>.csv`) and its wall-clock companion
+/// (`<name>.timing.csv`).
+pub fn write_tables(
+    exp: &crate::experiment::Experiment,
+    results: &std::path::Path,
+    stats: &[CellStats],
+    rows: &[crate::experiment::RawRow],
+) -> crate::Result<()> {
+    crate::tables::write_table(&crate::tables::table_path(results, &exp.name), stats)?;
+    let timing = crate::tables::cell_timings(exp, results, rows);
+    crate::record::write_records(
+        &results
+            .join("tables")
+            .join(format!("{}.timing.csv", exp.name)),
+        &timing,
+    )
+}
+
+/// Renders every figure of every experiment into `figures` and writes the report's generated
+/// LaTeX into `tex`: `numbers.tex`, `<experiment>_cells.tex`, `table.tex` (the results table)
+/// and `claims.tex`. Returns every file written.
+pub fn render_all(
+    experiments: &[(crate::experiment::Experiment, Vec<CellStats>)],
+    results: &std::path::Path,
+    figures: &std::path::Path,
+    tex_dir: &std::path::Path,
+) -> crate::Result<Vec<std::path::PathBuf>> {
+    let mut files = Vec::new();
+    for (exp, stats) in experiments {
+        files.extend(crate::figures::render_experiment(
+            exp, results, stats, figures,
+        )?);
+        let path = tex_dir.join(format!("{}_cells.tex", exp.name));
+        let text = cells_table_tex(stats);
+        crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        files.push(path);
+        if exp.name == "table" {
+            for (name, text) in [
+                (
+                    "table.tex",
+                    results_table_tex(stats, &exp.mazes, &exp.methods),
+                ),
+                ("settings.tex", settings_tex(exp)),
+            ] {
+                let path = tex_dir.join(name);
+                crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+                files.push(path);
+            }
+        }
+    }
+    let named = |n: &str| {
+        experiments
+            .iter()
+            .find(|(e, _)| e.name == n)
+            .map_or(Vec::new(), |(_, s)| s.clone())
+    };
+    let all_claims = claims(&named("table"), &named("gamma"), &named("unseen"));
+    let tables: Vec<(String, Vec<CellStats>)> = experiments
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    for (name, text) in [
+        ("numbers.tex", numbers_tex(&tables)),
+        ("claims.tex", claims_tex(&all_claims)),
+    ] {
+        let path = tex_dir.join(name);
+        crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+/// `settings.tex`: the settings of the table's PBCS and DDPG cells (maze 2) as
+/// `\setting{<name>}`, so that the report quotes the configs instead of retyping them.
+pub fn settings_tex(exp: &crate::experiment::Experiment) -> String {
+    use crate::experiment::Job;
+    let mut s = String::from(GENERATED);
+    s.push_str("\\providecommand{\\setting}[1]{\\csname setting:#1\\endcsname}\n");
+    let mut put = |name: &str, value: String| {
+        let _ = writeln!(
+            s,
+            "\\expandafter\\def\\csname setting:{name}\\endcsname{{{}}}",
+            tex(&value)
+        );
+    };
+    for c in exp.cells.iter().filter(|c| c.maze == exp.mazes[0]) {
+        match (&c.job, c.method.as_str()) {
+            (Job::Pbcs(j), "pbcs") => {
+                let (p, l) = (&j.phase2, &j.learner);
+                put("alpha", p.alpha.to_string());
+                put("beta", p.beta.to_string());
+                put("epsilon", p.epsilon.to_string());
+                put("maxsteps", p.max_steps.to_string());
+                put("kstep", p.k_step.to_string());
+                put("pbcsbudget", human_steps(p.max_env_steps as f64));
+                put("evalepisodes", p.eval_episodes.to_string());
+                put("evalmaxsteps", p.eval_max_steps.to_string());
+                put("pbcsgamma", l.gamma.to_string());
+                put(
+                    "hidden",
+                    l.hidden
+                        .iter()
+                        .map(|h| h.to_string())
+                        .collect::<Vec<_>>()
+                        .join("×"),
+                );
+                put("actorlr", l.actor_lr.to_string());
+                put("criticlr", l.critic_lr.to_string());
+                put("tau", l.tau.to_string());
+                put("batch", l.batch_size.to_string());
+                put("replay", human_steps(l.replay_size as f64));
+                put("noisesigma", l.noise_sigma.to_string());
+                put("argmaxsamples", l.argmax_samples.to_string());
+                put("mazeseed", j.maze.seed.to_string());
+            }
+            (Job::Vanilla(j), "ddpg") => {
+                put("vanillabudget", human_steps(j.train.steps as f64));
+                put("vanillagamma", j.learner.gamma.to_string());
+                put("episodesteps", j.train.max_episode_steps.to_string());
+                put(
+                    "learningstarts",
+                    human_steps(j.train.learning_starts as f64),
+                );
+            }
+            _ => {}
+        }
+    }
+    put("seeds", exp.seed_count.to_string());
+    s
+}

@@ -1,0 +1,177 @@
+//! Per-cell statistics of an experiment (`results/tables/<experiment>.csv`): what every table,
+//! figure and statistical claim is computed from.
+//!
+//! The tables are produced by `pbcs aggregate` with polars (the `polars` cargo feature, see
+//! [`crate::aggregate`]); this module holds their row type, reads and writes them, and
+//! computes the same statistics in plain Rust, which the aggregation checks polars against.
+
+use crate::error::{Error, Result};
+use crate::experiment::{Experiment, RawRow};
+use crate::stats::{median, quantile, wilson};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// z of the 95 % Wilson score intervals.
+pub const Z95: f64 = 1.959_963_984_540_054;
+
+/// One cell's statistics over its seeds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellStats {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cell id.
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// Method label.
+    pub label: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// Finished runs (seeds).
+    pub n: u64,
+    /// Runs that solved the maze.
+    pub successes: u64,
+    /// successes / n.
+    pub success_rate: f64,
+    /// Wilson 95 % interval, lower end.
+    pub wilson_lo: f64,
+    /// Wilson 95 % interval, upper end.
+    pub wilson_hi: f64,
+    /// Environment steps: median over runs.
+    pub steps_median: f64,
+    /// First quartile (linear interpolation).
+    pub steps_q1: f64,
+    /// Third quartile.
+    pub steps_q3: f64,
+    /// Fewest.
+    pub steps_min: f64,
+    /// Most.
+    pub steps_max: f64,
+    /// Median environment steps of the solved runs (empty if none solved).
+    pub solved_steps_median: Option<f64>,
+    /// Median number of skills (PBCS; 0 for vanilla).
+    pub skills_median: f64,
+    /// Median of the final evaluation's success rate.
+    pub success_rate_median: f64,
+    /// The step budget of each run.
+    pub budget: u64,
+    /// The paper's environment steps for this cell (one seed), if reported.
+    pub paper_steps: Option<u64>,
+    /// Whether the paper's run solved it, if reported.
+    pub paper_solved: Option<bool>,
+}
+
+/// Where an experiment's table lives under `results`.
+pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
+    results.join("tables").join(format!("{experiment}.csv"))
+}
+
+/// Reads a table written by [`write_table`].
+pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
+    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        message: format!("{e} (run `make figures` to aggregate the raw results)"),
+    })?;
+    reader
+        .deserialize()
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(Error::Csv)
+}
+
+/// Writes a table atomically.
+pub fn write_table(path: &Path, rows: &[CellStats]) -> Result<()> {
+    crate::record::write_records(path, rows)
+}
+
+/// The statistics of each cell of `exp` that has finished runs, in the experiment's cell
+/// order, computed in plain Rust from the raw rows.
+pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
+    exp.cells
+        .iter()
+        .filter_map(|c| {
+            let runs: Vec<&RawRow> = rows.iter().filter(|r| r.cell == c.id).collect();
+            if runs.is_empty() {
+                return None;
+            }
+            let n = runs.len() as u64;
+            let k = runs.iter().filter(|r| r.solved).count() as u64;
+            let mut steps: Vec<f64> = runs.iter().map(|r| r.env_steps as f64).collect();
+            let mut solved: Vec<f64> = runs
+                .iter()
+                .filter(|r| r.solved)
+                .map(|r| r.env_steps as f64)
+                .collect();
+            let mut skills: Vec<f64> = runs.iter().map(|r| r.skills as f64).collect();
+            let mut rate: Vec<f64> = runs.iter().map(|r| r.success_rate as f64).collect();
+            let (lo, hi) = wilson(k, n, Z95);
+            Some(CellStats {
+                experiment: exp.name.clone(),
+                cell: c.id.clone(),
+                method: c.method.clone(),
+                label: c.label.clone(),
+                maze: c.maze,
+                n,
+                successes: k,
+                success_rate: k as f64 / n as f64,
+                wilson_lo: lo,
+                wilson_hi: hi,
+                steps_median: median(&mut steps),
+                steps_q1: quantile(&mut steps, 0.25),
+                steps_q3: quantile(&mut steps, 0.75),
+                steps_min: steps[0],
+                steps_max: steps[steps.len() - 1],
+                solved_steps_median: (!solved.is_empty()).then(|| median(&mut solved)),
+                skills_median: median(&mut skills),
+                success_rate_median: median(&mut rate),
+                budget: runs[0].budget,
+                paper_steps: c.paper_steps,
+                paper_solved: c.paper_solved,
+            })
+        })
+        .collect()
+}
+
+/// Wall-clock statistics of a cell (beside the table, not in it: not deterministic).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellTiming {
+    /// Cell id.
+    pub cell: String,
+    /// Runs with a timing file.
+    pub n: u64,
+    /// Median wall seconds per run.
+    pub wall_median_s: f64,
+    /// Total wall seconds of the cell's runs.
+    pub wall_total_s: f64,
+    /// Environment steps per wall second over the cell's runs.
+    pub steps_per_s: f64,
+}
+
+/// The wall-clock statistics of each cell with timing files.
+pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<CellTiming> {
+    exp.cells
+        .iter()
+        .filter_map(|c| {
+            let runs: Vec<(f64, u64)> = rows
+                .iter()
+                .filter(|r| r.cell == c.id)
+                .filter_map(|r| {
+                    crate::experiment::read_wall_seconds(exp, results, c, r.seed)
+                        .map(|s| (s, r.env_steps))
+                })
+                .collect();
+            if runs.is_empty() {
+                return None;
+            }
+            let mut secs: Vec<f64> = runs.iter().map(|r| r.0).collect();
+            let total: f64 = secs.iter().sum();
+            let steps: u64 = runs.iter().map(|r| r.1).sum();
+            Some(CellTiming {
+                cell: c.id.clone(),
+                n: runs.len() as u64,
+                wall_median_s: median(&mut secs),
+                wall_total_s: total,
+                steps_per_s: steps as f64 / total.max(1e-9),
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,213 @@
+//! Experiment files: every file parses under every profile with unique cells, bad files are
+//! rejected with the field named, and the smoke profile runs end to end to tables and figures,
+//! deterministically and resumably.
+
+use pbcs::experiment::{experiment_files, plan, read_raw, sweep, Event, Experiment};
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::sync::Mutex;
+
+fn files() -> Vec<std::path::PathBuf> {
+    experiment_files(Path::new("experiments")).unwrap()
+}
+
+#[test]
+fn every_experiment_file_parses_with_unique_cells() {
+    let names: BTreeSet<String> = files()
+        .iter()
+        .map(|f| f.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    for want in ["table", "gamma", "unseen"] {
+        assert!(names.contains(want), "experiments/{want}.toml is missing");
+    }
+    for f in files() {
+        for profile in [None, Some("smoke"), Some("full")] {
+            let exp = Experiment::load(&f, profile)
+                .unwrap_or_else(|e| panic!("{} ({profile:?}): {e}", f.display()));
+            let ids: BTreeSet<&str> = exp.cells.iter().map(|c| c.id.as_str()).collect();
+            assert_eq!(
+                ids.len(),
+                exp.cells.len(),
+                "{}: duplicate cells",
+                f.display()
+            );
+            assert_eq!(exp.cells.len(), exp.mazes.len() * exp.methods.len());
+        }
+        // The committed grid holds at least 10 seeds per cell.
+        assert!(Experiment::load(&f, None).unwrap().seed_count >= 10);
+    }
+}
+
+#[test]
+fn the_table_has_the_papers_columns_and_sizes() {
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    assert_eq!(exp.mazes, [2, 5, 7, 10, 15]);
+    let methods: Vec<&str> = exp.methods.iter().map(|(m, _)| m.as_str()).collect();
+    assert_eq!(methods, ["ddpg", "td3", "pbcs_no_chaining", "pbcs"]);
+    let pbcs2 = exp.cell("pbcs-maze2").unwrap();
+    assert_eq!(
+        (pbcs2.paper_steps, pbcs2.paper_solved),
+        (Some(321_000), Some(true))
+    );
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn bad_experiment_files_name_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        "experiments/pbcs_faithful.toml",
+        dir.path().join("base.toml"),
+    )
+    .unwrap();
+    let head = "title = \"t\"\nseeds = 2\nmazes = [2]\n";
+    let method = |name: &str, set: &str| {
+        format!("[[method]]\nname = \"{name}\"\nkind = \"pbcs\"\nbase = \"base.toml\"\nset = {{ {set} }}\n")
+    };
+    let cases = [
+        (
+            format!("{head}{}", method("a", "phase2.epsilom = 0.1")),
+            "epsilom",
+        ),
+        (
+            format!("{head}{}{}", method("a", ""), method("a", "")),
+            "appears twice",
+        ),
+        (
+            format!("{head}{}", method("a", "phase2.beta = 0")),
+            "phase2.beta",
+        ),
+        (format!("{head}{}", method("a b", "")), "method.name"),
+        (
+            format!("title = \"t\"\nseeds = 0\nmazes = [2]\n{}", method("a", "")),
+            "seeds",
+        ),
+        (
+            format!("title = \"t\"\nseeds = 1\nmazes = [1]\n{}", method("a", "")),
+            "maze.size",
+        ),
+        (
+            format!(
+                "title = \"t\"\nseeds = 1\nmazes = [2, 2]\n{}",
+                method("a", "")
+            ),
+            "mazes",
+        ),
+        (
+            format!(
+                "{head}{}",
+                method("a", "").replace("base.toml", "nowhere.toml")
+            ),
+            "nowhere.toml",
+        ),
+    ];
+    for (i, (text, needle)) in cases.iter().enumerate() {
+        let path = write(dir.path(), &format!("bad{i}.toml"), text);
+        let err = Experiment::load(&path, None).unwrap_err().to_string();
+        assert!(
+            err.contains(needle),
+            "case {i}: `{err}` does not name `{needle}`"
+        );
+    }
+    let ok = write(dir.path(), "ok.toml", &format!("{head}{}", method("a", "")));
+    let err = Experiment::load(&ok, Some("nope")).unwrap_err().to_string();
+    assert!(err.contains("profile") && err.contains("nope"), "{err}");
+    let exp = Experiment::load(&ok, None).unwrap();
+    assert!(plan(&exp, Some("a-maze3"), None)
+        .unwrap_err()
+        .to_string()
+        .contains("a-maze2"));
+    assert!(plan(&exp, None, Some(7))
+        .unwrap_err()
+        .to_string()
+        .contains("seed"));
+}
+
+/// The smoke profile of every experiment, run twice into two folders with 1 and 2 jobs: the
+/// same bytes; a third sweep finds everything finished; then tables, figures and LaTeX.
+#[test]
+fn smoke_profile_runs_end_to_end_deterministically() {
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let mut loaded = Vec::new();
+    for f in files() {
+        let exp = Experiment::load(&f, Some("smoke")).unwrap();
+        let runs = plan(&exp, None, None).unwrap();
+        let ran_a = sweep(&exp, &runs, a.path(), 1, |_, _| {}).unwrap();
+        let ran_b = sweep(&exp, &runs, b.path(), 2, |_, _| {}).unwrap();
+        assert_eq!(ran_a, ran_b);
+        for p in &runs {
+            for suffix in ["csv", "toml"] {
+                let name = format!("s{}.{suffix}", p.seed);
+                let read =
+                    |root: &Path| std::fs::read(exp.cell_dir(root, p.cell).join(&name)).unwrap();
+                assert_eq!(read(a.path()), read(b.path()), "{} {name}", p.cell.id);
+            }
+        }
+        let skipped = Mutex::new(0);
+        sweep(&exp, &runs, a.path(), 2, |_, e| {
+            if matches!(e, Event::Skipped(_)) {
+                *skipped.lock().unwrap() += 1;
+            }
+        })
+        .unwrap();
+        assert_eq!(
+            *skipped.lock().unwrap(),
+            runs.len(),
+            "{}: resume re-ran a run",
+            exp.name
+        );
+        let rows = read_raw(&exp, a.path()).unwrap();
+        let stats = pbcs::tables::cell_stats(&exp, &rows);
+        assert_eq!(stats.len(), exp.cells.len());
+        pbcs::report::write_tables(&exp, a.path(), &stats, &rows).unwrap();
+        let back =
+            pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), &exp.name)).unwrap();
+        assert_eq!(back, stats);
+        loaded.push((exp, stats));
+    }
+    let figures = a.path().join("figures");
+    let tex = a.path().join("tex");
+    let files = pbcs::report::render_all(&loaded, a.path(), &figures, &tex).unwrap();
+    for name in [
+        "results_grid.png",
+        "results_grid.svg",
+        "results_maze2.png",
+        "curves.png",
+        "gamma.png",
+        "unseen.png",
+        "unseen_bars.png",
+    ] {
+        let path = figures.join(name);
+        assert!(files.contains(&path), "{name} not written");
+        assert!(
+            std::fs::metadata(&path).unwrap().len() > 1000,
+            "{name} is empty"
+        );
+    }
+    for name in ["table.tex", "numbers.tex", "claims.tex", "gamma_cells.tex"] {
+        let text = std::fs::read_to_string(tex.join(name)).unwrap();
+        assert!(text.starts_with("% Generated"), "{name}");
+    }
+}
+
+/// A finished run of another config is never mixed with the experiment's: the sweep refuses.
+#[test]
+fn a_changed_experiment_refuses_to_resume_over_old_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
+    let runs = plan(&exp, Some("exact-maze2"), None).unwrap();
+    sweep(&exp, &runs, dir.path(), 1, |_, _| {}).unwrap();
+    let mut changed = exp.clone();
+    if let pbcs::experiment::Job::Pbcs(j) = &mut changed.cells[1].job {
+        j.phase2.epsilon = 0.2;
+    }
+    let runs = plan(&changed, Some("exact-maze2"), None).unwrap();
+    let err = sweep(&changed, &runs, dir.path(), 1, |_, _| {}).unwrap_err();
+    assert!(err.to_string().contains("another config"), "{err}");
+}
