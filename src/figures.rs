@@ -310,11 +310,14 @@ impl Figure for Panels {
     }
 }
 
+/// One maze's curve: (maze, [(environment steps, fraction of seeds reaching the target)]).
+type CurveLine = (usize, Vec<(f64, f64)>);
+
 /// Learning curves of vanilla baselines: fraction of seeds whose greedy policy reaches the
 /// target at each evaluation, one panel per method, one line per maze.
 pub struct Curves {
     /// (method label, [(maze, [(steps, fraction of seeds)])]).
-    panels: Vec<(String, Vec<(usize, Vec<(f64, f64)>)>)>,
+    panels: Vec<(String, Vec<CurveLine>)>,
     max_steps: f64,
     seeds: u64,
 }
