@@ -310,15 +310,17 @@ impl Figure for Panels {
     }
 }
 
-/// One maze's curve: (maze, [(environment steps, fraction of seeds reaching the target)]).
-type CurveLine = (usize, Vec<(f64, f64)>);
+/// One maze's curve: (maze, [(environment steps, fraction of seeds reaching the target, mean
+/// greedy return over seeds)]).
+type CurveLine = (usize, Vec<(f64, f64, f64)>);
 
-/// Learning curves of vanilla baselines: fraction of seeds whose greedy policy reaches the
-/// target at each evaluation, one panel per method, one line per maze.
+/// Learning curves of vanilla baselines, one column per method, one line per maze: the
+/// fraction of seeds whose greedy policy reaches the target at each evaluation (top), and the
+/// mean return of the greedy episode over seeds (bottom: −1 per wall hit, +1 at the target).
 pub struct Curves {
-    /// (method label, [(maze, [(steps, fraction of seeds)])]).
     panels: Vec<(String, Vec<CurveLine>)>,
     max_steps: f64,
+    returns: (f64, f64),
     seeds: u64,
 }
 
@@ -327,14 +329,16 @@ impl Curves {
     pub fn new(exp: &Experiment, results: &Path) -> Result<Option<Curves>> {
         let mut panels = Vec::new();
         let mut max_steps: f64 = 1.0;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (m, label) in &exp.methods {
             let mut lines = Vec::new();
             for c in exp.cells.iter().filter(|c| &c.method == m) {
                 if !matches!(c.job, Job::Vanilla(_)) {
                     continue;
                 }
-                // steps → (successful seeds, seeds)
-                let mut by_step: std::collections::BTreeMap<u64, (u64, u64)> = Default::default();
+                // steps → (successful seeds, seeds, sum of returns)
+                let mut by_step: std::collections::BTreeMap<u64, (u64, u64, f64)> =
+                    Default::default();
                 for seed in exp.seeds() {
                     let path = evals_file(exp, results, c, seed);
                     if !path.exists() {
@@ -346,15 +350,20 @@ impl Curves {
                         let slot = by_step.entry(e.steps).or_default();
                         slot.0 += u64::from(e.success >= 0.95);
                         slot.1 += 1;
+                        slot.2 += f64::from(e.mean_return);
                     }
                 }
                 if by_step.is_empty() {
                     continue;
                 }
-                let line: Vec<(f64, f64)> = by_step
+                let line: Vec<(f64, f64, f64)> = by_step
                     .iter()
-                    .map(|(&s, &(k, n))| (s as f64, k as f64 / n as f64))
+                    .map(|(&s, &(k, n, r))| (s as f64, k as f64 / n as f64, r / n as f64))
                     .collect();
+                for p in &line {
+                    lo = lo.min(p.2);
+                    hi = hi.max(p.2);
+                }
                 max_steps = max_steps.max(line.last().map_or(1.0, |p| p.0));
                 lines.push((c.maze, line));
             }
@@ -362,9 +371,11 @@ impl Curves {
                 panels.push((label.clone(), lines));
             }
         }
+        let pad = ((hi - lo) * 0.05).max(0.05);
         Ok((!panels.is_empty()).then_some(Curves {
             panels,
             max_steps,
+            returns: (lo - pad, hi + pad),
             seeds: exp.seed_count,
         }))
     }
@@ -374,57 +385,60 @@ impl Curves {
 struct EvalPoint {
     steps: u64,
     success: f32,
+    mean_return: f32,
 }
 
 impl Figure for Curves {
     fn size(&self) -> (u32, u32) {
-        (560 * self.panels.len() as u32, 440)
+        (560 * self.panels.len() as u32, 780)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        for (area, (label, lines)) in root
-            .split_evenly((1, self.panels.len()))
-            .iter()
-            .zip(&self.panels)
+        let areas = root.split_evenly((2, self.panels.len()));
+        for (row, (y_desc, range)) in [
+            ("fraction of seeds reaching the target", (-0.02, 1.02)),
+            ("greedy return, mean over seeds", self.returns),
+        ]
+        .into_iter()
+        .enumerate()
         {
-            let mut chart = ChartBuilder::on(area)
-                .caption(
-                    format!(
-                        "{label}: greedy success over training ({} seeds)",
-                        self.seeds
-                    ),
-                    ("sans-serif", 17),
-                )
-                .margin(12)
-                .x_label_area_size(40)
-                .y_label_area_size(55)
-                .build_cartesian_2d(0.0..self.max_steps, -0.02..1.02)?;
-            chart
-                .configure_mesh()
-                .x_desc("environment steps")
-                .y_desc("fraction of seeds reaching the target")
-                .x_label_formatter(&|x| human_steps(*x))
-                .label_style(("sans-serif", 13))
-                .draw()?;
-            for (i, (maze, line)) in lines.iter().enumerate() {
-                let colour = PALETTE[i % PALETTE.len()];
+            for (col, (label, lines)) in self.panels.iter().enumerate() {
+                let area = &areas[row * self.panels.len() + col];
+                let mut chart = ChartBuilder::on(area)
+                    .caption(format!("{label}, {} seeds", self.seeds), ("sans-serif", 17))
+                    .margin(12)
+                    .x_label_area_size(40)
+                    .y_label_area_size(55)
+                    .build_cartesian_2d(0.0..self.max_steps, range.0..range.1)?;
                 chart
-                    .draw_series(LineSeries::new(
-                        line.iter().copied(),
-                        colour.stroke_width(2),
-                    ))?
-                    .label(format!("maze {maze}×{maze}"))
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
-                    });
+                    .configure_mesh()
+                    .x_desc("environment steps")
+                    .y_desc(y_desc)
+                    .x_label_formatter(&|x| human_steps(*x))
+                    .label_style(("sans-serif", 13))
+                    .draw()?;
+                for (i, (maze, line)) in lines.iter().enumerate() {
+                    let colour = PALETTE[i % PALETTE.len()];
+                    let points = line.iter().map(|p| (p.0, if row == 0 { p.1 } else { p.2 }));
+                    chart
+                        .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
+                        .label(format!("maze {maze}×{maze}"))
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                        });
+                }
+                chart
+                    .configure_series_labels()
+                    .position(if row == 0 {
+                        SeriesLabelPosition::UpperLeft
+                    } else {
+                        SeriesLabelPosition::LowerLeft
+                    })
+                    .background_style(WHITE.mix(0.9))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 13))
+                    .draw()?;
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.9))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .draw()?;
         }
         Ok(())
     }
