@@ -63,6 +63,40 @@ pub fn beats(a: &CellStats, b: &CellStats) -> bool {
     a.wilson_lo > b.wilson_hi
 }
 
+/// Compares method `a` with method `b` maze by maze: `a` beats `b` on a maze when their Wilson
+/// intervals are disjoint with `a` above. The verdict agrees with "a does better than b" when
+/// `a` beats `b` on some maze and `b` beats `a` on none; it disagrees when `b` beats `a`
+/// somewhere; otherwise it is inconclusive. Returns one "maze N: A k/n […] vs B k/n […]" part
+/// per maze both methods have, and the verdict.
+fn per_maze(
+    stats: &[CellStats],
+    (a, a_name): (&str, &str),
+    (b, b_name): (&str, &str),
+) -> (Vec<String>, Verdict) {
+    let mut parts = Vec::new();
+    let (mut a_wins, mut b_wins) = (false, false);
+    for s in cells(stats, a) {
+        if let Some(t) = find(stats, b, s.maze) {
+            parts.push(format!(
+                "maze {}: {a_name} {} vs {b_name} {}",
+                s.maze,
+                k_of_n(s),
+                k_of_n(t)
+            ));
+            a_wins |= beats(s, t);
+            b_wins |= beats(t, s);
+        }
+    }
+    let verdict = if b_wins {
+        Verdict::Disagrees
+    } else if a_wins {
+        Verdict::Agrees
+    } else {
+        Verdict::Inconclusive
+    };
+    (parts, verdict)
+}
+
 fn k_of_n(s: &CellStats) -> String {
     format!(
         "{}/{} [{:.2}, {:.2}]",
@@ -183,39 +217,20 @@ pub fn claims(table: &[CellStats], gamma: &[CellStats], unseen: &[CellStats]) ->
                 .join("; "),
             verdict,
         });
-        let mut parts = Vec::new();
-        let mut verdicts = Vec::new();
-        for s in &pbcs {
-            if let Some(nc) = find(table, "pbcs_no_chaining", s.maze) {
-                parts.push(format!(
-                    "maze {}: PBCS {} vs without chaining {}",
-                    s.maze,
-                    k_of_n(s),
-                    k_of_n(nc)
-                ));
-                verdicts.push(if beats(s, nc) {
-                    Verdict::Agrees
-                } else if beats(nc, s) {
-                    Verdict::Disagrees
-                } else {
-                    Verdict::Inconclusive
-                });
-            }
-        }
-        if !verdicts.is_empty() {
+        // Both methods live in the table; `per_maze` needs them in one slice, which `table` is.
+        let (parts, verdict) = per_maze(
+            table,
+            ("pbcs", "PBCS"),
+            ("pbcs_no_chaining", "without chaining"),
+        );
+        if !parts.is_empty() {
             out.push(Claim {
                 id: "chaining_helps",
                 paper: "Skill chaining is what lets PBCS solve mazes that PBCS without chaining \
                         fails on."
                     .into(),
                 ours: parts.join("; "),
-                verdict: if verdicts.contains(&Verdict::Disagrees) {
-                    Verdict::Disagrees
-                } else if verdicts.contains(&Verdict::Agrees) {
-                    Verdict::Agrees
-                } else {
-                    Verdict::Inconclusive
-                },
+                verdict,
             });
         }
         let mut parts = Vec::new();
@@ -248,34 +263,30 @@ pub fn claims(table: &[CellStats], gamma: &[CellStats], unseen: &[CellStats]) ->
             });
         }
     }
-    if let (Some(g9), Some(g99)) = (pooled(gamma, "g090"), pooled(gamma, "g099")) {
-        let per_maze = cells(gamma, "g090")
-            .iter()
-            .filter_map(|s| {
-                find(gamma, "g099", s.maze).map(|t| {
-                    format!(
-                        "maze {}: γ = 0.9 {} vs γ = 0.99 {}",
-                        s.maze,
-                        k_of_n(s),
-                        k_of_n(t)
-                    )
-                })
-            })
-            .collect::<Vec<_>>()
-            .join("; ");
+    let (parts, verdict) = per_maze(gamma, ("g090", "γ = 0.9"), ("g099", "γ = 0.99"));
+    if let (false, Some(g9), Some(g99)) = (
+        parts.is_empty(),
+        pooled(gamma, "g090"),
+        pooled(gamma, "g099"),
+    ) {
+        // Per maze, and pooled over mazes (more seeds per bar; it decides when no maze does).
+        let verdict = match verdict {
+            Verdict::Inconclusive if beats(&g9, &g99) => Verdict::Agrees,
+            Verdict::Inconclusive if beats(&g99, &g9) => Verdict::Disagrees,
+            v => v,
+        };
         out.push(Claim {
             id: "gamma_lower_better",
             paper: "On small mazes, lowering γ from 0.99 to 0.9 raises the success rate of PBCS \
                     without skill chaining."
                 .into(),
-            ours: format!("{per_maze}; pooled: {} vs {}", k_of_n(&g9), k_of_n(&g99)),
-            verdict: if beats(&g9, &g99) {
-                Verdict::Agrees
-            } else if beats(&g99, &g9) {
-                Verdict::Disagrees
-            } else {
-                Verdict::Inconclusive
-            },
+            ours: format!(
+                "{}; pooled: {} vs {}",
+                parts.join("; "),
+                k_of_n(&g9),
+                k_of_n(&g99)
+            ),
+            verdict,
         });
     }
     if let (Some(am), Some(g)) = (pooled(gamma, "g099_am"), pooled(gamma, "g099")) {
@@ -294,24 +305,15 @@ pub fn claims(table: &[CellStats], gamma: &[CellStats], unseen: &[CellStats]) ->
             verdict: Verdict::NoClaim,
         });
     }
-    if let (Some(ball), Some(exact)) = (pooled(unseen, "ball"), pooled(unseen, "exact")) {
+    let (parts, verdict) = per_maze(unseen, ("ball", "ε-ball starts"), ("exact", "exact starts"));
+    if !parts.is_empty() {
         out.push(Claim {
             id: "unseen_states",
             paper: "Starting Backplay's episodes exactly on τ fails: the policy meets states it \
                     never saw; starts sampled in B_ε(τ_K) avoid this."
                 .into(),
-            ours: format!(
-                "pooled over mazes: ε-ball starts {} vs exact starts {}",
-                k_of_n(&ball),
-                k_of_n(&exact)
-            ),
-            verdict: if beats(&ball, &exact) {
-                Verdict::Agrees
-            } else if beats(&exact, &ball) {
-                Verdict::Disagrees
-            } else {
-                Verdict::Inconclusive
-            },
+            ours: parts.join("; "),
+            verdict,
         });
     }
     out
@@ -351,7 +353,10 @@ pub fn tex(text: &str) -> String {
 
 const GENERATED: &str = "% Generated by `pbcs figures` from results/tables/*.csv. Do not edit.\n";
 
-/// `numbers.tex`: every statistic of every cell as `\res{<experiment>:<cell>:<field>}`.
+/// `numbers.tex`: every statistic of every cell as `\res{<experiment>:<cell>:<field>}`, with
+/// fields `n`, `successes`, `rate`, `lo`/`hi` (Wilson 95 %), `median`/`q1`/`q3` (environment
+/// steps), `solvedmedian`, `skills` (median), `evalmedian` (median final evaluation success
+/// rate), `budget` and `paper`.
 pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
     let mut s = String::from(GENERATED);
     s.push_str("\\providecommand{\\res}[1]{\\csname res:#1\\endcsname}\n");
@@ -371,6 +376,7 @@ pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
                     r.solved_steps_median.map_or("--".into(), human_steps),
                 ),
                 ("skills", format!("{}", r.skills_median)),
+                ("evalmedian", format!("{:.2}", r.success_rate_median)),
                 ("budget", human_steps(r.budget as f64)),
                 (
                     "paper",
@@ -636,4 +642,81 @@ pub fn settings_tex(exp: &crate::experiment::Experiment) -> String {
     }
     put("seeds", exp.seed_count.to_string());
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
+    fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
+        let (lo, hi) = crate::stats::wilson(k, n, crate::tables::Z95);
+        CellStats {
+            experiment: "t".into(),
+            cell: format!("{method}-maze{maze}"),
+            method: method.into(),
+            label: method.into(),
+            maze,
+            n,
+            successes: k,
+            success_rate: k as f64 / n as f64,
+            wilson_lo: lo,
+            wilson_hi: hi,
+            steps_median: 1.0,
+            steps_q1: 1.0,
+            steps_q3: 1.0,
+            steps_min: 1.0,
+            steps_max: 1.0,
+            solved_steps_median: None,
+            skills_median: 0.0,
+            success_rate_median: 0.0,
+            budget: 1,
+            paper_steps: None,
+            paper_solved: None,
+        }
+    }
+
+    #[test]
+    fn per_maze_agrees_when_one_maze_separates_and_none_reverses() {
+        // 10/10 is [0.72, 1.00], 2/10 is [0.06, 0.51]: disjoint. 0/10 against 0/10: a tie.
+        let stats = [
+            cell("a", 2, 10, 10),
+            cell("b", 2, 2, 10),
+            cell("a", 3, 0, 10),
+            cell("b", 3, 0, 10),
+        ];
+        let (parts, verdict) = per_maze(&stats, ("a", "A"), ("b", "B"));
+        assert_eq!(verdict, Verdict::Agrees);
+        assert_eq!(parts.len(), 2);
+        assert!(parts[0].starts_with("maze 2: A 10/10 [0.72, 1.00] vs B 2/10 [0.06, 0.51]"));
+        // Pooled, the same counts overlap (10/20 [0.30, 0.70] against 2/20 [0.03, 0.30] is a
+        // near miss), which is why the verdict is per maze.
+        let (a, b) = (pooled(&stats, "a").unwrap(), pooled(&stats, "b").unwrap());
+        assert!(!beats(&a, &b), "{} vs {}", k_of_n(&a), k_of_n(&b));
+    }
+
+    #[test]
+    fn per_maze_disagrees_when_any_maze_reverses_and_is_inconclusive_on_overlaps() {
+        let reversed = [
+            cell("a", 2, 10, 10),
+            cell("b", 2, 0, 10),
+            cell("a", 5, 0, 10),
+            cell("b", 5, 10, 10),
+        ];
+        assert_eq!(
+            per_maze(&reversed, ("a", "A"), ("b", "B")).1,
+            Verdict::Disagrees
+        );
+        // 6/10 [0.31, 0.83] against 3/10 [0.11, 0.60]: overlapping.
+        let close = [cell("a", 2, 6, 10), cell("b", 2, 3, 10)];
+        assert_eq!(
+            per_maze(&close, ("a", "A"), ("b", "B")).1,
+            Verdict::Inconclusive
+        );
+        // A maze only one method has is not compared.
+        let alone = [cell("a", 2, 10, 10)];
+        let (parts, verdict) = per_maze(&alone, ("a", "A"), ("b", "B"));
+        assert!(parts.is_empty());
+        assert_eq!(verdict, Verdict::Inconclusive);
+    }
 }
