@@ -4,7 +4,7 @@ CARGO ?= cargo
 JOBS ?= 2
 # A profile of the experiment files (`smoke`, `full`); empty: the committed grids.
 PROFILE ?=
-EXPERIMENTS ?= table gamma unseen
+EXPERIMENTS ?= table gamma unseen curves
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)

@@ -446,7 +446,8 @@ impl Figure for Curves {
 
 /// Draws every figure of `exp` whose data exists into `out`, returning the files written.
 /// Which figures an experiment gets depends on its name: `table` (grid, enlarged pictures,
-/// learning curves), `gamma` (bars), `unseen` (panels, bars); any other experiment gets bars.
+/// learning curves), `curves` (learning curves over the full budget), `gamma` (bars), `unseen`
+/// (panels, bars); any other experiment gets bars.
 pub fn render_experiment(
     exp: &Experiment,
     results: &Path,
@@ -514,6 +515,11 @@ pub fn render_experiment(
                 &SuccessBars::new(exp, stats),
                 &out.join("unseen_bars"),
             )?);
+        }
+        "curves" => {
+            if let Some(curves) = Curves::new(exp, results)? {
+                files.extend(render_figure(&curves, &out.join("curves_1m"))?);
+            }
         }
         name => {
             files.extend(render_figure(
