@@ -131,64 +131,92 @@ fn pooled(stats: &[CellStats], method: &str) -> Option<CellStats> {
     })
 }
 
-/// "Method fails on every maze" over all of its cells.
+/// "Method fails on every maze", judged maze by maze on the 10-seed cells of `stats` and, where
+/// `longer` has the same method and maze, on those runs at a larger budget (the paper's; fewer
+/// seeds). Per maze: a longer cell that solves disagrees; one with any success leaves the maze
+/// inconclusive (the method reached the target within the paper's budget, but not reliably);
+/// otherwise the 10-seed cell decides (fails: agrees, solves: disagrees, else inconclusive).
+/// The claim agrees when every maze does and disagrees when any maze does.
 fn fails_everywhere(
     id: &'static str,
     paper: &str,
     stats: &[CellStats],
+    longer: &[CellStats],
     method: &str,
 ) -> Option<Claim> {
     let c = cells(stats, method);
     if c.is_empty() {
         return None;
     }
-    let verdict = if c.iter().all(|s| fails(s)) {
-        Verdict::Agrees
-    } else if c.iter().any(|s| solves(s)) {
+    let mut parts = Vec::new();
+    let mut verdicts = Vec::new();
+    for s in c {
+        let mut part = format!(
+            "maze {}: {} solved within {} steps",
+            s.maze,
+            k_of_n(s),
+            human_steps(s.budget as f64)
+        );
+        let long = find(longer, method, s.maze).filter(|l| l.budget > s.budget);
+        if let Some(l) = long {
+            part.push_str(&format!(
+                ", {} within {}",
+                k_of_n(l),
+                human_steps(l.budget as f64)
+            ));
+        }
+        parts.push(part);
+        verdicts.push(match long {
+            Some(l) if solves(l) => Verdict::Disagrees,
+            Some(l) if l.successes > 0 => Verdict::Inconclusive,
+            _ if fails(s) => Verdict::Agrees,
+            _ if solves(s) => Verdict::Disagrees,
+            _ => Verdict::Inconclusive,
+        });
+    }
+    let verdict = if verdicts.contains(&Verdict::Disagrees) {
         Verdict::Disagrees
+    } else if verdicts.iter().all(|v| *v == Verdict::Agrees) {
+        Verdict::Agrees
     } else {
         Verdict::Inconclusive
     };
-    let ours = c
-        .iter()
-        .map(|s| {
-            format!(
-                "maze {}: {} solved within {} steps",
-                s.maze,
-                k_of_n(s),
-                human_steps(s.budget as f64)
-            )
-        })
-        .collect::<Vec<_>>()
-        .join("; ");
     Some(Claim {
         id,
         paper: paper.into(),
-        ours,
+        ours: parts.join("; "),
         verdict,
     })
 }
 
 /// Evaluates the paper's claims on our tables (any of them may be empty: its claims are then
 /// left out).
-pub fn claims(table: &[CellStats], gamma: &[CellStats], unseen: &[CellStats]) -> Vec<Claim> {
+pub fn claims(
+    table: &[CellStats],
+    gamma: &[CellStats],
+    unseen: &[CellStats],
+    curves: &[CellStats],
+) -> Vec<Claim> {
     let mut out = Vec::new();
     out.extend(fails_everywhere(
         "vanilla_ddpg_fails",
         "Vanilla DDPG does not reach the target on any maze (1M steps, one seed per maze).",
         table,
+        curves,
         "ddpg",
     ));
     out.extend(fails_everywhere(
         "vanilla_td3_fails",
         "Vanilla TD3 does not reach the target on any maze (1M steps, one seed per maze).",
         table,
+        curves,
         "td3",
     ));
     out.extend(fails_everywhere(
         "no_chaining_fails",
         "PBCS without skill chaining fails on every maze, 2×2 included.",
         table,
+        &[],
         "pbcs_no_chaining",
     ));
     let pbcs = cells(table, "pbcs");
@@ -569,7 +597,12 @@ pub fn render_all(
             .find(|(e, _)| e.name == n)
             .map_or(Vec::new(), |(_, s)| s.clone())
     };
-    let all_claims = claims(&named("table"), &named("gamma"), &named("unseen"));
+    let all_claims = claims(
+        &named("table"),
+        &named("gamma"),
+        &named("unseen"),
+        &named("curves"),
+    );
     let tables: Vec<(String, Vec<CellStats>)> = experiments
         .iter()
         .map(|(e, s)| (e.name.clone(), s.clone()))
@@ -693,6 +726,58 @@ mod tests {
         // near miss), which is why the verdict is per maze.
         let (a, b) = (pooled(&stats, "a").unwrap(), pooled(&stats, "b").unwrap());
         assert!(!beats(&a, &b), "{} vs {}", k_of_n(&a), k_of_n(&b));
+    }
+
+    #[test]
+    fn fails_everywhere_weighs_runs_at_the_papers_budget() {
+        let with_budget = |mut c: CellStats, b: u64| {
+            c.budget = b;
+            c
+        };
+        let table = [
+            with_budget(cell("ddpg", 2, 0, 10), 100_000),
+            with_budget(cell("ddpg", 5, 0, 10), 100_000),
+        ];
+        let verdict = |longer: &[CellStats]| {
+            fails_everywhere("x", "", &table, longer, "ddpg")
+                .unwrap()
+                .verdict
+        };
+        // No longer runs, or longer runs that never succeed: the 10-seed failures decide.
+        assert_eq!(verdict(&[]), Verdict::Agrees);
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 0, 3), 1_000_000)]),
+            Verdict::Agrees
+        );
+        // 2 of 3 at the paper's budget: reached, not reliably. 10 of 10: the claim is wrong.
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 2, 3), 1_000_000)]),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 5, 10, 10), 1_000_000)]),
+            Verdict::Disagrees
+        );
+        // A "longer" cell with no larger budget is not evidence about a larger budget.
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 2, 3), 100_000)]),
+            Verdict::Agrees
+        );
+        let claim = fails_everywhere(
+            "x",
+            "",
+            &table,
+            &[with_budget(cell("ddpg", 2, 2, 3), 1_000_000)],
+            "ddpg",
+        )
+        .unwrap();
+        assert!(
+            claim.ours.starts_with(
+                "maze 2: 0/10 [0.00, 0.28] solved within 100k steps, 2/3 [0.21, 0.94] within 1.00M"
+            ),
+            "{}",
+            claim.ours
+        );
     }
 
     #[test]

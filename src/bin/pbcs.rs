@@ -457,7 +457,12 @@ fn make_figures(
             .map_or(Vec::new(), |(_, s)| s.clone())
     };
     println!("\nthe paper's claims against our tables:");
-    for c in pbcs::report::claims(&named("table"), &named("gamma"), &named("unseen")) {
+    for c in pbcs::report::claims(
+        &named("table"),
+        &named("gamma"),
+        &named("unseen"),
+        &named("curves"),
+    ) {
         println!(
             "- {} — {}: {}",
             c.id,
