@@ -18,4 +18,20 @@ if [ "$count" -eq 0 ]; then
   exit 1
 fi
 [ "$missing" -eq 0 ] && echo "all $count files included by paper/report.tex exist"
+
+# Every generated number (\res{exp:cell:field}) and setting (\setting{name}) the report quotes is
+# defined: an undefined \csname expands to nothing, so a typo would vanish silently from the PDF.
+keys=0
+for kind in res setting; do
+  file=generated/numbers.tex
+  [ "$kind" = setting ] && file=generated/settings.tex
+  while read -r key; do
+    keys=$((keys + 1))
+    if ! grep -qF "\\csname $kind:$key\\endcsname" "$file" 2>/dev/null; then
+      echo "paper/report.tex quotes \\$kind{$key}, which $file does not define" >&2
+      missing=1
+    fi
+  done < <(grep -v '^\s*%' report.tex | grep -o "[\\]$kind{[^}]*}" | sed 's/.*{\(.*\)}/\1/' | sort -u)
+done
+[ "$missing" -eq 0 ] && echo "all $keys numbers and settings quoted by paper/report.tex are defined"
 exit "$missing"
