@@ -33,8 +33,12 @@ fn every_experiment_file_parses_with_unique_cells() {
             );
             assert_eq!(exp.cells.len(), exp.mazes.len() * exp.methods.len());
         }
-        // The committed grid holds at least 10 seeds per cell.
-        assert!(Experiment::load(&f, None).unwrap().seed_count >= 10);
+        // The committed grid holds at least 10 seeds per cell, except the learning-curve
+        // picture (`curves.toml`, 3 seeds at the paper's 1M steps), which no claim rests on.
+        let exp = Experiment::load(&f, None).unwrap();
+        if exp.name != "curves" {
+            assert!(exp.seed_count >= 10, "{}", f.display());
+        }
     }
 }
 
