@@ -9,8 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{Experiment, RawRow};
-use crate::stats::wilson;
-use crate::tables::{cell_stats, CellStats, Z95};
+use crate::tables::{cell_stats, CellStats};
 use polars::prelude::*;
 
 fn err(exp: &Experiment, e: impl std::fmt::Display) -> Error {
@@ -88,18 +87,7 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             num(name, i)?.ok_or_else(|| err(exp, format!("{}: no `{name}`", c.id)))
         };
         let (n, k) = (get("n")? as u64, get("successes")? as u64);
-        let (lo, hi) = wilson(k, n, Z95);
         out.push(CellStats {
-            experiment: exp.name.clone(),
-            cell: c.id.clone(),
-            method: c.method.clone(),
-            label: c.label.clone(),
-            maze: c.maze,
-            n,
-            successes: k,
-            success_rate: k as f64 / n as f64,
-            wilson_lo: lo,
-            wilson_hi: hi,
             steps_median: get("steps_median")?,
             steps_q1: get("steps_q1")?,
             steps_q3: get("steps_q3")?,
@@ -109,8 +97,7 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             skills_median: get("skills_median")?,
             success_rate_median: get("success_rate_median")?,
             budget: get("budget")? as u64,
-            paper_steps: c.paper_steps,
-            paper_solved: c.paper_solved,
+            ..CellStats::counted(exp, c, k, n)
         });
     }
     let plain = cell_stats(exp, rows);

@@ -119,15 +119,9 @@ fn pooled(stats: &[CellStats], method: &str) -> Option<CellStats> {
     let (k, n) = c
         .iter()
         .fold((0, 0), |(k, n), s| (k + s.successes, n + s.n));
-    let (lo, hi) = crate::stats::wilson(k, n, crate::tables::Z95);
     Some(CellStats {
-        successes: k,
-        n,
-        success_rate: k as f64 / n as f64,
-        wilson_lo: lo,
-        wilson_hi: hi,
         cell: format!("{method}-pooled"),
-        ..first
+        ..first.with_counts(k, n)
     })
 }
 
@@ -678,18 +672,17 @@ mod tests {
 
     /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
     fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
-        let (lo, hi) = crate::stats::wilson(k, n, crate::tables::Z95);
         CellStats {
             experiment: "t".into(),
             cell: format!("{method}-maze{maze}"),
             method: method.into(),
             label: method.into(),
             maze,
-            n,
-            successes: k,
-            success_rate: k as f64 / n as f64,
-            wilson_lo: lo,
-            wilson_hi: hi,
+            n: 0,
+            successes: 0,
+            success_rate: 0.0,
+            wilson_lo: 0.0,
+            wilson_hi: 0.0,
             steps_median: 1.0,
             steps_q1: 1.0,
             steps_q3: 1.0,
@@ -702,6 +695,7 @@ mod tests {
             paper_steps: None,
             paper_solved: None,
         }
+        .with_counts(k, n)
     }
 
     #[test]

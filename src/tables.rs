@@ -6,7 +6,7 @@
 //! computes the same statistics in plain Rust, which the aggregation checks polars against.
 
 use crate::error::{Error, Result};
-use crate::experiment::{Experiment, RawRow};
+use crate::experiment::{Cell, Experiment, RawRow};
 use crate::stats::{median, quantile, wilson};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -61,6 +61,52 @@ pub struct CellStats {
     pub paper_solved: Option<bool>,
 }
 
+impl CellStats {
+    /// Cell `c` of `exp` with `k` of `n` runs solved (see [`CellStats::with_counts`]), its
+    /// identity and the paper's figures from `c`, and the step statistics zero: callers fill
+    /// them in with struct-update syntax.
+    pub fn counted(exp: &Experiment, c: &Cell, k: u64, n: u64) -> CellStats {
+        CellStats {
+            experiment: exp.name.clone(),
+            cell: c.id.clone(),
+            method: c.method.clone(),
+            label: c.label.clone(),
+            maze: c.maze,
+            n: 0,
+            successes: 0,
+            success_rate: 0.0,
+            wilson_lo: 0.0,
+            wilson_hi: 0.0,
+            steps_median: 0.0,
+            steps_q1: 0.0,
+            steps_q3: 0.0,
+            steps_min: 0.0,
+            steps_max: 0.0,
+            solved_steps_median: None,
+            skills_median: 0.0,
+            success_rate_median: 0.0,
+            budget: 0,
+            paper_steps: c.paper_steps,
+            paper_solved: c.paper_solved,
+        }
+        .with_counts(k, n)
+    }
+
+    /// The same cell with `k` successes out of `n` runs, and the success rate and 95 % Wilson
+    /// interval that follow from them.
+    pub fn with_counts(self, k: u64, n: u64) -> CellStats {
+        let (lo, hi) = wilson(k, n, Z95);
+        CellStats {
+            n,
+            successes: k,
+            success_rate: k as f64 / n as f64,
+            wilson_lo: lo,
+            wilson_hi: hi,
+            ..self
+        }
+    }
+}
+
 /// Where an experiment's table lives under `results`.
 pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
     results.join("tables").join(format!("{experiment}.csv"))
@@ -103,18 +149,7 @@ pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
                 .collect();
             let mut skills: Vec<f64> = runs.iter().map(|r| r.skills as f64).collect();
             let mut rate: Vec<f64> = runs.iter().map(|r| r.success_rate as f64).collect();
-            let (lo, hi) = wilson(k, n, Z95);
             Some(CellStats {
-                experiment: exp.name.clone(),
-                cell: c.id.clone(),
-                method: c.method.clone(),
-                label: c.label.clone(),
-                maze: c.maze,
-                n,
-                successes: k,
-                success_rate: k as f64 / n as f64,
-                wilson_lo: lo,
-                wilson_hi: hi,
                 steps_median: median(&mut steps),
                 steps_q1: quantile(&mut steps, 0.25),
                 steps_q3: quantile(&mut steps, 0.75),
@@ -124,8 +159,7 @@ pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
                 skills_median: median(&mut skills),
                 success_rate_median: median(&mut rate),
                 budget: runs[0].budget,
-                paper_steps: c.paper_steps,
-                paper_solved: c.paper_solved,
+                ..CellStats::counted(exp, c, k, n)
             })
         })
         .collect()
