@@ -219,18 +219,24 @@ impl SetArgs {
                 self.profile.as_deref(),
             )?);
         }
-        let results = self.results.clone().unwrap_or_else(|| match &self.profile {
-            None => PathBuf::from("results"),
-            Some(p) => PathBuf::from(format!("results-{p}")),
-        });
+        let results = results_dir(self.results.as_ref(), self.profile.as_deref());
         Ok((exps, results))
     }
+}
+
+/// The results folder: `--results` if given, else `results` for the committed grid and
+/// `results-<profile>` for a profile (so a smoke run never mixes with the committed rows).
+fn results_dir(results: Option<&PathBuf>, profile: Option<&str>) -> PathBuf {
+    results.cloned().unwrap_or_else(|| match profile {
+        None => PathBuf::from("results"),
+        Some(p) => PathBuf::from(format!("results-{p}")),
+    })
 }
 
 /// Which experiment, which profile, where its results live.
 #[derive(Args)]
 struct ExpArgs {
-    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml).
+    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml, curves.toml).
     file: PathBuf,
     /// A profile of the file (`smoke`, `full`); none: the committed grid.
     #[arg(long)]
@@ -243,10 +249,7 @@ struct ExpArgs {
 impl ExpArgs {
     fn load(&self) -> anyhow::Result<(pbcs::experiment::Experiment, PathBuf)> {
         let exp = pbcs::experiment::Experiment::load(&self.file, self.profile.as_deref())?;
-        let results = self.results.clone().unwrap_or_else(|| match &self.profile {
-            None => PathBuf::from("results"),
-            Some(p) => PathBuf::from(format!("results-{p}")),
-        });
+        let results = results_dir(self.results.as_ref(), self.profile.as_deref());
         Ok((exp, results))
     }
 }
