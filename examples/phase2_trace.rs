@@ -39,7 +39,7 @@ fn main() -> anyhow::Result<()> {
                 t0.elapsed().as_secs_f64(),
                 p.k,
                 p.t,
-                if p.test { "TEST " } else { "train" },
+                format!("{:?}", p.kind),
                 p.success,
                 p.steps.train,
                 p.steps.test

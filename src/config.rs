@@ -222,3 +222,45 @@ impl Check for RunJob {
         self.phase2.check()
     }
 }
+
+/// The named PBCS procedures, each a complete TOML file in `experiments/` (embedded in the
+/// library, so `pbcs run --preset NAME` needs no file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// The paper's procedure (Algorithms 1–3 as written, K − 1 at a time, α rounds of
+    /// training), with our corrections and our choices of the settings it leaves open:
+    /// `experiments/pbcs_paper.toml`.
+    Paper,
+    /// Everything of ours that measured better (shortened τ, early stop, adaptive K steps,
+    /// verified skills): `experiments/pbcs_fast.toml`.
+    Fast,
+}
+
+impl Preset {
+    /// The preset's file name in `experiments/`.
+    pub fn file_name(self) -> &'static str {
+        match self {
+            Preset::Paper => "pbcs_paper.toml",
+            Preset::Fast => "pbcs_fast.toml",
+        }
+    }
+
+    /// The preset's TOML text (the file in `experiments/`, embedded at build time).
+    pub fn text(self) -> &'static str {
+        match self {
+            Preset::Paper => include_str!("../experiments/pbcs_paper.toml"),
+            Preset::Fast => include_str!("../experiments/pbcs_fast.toml"),
+        }
+    }
+
+    /// The preset as a validated job (maze 5, seed 0: set them for your run).
+    pub fn job(self) -> Result<RunJob> {
+        let job: RunJob = toml::from_str(self.text()).map_err(|e| Error::Parse {
+            path: Path::new("experiments").join(self.file_name()),
+            message: e.to_string(),
+        })?;
+        job.check()?;
+        Ok(job)
+    }
+}

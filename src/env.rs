@@ -74,6 +74,15 @@ pub trait Env {
         None
     }
 
+    /// The environment's success region as a ball in observation space, `(centre, radius)`,
+    /// if it has one (the maze: the target and its 0.2 radius). PBCS's last skill aims at it:
+    /// its potential is measured to this centre, so that the last skill is paid for reaching
+    /// the region the environment rewards and for nothing else. Without one, the last skill's
+    /// potential is measured to τ_N.
+    fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+        None
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 

@@ -329,7 +329,8 @@ pub struct RunRecord {
 const DRAWN_ROLLOUTS: usize = 10;
 
 /// Runs PBCS for `job` and writes into `out`: `config.toml`, `record.csv`, `skills.csv` (one row
-/// per skill: K, T, ball), `trajectory.csv`, `chain/` (the saved chain), `run.png`, `run.svg`,
+/// per skill: K, T, ball), `trace.csv` (every test, training round and verification: skill,
+/// K, T, event, success, env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the saved chain), `run.png`, `run.svg`,
 /// `timing.toml`. `progress(skill, report)` is called during phase 2.
 pub fn run_pbcs(
     job: &RunJob,
@@ -418,6 +419,12 @@ pub fn run_pbcs(
     write_record(&out.join("record.csv"), &record)?;
     write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
     write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
+    crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
+    write_csv(
+        &out.join("trace.timing.csv"),
+        &["seconds".to_string()],
+        phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
+    )?;
     phase2.chain.save(&out.join("chain"))?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let data = PictureData {

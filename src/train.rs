@@ -94,6 +94,13 @@ pub struct TrainOutcome {
     pub learner: Learner,
 }
 
+/// Scales a learner action in [−1, 1]ᵈ to the environment's bounds.
+pub fn to_env_action<E: Env + ?Sized>(env: &E, a: &[f32], out: &mut [f32]) {
+    for (i, (o, x)) in out.iter_mut().zip(a).enumerate() {
+        *o = x * env.action_bound(i);
+    }
+}
+
 /// Runs the greedy policy for `episodes` episodes from [`Env::sample_start`] (stream
 /// [`Stream::Eval`], so evaluation never shifts training's randomness).
 pub fn evaluate<E: Env>(
@@ -106,12 +113,14 @@ pub fn evaluate<E: Env>(
 ) -> (f32, f32, f32) {
     let mut rng = seeds.substream(Stream::Eval, round);
     let mut obs = vec![0.0; env.obs_dim()];
+    let mut action = vec![0.0; env.action_dim()];
     let (mut wins, mut ret, mut len) = (0usize, 0.0f32, 0usize);
     for _ in 0..episodes {
         let mut s = env.sample_start(&mut rng);
         for _ in 0..max_steps {
             env.observe(&s, &mut obs);
-            let step = env.step(&s, learner.act(&obs, 1));
+            to_env_action(env, learner.act(&obs, 1), &mut action);
+            let step = env.step(&s, &action);
             ret += step.reward;
             len += 1;
             s = step.state;
@@ -135,23 +144,21 @@ pub fn train_vanilla<E: Env>(
     mut progress: impl FnMut(u64, f32),
 ) -> Result<TrainOutcome> {
     train.check()?;
-    let bounds: Vec<f32> = (0..env.action_dim()).map(|i| env.action_bound(i)).collect();
-    let mut learner = Learner::new(learner_config, env.obs_dim(), &bounds, seeds)?;
+    // The learner acts in [−1, 1]ᵈ (Stable-Baselines3's convention); the environment gets
+    // a_i · b_i. Exploration noise σ lives in the learner's space.
+    let unit = vec![1.0; env.action_dim()];
+    let mut learner = Learner::new(learner_config, env.obs_dim(), &unit, seeds)?;
     let lc = learner_config;
     let mut replay = Replay::new(lc.replay_size, env.obs_dim(), env.action_dim());
-    let mut noise = Noise::new(
-        lc.noise,
-        lc.noise_sigma * bounds[0],
-        lc.noise_theta,
-        env.action_dim(),
-    );
+    let mut noise = Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, env.action_dim());
     let (mut rng_start, mut rng_noise, mut rng_replay) = (
         seeds.stream(Stream::Start),
         seeds.stream(Stream::Noise),
         seeds.stream(Stream::Replay),
     );
     let (mut obs, mut next_obs) = (vec![0.0; env.obs_dim()], vec![0.0; env.obs_dim()]);
-    let mut action = vec![0.0; env.action_dim()];
+    // The learner's action (in [−1, 1]ᵈ) and the environment's.
+    let (mut action, mut env_action) = (vec![0.0; env.action_dim()], vec![0.0; env.action_dim()]);
     let mut batch = Batch::default();
     let mut visited: FxHashSet<Vec<i32>> = FxHashSet::default();
     let bin = |o: &[f32]| -> Vec<i32> {
@@ -168,15 +175,19 @@ pub fn train_vanilla<E: Env>(
     visited.insert(bin(&obs));
     for step_i in 1..=train.steps {
         if step_i <= train.learning_starts {
-            random_action(env, &mut rng_noise, &mut action);
+            random_action(env, &mut rng_noise, &mut env_action);
+            for (i, (a, e)) in action.iter_mut().zip(&env_action).enumerate() {
+                *a = e / env.action_bound(i);
+            }
         } else {
             action.copy_from_slice(learner.act(&obs, 1));
             noise.add(&mut rng_noise, &mut action);
-            for (i, a) in action.iter_mut().enumerate() {
-                *a = a.clamp(-bounds[i], bounds[i]);
+            for a in action.iter_mut() {
+                *a = a.clamp(-1.0, 1.0);
             }
         }
-        let step = env.step(&state, &action);
+        to_env_action(env, &action, &mut env_action);
+        let step = env.step(&state, &env_action);
         env.observe(&step.state, &mut next_obs);
         visited.insert(bin(&next_obs));
         // Only true terminal states stop bootstrapping; the time limit below does not.

@@ -64,11 +64,7 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
 #[test]
 fn bad_experiment_files_name_the_problem() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::copy(
-        "experiments/pbcs_faithful.toml",
-        dir.path().join("base.toml"),
-    )
-    .unwrap();
+    std::fs::copy("experiments/pbcs_paper.toml", dir.path().join("base.toml")).unwrap();
     let head = "title = \"t\"\nseeds = 2\nmazes = [2]\n";
     let method = |name: &str, set: &str| {
         format!("[[method]]\nname = \"{name}\"\nkind = \"pbcs\"\nbase = \"base.toml\"\nset = {{ {set} }}\n")

@@ -3,7 +3,8 @@
 
 use pbcs::env::{Env, Step};
 use pbcs::nn::{Head, Mlp};
-use pbcs::pbcs::backplay::{backplay, Backplayer};
+use pbcs::pbcs::backplay::{backplay, backplay_candidates, Backplayer, Walk};
+use pbcs::pbcs::goal::Inputs;
 use pbcs::pbcs::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 use std::collections::HashMap;
@@ -17,6 +18,8 @@ struct Scripted {
     train: Vec<f32>,
     calls: Vec<String>,
     rounds: usize,
+    /// Verification results by (K, policy); 1 when absent.
+    verified: HashMap<(usize, usize), f32>,
 }
 
 impl Backplayer for Scripted {
@@ -36,6 +39,23 @@ impl Backplayer for Scripted {
     fn policy(&self) -> usize {
         self.rounds
     }
+    fn verify(&mut self, k: usize, policy: &usize, episodes: usize) -> f32 {
+        let p = self.verified.get(&(k, *policy)).copied().unwrap_or(1.0);
+        self.calls.push(format!(
+            "verify {k} (policy {policy}, {episodes} episodes) = {p}"
+        ));
+        p
+    }
+}
+
+/// Backplay's walk: α, K step, early stop; the paper's fixed step.
+fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
+    Walk {
+        alpha,
+        k_step,
+        early_stop,
+        adaptive: false,
+    }
 }
 
 #[test]
@@ -44,7 +64,7 @@ fn always_successful_walks_to_zero_without_training() {
         tests: (0..5).map(|k| (k, vec![1.0])).collect(),
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 5, 10, 1, false), Some((0, 0)));
+    assert_eq!(backplay(&mut b, 5, &walk(10, 1, false)), Some((0, 0)));
     assert_eq!(
         b.calls,
         [
@@ -65,7 +85,7 @@ fn training_stops_after_alpha_non_improvements() {
         train: vec![0.2, 0.5, 0.5, 0.4, 0.3, 0.9],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 3, 1, false), Some((0, 5)));
+    assert_eq!(backplay(&mut b, 3, &walk(3, 1, false)), Some((0, 5)));
     assert_eq!(
         b.calls,
         [
@@ -91,7 +111,7 @@ fn never_successful_returns_the_last_kept_skill() {
         train: vec![0.1; 10],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 5, 2, 1, false), Some((4, 0)));
+    assert_eq!(backplay(&mut b, 5, &walk(2, 1, false)), Some((4, 0)));
     assert_eq!(b.calls.last().unwrap(), "test 3 = 0");
 }
 
@@ -104,7 +124,7 @@ fn sometimes_successful_is_not_kept_and_k_goes_on() {
         train: vec![0.5, 0.5, 0.0, 0.0],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 2, 1, false), Some((1, 3)));
+    assert_eq!(backplay(&mut b, 3, &walk(2, 1, false)), Some((1, 3)));
     assert!(b.calls.contains(&"test 2 = 0.6".to_string()));
 }
 
@@ -115,7 +135,7 @@ fn never_successful_without_a_kept_skill_goes_on_and_may_fail() {
         train: vec![0.0; 100],
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 3, 2, 1, false), None);
+    assert_eq!(backplay(&mut b, 3, &walk(2, 1, false)), None);
     // Every K was tried, each with α = 2 training rounds (0.0 is a first best, then 2 misses).
     assert_eq!(b.calls.iter().filter(|c| c.starts_with("test")).count(), 6);
     assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 9);
@@ -131,7 +151,7 @@ fn early_stop_ends_training_at_a_confirmed_100_percent() {
         ..Default::default()
     };
     let mut b = script();
-    assert_eq!(backplay(&mut b, 2, 3, 1, true), Some((0, 2)));
+    assert_eq!(backplay(&mut b, 2, &walk(3, 1, true)), Some((0, 2)));
     assert_eq!(
         b.calls,
         [
@@ -144,7 +164,7 @@ fn early_stop_ends_training_at_a_confirmed_100_percent() {
         ]
     );
     let mut b = script();
-    backplay(&mut b, 2, 3, 1, false);
+    backplay(&mut b, 2, &walk(3, 1, false));
     assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 5);
 }
 
@@ -154,10 +174,123 @@ fn k_step_walks_back_faster_but_still_ends_at_zero() {
         tests: (0..10).map(|k| (k, vec![1.0])).collect(),
         ..Default::default()
     };
-    assert_eq!(backplay(&mut b, 10, 10, 4, false), Some((0, 0)));
+    assert_eq!(backplay(&mut b, 10, &walk(10, 4, false)), Some((0, 0)));
     assert_eq!(
         b.calls,
         ["test 9 = 1", "test 5 = 1", "test 1 = 1", "test 0 = 1"]
+    );
+}
+
+#[test]
+fn adaptive_walk_doubles_its_step_after_successes() {
+    let mut b = Scripted {
+        tests: (0..40).map(|k| (k, vec![1.0])).collect(),
+        ..Default::default()
+    };
+    let adaptive = Walk {
+        adaptive: true,
+        ..walk(10, 1, false)
+    };
+    assert_eq!(backplay(&mut b, 40, &adaptive), Some((0, 0)));
+    // Steps 2, 4, 8, 16 (MAX_ADAPTIVE_STEP), 16, floored at K = 0.
+    assert_eq!(
+        b.calls,
+        [
+            "test 39 = 1",
+            "test 37 = 1",
+            "test 33 = 1",
+            "test 25 = 1",
+            "test 9 = 1",
+            "test 0 = 1"
+        ]
+    );
+}
+
+#[test]
+fn adaptive_walk_bisects_a_failed_jump_without_training_it() {
+    // K ≥ 30 always succeeds, K < 30 never does, even after training.
+    let mut b = Scripted {
+        tests: (0..40)
+            .map(|k| (k, vec![if k >= 30 { 1.0 } else { 0.0 }]))
+            .collect(),
+        train: vec![0.0; 100],
+        ..Default::default()
+    };
+    let adaptive = Walk {
+        adaptive: true,
+        ..walk(2, 1, false)
+    };
+    // The paper's answer: the last K that holds.
+    assert_eq!(backplay(&mut b, 40, &adaptive), Some((30, 0)));
+    let trained: Vec<&String> = b.calls.iter().filter(|c| c.starts_with("train")).collect();
+    // Only K = 29, reached at step 1, is trained (α = 2: three rounds).
+    assert_eq!(trained, ["train 29 = 0", "train 29 = 0", "train 29 = 0"]);
+    let tested: Vec<&str> = b
+        .calls
+        .iter()
+        .filter_map(|c| c.strip_prefix("test "))
+        .collect();
+    assert_eq!(
+        tested,
+        [
+            "39 = 1", "37 = 1", "33 = 1", // steps 2, 4, 8: the jump to 25 fails
+            "25 = 0", "29 = 0", "31 = 1", // halved to 4 (from 33), then 2: 31 holds
+            "27 = 0", "29 = 0", "30 = 1", // step 4 fails, 2 fails, 1 holds
+            "28 = 0", "29 = 0", // step 2 fails; at step 1, K = 29 is trained
+            "29 = 0"  // and still fails: return the last saved (30, π)
+        ]
+    );
+}
+
+#[test]
+fn candidates_are_every_saved_skill_in_order() {
+    let mut b = Scripted {
+        tests: HashMap::from([
+            (3, vec![1.0]),
+            (2, vec![0.5]),
+            (1, vec![1.0]),
+            (0, vec![0.0]),
+        ]),
+        train: vec![0.1; 100],
+        ..Default::default()
+    };
+    let found: Vec<usize> = backplay_candidates(&mut b, 4, &walk(2, 1, false))
+        .into_iter()
+        .map(|(k, _)| k)
+        .collect();
+    assert_eq!(found, [3, 1]);
+}
+
+#[test]
+fn verification_falls_back_to_a_shorter_reach() {
+    use pbcs::pbcs::verified;
+    // Saved (K, π): (3, 0), (2, 0), (1, 3). The farthest (1, π 3) fails its verification,
+    // (2, π 0) passes: it is kept, and its verification used the requested episodes.
+    let mut b = Scripted {
+        verified: HashMap::from([((1, 3), 0.98)]),
+        ..Default::default()
+    };
+    let found = verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 500);
+    assert_eq!(found, Some((2, 0)));
+    assert_eq!(
+        b.calls,
+        [
+            "verify 1 (policy 3, 500 episodes) = 0.98",
+            "verify 2 (policy 0, 500 episodes) = 1"
+        ]
+    );
+    // Without verification: the paper's (K_s, π_s), the last saved, untested.
+    let mut b = Scripted::default();
+    assert_eq!(verified(&mut b, vec![(3, 0), (1, 3)], 0), Some((1, 3)));
+    assert!(b.calls.is_empty());
+    // None passes: the best verified success, the farthest reach among ties.
+    let mut b = Scripted {
+        verified: HashMap::from([((3, 0), 0.9), ((2, 0), 0.99), ((1, 3), 0.99)]),
+        ..Default::default()
+    };
+    assert_eq!(
+        verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 100),
+        Some((1, 3))
     );
 }
 
@@ -181,6 +314,9 @@ impl Backplayer for Reach {
     }
     fn policy(&self) -> (usize, usize) {
         (self.t, self.reach)
+    }
+    fn verify(&mut self, k: usize, _policy: &(usize, usize), _episodes: usize) -> f32 {
+        self.test(k)
     }
 }
 
@@ -283,6 +419,7 @@ fn two_skill_chain() -> SkillChain {
         },
         start_index: k,
         target_index: k + 1,
+        inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),
     };
     SkillChain {
         skills: vec![
@@ -392,6 +529,7 @@ mod end_to_end {
         for f in [
             "record.csv",
             "skills.csv",
+            "trace.csv",
             "trajectory.csv",
             "config.toml",
             "run.png",
@@ -404,5 +542,192 @@ mod end_to_end {
             );
             assert!(x == y, "{f} differs between two runs of one seed");
         }
+    }
+}
+
+/// Algorithm 3's goal and inputs: one region decides reached, reward and potential.
+mod algorithm3 {
+    use super::{constant_policy, Plane};
+    use pbcs::config::MazeConfig;
+    use pbcs::env::Env;
+    use pbcs::maze::Maze;
+    use pbcs::nn::{Head, Mlp};
+    use pbcs::pbcs::goal::{Goal, GoalKind, Inputs, REACHED_REWARD};
+    use pbcs::pbcs::{Ball, Skill, SkillChain};
+    use pbcs::rng::{Seeds, Stream};
+
+    fn maze2() -> Maze {
+        Maze::new(&MazeConfig {
+            size: 2,
+            ..MazeConfig::default()
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn shaped_reward_is_ten_in_the_ball_else_the_potential_difference() {
+        let g = Goal::ball(vec![1.0, 1.0], 0.1);
+        // Φ = 1/d: from d = 0.5 to d = 0.25 earns 4 − 2; going back costs as much.
+        assert!((g.reward(&[1.5, 1.0], &[1.25, 1.0], false) - 2.0).abs() < 1e-5);
+        assert!((g.reward(&[1.25, 1.0], &[1.5, 1.0], false) + 2.0).abs() < 1e-5);
+        // Entering the closed ball reaches it and pays 10.
+        assert!(g.reached(&[1.0, 1.0999], false, 0.0));
+        assert!(!g.reached(&[1.0, 1.1001], false, 0.0));
+        assert_eq!(g.reward(&[1.5, 1.0], &[1.1, 1.0], true), REACHED_REWARD);
+        // The environment's success reaches any goal; a terminal failure does not.
+        assert!(g.reached(&[5.0, 5.0], true, 1.0));
+        assert!(!g.reached(&[5.0, 5.0], true, -1.0));
+        assert!(g.terminal(false, true) && g.terminal(true, false) && !g.terminal(false, false));
+        // Φ is bounded by 1/ε, also at the centre.
+        assert_eq!(g.potential(&[1.0, 1.0]), 10.0);
+    }
+
+    #[test]
+    fn the_last_skill_aims_at_the_environments_target_disc() {
+        let maze = maze2();
+        // τ_N: the first state found inside the 0.2 target disc, here at its rim.
+        let tau_n = [0.5, 1.5 - 0.19];
+        let g = Goal::last(&maze, &tau_n, 0.1);
+        assert_eq!(g.kind, GoalKind::EnvSuccess);
+        assert_eq!((g.center.clone(), g.radius), (vec![0.5, 1.5], 0.2));
+        // A point of B_ε(τ_N) outside the disc: not the goal, whatever d(s, τ_N) says.
+        let outside = [0.5, 1.5 - 0.28];
+        assert!(((outside[1] - tau_n[1]) as f32).abs() <= 0.1);
+        let mut s = maze.start();
+        s.x = outside[0];
+        s.y = outside[1];
+        let step = maze.step(&s, &[0.0, 0.0]);
+        assert!(!step.terminal);
+        assert!(!g.reached(&outside, step.terminal, step.reward));
+        // Stepping into the disc is the environment's success, and the goal's.
+        let step = maze.step(&s, &[0.0, 0.1]);
+        assert!(step.terminal && step.reward > 0.0);
+        assert!(g.reached(&[0.5, 1.32], step.terminal, step.reward));
+        // A goal for T < N is B_ε(τ_T).
+        let obs = vec![vec![0.5, 0.5], vec![0.6, 0.5], tau_n.to_vec()];
+        let mid = Goal::for_target(&maze, &obs, 1, 0.1);
+        assert_eq!(mid, Goal::ball(vec![0.6, 0.5], 0.1));
+        assert_eq!(Goal::for_target(&maze, &obs, 2, 0.1), g);
+    }
+
+    #[test]
+    fn hovering_earns_nothing_anywhere() {
+        // The defect this goal fixes: 10 per step for staying in B_ε(τ_N) outside the disc.
+        let maze = maze2();
+        let g = Goal::last(&maze, &[0.5, 1.31], 0.1);
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let p = [0.3 + 0.01 * i as f32, 1.1 + 0.01 * j as f32];
+                if !g.reached(&p, false, 0.0) {
+                    assert_eq!(g.reward(&p, &p, false), 0.0, "{p:?}");
+                }
+            }
+        }
+        // An environment without a success region: Φ to τ_N, reached only on its reward.
+        let g = Goal::last(&Plane, &[3.0, 0.0], 0.1);
+        assert_eq!(g.kind, GoalKind::EnvSuccess);
+        assert!(!g.reached(&[3.0, 0.0], false, 0.0));
+        assert_eq!(g.reward(&[3.0, 0.05], &[3.0, 0.05], false), 0.0);
+    }
+
+    #[test]
+    fn inputs_are_goal_relative_with_unit_actions() {
+        let maze = maze2();
+        let g = Goal::ball(vec![1.5, 0.5], 0.1);
+        let inputs = Inputs::for_goal(&maze, &g);
+        assert_eq!(inputs, Inputs::new(vec![1.5, 0.5], vec![0.1, 0.1]));
+        let mut o = [0.0; 2];
+        inputs.observation(&[0.5, 0.5], &mut o);
+        assert_eq!(o, [-1.0, 0.0]);
+        let mut a = [0.0; 2];
+        inputs.env_action(&[1.0, -1.0], &mut a);
+        assert_eq!(a, [0.1, -0.1]);
+    }
+
+    /// a_0 = tanh(−20·x): steers its first observation towards 0 (in its own frame).
+    fn homing_policy() -> Mlp {
+        let mut rng = Seeds::new(0).stream(Stream::Init);
+        let mut m = Mlp::new(&[2, 2, 2], Head::Tanh(vec![1.0, 1.0]), &mut rng);
+        m.params.iter_mut().for_each(|p| *p = 0.0);
+        // Layer 0 (2 × 2, row-major, then bias): h_0 = relu(−x), h_1 = relu(x).
+        m.params[0] = -1.0;
+        m.params[1] = 1.0;
+        // Layer 1: out_0 = 20·h_0 − 20·h_1.
+        let (w, _) = m.offsets(1);
+        m.params[w] = 20.0;
+        m.params[w + 2] = -20.0;
+        m
+    }
+
+    #[test]
+    fn a_chain_feeds_each_skill_its_own_inputs_also_after_reloading() {
+        let skill = Skill {
+            policy: homing_policy(),
+            activation: Ball {
+                center: vec![0.0, 0.0],
+                radius: 0.1,
+            },
+            start_index: 0,
+            target_index: 1,
+            inputs: Inputs::new(vec![1.0, 0.0], vec![0.1, 0.1]),
+        };
+        let chain = SkillChain {
+            skills: vec![skill],
+        };
+        // Seen from its origin (1, 0), the policy homes on x = 1, not on x = 0.
+        let r = chain.run(&Plane, [0.0, 0.0], 40);
+        let last = r.states.last().unwrap();
+        assert!((last[0] - 1.0).abs() <= 0.1, "{last:?}");
+        let dir = tempfile::tempdir().unwrap();
+        chain.save(dir.path()).unwrap();
+        let loaded = SkillChain::load(dir.path()).unwrap();
+        assert_eq!(loaded, chain);
+        assert_eq!(loaded.run(&Plane, [0.0, 0.0], 40), r);
+    }
+
+    #[test]
+    fn a_malformed_manifest_is_an_error_naming_the_field() {
+        let chain = SkillChain {
+            skills: vec![Skill {
+                policy: constant_policy([1.0, 0.0]),
+                activation: Ball {
+                    center: vec![0.0, 0.0],
+                    radius: 0.1,
+                },
+                start_index: 0,
+                target_index: 1,
+                inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),
+            }],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        chain.save(dir.path()).unwrap();
+        let manifest = dir.path().join("manifest.toml");
+        let text = std::fs::read_to_string(&manifest).unwrap();
+        for (from, to, field) in [
+            ("sizes = [2, 4, 2]", "sizes = [2]", "sizes"),
+            (
+                "action_bounds = [0.1, 0.1]",
+                "action_bounds = [0.1]",
+                "action_bounds",
+            ),
+            ("origin = [0.0, 0.0]", "origin = [0.0]", "origin"),
+            (
+                "action_scale = [1.0, 1.0]",
+                "action_scale = []",
+                "action_scale",
+            ),
+            ("radius = 0.1", "radius = -1.0", "radius"),
+        ] {
+            assert!(text.contains(from), "{from} not in {text}");
+            std::fs::write(&manifest, text.replace(from, to)).unwrap();
+            let err = SkillChain::load(dir.path()).unwrap_err().to_string();
+            assert!(
+                err.contains("manifest.toml") && err.contains(&format!("skills[0].{field}")),
+                "{err}"
+            );
+        }
+        // An empty chain takes no step instead of panicking.
+        let r = SkillChain::default().run(&Plane, [0.0, 0.0], 10);
+        assert!(r.skill_used.is_empty() && !r.success);
     }
 }

@@ -5,7 +5,7 @@
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use pbcs::config::{self, Check, ExploreJob, MazeConfig, RunJob, TrainJob};
+use pbcs::config::{self, Check, ExploreJob, MazeConfig, Preset, RunJob, TrainJob};
 use pbcs::learner::{ActorUpdate, Algo};
 use serde::de::DeserializeOwned;
 use std::path::PathBuf;
@@ -51,9 +51,18 @@ impl RunArgs {
         &self,
         parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
     ) -> anyhow::Result<T> {
+        self.load_or(|| Ok(T::default()), parts)
+    }
+
+    /// The config file (or `default()` without one) with the maze and seed flags applied.
+    fn load_or<T: DeserializeOwned + Check>(
+        &self,
+        default: impl FnOnce() -> anyhow::Result<T>,
+        parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
+    ) -> anyhow::Result<T> {
         let mut job: T = match &self.config {
             Some(path) => config::load(path)?,
-            None => T::default(),
+            None => default()?,
         };
         let (maze, seed) = parts(&mut job);
         if let Some(n) = self.maze {
@@ -138,6 +147,10 @@ enum Command {
     Run {
         #[command(flatten)]
         run: RunArgs,
+        /// The procedure, when no --config is given: `fast` (ours, the default) or `paper`
+        /// (the paper's procedure with our corrections): experiments/pbcs_<preset>.toml.
+        #[arg(long, value_enum, conflicts_with = "config")]
+        preset: Option<Preset>,
         #[command(flatten)]
         learner: LearnerArgs,
         /// PBCS without skill chaining (fail when a second skill would be needed).
@@ -153,7 +166,7 @@ enum Command {
     /// The PBCS results table: `pbcs run` for every maze size × seed (resumable: finished runs
     /// are read back, not re-run), then solved counts and step statistics beside the paper's.
     Table {
-        /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_faithful.toml).
+        /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_paper.toml).
         #[arg(long)]
         config: Option<PathBuf>,
         /// Maze sizes.
@@ -325,12 +338,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         } => train(&run, &learner, steps),
         Command::Run {
             run,
+            preset,
             learner,
             no_chaining,
             exact_starts,
             gamma,
         } => {
-            let mut job: RunJob = run.load(|j: &mut RunJob| (&mut j.maze, &mut j.seed))?;
+            let preset = preset.unwrap_or(Preset::Fast);
+            let mut job: RunJob = run.load_or(
+                || Ok(preset.job()?),
+                |j: &mut RunJob| (&mut j.maze, &mut j.seed),
+            )?;
             learner.apply(&mut job.learner);
             if no_chaining {
                 job.phase2.chaining = false;
@@ -758,6 +776,14 @@ fn table(
     Ok(())
 }
 
+fn kind_name(kind: pbcs::pbcs::EventKind) -> &'static str {
+    match kind {
+        pbcs::pbcs::EventKind::Test => "test",
+        pbcs::pbcs::EventKind::Train => "train",
+        pbcs::pbcs::EventKind::Verify => "verify",
+    }
+}
+
 fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
     job.check()?;
     let mut suffix = String::new();
@@ -780,10 +806,12 @@ fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
         current = p.steps.train + p.steps.test;
         let total = finished + current;
         bar.set_message(format!(
-            "skill {skill}: K {} → T {}, {} {:.0} %, {} phase-2 env steps ({:.0} steps/s)",
+            "{skill} skills found; building skill {}: K {} → T {}, {} {:.0} %, {} phase-2 env \
+             steps ({:.0} steps/s)",
+            skill + 1,
             p.k,
             p.t,
-            if p.test { "test" } else { "train" },
+            kind_name(p.kind),
             100.0 * p.success,
             total,
             total as f64 / clock.elapsed().as_secs_f64().max(1e-9)

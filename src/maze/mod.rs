@@ -168,6 +168,14 @@ impl Env for Maze {
         vec!["x".into(), "y".into()]
     }
 
+    /// The target disc: centre `target`, radius `maze.target_radius`.
+    fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+        Some((
+            vec![self.target.x, self.target.y],
+            self.config.target_radius,
+        ))
+    }
+
     /// The straight line from `from` to `to` in equal steps of at most `max_action` per axis,
     /// when the whole segment stays `clearance` away from every wall (walls grown by the
     /// clearance on each side) and is at most 2 units long.

@@ -6,42 +6,51 @@
 pub trait Backplayer {
     /// A saved copy of π.
     type Policy: Clone;
-    /// Greedy success fraction of π over β episodes from B_ε(τ_k) to B_ε(τ_T).
+    /// Greedy success fraction of π over β episodes from B_ε(τ_k) to the goal.
     fn test(&mut self, k: usize) -> f32;
     /// One run of Algorithm 3 from B_ε(τ_k): β training episodes; the training success
     /// fraction.
     fn train(&mut self, k: usize) -> f32;
     /// A copy of the current π.
     fn policy(&self) -> Self::Policy;
-    /// Called at each K with the test result (for progress displays). Optional.
-    fn observe(&mut self, _event: Event) {}
+    /// Greedy success fraction of a saved `policy` over `episodes` episodes from B_ε(τ_k)
+    /// (the verification of a finished skill, with many more episodes than β).
+    fn verify(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32;
     /// Whether this problem ran out of its step budget (then its result is discarded).
     fn exhausted(&self) -> bool {
         false
     }
 }
 
-/// What happened at one K (for progress displays and tests).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Event {
-    /// First test at K: success fraction.
-    Tested {
-        /// K.
-        k: usize,
-        /// Success fraction.
-        success: f32,
-    },
-    /// Training at K stopped after `rounds` rounds; the test after it gave `success`.
-    Trained {
-        /// K.
-        k: usize,
-        /// Training rounds run.
-        rounds: usize,
-        /// Best training success.
-        best: f32,
-        /// Test success after training.
-        success: f32,
-    },
+/// How Backplay walks K and when it stops training (validated as part of
+/// [`super::Phase2Config`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Walk {
+    /// α: consecutive non-improvements of the training success that end training at one K.
+    pub alpha: usize,
+    /// How far K moves back after each K (1: the paper).
+    pub k_step: usize,
+    /// End training at K once a 100 % round is confirmed by a 100 % test (ours).
+    pub early_stop: bool,
+    /// Adaptive K steps (ours): the step doubles after each K that ends at 100 % (up to
+    /// [`MAX_ADAPTIVE_STEP`]); a jump whose first test fails is not trained but halved, K
+    /// going back halfway towards the last saved K; at step 1 the walk is the paper's.
+    pub adaptive: bool,
+}
+
+/// The largest K step of the adaptive walk.
+pub const MAX_ADAPTIVE_STEP: usize = 16;
+
+impl Walk {
+    /// The paper's walk: K − 1 each time, α rounds without improvement end training.
+    pub fn paper(alpha: usize) -> Self {
+        Walk {
+            alpha,
+            k_step: 1,
+            early_stop: false,
+            adaptive: false,
+        }
+    }
 }
 
 /// Runs Algorithm 3 ([`Backplayer::train`]) from τ_k until its success fails to beat its best
@@ -74,7 +83,8 @@ pub fn train_until_stable<B: Backplayer>(
 }
 
 /// Algorithm 2. Walks K back from T − 1; returns (K_s, π_s) such that π_s reliably reaches
-/// B_ε(τ_T) from B_ε(τ_{K_s}), or `None` if no K was ever solved.
+/// the goal from B_ε(τ_{K_s}), or `None` if no K was ever solved. The last of
+/// [`backplay_candidates`].
 ///
 /// ```text
 /// K = T − 1; fresh π
@@ -90,44 +100,58 @@ pub fn train_until_stable<B: Backplayer>(
 /// ```
 ///
 /// The paper loops `while K > 0`; then K_s ≥ 1 always and Algorithm 1 (`while T > 0`) would
-/// never end, so we let K reach 0 (the start τ_0). `k_step` walks K back by more than one
-/// index at a time (1 is the paper's walk; larger steps are our option, never the default);
-/// `early_stop` is explained at [`train_until_stable`].
-pub fn backplay<B: Backplayer>(
+/// never end, so we let K reach 0 (the start τ_0). [`Walk`] holds our options (larger or
+/// adaptive K steps, early stopping); [`Walk::paper`] is the pseudo-code above.
+pub fn backplay<B: Backplayer>(b: &mut B, t: usize, walk: &Walk) -> Option<(usize, B::Policy)> {
+    backplay_candidates(b, t, walk).pop()
+}
+
+/// Algorithm 2, returning every (K, π) it saved, in the order saved (decreasing K): the last
+/// one is the paper's (K_s, π_s); the earlier ones are shorter-reaching skills to fall back on
+/// when the last fails its verification.
+pub fn backplay_candidates<B: Backplayer>(
     b: &mut B,
     t: usize,
-    alpha: usize,
-    k_step: usize,
-    early_stop: bool,
-) -> Option<(usize, B::Policy)> {
-    assert!(t >= 1 && k_step >= 1);
-    let mut kept: Option<(usize, B::Policy)> = None;
+    walk: &Walk,
+) -> Vec<(usize, B::Policy)> {
+    assert!(t >= 1 && walk.k_step >= 1);
+    let mut kept: Vec<(usize, B::Policy)> = Vec::new();
+    let mut step = walk.k_step;
     let mut k = t - 1;
     loop {
-        let ku = k;
-        let success = b.test(ku);
-        b.observe(Event::Tested { k: ku, success });
-        if success >= 1.0 {
-            kept = Some((ku, b.policy()));
-        } else {
-            let (rounds, best) = train_until_stable(b, ku, alpha, early_stop);
-            let success = b.test(ku);
-            b.observe(Event::Trained {
-                k: ku,
-                rounds,
-                best,
-                success,
-            });
-            if success >= 1.0 {
-                kept = Some((ku, b.policy()));
+        let mut solved = b.test(k) >= 1.0;
+        if !solved && walk.adaptive && step > 1 {
+            // A jump too far: back halfway towards the last saved K (T if none), testing
+            // before any training; once the step is 1, K is trained as the paper does.
+            let last = kept.last().map_or(t, |(ks, _)| *ks);
+            step /= 2;
+            while step > 1 && last.saturating_sub(step) <= k {
+                step /= 2;
             }
-            if success <= 0.0 && kept.is_some() {
-                return kept;
+            if last.saturating_sub(step) > k {
+                k = last - step;
+                continue;
             }
+        }
+        let mut dead = false;
+        if !solved {
+            train_until_stable(b, k, walk.alpha, walk.early_stop);
+            let success = b.test(k);
+            solved = success >= 1.0;
+            dead = success <= 0.0;
+        }
+        if solved {
+            kept.push((k, b.policy()));
+            if walk.adaptive {
+                step = (step * 2).min(MAX_ADAPTIVE_STEP);
+            }
+        }
+        if dead && !kept.is_empty() {
+            return kept;
         }
         if k == 0 {
             return kept;
         }
-        k = k.saturating_sub(k_step);
+        k = k.saturating_sub(step);
     }
 }

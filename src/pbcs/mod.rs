@@ -3,12 +3,16 @@
 //! * [`backplay::backplay`] — Algorithm 2, over the [`backplay::Backplayer`] interface;
 //! * [`shaped::SkillTask`] — Algorithm 3 (training with the shaped reward) and Backplay's
 //!   greedy tests, for one skill;
+//! * [`goal::Goal`] — what a skill must reach (reached, terminal, reward and potential from
+//!   one region), and [`goal::Inputs`] — what its networks see (goal-relative observations,
+//!   actions in [−1, 1]ᵈ);
 //! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
 //!   collecting skills backwards, then reversing them;
 //! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
 //!   executing it uses π_0 until the state enters A_1, then π_1, and so on.
 
 pub mod backplay;
+pub mod goal;
 pub mod shaped;
 
 use crate::config::Check;
@@ -17,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::Mlp;
 use crate::rng::{Seeds, Stream};
+use goal::{Goal, Inputs};
 use serde::{Deserialize, Serialize};
 use shaped::{dist, SkillTask, StepCounts};
 use std::path::Path;
@@ -57,6 +62,14 @@ pub struct Phase2Config {
     /// End training at K as soon as a round at 100 % is confirmed by a 100 % greedy test
     /// ([`backplay::train_until_stable`]); off in the paper's procedure.
     pub early_stop: bool,
+    /// Adaptive K steps ([`backplay::Walk::adaptive`]); off in the paper's procedure.
+    pub adaptive_k: bool,
+    /// Verification of each finished skill (ours; 0 = off, the paper's procedure): its
+    /// policy must reach its goal in all of `verify_episodes` greedy episodes from its
+    /// activation ball, else Backplay's previous saved (K, π) — a shorter reach — is verified
+    /// in its place. A skill that passes n of n episodes fails at most 3/n of the time (95 %
+    /// confidence, the rule of three): β = 50 bounds it by 6 %, 500 episodes by 0.6 %.
+    pub verify_episodes: usize,
     /// Budget of environment steps for the whole run (phase 1 included); the run fails when
     /// it is exceeded.
     pub max_env_steps: u64,
@@ -78,6 +91,8 @@ impl Default for Phase2Config {
             k_step: 1,
             shorten: false,
             early_stop: false,
+            adaptive_k: false,
+            verify_episodes: 0,
             max_env_steps: 50_000_000,
             eval_episodes: 100,
             eval_max_steps: 5_000,
@@ -105,11 +120,45 @@ impl Check for Phase2Config {
                 format!("must be positive, got {}", self.epsilon),
             ));
         }
+        if self.epsilon > 1.0 {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!(
+                    "is a radius in the environment's units (the maze's cells are 1 wide), \
+                     at most 1, got {}",
+                    self.epsilon
+                ),
+            ));
+        }
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
         }
         Ok(())
     }
+}
+
+impl Phase2Config {
+    /// Backplay's walk from these settings.
+    pub fn walk(&self) -> backplay::Walk {
+        backplay::Walk {
+            alpha: self.alpha,
+            k_step: self.k_step,
+            early_stop: self.early_stop,
+            adaptive: self.adaptive_k,
+        }
+    }
+}
+
+/// What a progress report is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventKind {
+    /// A greedy test of β episodes (Backplay's).
+    Test,
+    /// A training round of β episodes (Algorithm 3).
+    Train,
+    /// The verification of a finished skill (`phase2.verify_episodes` greedy episodes).
+    Verify,
 }
 
 /// A progress report from inside Backplay.
@@ -119,8 +168,8 @@ pub struct Progress {
     pub k: usize,
     /// Current T.
     pub t: usize,
-    /// A test (true) or a training round (false).
-    pub test: bool,
+    /// A test, a training round or a verification.
+    pub kind: EventKind,
     /// Its success fraction.
     pub success: f32,
     /// Steps spent by the current skill so far.
@@ -154,6 +203,8 @@ pub struct Skill {
     pub start_index: usize,
     /// The index on τ of the skill's target (the next skill's K, or N for the last one).
     pub target_index: usize,
+    /// What π_i sees and emits (goal-relative observations, actions in [−1, 1]ᵈ).
+    pub inputs: Inputs,
 }
 
 /// A chain of skills in execution order.
@@ -187,14 +238,24 @@ struct ManifestSkill {
     start_index: usize,
     target_index: usize,
     sizes: Vec<usize>,
+    /// The policy's tanh scale (1 for actions in [−1, 1]).
     action_bounds: Vec<f32>,
+    /// [`Inputs::origin`]: subtracted from observations.
+    origin: Vec<f32>,
+    /// [`Inputs::action_scale`]: multiplies the policy's actions.
+    action_scale: Vec<f32>,
 }
 
 impl SkillChain {
     /// Executes the chain from `start`: π_0 until the state enters A_1, then π_1, and so on,
-    /// until the environment's positive reward or `max_steps` steps.
+    /// until the environment's positive reward or `max_steps` steps. When a state lies in
+    /// several later activation balls, the chain switches to the last of them (a skill that
+    /// overshoots its goal into a later ball hands over there). Each skill sees its own
+    /// [`Inputs`]. An empty chain takes no step.
     pub fn run<E: Env>(&self, env: &E, start: E::State, max_steps: usize) -> Rollout<E::State> {
+        let mut raw = vec![0.0; env.obs_dim()];
         let mut obs = vec![0.0; env.obs_dim()];
+        let mut action = vec![0.0; env.action_dim()];
         let mut ws = crate::nn::Workspace::default();
         let mut i = 0;
         let mut s = start;
@@ -203,13 +264,22 @@ impl SkillChain {
             skill_used: Vec::new(),
             success: false,
         };
+        if self.skills.is_empty() {
+            return out;
+        }
         for _ in 0..max_steps {
-            env.observe(&s, &mut obs);
-            while i + 1 < self.skills.len() && self.skills[i + 1].activation.contains(&obs) {
-                i += 1;
+            env.observe(&s, &mut raw);
+            if let Some(j) = (i + 1..self.skills.len())
+                .rev()
+                .find(|&j| self.skills[j].activation.contains(&raw))
+            {
+                i = j;
             }
-            let action = self.skills[i].policy.forward(&obs, 1, &mut ws);
-            let step = env.step(&s, action);
+            let skill = &self.skills[i];
+            skill.inputs.observation(&raw, &mut obs);
+            let a = skill.policy.forward(&obs, 1, &mut ws);
+            skill.inputs.env_action(a, &mut action);
+            let step = env.step(&s, &action);
             out.skill_used.push(i);
             s = step.state;
             out.states.push(s.clone());
@@ -240,6 +310,8 @@ impl SkillChain {
                 target_index: skill.target_index,
                 sizes: skill.policy.sizes().to_vec(),
                 action_bounds: bounds,
+                origin: skill.inputs.origin.clone(),
+                action_scale: skill.inputs.action_scale.clone(),
             });
         }
         let text = toml::to_string(&manifest).map_err(|e| Error::Parse {
@@ -258,7 +330,45 @@ impl SkillChain {
             message: e.to_string(),
         })?;
         let mut skills = Vec::new();
-        for m in manifest.skills {
+        for (i, m) in manifest.skills.into_iter().enumerate() {
+            let bad = |field: &str, why: String| Error::Parse {
+                path: path.clone(),
+                message: format!("skills[{i}].{field}: {why}"),
+            };
+            if m.sizes.len() < 2 || m.sizes.contains(&0) {
+                return Err(bad(
+                    "sizes",
+                    format!(
+                        "needs an input, an output and no empty layer, got {:?}",
+                        m.sizes
+                    ),
+                ));
+            }
+            let (input, output) = (m.sizes[0], *m.sizes.last().unwrap_or(&0));
+            for (field, len, want) in [
+                ("center", m.center.len(), input),
+                ("origin", m.origin.len(), input),
+                ("action_scale", m.action_scale.len(), output),
+            ] {
+                if len != want {
+                    return Err(bad(
+                        field,
+                        format!("has {len} values, the network needs {want}"),
+                    ));
+                }
+            }
+            if !m.action_bounds.is_empty() && m.action_bounds.len() != output {
+                return Err(bad(
+                    "action_bounds",
+                    format!(
+                        "has {} values, the network has {output} outputs",
+                        m.action_bounds.len()
+                    ),
+                ));
+            }
+            if !(m.radius.is_finite() && m.radius > 0.0) {
+                return Err(bad("radius", format!("must be positive, got {}", m.radius)));
+            }
             let mut rng = Seeds::new(0).stream(Stream::Init);
             let head = if m.action_bounds.is_empty() {
                 crate::nn::Head::Linear
@@ -275,6 +385,7 @@ impl SkillChain {
                 },
                 start_index: m.start_index,
                 target_index: m.target_index,
+                inputs: Inputs::new(m.origin, m.action_scale),
             });
         }
         Ok(SkillChain { skills })
@@ -302,6 +413,30 @@ pub struct Phase2Outcome {
     pub failure: Option<Failure>,
     /// Environment steps of training and of tests.
     pub steps: StepCounts,
+    /// Every test, training round and verification, in order: how Backplay walked.
+    pub trace: Vec<TraceRow>,
+}
+
+/// One row of a run's trace (`trace.csv`): a test, training round or verification of one
+/// skill at one K. Deterministic per seed; the wall clock of each row is `seconds`, kept out
+/// of the CSV (written beside it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TraceRow {
+    /// The skill being built, counted in the order found (0 = the one that ends at τ_N).
+    pub skill: usize,
+    /// K: start index on τ.
+    pub k: usize,
+    /// T: target index on τ.
+    pub t: usize,
+    /// Test, training round or verification.
+    pub event: EventKind,
+    /// Its success fraction.
+    pub success: f32,
+    /// Environment steps of the whole run so far (phase 1 included), after this event.
+    pub env_steps: u64,
+    /// Wall-clock seconds since phase 2 began (not in the CSV).
+    #[serde(skip)]
+    pub seconds: f64,
 }
 
 /// The trajectory phase 2 works on: τ itself, or τ shortened with clearance ε when
@@ -328,7 +463,7 @@ pub fn phase2_trajectory<E: Env>(
 /// reverse π and A
 /// ```
 ///
-/// α, the K step, early stopping and chaining come from `config`.
+/// α, the K walk, early stopping, verification and chaining come from `config`.
 /// `next(n, T)` makes the fresh learning problem of skill n (a new DDPG each time);
 /// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
 /// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
@@ -346,7 +481,8 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     let mut failure = None;
     while t > 0 {
         let mut b = next(skills.len(), t)?;
-        let found = backplay::backplay(&mut b, t, config.alpha, config.k_step, config.early_stop);
+        let candidates = backplay::backplay_candidates(&mut b, t, &config.walk());
+        let found = verified(&mut b, candidates, config.verify_episodes);
         let exhausted = b.exhausted();
         finished(b);
         match found {
@@ -372,6 +508,40 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     Ok((skills, failure))
 }
 
+/// Most saved (K, π) of one Backplay that a failed verification falls back through.
+pub const MAX_VERIFIED_CANDIDATES: usize = 4;
+
+/// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
+/// Without verification (`episodes` = 0) the last one, as in the paper. With it, the last
+/// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
+/// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
+/// verified success (the farthest-reaching among ties).
+pub fn verified<B: backplay::Backplayer>(
+    b: &mut B,
+    mut candidates: Vec<(usize, B::Policy)>,
+    episodes: usize,
+) -> Option<(usize, B::Policy)> {
+    if episodes == 0 {
+        return candidates.pop();
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
+    for i in (first..candidates.len()).rev() {
+        let (k, policy) = &candidates[i];
+        let p = b.verify(*k, policy, episodes);
+        if p >= 1.0 {
+            return Some(candidates.swap_remove(i));
+        }
+        if best.is_none_or(|(bp, _)| p > bp) {
+            best = Some((p, i));
+        }
+        if b.exhausted() {
+            break;
+        }
+    }
+    best.map(|(_, i)| candidates.swap_remove(i))
+}
+
 /// Phase 2 on a trajectory τ: [`skill_chaining`] with a [`SkillTask`] (fresh learner, shaped
 /// reward, starts in B_ε(τ_K)) per skill.
 ///
@@ -388,7 +558,8 @@ pub fn chain_skills<E: Env>(
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
-    let bounds: Vec<f32> = (0..env.action_dim()).map(|i| env.action_bound(i)).collect();
+    // The learner acts in [−1, 1]ᵈ; each skill's Inputs scale its actions to the bounds.
+    let unit = vec![1.0; env.action_dim()];
     let obs: Vec<Vec<f32>> = tau
         .iter()
         .map(|s| {
@@ -399,13 +570,15 @@ pub fn chain_skills<E: Env>(
         .collect();
     let mut steps = StepCounts::default();
     let spent_cell = std::cell::Cell::new(spent);
+    let clock = std::time::Instant::now();
+    let trace = std::cell::RefCell::new(Vec::new());
     let progress = std::cell::RefCell::new(&mut progress);
     let (found, failure) = skill_chaining(
         tau.len() - 1,
         config,
         |n, t| {
             let n32 = n as u32;
-            let learner = Learner::new(learner, env.obs_dim(), &bounds, &seeds.skill(n32))?;
+            let learner = Learner::new(learner, env.obs_dim(), &unit, &seeds.skill(n32))?;
             let rngs = [
                 seeds.substream(Stream::Start, n32),
                 seeds.substream(Stream::Noise, n32),
@@ -413,8 +586,19 @@ pub fn chain_skills<E: Env>(
             ];
             let budget = config.max_env_steps.saturating_sub(spent_cell.get());
             let mut task = SkillTask::new(env, config, tau, &obs, t, learner, rngs, budget);
-            let progress = &progress;
-            task.on_event = Some(Box::new(move |p: Progress| (progress.borrow_mut())(n, p)));
+            let (progress, trace, before) = (&progress, &trace, spent_cell.get());
+            task.on_event = Some(Box::new(move |p: Progress| {
+                trace.borrow_mut().push(TraceRow {
+                    skill: n,
+                    k: p.k,
+                    t: p.t,
+                    event: p.kind,
+                    success: p.success,
+                    env_steps: before + p.steps.train + p.steps.test,
+                    seconds: clock.elapsed().as_secs_f64(),
+                });
+                (progress.borrow_mut())(n, p)
+            }));
             Ok(task)
         },
         |task| {
@@ -433,11 +617,13 @@ pub fn chain_skills<E: Env>(
             },
             start_index: k,
             target_index: t,
+            inputs: Inputs::for_goal(env, &Goal::for_target(env, &obs, t, config.epsilon)),
         })
         .collect();
     Ok(Phase2Outcome {
         chain: SkillChain { skills },
         failure,
         steps,
+        trace: trace.into_inner(),
     })
 }

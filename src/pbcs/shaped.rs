@@ -1,8 +1,11 @@
-//! The learning problem of one skill: reach B_ε(τ_T) from starts in B_ε(τ_K), with the
-//! paper's shaped reward (Algorithm 3) — the [`Backplayer`] that Backplay drives.
+//! The learning problem of one skill: reach its [`Goal`] (B_ε(τ_T), or the environment's
+//! success for the last skill) from starts in B_ε(τ_K), with the paper's shaped reward
+//! (Algorithm 3) — the [`Backplayer`] that Backplay drives. The networks see the skill's
+//! [`Inputs`]: observations relative to the goal's centre, actions in [−1, 1]ᵈ.
 
 use super::backplay::Backplayer;
-use super::{Phase2Config, StartMode};
+use super::goal::{Goal, Inputs};
+use super::{EventKind, Phase2Config, StartMode};
 use crate::env::Env;
 use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
@@ -29,26 +32,17 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
-/// The shaped reward of Algorithm 3: 10 when s' ∈ B_ε(τ_T), else Φ(s') − Φ(s) with the
-/// potential Φ(s) = 1 / d(s, τ_T). (The episode loop also gives 10 when the last skill reaches
-/// the environment's reward.)
-#[inline]
-pub fn shaped_reward(d_s: f32, d_next: f32, epsilon: f32) -> f32 {
-    if d_next <= epsilon {
-        10.0
-    } else {
-        1.0 / d_next.max(1e-6) - 1.0 / d_s.max(1e-6)
-    }
-}
-
 /// One skill's learning problem on a trajectory section τ_0 … τ_T.
 pub struct SkillTask<'a, E: Env> {
     env: &'a E,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
     states: &'a [E::State],
-    obs: &'a [Vec<f32>],
     t: usize,
+    /// The region this skill must reach (decides reached, terminal, reward and Φ).
+    pub goal: Goal,
+    /// What the networks see and emit.
+    pub inputs: Inputs,
     /// The learner being trained (a fresh DDPG for each skill).
     pub learner: Learner,
     replay: Replay,
@@ -66,8 +60,10 @@ pub struct SkillTask<'a, E: Env> {
 }
 
 impl<'a, E: Env> SkillTask<'a, E> {
-    /// The task of reaching τ_T (`t`) along `states` with `learner`; random streams for
-    /// starts, noise and replay sampling are passed in.
+    /// The task of reaching τ_T (`t`) along `states` (observations `obs`) with `learner`,
+    /// whose actions must live in [−1, 1]ᵈ; random streams for starts, noise and replay
+    /// sampling are passed in. The goal is B_ε(τ_T), or [`Goal::last`] when T is the last
+    /// index of `states`.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         env: &'a E,
@@ -80,24 +76,22 @@ impl<'a, E: Env> SkillTask<'a, E> {
         budget: u64,
     ) -> Self {
         let lc = learner.config().clone();
-        let bound = env.action_bound(0);
         let [rng_start, rng_noise, rng_replay] = rngs;
+        let goal = Goal::for_target(env, obs, t, config.epsilon);
+        let inputs = Inputs::for_goal(env, &goal);
         SkillTask {
             env,
             config,
             states,
-            obs,
             t,
+            goal,
+            inputs,
             replay: Replay::new(lc.replay_size, env.obs_dim(), env.action_dim()),
             batch: Batch::default(),
             noise: (0..config.beta)
                 .map(|_| {
-                    Noise::new(
-                        lc.noise,
-                        lc.noise_sigma * bound,
-                        lc.noise_theta,
-                        env.action_dim(),
-                    )
+                    // σ in the learner's [−1, 1] action space.
+                    Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, env.action_dim())
                 })
                 .collect(),
             learner,
@@ -114,9 +108,10 @@ impl<'a, E: Env> SkillTask<'a, E> {
         self.steps.train + self.steps.test >= self.budget
     }
 
-    /// β start states around τ_k: uniform in B_ε(τ_k), or τ_k itself ([`StartMode::Exact`]).
-    fn starts(&mut self, k: usize) -> Vec<E::State> {
-        (0..self.config.beta)
+    /// `n` start states around τ_k: uniform in B_ε(τ_k), or τ_k itself
+    /// ([`StartMode::Exact`]).
+    fn starts(&mut self, k: usize, n: usize) -> Vec<E::State> {
+        (0..n)
             .map(|_| match self.config.start {
                 StartMode::Ball => {
                     self.env
@@ -127,27 +122,25 @@ impl<'a, E: Env> SkillTask<'a, E> {
             .collect()
     }
 
-    /// β episodes in lockstep from starts around τ_k, at most `max_steps` steps each; each step
-    /// the actions of all running episodes come from one batched forward pass. With
+    /// `n` episodes in lockstep from starts around τ_k, at most `max_steps` steps each; each
+    /// step the actions of all running episodes come from one batched forward pass. With
     /// `learn`, noise is added, transitions are stored with the shaped reward and every step
     /// makes one learner update (Algorithm 3); without, the policy is greedy (a test).
-    /// Returns the fraction of episodes that reached B_ε(τ_T).
-    fn episodes(&mut self, k: usize, learn: bool) -> f32 {
-        let (eps, obs_dim, act_dim) = (
-            self.config.epsilon,
-            self.env.obs_dim(),
-            self.env.action_dim(),
-        );
-        let bounds: Vec<f32> = (0..act_dim).map(|i| self.env.action_bound(i)).collect();
-        let target = &self.obs[self.t];
-        let final_skill = self.t + 1 == self.states.len();
-        let mut states = self.starts(k);
+    /// Returns the fraction of episodes that reached the goal.
+    fn episodes(&mut self, k: usize, n: usize, learn: bool) -> f32 {
+        let (obs_dim, act_dim) = (self.env.obs_dim(), self.env.action_dim());
+        let mut states = self.starts(k, n);
         let mut running: Vec<usize> = (0..states.len()).collect();
         let mut successes = 0usize;
+        // The networks' view of the running states, and of one next state; raw observations.
         let mut obs = vec![0.0; obs_dim * running.len()];
         let mut next_obs = vec![0.0; obs_dim];
-        for n in &mut self.noise {
-            n.reset();
+        let (mut raw, mut raw_next) = (vec![0.0; obs_dim], vec![0.0; obs_dim]);
+        let mut env_action = vec![0.0; act_dim];
+        if learn {
+            for noise in &mut self.noise {
+                noise.reset();
+            }
         }
         for _ in 0..self.config.max_steps {
             if running.is_empty() {
@@ -155,7 +148,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
             }
             obs.resize(obs_dim * running.len(), 0.0);
             for (row, &lane) in obs.chunks_exact_mut(obs_dim).zip(&running) {
-                self.env.observe(&states[lane], row);
+                self.env.observe(&states[lane], &mut raw);
+                self.inputs.observation(&raw, row);
             }
             let mut actions = self.learner.act(&obs, running.len()).to_vec();
             let mut still = Vec::with_capacity(running.len());
@@ -163,33 +157,22 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 let a = &mut actions[j * act_dim..(j + 1) * act_dim];
                 if learn {
                     self.noise[lane].add(&mut self.rng_noise, a);
-                    for (x, &b) in a.iter_mut().zip(&bounds) {
-                        *x = x.clamp(-b, b);
+                    for x in a.iter_mut() {
+                        *x = x.clamp(-1.0, 1.0);
                     }
                 }
-                let o = &obs[j * obs_dim..(j + 1) * obs_dim];
-                let step = self.env.step(&states[lane], a);
-                self.env.observe(&step.state, &mut next_obs);
-                let (d_s, d_next) = (dist(o, target), dist(&next_obs, target));
-                // The goal is B_ε(τ_T); for the last skill (T = N) it is the environment's own
-                // reward, because B_ε(τ_N) can stick out of the rewarded region (τ_N is merely
-                // the first state found inside it). Reaching the reward ends any episode, and
-                // so does any other terminal state (as a failure).
-                let rewarded = step.terminal && step.reward > 0.0;
-                let reached = if final_skill {
-                    rewarded
-                } else {
-                    d_next <= eps || rewarded
-                };
+                self.inputs.env_action(a, &mut env_action);
+                self.env.observe(&states[lane], &mut raw);
+                let step = self.env.step(&states[lane], &env_action);
+                self.env.observe(&step.state, &mut raw_next);
+                let reached = self.goal.reached(&raw_next, step.terminal, step.reward);
                 if learn {
                     self.steps.train += 1;
-                    let r = if reached {
-                        10.0
-                    } else {
-                        shaped_reward(d_s, d_next, eps)
-                    };
-                    self.replay
-                        .push(o, a, r, &next_obs, reached || step.terminal);
+                    let r = self.goal.reward(&raw, &raw_next, reached);
+                    self.inputs.observation(&raw_next, &mut next_obs);
+                    let o = &obs[j * obs_dim..(j + 1) * obs_dim];
+                    let done = self.goal.terminal(reached, step.terminal);
+                    self.replay.push(o, a, r, &next_obs, done);
                     if self.replay.len() >= self.learner.config().batch_size {
                         self.replay.sample(
                             self.learner.config().batch_size,
@@ -211,16 +194,16 @@ impl<'a, E: Env> SkillTask<'a, E> {
             }
             running = still;
         }
-        successes as f32 / self.config.beta as f32
+        successes as f32 / n as f32
     }
 
-    fn report(&mut self, k: usize, test: bool, success: f32) {
+    fn report(&mut self, k: usize, kind: EventKind, success: f32) {
         let steps = self.steps;
         if let Some(f) = self.on_event.as_mut() {
             f(super::Progress {
                 k,
                 t: self.t,
-                test,
+                kind,
                 success,
                 steps,
             });
@@ -235,8 +218,8 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         if self.spent_budget() {
             return 0.0;
         }
-        let p = self.episodes(k, false);
-        self.report(k, true, p);
+        let p = self.episodes(k, self.config.beta, false);
+        self.report(k, EventKind::Test, p);
         p
     }
 
@@ -244,13 +227,25 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         if self.spent_budget() {
             return 0.0;
         }
-        let p = self.episodes(k, true);
-        self.report(k, false, p);
+        let p = self.episodes(k, self.config.beta, true);
+        self.report(k, EventKind::Train, p);
         p
     }
 
     fn policy(&self) -> Mlp {
         self.learner.actor.clone()
+    }
+
+    /// Runs `episodes` greedy episodes of `policy` (swapped in for π, then swapped back).
+    fn verify(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
+        if self.spent_budget() {
+            return 0.0;
+        }
+        let current = std::mem::replace(&mut self.learner.actor, policy.clone());
+        let p = self.episodes(k, episodes, false);
+        self.learner.actor = current;
+        self.report(k, EventKind::Verify, p);
+        p
     }
 
     fn exhausted(&self) -> bool {

@@ -1,0 +1,180 @@
+//! A skill's goal and what its networks see: the two places where Algorithm 3 meets the
+//! environment.
+//!
+//! * [`Goal`] decides, from one region, whether a step reached the goal, whether it ends the
+//!   episode, what shaped reward it earns and the potential Φ behind that reward. For every
+//!   skill but the last the region is B_ε(τ_T); for the last skill (T = N) it is the
+//!   environment's own success region, so that the last skill is never paid for hovering in
+//!   the part of B_ε(τ_N) that lies outside the rewarded disc.
+//! * [`Inputs`] maps observations and actions between the environment and a skill's networks:
+//!   observations relative to the centre of the skill's goal (the same skill is the same
+//!   learning problem wherever it lies in the maze), actions in [−1, 1]ᵈ scaled to the
+//!   environment's bounds (Stable-Baselines3's convention; exploration noise σ lives in that
+//!   space).
+//!
+//! ```
+//! use pbcs::pbcs::goal::{Goal, Inputs, REACHED_REWARD};
+//!
+//! // Skill goal B_ε(τ_T) with τ_T = (1, 1), ε = 0.1.
+//! let goal = Goal::ball(vec![1.0, 1.0], 0.1);
+//! assert!(goal.reached(&[1.05, 1.0], false, 0.0));
+//! assert_eq!(goal.reward(&[1.5, 1.0], &[1.05, 1.0], true), REACHED_REWARD);
+//! // Φ(s) = 1 / d(s, centre): moving from d = 0.5 to d = 0.25 earns 4 − 2 = 2.
+//! assert!((goal.reward(&[1.5, 1.0], &[1.25, 1.0], false) - 2.0).abs() < 1e-5);
+//!
+//! // The networks see s − centre and act in [−1, 1]²; the environment gets ±0.1.
+//! let inputs = Inputs::new(vec![1.0, 1.0], vec![0.1, 0.1]);
+//! let mut obs = [0.0; 2];
+//! inputs.observation(&[1.5, 0.5], &mut obs);
+//! assert_eq!(obs, [0.5, -0.5]);
+//! let mut act = [0.0; 2];
+//! inputs.env_action(&[1.0, -0.5], &mut act);
+//! assert_eq!(act, [0.1, -0.05]);
+//! ```
+
+use super::shaped::dist;
+use crate::env::Env;
+use serde::{Deserialize, Serialize};
+
+/// The shaped reward of a step that reaches the goal (the paper's 10).
+pub const REACHED_REWARD: f32 = 10.0;
+
+/// How a [`Goal`] is reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalKind {
+    /// d(s′, centre) ≤ radius: the ball B_ε(τ_T) of every skill but the last. Reaching the
+    /// environment's reward on the way counts too.
+    Ball,
+    /// The environment's own success (a positive reward on a terminal step): the last skill.
+    /// `centre` and `radius` describe the success region for the potential.
+    EnvSuccess,
+}
+
+/// One skill's goal: the region that decides reached, terminal, reward and potential together.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Goal {
+    /// How it is reached.
+    pub kind: GoalKind,
+    /// Centre of the region (τ_T, or the environment's success region).
+    pub center: Vec<f32>,
+    /// Radius of the region (ε, or the success radius). Φ is bounded by 1 / radius.
+    pub radius: f32,
+}
+
+impl Goal {
+    /// B_ε(τ_T): the goal of every skill but the last.
+    pub fn ball(center: Vec<f32>, epsilon: f32) -> Self {
+        Goal {
+            kind: GoalKind::Ball,
+            center,
+            radius: epsilon,
+        }
+    }
+
+    /// The last skill's goal: the environment's success region ([`Env::success_region`]), or,
+    /// for an environment that does not describe one, its success with Φ measured to τ_N
+    /// (`tau_n`) and bounded by 1/ε.
+    pub fn last<E: Env>(env: &E, tau_n: &[f32], epsilon: f32) -> Self {
+        let (center, radius) = env
+            .success_region()
+            .unwrap_or_else(|| (tau_n.to_vec(), epsilon));
+        Goal {
+            kind: GoalKind::EnvSuccess,
+            center,
+            radius,
+        }
+    }
+
+    /// The goal of the skill whose target is τ_t on a trajectory with observations `obs`
+    /// (τ_0 … τ_N): [`Goal::last`] when t = N, else B_ε(τ_t).
+    pub fn for_target<E: Env>(env: &E, obs: &[Vec<f32>], t: usize, epsilon: f32) -> Self {
+        if t + 1 == obs.len() {
+            Goal::last(env, &obs[t], epsilon)
+        } else {
+            Goal::ball(obs[t].clone(), epsilon)
+        }
+    }
+
+    /// Whether the step to `next_obs` (with the environment's `terminal` flag and `reward`)
+    /// reached the goal.
+    #[inline]
+    pub fn reached(&self, next_obs: &[f32], terminal: bool, reward: f32) -> bool {
+        let env_success = terminal && reward > 0.0;
+        match self.kind {
+            GoalKind::Ball => env_success || dist(next_obs, &self.center) <= self.radius,
+            GoalKind::EnvSuccess => env_success,
+        }
+    }
+
+    /// Whether the transition ends the episode: the goal was reached, or the environment
+    /// ended it (a terminal state that is not the goal counts as a failure).
+    #[inline]
+    pub fn terminal(&self, reached: bool, env_terminal: bool) -> bool {
+        reached || env_terminal
+    }
+
+    /// The potential Φ(s) = 1 / d(s, centre), bounded by 1 / radius (equation (1) of the
+    /// paper, with the bound that keeps it finite inside the region).
+    #[inline]
+    pub fn potential(&self, obs: &[f32]) -> f32 {
+        1.0 / dist(obs, &self.center).max(self.radius)
+    }
+
+    /// The shaped reward of Algorithm 3: [`REACHED_REWARD`] when the step reached the goal,
+    /// else Φ(s′) − Φ(s). Standing still pays 0, wherever it stands.
+    #[inline]
+    pub fn reward(&self, obs: &[f32], next_obs: &[f32], reached: bool) -> f32 {
+        if reached {
+            REACHED_REWARD
+        } else {
+            self.potential(next_obs) - self.potential(obs)
+        }
+    }
+}
+
+/// What a skill's networks see and emit. Saved with the chain, so that executing a saved or
+/// reloaded chain computes the same inputs as training did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Inputs {
+    /// Subtracted from every observation: the centre of the skill's goal.
+    pub origin: Vec<f32>,
+    /// Multiplies each action component in [−1, 1]: the environment's bound b_i.
+    pub action_scale: Vec<f32>,
+}
+
+impl Inputs {
+    /// Observations relative to `origin`; actions in [−1, 1] scaled by `action_scale`.
+    pub fn new(origin: Vec<f32>, action_scale: Vec<f32>) -> Self {
+        Inputs {
+            origin,
+            action_scale,
+        }
+    }
+
+    /// The inputs of a skill aiming at `goal` in `env`.
+    pub fn for_goal<E: Env>(env: &E, goal: &Goal) -> Self {
+        Inputs::new(
+            goal.center.clone(),
+            (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
+        )
+    }
+
+    /// Writes the network's view of the environment observation `raw` into `out`:
+    /// `raw − origin`.
+    #[inline]
+    pub fn observation(&self, raw: &[f32], out: &mut [f32]) {
+        for ((o, r), c) in out.iter_mut().zip(raw).zip(&self.origin) {
+            *o = r - c;
+        }
+    }
+
+    /// Writes the environment action of the network action `a` ∈ [−1, 1]ᵈ into `out`:
+    /// `a_i · b_i`.
+    #[inline]
+    pub fn env_action(&self, a: &[f32], out: &mut [f32]) {
+        for ((o, x), b) in out.iter_mut().zip(a).zip(&self.action_scale) {
+            *o = x * b;
+        }
+    }
+}
