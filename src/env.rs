@@ -74,6 +74,15 @@ pub trait Env {
         None
     }
 
+    /// Whether the ball of radius `radius` around `center` is clear of everything that blocks
+    /// (`Some(true)`), touches something (`Some(false)`), or unknown (`None`, the default).
+    /// Used by PBCS's `phase2.stop_at_failure` option: a partial failure from a clear ball
+    /// is the policy's, not a wall's.
+    fn ball_is_clear(&self, center: &Self::State, radius: f32) -> Option<bool> {
+        let _ = (center, radius);
+        None
+    }
+
     /// The environment's success region as a ball in observation space, `(centre, radius)`,
     /// if it has one (the maze: the target and its 0.2 radius). PBCS's last skill aims at it:
     /// its potential is measured to this centre, so that the last skill is paid for reaching

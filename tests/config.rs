@@ -173,3 +173,38 @@ fn train_rejects_bad_learner_settings_and_runs_a_small_case() {
         assert!(out.join(f).exists(), "{f} missing");
     }
 }
+
+#[test]
+fn presets_are_the_experiment_files_and_paper_is_the_library_default() {
+    use pbcs::config::Preset;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    for preset in [Preset::Paper, Preset::Fast] {
+        let from_file: RunJob = load(&dir.join(preset.file_name())).unwrap();
+        assert_eq!(preset.job().unwrap(), from_file, "{preset:?}");
+    }
+    // The paper preset is RunJob::default() (what experiment bases start from), for maze 5.
+    let mut default = RunJob::default();
+    default.maze.size = 5;
+    assert_eq!(Preset::Paper.job().unwrap(), default);
+    // The fast preset differs only in the switches of ours.
+    let fast = Preset::Fast.job().unwrap().phase2;
+    assert!(fast.shorten && fast.early_stop && fast.adaptive_k && fast.verify_episodes > 0);
+    let paper = Preset::Paper.job().unwrap().phase2;
+    assert!(!paper.shorten && !paper.early_stop && !paper.adaptive_k);
+    assert_eq!(paper.verify_episodes, 0);
+    // --preset and --config exclude each other; an unknown preset is refused by name.
+    let (code, err) = pbcs(&["run", "--preset", "paper", "--config", "x.toml"]);
+    assert!(code != 0 && err.contains("--config"), "{code} {err}");
+    let (code, err) = pbcs(&["run", "--preset", "quick"]);
+    assert!(
+        code != 0 && err.contains("quick") && err.contains("fast"),
+        "{code} {err}"
+    );
+}
+
+#[test]
+fn epsilon_is_a_radius_in_cells() {
+    let (_dir, path) = write("[phase2]\nepsilon = 50\n");
+    let err = load::<RunJob>(&path).unwrap_err().to_string();
+    assert!(err.contains("phase2.epsilon"), "{err}");
+}

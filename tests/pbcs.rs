@@ -55,6 +55,7 @@ fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
         k_step,
         early_stop,
         adaptive: false,
+        stop_at_failure: false,
     }
 }
 
@@ -730,4 +731,116 @@ mod algorithm3 {
         let r = SkillChain::default().run(&Plane, [0.0, 0.0], 10);
         assert!(r.skill_used.is_empty() && !r.success);
     }
+}
+
+#[test]
+fn stop_at_failure_ends_the_walk_at_a_partial_failure_from_a_clear_ball() {
+    // K = 3 solved; K = 2 fails partly after training; K = 1 would succeed again.
+    let script = || Scripted {
+        tests: HashMap::from([
+            (3, vec![1.0]),
+            (2, vec![0.5]),
+            (1, vec![1.0]),
+            (0, vec![0.0]),
+        ]),
+        train: vec![0.1; 100],
+        ..Default::default()
+    };
+    let stop = Walk {
+        stop_at_failure: true,
+        ..walk(2, 1, false)
+    };
+    // The paper (and this option when the ball is not known to be clear) goes on to K = 1.
+    let mut b = script();
+    assert_eq!(
+        backplay(&mut b, 4, &walk(2, 1, false)).map(|(k, _)| k),
+        Some(1)
+    );
+    let mut b = script();
+    assert_eq!(backplay(&mut b, 4, &stop).map(|(k, _)| k), Some(1));
+    // A clear ball at K = 2: the failure is the policy's, the walk ends with (3, π).
+    let mut b = Clear(script());
+    assert_eq!(backplay(&mut b, 4, &stop), Some((3, 0)));
+    assert!(!b.0.calls.iter().any(|c| c.starts_with("test 1")));
+}
+
+/// [`Scripted`] with every ball clear of obstacles.
+struct Clear(Scripted);
+
+impl Backplayer for Clear {
+    type Policy = usize;
+    fn test(&mut self, k: usize) -> f32 {
+        self.0.test(k)
+    }
+    fn train(&mut self, k: usize) -> f32 {
+        self.0.train(k)
+    }
+    fn policy(&self) -> usize {
+        self.0.policy()
+    }
+    fn verify(&mut self, k: usize, policy: &usize, episodes: usize) -> f32 {
+        self.0.verify(k, policy, episodes)
+    }
+    fn ball_is_clear(&self, _k: usize) -> bool {
+        true
+    }
+}
+
+#[test]
+fn fast_tests_give_the_same_verdict_for_fewer_steps() {
+    use pbcs::config::MazeConfig;
+    use pbcs::learner::{Learner, LearnerConfig};
+    use pbcs::maze::Maze;
+    use pbcs::pbcs::shaped::SkillTask;
+    let maze = Maze::new(&MazeConfig {
+        size: 2,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    // τ: from the start to the right-hand cell; the policy pushes up into the wall at y = 1.
+    let mut s = maze.start();
+    let mut states = vec![s];
+    for _ in 0..10 {
+        s = maze.step(&s, &[0.1, 0.0]).state;
+        states.push(s);
+    }
+    let obs: Vec<Vec<f32>> = states.iter().map(|p| vec![p.x, p.y]).collect();
+    let up = {
+        let mut m = constant_policy([0.0, 1.0]);
+        if let Head::Tanh(b) = m.head().clone() {
+            assert_eq!(b, vec![0.1, 0.1]);
+        }
+        // Rescale the head to [−1, 1] (the learner's action space): same saturated output.
+        let sizes = m.sizes().to_vec();
+        let params = m.params.clone();
+        m = Mlp::new(
+            &sizes,
+            Head::Tanh(vec![1.0, 1.0]),
+            &mut Seeds::new(0).stream(Stream::Init),
+        );
+        m.params = params;
+        m
+    };
+    let seeds = Seeds::new(0);
+    let run = |fast: bool| {
+        let config = Phase2Config {
+            fast_tests: fast,
+            ..Phase2Config::default()
+        };
+        let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
+        learner.actor = up.clone();
+        let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
+        let mut task = SkillTask::new(&maze, &config, &states, &obs, 10, learner, rngs, 1_000_000);
+        let p = task.test(0);
+        (p, task.steps.test)
+    };
+    let (slow, fast) = (run(false), run(true));
+    assert_eq!(slow.0, 0.0);
+    assert_eq!(fast.0, slow.0, "same verdict");
+    assert_eq!(slow.1, 50 * 50, "every episode runs its 50 steps");
+    assert!(
+        fast.1 < slow.1 / 4,
+        "stuck episodes end early: {} steps",
+        fast.1
+    );
 }

@@ -168,6 +168,12 @@ impl Env for Maze {
         vec!["x".into(), "y".into()]
     }
 
+    /// Conservative: walls grown by `radius` in every axis direction (a square, not a disc)
+    /// must not contain the centre.
+    fn ball_is_clear(&self, center: &Point<f32>, radius: f32) -> Option<bool> {
+        Some(!self.walls.segment_hits_with_margin(center, center, radius))
+    }
+
     /// The target disc: centre `target`, radius `maze.target_radius`.
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
         Some((

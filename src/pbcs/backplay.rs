@@ -20,6 +20,12 @@ pub trait Backplayer {
     fn exhausted(&self) -> bool {
         false
     }
+    /// Whether B_ε(τ_k) is known to be clear of obstacles (then a partial failure there is
+    /// the policy's, not a wall's). Default: unknown.
+    fn ball_is_clear(&self, k: usize) -> bool {
+        let _ = k;
+        false
+    }
 }
 
 /// How Backplay walks K and when it stops training (validated as part of
@@ -36,6 +42,10 @@ pub struct Walk {
     /// [`MAX_ADAPTIVE_STEP`]); a jump whose first test fails is not trained but halved, K
     /// going back halfway towards the last saved K; at step 1 the walk is the paper's.
     pub adaptive: bool,
+    /// End the walk at the first K that fails after training, once a skill is saved, when
+    /// B_ε(τ_K) is clear of obstacles (ours): the paper goes on because a ball overlapping a
+    /// wall can fail partly whatever the policy, which a clear ball cannot.
+    pub stop_at_failure: bool,
 }
 
 /// The largest K step of the adaptive walk.
@@ -49,6 +59,7 @@ impl Walk {
             k_step: 1,
             early_stop: false,
             adaptive: false,
+            stop_at_failure: false,
         }
     }
 }
@@ -138,7 +149,7 @@ pub fn backplay_candidates<B: Backplayer>(
             train_until_stable(b, k, walk.alpha, walk.early_stop);
             let success = b.test(k);
             solved = success >= 1.0;
-            dead = success <= 0.0;
+            dead = success <= 0.0 || (!solved && walk.stop_at_failure && b.ball_is_clear(k));
         }
         if solved {
             kept.push((k, b.policy()));

@@ -64,6 +64,15 @@ pub struct Phase2Config {
     pub early_stop: bool,
     /// Adaptive K steps ([`backplay::Walk::adaptive`]); off in the paper's procedure.
     pub adaptive_k: bool,
+    /// End a skill at the first K that fails after training when its ball is clear of walls
+    /// ([`backplay::Walk::stop_at_failure`]); off in the paper's procedure.
+    pub stop_at_failure: bool,
+    /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
+    /// deterministic policy and a pure step it never will), and stop the whole test once it
+    /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
+    /// fraction reported for such a test is then a lower bound). Off in the paper's
+    /// procedure, which counts every step of every test.
+    pub fast_tests: bool,
     /// Verification of each finished skill (ours; 0 = off, the paper's procedure): its
     /// policy must reach its goal in all of `verify_episodes` greedy episodes from its
     /// activation ball, else Backplay's previous saved (K, π) — a shorter reach — is verified
@@ -92,6 +101,8 @@ impl Default for Phase2Config {
             shorten: false,
             early_stop: false,
             adaptive_k: false,
+            stop_at_failure: false,
+            fast_tests: false,
             verify_episodes: 0,
             max_env_steps: 50_000_000,
             eval_episodes: 100,
@@ -145,6 +156,7 @@ impl Phase2Config {
             k_step: self.k_step,
             early_stop: self.early_stop,
             adaptive: self.adaptive_k,
+            stop_at_failure: self.stop_at_failure,
         }
     }
 }

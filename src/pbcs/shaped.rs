@@ -126,12 +126,14 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// step the actions of all running episodes come from one batched forward pass. With
     /// `learn`, noise is added, transitions are stored with the shaped reward and every step
     /// makes one learner update (Algorithm 3); without, the policy is greedy (a test).
-    /// Returns the fraction of episodes that reached the goal.
+    /// Returns the fraction of episodes that reached the goal (a lower bound for a test cut
+    /// short by [`Phase2Config::fast_tests`]).
     fn episodes(&mut self, k: usize, n: usize, learn: bool) -> f32 {
         let (obs_dim, act_dim) = (self.env.obs_dim(), self.env.action_dim());
         let mut states = self.starts(k, n);
         let mut running: Vec<usize> = (0..states.len()).collect();
-        let mut successes = 0usize;
+        let (mut successes, mut failures) = (0usize, 0usize);
+        let fast = !learn && self.config.fast_tests;
         // The networks' view of the running states, and of one next state; raw observations.
         let mut obs = vec![0.0; obs_dim * running.len()];
         let mut next_obs = vec![0.0; obs_dim];
@@ -184,15 +186,23 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 } else {
                     self.steps.test += 1;
                 }
-                let ended = step.terminal;
+                // A greedy episode that did not move is stuck for good (deterministic policy,
+                // pure step): with fast tests it ends as a failure now.
+                let stuck = fast && step.state == states[lane];
+                let ended = step.terminal || stuck;
                 states[lane] = step.state;
                 if reached {
                     successes += 1;
-                } else if !ended {
+                } else if ended {
+                    failures += 1;
+                } else {
                     still.push(lane);
                 }
             }
             running = still;
+            if fast && successes > 0 && failures > 0 {
+                break; // neither 0 % nor 100 %: all Backplay needs to know
+            }
         }
         successes as f32 / n as f32
     }
@@ -250,5 +260,9 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
 
     fn exhausted(&self) -> bool {
         self.spent_budget()
+    }
+
+    fn ball_is_clear(&self, k: usize) -> bool {
+        self.env.ball_is_clear(&self.states[k], self.config.epsilon) == Some(true)
     }
 }
