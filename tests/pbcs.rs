@@ -844,3 +844,98 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
         fast.1
     );
 }
+
+/// A [`SkillTask`] on maze 2 along a straight τ to the right, with a policy pushing up.
+mod skill_task {
+    use super::{constant_policy, Head, Mlp, Phase2Config, Seeds, Stream};
+    use parry2d::math::Point;
+    use pbcs::config::MazeConfig;
+    use pbcs::env::Env;
+    use pbcs::learner::{Learner, LearnerConfig};
+    use pbcs::maze::Maze;
+    use pbcs::pbcs::backplay::Backplayer;
+    use pbcs::pbcs::shaped::SkillTask;
+    use pbcs::pbcs::StartMode;
+
+    fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {
+        let maze = Maze::new(&MazeConfig {
+            size: 2,
+            ..MazeConfig::default()
+        })
+        .unwrap();
+        let mut s = maze.start();
+        let mut states = vec![s];
+        for _ in 0..10 {
+            s = maze.step(&s, &[0.1, 0.0]).state;
+            states.push(s);
+        }
+        let obs = states.iter().map(|p| vec![p.x, p.y]).collect();
+        (maze, states, obs)
+    }
+
+    /// Moves along +x at full speed in the learner's [−1, 1] space.
+    fn right() -> Mlp {
+        let m = constant_policy([1.0, 0.0]);
+        let mut unit = Mlp::new(
+            m.sizes(),
+            Head::Tanh(vec![1.0, 1.0]),
+            &mut Seeds::new(0).stream(Stream::Init),
+        );
+        unit.params = m.params.clone();
+        unit
+    }
+
+    fn task<'a>(
+        maze: &'a Maze,
+        config: &'a Phase2Config,
+        states: &'a [Point<f32>],
+        obs: &'a [Vec<f32>],
+        budget: u64,
+    ) -> SkillTask<'a, Maze> {
+        let seeds = Seeds::new(3);
+        let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
+        learner.actor = right();
+        let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
+        SkillTask::new(maze, config, states, obs, 5, learner, rngs, budget)
+    }
+
+    #[test]
+    fn a_policy_that_goes_to_the_goal_passes_and_actions_are_scaled_to_the_bounds() {
+        let (maze, states, obs) = setup();
+        let config = Phase2Config::default();
+        let mut t = task(&maze, &config, &states, &obs, 1_000_000);
+        // From B_ε(τ_0) = B_0.1((0.5, 0.5)), +0.1 per step reaches B_ε(τ_5) within 7 steps:
+        // at +1 unscaled it would jump over walls; scaled, each step is exactly 0.1.
+        assert_eq!(t.test(0), 1.0);
+        assert!(t.steps.test <= 50 * 7, "{}", t.steps.test);
+        assert!(t.steps.test >= 50 * 3, "{}", t.steps.test);
+    }
+
+    #[test]
+    fn exact_starts_are_all_tau_k() {
+        let (maze, states, obs) = setup();
+        let config = Phase2Config {
+            start: StartMode::Exact,
+            ..Phase2Config::default()
+        };
+        let mut t = task(&maze, &config, &states, &obs, 1_000_000);
+        assert_eq!(t.test(0), 1.0);
+        // τ_0 → B_ε(τ_5) at 0.1 per step: the same 4 or 5 steps (d(τ_4, τ_5) is 0.1 give or
+        // take f32 rounding) for each of the β = 50 identical episodes.
+        assert!([50 * 4, 50 * 5].contains(&t.steps.test), "{}", t.steps.test);
+    }
+
+    #[test]
+    fn a_spent_budget_stops_every_test_and_round() {
+        let (maze, states, obs) = setup();
+        let config = Phase2Config::default();
+        let mut t = task(&maze, &config, &states, &obs, 100);
+        assert!(!t.exhausted());
+        t.test(0); // 50 episodes of ≥ 3 steps: over the budget
+        let spent = t.steps;
+        assert!(t.exhausted());
+        assert_eq!((t.test(0), t.train(0)), (0.0, 0.0));
+        assert_eq!(t.steps, spent, "no step after the budget");
+        let _ = maze.start();
+    }
+}
