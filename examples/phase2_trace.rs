@@ -35,11 +35,11 @@ fn main() -> anyhow::Result<()> {
         found.env_steps,
         |n, p| {
             println!(
-                "{:7.1}s skill {n} K {:4} T {:4} {} {:.2} steps {}/{}",
+                "{:7.1}s skill {n} K {:4} T {:4} {:?} {:.2} steps {}/{}",
                 t0.elapsed().as_secs_f64(),
                 p.k,
                 p.t,
-                format!("{:?}", p.kind),
+                p.kind,
                 p.success,
                 p.steps.train,
                 p.steps.test

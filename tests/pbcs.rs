@@ -593,7 +593,7 @@ mod algorithm3 {
         assert_eq!((g.center.clone(), g.radius), (vec![0.5, 1.5], 0.2));
         // A point of B_ε(τ_N) outside the disc: not the goal, whatever d(s, τ_N) says.
         let outside = [0.5, 1.5 - 0.28];
-        assert!(((outside[1] - tau_n[1]) as f32).abs() <= 0.1);
+        assert!((outside[1] - tau_n[1]).abs() <= 0.1);
         let mut s = maze.start();
         s.x = outside[0];
         s.y = outside[1];
