@@ -56,6 +56,7 @@ fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
         early_stop,
         adaptive: false,
         stop_at_failure: false,
+        give_up_when_dead: false,
     }
 }
 
@@ -938,4 +939,64 @@ mod skill_task {
         assert_eq!(t.steps, spent, "no step after the budget");
         let _ = maze.start();
     }
+}
+
+/// A learner that collapses (0 % everywhere) in its first `dead` problems, then reaches 10.
+struct Collapsing {
+    t: usize,
+    dead: bool,
+}
+
+impl Backplayer for Collapsing {
+    type Policy = usize;
+    fn test(&mut self, k: usize) -> f32 {
+        f32::from(u8::from(!self.dead && self.t - k <= 10))
+    }
+    fn train(&mut self, _k: usize) -> f32 {
+        0.0
+    }
+    fn policy(&self) -> usize {
+        self.t
+    }
+    fn verify(&mut self, k: usize, _policy: &usize, _episodes: usize) -> f32 {
+        self.test(k)
+    }
+}
+
+#[test]
+fn a_collapsed_skill_restarts_with_a_fresh_learner_while_restarts_are_left() {
+    let run = |restarts: usize| {
+        let config = Phase2Config {
+            alpha: 1,
+            restarts,
+            ..Phase2Config::default()
+        };
+        let mut made = Vec::new();
+        let out = skill_chaining(
+            15,
+            &config,
+            |n, t| {
+                made.push((n, t));
+                // Problems 0 and 1 collapse; later ones learn.
+                Ok(Collapsing { t, dead: n < 2 })
+            },
+            |_| {},
+        )
+        .unwrap();
+        (out, made)
+    };
+    // The paper (no restarts): the collapsed learner walks K down to 0 and fails.
+    let ((skills, failure), made) = run(0);
+    assert_eq!(
+        (skills.len(), failure, made),
+        (0, Some(Failure::BackplayFailed), vec![(0, 15)])
+    );
+    // One restart is not enough; two are: problem 2 solves T = 15, problem 3 T = 5.
+    let ((_, failure), _) = run(1);
+    assert_eq!(failure, Some(Failure::BackplayFailed));
+    let ((skills, failure), made) = run(2);
+    assert_eq!(failure, None);
+    assert_eq!(made, [(0, 15), (1, 15), (2, 15), (3, 5)]);
+    let spans: Vec<(usize, usize)> = skills.iter().map(|(k, t, _)| (*k, *t)).collect();
+    assert_eq!(spans, [(0, 5), (5, 15)]);
 }

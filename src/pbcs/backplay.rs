@@ -46,6 +46,9 @@ pub struct Walk {
     /// B_ε(τ_K) is clear of obstacles (ours): the paper goes on because a ball overlapping a
     /// wall can fail partly whatever the policy, which a clear ball cannot.
     pub stop_at_failure: bool,
+    /// Return nothing at the first K whose test after training is 0 % while no K is saved
+    /// yet (ours; the caller restarts the skill with a fresh learner). The paper walks on.
+    pub give_up_when_dead: bool,
 }
 
 /// The largest K step of the adaptive walk.
@@ -60,6 +63,7 @@ impl Walk {
             early_stop: false,
             adaptive: false,
             stop_at_failure: false,
+            give_up_when_dead: false,
         }
     }
 }
@@ -157,7 +161,7 @@ pub fn backplay_candidates<B: Backplayer>(
                 step = (step * 2).min(MAX_ADAPTIVE_STEP);
             }
         }
-        if dead && !kept.is_empty() {
+        if dead && (!kept.is_empty() || walk.give_up_when_dead) {
             return kept;
         }
         if k == 0 {

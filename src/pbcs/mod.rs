@@ -67,6 +67,11 @@ pub struct Phase2Config {
     /// End a skill at the first K that fails after training when its ball is clear of walls
     /// ([`backplay::Walk::stop_at_failure`]); off in the paper's procedure.
     pub stop_at_failure: bool,
+    /// Restarts of a skill with a fresh learner (ours; 0 = the paper): while a skill has
+    /// restarts left, a Backplay whose test after training is 0 % before any K was saved gives
+    /// up (its DDPG collapsed: walking K further from the goal cannot help), and the skill
+    /// starts again at T − 1 with new weights and an empty replay.
+    pub restarts: usize,
     /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
     /// deterministic policy and a pure step it never will), and stop the whole test once it
     /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
@@ -102,6 +107,7 @@ impl Default for Phase2Config {
             early_stop: false,
             adaptive_k: false,
             stop_at_failure: false,
+            restarts: 0,
             fast_tests: false,
             verify_episodes: 0,
             max_env_steps: 50_000_000,
@@ -157,6 +163,7 @@ impl Phase2Config {
             early_stop: self.early_stop,
             adaptive: self.adaptive_k,
             stop_at_failure: self.stop_at_failure,
+            give_up_when_dead: false,
         }
     }
 }
@@ -434,7 +441,8 @@ pub struct Phase2Outcome {
 /// of the CSV (written beside it).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TraceRow {
-    /// The skill being built, counted in the order found (0 = the one that ends at τ_N).
+    /// The learning problem: skills in the order built (0 = the one that ends at τ_N), a
+    /// restarted skill taking the next number (`phase2.restarts`).
     pub skill: usize,
     /// K: start index on τ.
     pub k: usize,
@@ -475,8 +483,9 @@ pub fn phase2_trajectory<E: Env>(
 /// reverse π and A
 /// ```
 ///
-/// α, the K walk, early stopping, verification and chaining come from `config`.
-/// `next(n, T)` makes the fresh learning problem of skill n (a new DDPG each time);
+/// α, the K walk, early stopping, verification, restarts and chaining come from `config`.
+/// `next(n, T)` makes the n-th fresh learning problem (a new DDPG each time; n counts
+/// restarts too, so it equals the skill's index when nothing restarts);
 /// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
 /// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
 /// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run
@@ -491,9 +500,16 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     let mut skills = Vec::new();
     let mut t = n;
     let mut failure = None;
+    // Learning problems made so far (skills plus restarts) and restarts of the current skill.
+    let (mut made, mut restarts) = (0, 0);
     while t > 0 {
-        let mut b = next(skills.len(), t)?;
-        let candidates = backplay::backplay_candidates(&mut b, t, &config.walk());
+        let mut b = next(made, t)?;
+        made += 1;
+        let walk = backplay::Walk {
+            give_up_when_dead: restarts < config.restarts,
+            ..config.walk()
+        };
+        let candidates = backplay::backplay_candidates(&mut b, t, &walk);
         let found = verified(&mut b, candidates, config.verify_episodes);
         let exhausted = b.exhausted();
         finished(b);
@@ -502,11 +518,13 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                 failure = Some(Failure::Budget);
                 break;
             }
+            None if restarts < config.restarts => restarts += 1,
             None => {
                 failure = Some(Failure::BackplayFailed);
                 break;
             }
             Some((k, policy)) => {
+                restarts = 0;
                 skills.push((k, t, policy));
                 if k > 0 && !config.chaining {
                     failure = Some(Failure::NoChaining);
