@@ -138,6 +138,15 @@ impl Job {
         .expect("jobs serialise to TOML")
     }
 
+    /// Whether the stored TOML `text` describes this job (compared by value: fields absent
+    /// from `text` take their defaults; unparseable text is another job).
+    pub fn same_as(&self, text: &str) -> bool {
+        match self {
+            Job::Vanilla(j) => toml::from_str::<TrainJob>(text).is_ok_and(|s| &s == j),
+            Job::Pbcs(j) => toml::from_str::<RunJob>(text).is_ok_and(|s| &s == j),
+        }
+    }
+
     fn check(&self) -> Result<()> {
         match self {
             Job::Vanilla(j) => j.check(),
@@ -534,7 +543,9 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
 }
 
 /// The finished raw row of (cell, seed) in `dir`, if there is one. A finished run of another
-/// config is an error: results of two configs are never mixed.
+/// config is an error: results of two configs are never mixed. Configs are compared by value,
+/// so a setting added later, absent from an older stored config, takes its default (the
+/// behaviour the older run had).
 pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow>> {
     let path = run_file(dir, seed, ".csv");
     if !path.exists() {
@@ -542,7 +553,7 @@ pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow
     }
     let config_path = run_file(dir, seed, ".toml");
     let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
-    if stored != cell.job.with_seed(seed).to_toml() {
+    if !cell.job.with_seed(seed).same_as(&stored) {
         return Err(parse_err(
             &config_path,
             "this finished run used another config than the experiment file now gives; \

@@ -211,3 +211,23 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     let err = sweep(&changed, &runs, dir.path(), 1, |_, _| {}).unwrap_err();
     assert!(err.to_string().contains("another config"), "{err}");
 }
+
+/// Stored configs are compared by value: a setting added after a run was stored, absent from
+/// its file, takes its default (the older run's behaviour); a changed value is another job.
+#[test]
+fn stored_configs_compare_by_value() {
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
+    let job = exp.cells[0].job.with_seed(3);
+    let text = job.to_toml();
+    assert!(job.same_as(&text));
+    let older: String = text
+        .lines()
+        .filter(|l| !l.starts_with("fast_tests") && !l.starts_with("restarts"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(older, text);
+    assert!(job.same_as(&older));
+    assert!(!job.same_as(&text.replace("fast_tests = false", "fast_tests = true")));
+    assert!(!job.same_as("not toml ["));
+    assert!(!exp.cells[0].job.with_seed(4).same_as(&text));
+}
