@@ -852,7 +852,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
         seconds
     );
     println!(
-        "wrote {}/{{record,skills,trajectory}}.csv, chain/, run.png, run.svg",
+        "wrote {}/{{record,skills,trace,trajectory}}.csv, chain/, run.png, run.svg",
         out.display()
     );
     Ok(())
