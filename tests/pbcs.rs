@@ -787,65 +787,6 @@ impl Backplayer for Clear {
     }
 }
 
-#[test]
-fn fast_tests_give_the_same_verdict_for_fewer_steps() {
-    use pbcs::config::MazeConfig;
-    use pbcs::learner::{Learner, LearnerConfig};
-    use pbcs::maze::Maze;
-    use pbcs::pbcs::shaped::SkillTask;
-    let maze = Maze::new(&MazeConfig {
-        size: 2,
-        ..MazeConfig::default()
-    })
-    .unwrap();
-    // τ: from the start to the right-hand cell; the policy pushes up into the wall at y = 1.
-    let mut s = maze.start();
-    let mut states = vec![s];
-    for _ in 0..10 {
-        s = maze.step(&s, &[0.1, 0.0]).state;
-        states.push(s);
-    }
-    let obs: Vec<Vec<f32>> = states.iter().map(|p| vec![p.x, p.y]).collect();
-    let up = {
-        let mut m = constant_policy([0.0, 1.0]);
-        if let Head::Tanh(b) = m.head().clone() {
-            assert_eq!(b, vec![0.1, 0.1]);
-        }
-        // Rescale the head to [−1, 1] (the learner's action space): same saturated output.
-        let sizes = m.sizes().to_vec();
-        let params = m.params.clone();
-        m = Mlp::new(
-            &sizes,
-            Head::Tanh(vec![1.0, 1.0]),
-            &mut Seeds::new(0).stream(Stream::Init),
-        );
-        m.params = params;
-        m
-    };
-    let seeds = Seeds::new(0);
-    let run = |fast: bool| {
-        let config = Phase2Config {
-            fast_tests: fast,
-            ..Phase2Config::default()
-        };
-        let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
-        learner.actor = up.clone();
-        let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
-        let mut task = SkillTask::new(&maze, &config, &states, &obs, 10, learner, rngs, 1_000_000);
-        let p = task.test(0);
-        (p, task.steps.test)
-    };
-    let (slow, fast) = (run(false), run(true));
-    assert_eq!(slow.0, 0.0);
-    assert_eq!(fast.0, slow.0, "same verdict");
-    assert_eq!(slow.1, 50 * 50, "every episode runs its 50 steps");
-    assert!(
-        fast.1 < slow.1 / 4,
-        "stuck episodes end early: {} steps",
-        fast.1
-    );
-}
-
 /// A [`SkillTask`] on maze 2 along a straight τ to the right, with a policy pushing up.
 mod skill_task {
     use super::{constant_policy, Head, Mlp, Phase2Config, Seeds, Stream};
@@ -874,9 +815,9 @@ mod skill_task {
         (maze, states, obs)
     }
 
-    /// Moves along +x at full speed in the learner's [−1, 1] space.
-    fn right() -> Mlp {
-        let m = constant_policy([1.0, 0.0]);
+    /// Always moves in direction `dir` at full speed in the learner's [−1, 1] space.
+    fn unit_policy(dir: [f32; 2]) -> Mlp {
+        let m = constant_policy(dir);
         let mut unit = Mlp::new(
             m.sizes(),
             Head::Tanh(vec![1.0, 1.0]),
@@ -886,6 +827,7 @@ mod skill_task {
         unit
     }
 
+    /// The task of reaching τ_5 along `states` with a policy moving along +x.
     fn task<'a>(
         maze: &'a Maze,
         config: &'a Phase2Config,
@@ -893,11 +835,55 @@ mod skill_task {
         obs: &'a [Vec<f32>],
         budget: u64,
     ) -> SkillTask<'a, Maze> {
+        task_with(
+            maze,
+            config,
+            states,
+            obs,
+            unit_policy([1.0, 0.0]),
+            5,
+            budget,
+        )
+    }
+
+    fn task_with<'a>(
+        maze: &'a Maze,
+        config: &'a Phase2Config,
+        states: &'a [Point<f32>],
+        obs: &'a [Vec<f32>],
+        policy: Mlp,
+        t: usize,
+        budget: u64,
+    ) -> SkillTask<'a, Maze> {
         let seeds = Seeds::new(3);
         let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
-        learner.actor = right();
+        learner.actor = policy;
         let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
-        SkillTask::new(maze, config, states, obs, 5, learner, rngs, budget)
+        SkillTask::new(maze, config, states, obs, t, learner, rngs, budget)
+    }
+
+    #[test]
+    fn fast_tests_give_the_same_verdict_for_fewer_steps() {
+        // The policy pushes up into the wall at y = 1 and never reaches τ_10.
+        let (maze, states, obs) = setup();
+        let run = |fast: bool| {
+            let config = Phase2Config {
+                fast_tests: fast,
+                ..Phase2Config::default()
+            };
+            let up = unit_policy([0.0, 1.0]);
+            let mut task = task_with(&maze, &config, &states, &obs, up, 10, 1_000_000);
+            (task.test(0), task.steps.test)
+        };
+        let (slow, fast) = (run(false), run(true));
+        assert_eq!(slow.0, 0.0);
+        assert_eq!(fast.0, slow.0, "same verdict");
+        assert_eq!(slow.1, 50 * 50, "every episode runs its 50 steps");
+        assert!(
+            fast.1 < slow.1 / 4,
+            "stuck episodes end early: {} steps",
+            fast.1
+        );
     }
 
     #[test]

@@ -134,10 +134,10 @@ impl<'a, E: Env> SkillTask<'a, E> {
         let mut running: Vec<usize> = (0..states.len()).collect();
         let (mut successes, mut failures) = (0usize, 0usize);
         let fast = !learn && self.config.fast_tests;
-        // The networks' view of the running states, and of one next state; raw observations.
-        let mut obs = vec![0.0; obs_dim * running.len()];
-        let mut next_obs = vec![0.0; obs_dim];
-        let (mut raw, mut raw_next) = (vec![0.0; obs_dim], vec![0.0; obs_dim]);
+        // Raw observations of the running states and the networks' view of them; one next
+        // state's raw observation and view.
+        let (mut raw, mut obs) = (Vec::new(), Vec::new());
+        let (mut raw_next, mut next_obs) = (vec![0.0; obs_dim], vec![0.0; obs_dim]);
         let mut env_action = vec![0.0; act_dim];
         if learn {
             for noise in &mut self.noise {
@@ -148,10 +148,15 @@ impl<'a, E: Env> SkillTask<'a, E> {
             if running.is_empty() {
                 break;
             }
+            raw.resize(obs_dim * running.len(), 0.0);
             obs.resize(obs_dim * running.len(), 0.0);
-            for (row, &lane) in obs.chunks_exact_mut(obs_dim).zip(&running) {
-                self.env.observe(&states[lane], &mut raw);
-                self.inputs.observation(&raw, row);
+            for ((r, o), &lane) in raw
+                .chunks_exact_mut(obs_dim)
+                .zip(obs.chunks_exact_mut(obs_dim))
+                .zip(&running)
+            {
+                self.env.observe(&states[lane], r);
+                self.inputs.observation(r, o);
             }
             let mut actions = self.learner.act(&obs, running.len()).to_vec();
             let mut still = Vec::with_capacity(running.len());
@@ -164,13 +169,13 @@ impl<'a, E: Env> SkillTask<'a, E> {
                     }
                 }
                 self.inputs.env_action(a, &mut env_action);
-                self.env.observe(&states[lane], &mut raw);
+                let raw_s = &raw[j * obs_dim..(j + 1) * obs_dim];
                 let step = self.env.step(&states[lane], &env_action);
                 self.env.observe(&step.state, &mut raw_next);
                 let reached = self.goal.reached(&raw_next, step.terminal, step.reward);
                 if learn {
                     self.steps.train += 1;
-                    let r = self.goal.reward(&raw, &raw_next, reached);
+                    let r = self.goal.reward(raw_s, &raw_next, reached);
                     self.inputs.observation(&raw_next, &mut next_obs);
                     let o = &obs[j * obs_dim..(j + 1) * obs_dim];
                     let done = self.goal.terminal(reached, step.terminal);
