@@ -1,18 +1,23 @@
 //! Learner update cost: prints numbers, asserts nothing. `cargo bench --bench learner`.
 //!
 //! For hidden width H ∈ {64, 256} and batch B ∈ {64, 256}: µs per DDPG update (actor, critic,
-//! targets; maze dimensions: 2-D observations and actions) of the fused implementation and of
-//! a straightforward candle implementation, and the matmul FLOPs per second each reaches as a
-//! percentage of this run's own single-core f32 matmul rate (a 512³ product with
-//! matrixmultiply). Then µs per single-state action, and the update cost over 100k updates
-//! (the subnormal-moment hazard). One thread throughout.
+//! targets; maze dimensions: 2-D observations and actions) with every kernel this CPU runs
+//! (portable, matrixmultiply — the earlier path —, AVX2, AVX-512; see `pbcs::nn::kernel`) and
+//! with a straightforward candle implementation, and the matmul FLOPs per second each reaches
+//! as a percentage of this run's single-core f32 matmul rate (a 512³ product with
+//! matrixmultiply). Then end-to-end environment steps per second of `pbcs run --maze 10
+//! --seed 0` (the fast preset) over its first 200k steps with the earlier and the best kernel,
+//! µs per single-state action, and the update cost over 100k updates (the subnormal-moment
+//! hazard). One thread throughout. `PBCS_BENCH_QUICK=1` skips the end-to-end part.
 
 use candle_core::{Device, Tensor, Var};
 use candle_nn::{Module, Optimizer};
+use pbcs::config::Preset;
 use pbcs::learner::replay::{Batch, Replay};
 use pbcs::learner::{Learner, LearnerConfig};
 use pbcs::nn::candle_ref::{self, CandleMlp};
-use pbcs::nn::{gemm, Mlp};
+use pbcs::nn::kernel::{Kernel, Post};
+use pbcs::nn::Mlp;
 use pbcs::rng::{Seeds, Stream};
 use rand::Rng;
 use std::hint::black_box;
@@ -32,13 +37,49 @@ fn best_of(reps: usize, mut f: impl FnMut()) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-fn matmul_rate() -> f64 {
+/// FLOP/s of a 512³ product with `kernel`.
+fn matmul_rate(kernel: Kernel) -> f64 {
     let n = 512;
     let a: Vec<f32> = (0..n * n).map(|i| (i % 7) as f32 * 0.1).collect();
     let b = a.clone();
     let mut c = vec![0.0f32; n * n];
-    let s = best_of(5, || gemm(n, n, n, &a, (n, 1), &b, (n, 1), 0.0, &mut c));
+    let s = best_of(5, || {
+        kernel.gemm_nn(n, n, n, &a, (n, 1), &b, n, &mut c, None, Post::Identity)
+    });
     2.0 * (n * n * n) as f64 / s
+}
+
+/// Environment steps per second of the fast preset on maze 10, seed 0, for its first
+/// `steps` steps (phase 1 included), with `kernel` active.
+fn end_to_end(kernel: Kernel, steps: u64) -> f64 {
+    kernel.set_active().unwrap();
+    let mut job = Preset::Fast.job().unwrap();
+    job.maze.size = 10;
+    job.seed = 0;
+    job.phase2.max_env_steps = steps;
+    let t = Instant::now();
+    let maze = pbcs::maze::Maze::new(&job.maze).unwrap();
+    let seeds = Seeds::new(job.seed);
+    let found = pbcs::explore::explore(
+        &maze,
+        &job.explore,
+        &mut seeds.stream(Stream::Explore),
+        |_, _| {},
+    )
+    .unwrap();
+    let tau = pbcs::pbcs::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+    let out = pbcs::pbcs::chain_skills(
+        &maze,
+        &tau,
+        &job.learner,
+        &job.phase2,
+        &seeds,
+        found.env_steps,
+        |_, _| {},
+    )
+    .unwrap();
+    let total = found.env_steps + out.steps.train + out.steps.test;
+    total as f64 / t.elapsed().as_secs_f64()
 }
 
 /// Matmul FLOPs of one fused DDPG update, counted as the implementation performs them.
@@ -65,7 +106,7 @@ fn random_batch(b: usize, seed: u32) -> Batch {
     Batch {
         len: b,
         obs: v(b * OBS, 5.0),
-        act: v(b * ACT, 0.1),
+        act: v(b * ACT, 1.0),
         rew: v(b, 1.0),
         next_obs: v(b * OBS, 5.0),
         done: vec![0.0; b],
@@ -157,52 +198,95 @@ fn main() {
     // seed. Set before any candle call.
     std::env::set_var("RAYON_NUM_THREADS", "1");
     std::env::set_var("CANDLE_NUM_THREADS", "1");
-    let rate = matmul_rate();
+    let kernels: Vec<Kernel> = Kernel::ALL.into_iter().filter(|k| k.available()).collect();
+    let best = Kernel::detect();
+    let rate = matmul_rate(Kernel::Matrixmultiply);
     println!(
-        "single-core f32 matmul rate (512³, matrixmultiply): {:.1} GFLOP/s",
-        rate / 1e9
+        "single-core f32 matmul rate (512³, matrixmultiply): {:.1} GFLOP/s; {}: {:.1} GFLOP/s",
+        rate / 1e9,
+        best.name(),
+        matmul_rate(best) / 1e9
+    );
+    println!(
+        "kernels on this CPU: {}",
+        kernels
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     println!();
-    println!("DDPG update, obs 2, act 2, one thread (best of 3 runs)");
-    println!("| hidden | batch | fused µs/update | fused % of matmul rate | candle µs/update | candle % | speed-up |");
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    println!("DDPG update, obs 2, act 2, one thread (best of 3 runs): µs per update (% of the matmul rate)");
+    let mut header = "| hidden | batch |".to_string();
+    for k in &kernels {
+        header += &format!(" {} |", k.name());
+    }
+    header += &format!(" candle | {} vs matrixmultiply |", best.name());
+    println!("{header}");
+    println!("{}", "| --- ".repeat(kernels.len() + 4) + "|");
     for h in [64, 256] {
         for b in [64, 256] {
             let flops = update_flops(h, b);
-            let n = if h * b >= 256 * 64 { 100 } else { 1000 };
             let batch = random_batch(b, 0);
-            let mut l = Learner::new(&config(h, b), OBS, &[0.1, 0.1], &Seeds::new(0)).unwrap();
-            for _ in 0..20 {
-                l.update(&batch);
-            }
-            let fused = best_of(3, || {
-                for _ in 0..n {
-                    black_box(l.update(&batch));
+            let mut row = format!("| {h} | {b} |");
+            let mut times = std::collections::HashMap::new();
+            let mut l0 = None;
+            for &k in &kernels {
+                // The portable kernel is slow enough that fewer updates give a stable number.
+                let scale = if k == Kernel::Portable { 10 } else { 1 };
+                let n = (if h * b >= 256 * 64 { 100 } else { 1000 }) / scale;
+                let mut l = Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
+                l.set_kernel(k);
+                for _ in 0..20 {
+                    l.update(&batch);
                 }
-            }) / n as f64;
+                let t = best_of(3, || {
+                    for _ in 0..n {
+                        black_box(l.update(&batch));
+                    }
+                }) / n as f64;
+                times.insert(k, t);
+                row += &format!(" {:.0} ({:.0} %) |", t * 1e6, 100.0 * flops / t / rate);
+                l0 = Some(l);
+            }
+            let l = l0.unwrap();
             let mut c = CandleDdpg::new(&l);
             for _ in 0..5 {
                 c.update(&batch).unwrap();
             }
-            let nc = (n / 4).max(20);
+            let nc = if h * b >= 256 * 64 { 25 } else { 250 };
             let cand = best_of(3, || {
                 for _ in 0..nc {
                     c.update(&batch).unwrap();
                 }
             }) / nc as f64;
-            println!(
-                "| {h} | {b} | {:.0} | {:.0} % | {:.0} | {:.0} % | {:.1}× |",
-                fused * 1e6,
-                100.0 * flops / fused / rate,
+            row += &format!(
+                " {:.0} ({:.0} %) | {:.2}× |",
                 cand * 1e6,
                 100.0 * flops / cand / rate,
-                cand / fused
+                times[&Kernel::Matrixmultiply] / times[&best]
             );
+            println!("{row}");
         }
     }
 
+    if std::env::var_os("PBCS_BENCH_QUICK").is_none() {
+        println!();
+        println!(
+            "end to end: `pbcs run --maze 10 --seed 0` (fast preset), first 200k environment steps"
+        );
+        let before = end_to_end(Kernel::Matrixmultiply, 200_000);
+        let after = end_to_end(best, 200_000);
+        println!(
+            "  matrixmultiply: {before:.0} steps/s; {}: {after:.0} steps/s ({:.2}×)",
+            best.name(),
+            after / before
+        );
+        best.set_active().unwrap();
+    }
+
     // Action selection: one state, one forward pass.
-    let mut l = Learner::new(&config(64, 64), OBS, &[0.1, 0.1], &Seeds::new(0)).unwrap();
+    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
     let obs = [1.5f32, 2.5];
     let n = 100_000;
     let s = best_of(3, || {
@@ -242,7 +326,7 @@ fn main() {
         };
         replay.push(&s, &a, r, &[s[0] + a[0], s[1] + a[1]], false);
     }
-    let mut l = Learner::new(&config(64, 64), OBS, &[0.1, 0.1], &Seeds::new(2)).unwrap();
+    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(2)).unwrap();
     let mut batch = Batch::default();
     let mut blocks = Vec::new();
     for _ in 0..10 {

@@ -90,12 +90,14 @@ fn write_config<T: Serialize>(job: &T, out: &Path) -> Result<()> {
 }
 
 /// Writes `timing.toml`: wall-clock data, which is not deterministic and so never goes into
-/// a CSV.
+/// a CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply`
+/// gives the same bytes, so a byte difference between machines can be told apart).
 fn write_timing(out: &Path, seconds: f64, env_steps: u64) -> Result<()> {
     let text = format!(
         "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n\
-         wall_seconds = {seconds:.6}\nsteps_per_second = {:.0}\n",
-        env_steps as f64 / seconds.max(1e-9)
+         wall_seconds = {seconds:.6}\nsteps_per_second = {:.0}\nkernel = \"{}\"\n",
+        env_steps as f64 / seconds.max(1e-9),
+        crate::nn::kernel::Kernel::active().name()
     );
     write_atomic(&out.join("timing.toml"), |w| w.write_all(text.as_bytes()))
 }

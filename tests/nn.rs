@@ -3,6 +3,7 @@
 use candle_core::{Device, Tensor};
 use candle_nn::{Module, Optimizer};
 use pbcs::nn::candle_ref::{self, CandleMlp};
+use pbcs::nn::kernel::Kernel;
 use pbcs::nn::{Adam, Head, Mlp, Workspace};
 use pbcs::rng::{Seeds, Stream};
 use rand::Rng;
@@ -117,13 +118,26 @@ fn flat_grads(
 }
 
 /// The critic regression loss and the actor's DPG loss: fused gradients equal candle's
-/// autograd on the same weights and batch.
+/// autograd on the same weights and batch, with every kernel this CPU runs, on widths that
+/// fill whole vectors (32) and that end in partial ones (20, batch 13).
 #[test]
 fn fused_gradients_equal_candle_autograd() {
-    let (obs, act, batch) = (3, 2, 16);
+    for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+        for (hidden, batch) in [(32, 16), (20, 13)] {
+            gradients_equal_candle(kernel, hidden, batch);
+        }
+    }
+}
+
+fn gradients_equal_candle(kernel: Kernel, hidden: usize, batch: usize) {
+    let (obs, act) = (3, 2);
     let mut rng = Seeds::new(5).stream(Stream::Init);
-    let actor = Mlp::new(&[obs, 32, 32, act], Head::Tanh(vec![0.1, 0.1]), &mut rng);
-    let critic = Mlp::new(&[obs + act, 32, 32, 1], Head::Linear, &mut rng);
+    let actor = Mlp::new(
+        &[obs, hidden, hidden, act],
+        Head::Tanh(vec![0.1, 0.1]),
+        &mut rng,
+    );
+    let critic = Mlp::new(&[obs + act, hidden, hidden, 1], Head::Linear, &mut rng);
     let s = random_vec(batch * obs, 2.0, 1);
     let a = random_vec(batch * act, 0.1, 2);
     let y = random_vec(batch, 1.0, 3);
@@ -137,7 +151,7 @@ fn fused_gradients_equal_candle_autograd() {
         .collect();
 
     // Critic: L = mean (Q(s, a) − y)².
-    let mut ws = Workspace::default();
+    let mut ws = Workspace::with_kernel(kernel);
     let q = critic.forward(&sa, batch, &mut ws).to_vec();
     let dq: Vec<f32> = q
         .iter()
@@ -158,10 +172,10 @@ fn fused_gradients_equal_candle_autograd() {
         .unwrap();
     let grads = loss.backward().unwrap();
     let gc = flat_grads(&grads, &cv);
-    assert_close(&g, &gc, 1e-4, "critic grad");
+    assert_close(&g, &gc, 1e-4, &format!("critic grad ({})", kernel.name()));
 
     // Actor: L = −mean Q(s, π(s)), gradient into the actor through the critic.
-    let mut wa = Workspace::default();
+    let mut wa = Workspace::with_kernel(kernel);
     let pi = actor.forward(&s, batch, &mut wa).to_vec();
     let spi: Vec<f32> = (0..batch)
         .flat_map(|i| {
@@ -171,7 +185,7 @@ fn fused_gradients_equal_candle_autograd() {
         })
         .copied()
         .collect();
-    let mut wc = Workspace::default();
+    let mut wc = Workspace::with_kernel(kernel);
     critic.forward(&spi, batch, &mut wc);
     let mut dsa = vec![0.0; batch * (obs + act)];
     critic.backward(
@@ -195,7 +209,7 @@ fn fused_gradients_equal_candle_autograd() {
     let loss = q.mean_all().unwrap().neg().unwrap();
     let grads = loss.backward().unwrap();
     let gac = flat_grads(&grads, &av);
-    assert_close(&ga, &gac, 1e-4, "actor grad");
+    assert_close(&ga, &gac, 1e-4, &format!("actor grad ({})", kernel.name()));
 }
 
 /// Five Adam steps on the critic loss: our Adam and candle's AdamW with weight decay 0 end

@@ -329,6 +329,9 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    // The layer kernel (PBCS_KERNEL, else the best this CPU runs): a bad name is an error here,
+    // before any work.
+    pbcs::nn::kernel::Kernel::from_env()?.set_active()?;
     match cli.command {
         Command::Explore { run } => explore(&run),
         Command::Train {
@@ -691,6 +694,35 @@ fn exp_check(args: &ExpArgs, cell: &str, seed: Option<u64>, jobs: usize) -> anyh
     if identical as u64 == n {
         println!("MATCH: the committed rows are reproduced exactly");
         return Ok(());
+    }
+    // Which layer kernel computed the committed rows (recorded beside them since issue 10;
+    // earlier rows were all computed with matrixmultiply's summation order).
+    let now = pbcs::nn::kernel::Kernel::active().name();
+    let mut then: Vec<String> = runs
+        .iter()
+        .map(|p| {
+            std::fs::read_to_string(committed_dir.join(format!("s{}.timing.toml", p.seed)))
+                .ok()
+                .and_then(|t| {
+                    t.lines().find_map(|l| {
+                        l.strip_prefix("kernel = ")
+                            .map(|v| v.trim().trim_matches('"').to_string())
+                    })
+                })
+                .unwrap_or_else(|| "matrixmultiply".into())
+        })
+        .collect();
+    then.sort();
+    then.dedup();
+    let fma = |k: &str| k == "avx512" || k == "avx2";
+    if then.iter().any(|k| k != now && !(fma(k) && fma(now))) {
+        println!(
+            "note: the committed rows were computed with the {} kernel, this run with {now}; \
+             kernels sum in different orders, so bytes differ. `PBCS_KERNEL={} make cell ...` \
+             compares like with like",
+            then.join(", "),
+            then[0]
+        );
     }
     let rate = k_new as f64 / n as f64;
     if (lo..=hi).contains(&rate) {

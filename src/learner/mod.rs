@@ -12,6 +12,7 @@ pub mod replay;
 
 use crate::config::Check;
 use crate::error::{Error, Result};
+use crate::nn::kernel::Kernel;
 use crate::nn::{Adam, Head, Mlp, Workspace};
 use crate::rng::{Rng, Seeds, Stream};
 use noise::NoiseKind;
@@ -336,6 +337,37 @@ impl Learner {
                 .iter()
                 .map(Adam::subnormal_moments)
                 .sum::<usize>()
+    }
+
+    /// Runs every later product and optimiser step on `kernel` (all kernels but
+    /// `matrixmultiply` give the same bytes; see [`crate::nn::kernel`]).
+    ///
+    /// # Panics
+    /// If this CPU cannot run `kernel` (see [`Kernel::available`]).
+    pub fn set_kernel(&mut self, kernel: Kernel) {
+        assert!(
+            kernel.available(),
+            "the {} kernel does not run here",
+            kernel.name()
+        );
+        let s = &mut self.s;
+        for ws in [
+            &mut s.ws_actor,
+            &mut s.ws_actor_target,
+            &mut s.ws_critic,
+            &mut s.ws_act,
+        ] {
+            ws.set_kernel(kernel);
+        }
+        self.actor_opt.kernel = kernel;
+        for o in &mut self.critic_opts {
+            o.kernel = kernel;
+        }
+    }
+
+    /// The kernel the update runs on.
+    pub fn kernel(&self) -> Kernel {
+        self.actor_opt.kernel
     }
 
     /// Greedy actions π(s) for a batch of `n` observations (one forward pass).

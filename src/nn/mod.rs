@@ -2,9 +2,9 @@
 //!
 //! Every learner update runs one actor and one or two critics forward and backward, once per
 //! environment step, so this is the hot path of the project. The networks are plain ReLU MLPs
-//! whose parameters live in one flat vector; a layer is one matrix product
-//! ([`matrixmultiply::sgemm`]) plus a bias and an activation, so a whole update does no
-//! allocation and no per-operation bookkeeping. candle is kept for what it does well: its
+//! whose parameters live in one flat vector; a layer is one matrix product with its bias and
+//! activation fused in ([`kernel`]: AVX-512, AVX2 or portable, chosen at run time, all giving
+//! the same bytes), so a whole update does no allocation and no per-operation bookkeeping. candle is kept for what it does well: its
 //! autograd is the oracle the tests check these gradients against ([`candle_ref`]), and
 //! safetensors is the file format of saved policies ([`Mlp::save`], [`Mlp::load`],
 //! [`candle_ref::load_module`]).
@@ -26,9 +26,11 @@
 //! ```
 
 pub mod candle_ref;
+pub mod kernel;
 
 use crate::error::{Error, Result};
 use crate::rng::Rng;
+use kernel::Kernel;
 use rand::Rng as _;
 use std::path::Path;
 
@@ -51,59 +53,46 @@ pub struct Mlp {
 }
 
 /// Activations kept by [`Mlp::forward`] for [`Mlp::backward`], and scratch buffers. One per
-/// network and use, reused across calls so the hot path allocates nothing.
-#[derive(Debug, Clone, Default)]
+/// network and use, reused across calls so the hot path allocates nothing. It also names the
+/// [`Kernel`] that does the arithmetic ([`Kernel::active`] by default).
+#[derive(Debug, Clone)]
 pub struct Workspace {
     /// `acts[0]` is the input batch, `acts[l]` the output of layer l.
     acts: Vec<Vec<f32>>,
     delta: Vec<f32>,
     delta_prev: Vec<f32>,
+    scratch: Vec<f32>,
     batch: usize,
+    kernel: Kernel,
 }
 
-/// C = A·B + beta·C for row-major or transposed operands given by their strides:
-/// A is m×k with strides (rsa, csa), B is k×n with (rsb, csb), C is m×n row-major.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub fn gemm(
-    m: usize,
-    k: usize,
-    n: usize,
-    a: &[f32],
-    (rsa, csa): (usize, usize),
-    b: &[f32],
-    (rsb, csb): (usize, usize),
-    beta: f32,
-    c: &mut [f32],
-) {
-    let last = |rows: usize, cols: usize, rs: usize, cs: usize| {
-        if rows == 0 || cols == 0 {
-            0
-        } else {
-            (rows - 1) * rs + (cols - 1) * cs + 1
+impl Default for Workspace {
+    fn default() -> Self {
+        Workspace::with_kernel(Kernel::active())
+    }
+}
+
+impl Workspace {
+    /// An empty workspace whose products run on `kernel`.
+    pub fn with_kernel(kernel: Kernel) -> Self {
+        Workspace {
+            acts: Vec::new(),
+            delta: Vec::new(),
+            delta_prev: Vec::new(),
+            scratch: Vec::new(),
+            batch: 0,
+            kernel,
         }
-    };
-    assert!(a.len() >= last(m, k, rsa, csa), "gemm: A too short");
-    assert!(b.len() >= last(k, n, rsb, csb), "gemm: B too short");
-    assert!(c.len() >= m * n, "gemm: C too short");
-    // SAFETY: the asserts above keep every index that sgemm reads or writes in bounds.
-    unsafe {
-        matrixmultiply::sgemm(
-            m,
-            k,
-            n,
-            1.0,
-            a.as_ptr(),
-            rsa as isize,
-            csa as isize,
-            b.as_ptr(),
-            rsb as isize,
-            csb as isize,
-            beta,
-            c.as_mut_ptr(),
-            n as isize,
-            1,
-        );
+    }
+
+    /// The kernel this workspace's products run on.
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    /// Runs later products on `kernel`.
+    pub fn set_kernel(&mut self, kernel: Kernel) {
+        self.kernel = kernel;
     }
 }
 
@@ -187,29 +176,24 @@ impl Mlp {
             let (fan_in, fan_out) = (self.sizes[l], self.sizes[l + 1]);
             let (w, b) = self.offsets(l);
             let (before, after) = ws.acts.split_at_mut(l + 1);
-            let input = &before[l];
             let out = &mut after[0];
-            out.clear();
-            for _ in 0..batch {
-                out.extend_from_slice(&self.params[b..b + fan_out]);
-            }
-            gemm(
-                batch,
-                fan_in,
-                fan_out,
-                input,
-                (fan_in, 1),
+            out.resize(batch * fan_out, 0.0);
+            // Y = relu(X·W + b) on hidden layers, X·W + b on the last.
+            ws.kernel.dense_forward(
+                &before[l],
                 &self.params[w..b],
-                (fan_out, 1),
-                1.0,
+                &self.params[b..b + fan_out],
+                (batch, fan_in, fan_out),
+                l + 1 < layers,
                 out,
+                &mut ws.scratch,
             );
-            if l + 1 < layers {
-                out.iter_mut().for_each(|v| *v = v.max(0.0));
-            } else if let Head::Tanh(scale) = &self.head {
-                for row in out.chunks_exact_mut(fan_out) {
-                    for (v, s) in row.iter_mut().zip(scale) {
-                        *v = s * v.tanh();
+            if l + 1 == layers {
+                if let Head::Tanh(scale) = &self.head {
+                    for row in out.chunks_exact_mut(fan_out) {
+                        for (v, s) in row.iter_mut().zip(scale) {
+                            *v = s * v.tanh();
+                        }
                     }
                 }
             }
@@ -250,45 +234,33 @@ impl Mlp {
             }
         }
         for l in (0..layers).rev() {
-            let (fan_in, fan_out) = (self.sizes[l], self.sizes[l + 1]);
+            let shape = (batch, self.sizes[l], self.sizes[l + 1]);
             let (w, b) = self.offsets(l);
             if let Some(grad) = grad.as_deref_mut() {
                 // ∂L/∂W_l = A_{l-1}ᵀ · δ_l ; ∂L/∂b_l = Σ_rows δ_l.
-                gemm(
-                    fan_in,
-                    batch,
-                    fan_out,
+                let (gw, gb) = grad[w..].split_at_mut(b - w);
+                ws.kernel.dense_param_grad(
                     &ws.acts[l],
-                    (1, fan_in),
                     &ws.delta,
-                    (fan_out, 1),
-                    0.0,
-                    &mut grad[w..b],
+                    shape,
+                    gw,
+                    &mut gb[..shape.2],
+                    &mut ws.scratch,
                 );
-                let gb = &mut grad[b..b + fan_out];
-                gb.fill(0.0);
-                for row in ws.delta.chunks_exact(fan_out) {
-                    for (g, d) in gb.iter_mut().zip(row) {
-                        *g += d;
-                    }
-                }
             }
             if l == 0 && dx.is_none() {
                 break;
             }
-            // ∂L/∂A_{l-1} = δ_l · W_lᵀ, then through the ReLU of layer l-1.
-            ws.delta_prev.clear();
-            ws.delta_prev.resize(batch * fan_in, 0.0);
-            gemm(
-                batch,
-                fan_out,
-                fan_in,
+            // ∂L/∂A_{l-1} = δ_l · W_lᵀ, through the ReLU of layer l-1 (none below layer 0).
+            ws.delta_prev.resize(batch * shape.1, 0.0);
+            let below = (l > 0).then_some(ws.acts[l].as_slice());
+            ws.kernel.dense_input_grad(
                 &ws.delta,
-                (fan_out, 1),
                 &self.params[w..b],
-                (1, fan_out),
-                0.0,
+                shape,
+                below,
                 &mut ws.delta_prev,
+                &mut ws.scratch,
             );
             if l == 0 {
                 if let Some(dx) = dx.take() {
@@ -296,20 +268,13 @@ impl Mlp {
                 }
                 break;
             }
-            for (d, a) in ws.delta_prev.iter_mut().zip(&ws.acts[l]) {
-                if *a <= 0.0 {
-                    *d = 0.0;
-                }
-            }
             std::mem::swap(&mut ws.delta, &mut ws.delta_prev);
         }
     }
 
     /// Polyak averaging of a target network: θ' ← τ·θ + (1 − τ)·θ'.
     pub fn soft_update_from(&mut self, online: &Mlp, tau: f32) {
-        for (t, o) in self.params.iter_mut().zip(&online.params) {
-            *t += tau * (o - *t);
-        }
+        Kernel::active().polyak(&mut self.params, &online.params, tau);
     }
 
     /// Tensor names and shapes in the safetensors file: `l{i}.weight` (fan-in × fan-out, as
@@ -368,6 +333,8 @@ pub struct Adam {
     m: Vec<f32>,
     v: Vec<f32>,
     t: i32,
+    /// The kernel the step's loop is compiled for (same results in every kernel).
+    pub kernel: Kernel,
 }
 
 impl Adam {
@@ -381,6 +348,7 @@ impl Adam {
             m: vec![0.0; n],
             v: vec![0.0; n],
             t: 0,
+            kernel: Kernel::active(),
         }
     }
 
@@ -392,24 +360,15 @@ impl Adam {
         let c2 = 1.0 - b2.powi(self.t);
         let step = self.lr / c1;
         let c2_sqrt = c2.sqrt();
-        for (((p, g), m), v) in params
-            .iter_mut()
-            .zip(grad)
-            .zip(self.m.iter_mut())
-            .zip(self.v.iter_mut())
-        {
-            let mut mi = b1 * *m + (1.0 - b1) * g;
-            let mut vi = b2 * *v + (1.0 - b2) * g * g;
-            if mi.abs() < f32::MIN_POSITIVE {
-                mi = 0.0;
-            }
-            if vi < f32::MIN_POSITIVE {
-                vi = 0.0;
-            }
-            *m = mi;
-            *v = vi;
-            *p -= step * mi / (vi.sqrt() / c2_sqrt + self.eps);
-        }
+        self.kernel.adam(
+            params,
+            grad,
+            &mut self.m,
+            &mut self.v,
+            (b1, b2, self.eps),
+            step,
+            c2_sqrt,
+        );
     }
 
     /// Number of subnormal values among the moments (the bench reports it).
