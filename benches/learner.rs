@@ -50,8 +50,10 @@ fn matmul_rate(kernel: Kernel) -> f64 {
 }
 
 /// Environment steps per second of the fast preset on maze 10, seed 0, for its first
-/// `steps` steps (phase 1 included), with `kernel` active.
-fn end_to_end(kernel: Kernel, steps: u64) -> f64 {
+/// `steps` steps (phase 1 included), with `kernel` active; also the training and test steps
+/// among them (kernels that round differently follow different runs, and test steps do no
+/// update, so the mix is printed beside the rate).
+fn end_to_end(kernel: Kernel, steps: u64) -> (f64, u64, u64) {
     kernel.set_active().unwrap();
     let mut job = Preset::Fast.job().unwrap();
     job.maze.size = 10;
@@ -79,7 +81,11 @@ fn end_to_end(kernel: Kernel, steps: u64) -> f64 {
     )
     .unwrap();
     let total = found.env_steps + out.steps.train + out.steps.test;
-    total as f64 / t.elapsed().as_secs_f64()
+    (
+        total as f64 / t.elapsed().as_secs_f64(),
+        out.steps.train,
+        out.steps.test,
+    )
 }
 
 /// Matmul FLOPs of one fused DDPG update, counted as the implementation performs them.
@@ -216,7 +222,7 @@ fn main() {
             .join(", ")
     );
     println!();
-    println!("DDPG update, obs 2, act 2, one thread (best of 3 runs): µs per update (% of the matmul rate)");
+    println!("DDPG update, obs 2, act 2, one thread (best of 5 runs; candle 3): µs per update (% of the matmul rate)");
     let mut header = "| hidden | batch |".to_string();
     for k in &kernels {
         header += &format!(" {} |", k.name());
@@ -240,7 +246,7 @@ fn main() {
                 for _ in 0..20 {
                     l.update(&batch);
                 }
-                let t = best_of(3, || {
+                let t = best_of(5, || {
                     for _ in 0..n {
                         black_box(l.update(&batch));
                     }
@@ -275,10 +281,11 @@ fn main() {
         println!(
             "end to end: `pbcs run --maze 10 --seed 0` (fast preset), first 200k environment steps"
         );
-        let before = end_to_end(Kernel::Matrixmultiply, 200_000);
-        let after = end_to_end(best, 200_000);
+        let (before, tr0, te0) = end_to_end(Kernel::Matrixmultiply, 200_000);
+        let (after, tr1, te1) = end_to_end(best, 200_000);
         println!(
-            "  matrixmultiply: {before:.0} steps/s; {}: {after:.0} steps/s ({:.2}×)",
+            "  matrixmultiply: {before:.0} steps/s ({tr0} training, {te0} test); {}: {after:.0} \
+             steps/s ({tr1} training, {te1} test); {:.2}×",
             best.name(),
             after / before
         );

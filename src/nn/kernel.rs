@@ -26,7 +26,7 @@
 //!   then + bias\[j\], then the epilogue.
 //! - Element-wise loops (Adam, Polyak averaging, bias gradients) are the same scalar
 //!   expressions in every kernel (Rust does not contract `a * b + c` into an FMA), so they
-//!   agree bit for bit too.
+//!   agree bit for bit too (matrixmultiply keeps the earlier Adam expression: [`Kernel::adam`]).
 //!
 //! The portable kernel rounds each product separately (an FMA in software would be two orders
 //! of magnitude slower), so its results differ from the SIMD kernels' by float rounding only
@@ -541,8 +541,10 @@ impl Kernel {
         elementwise!(self, column_sums_body(m, cols, out))
     }
 
-    /// One Adam step over all parameters (see [`super::Adam::step`] for the formula); the
-    /// same expressions in every kernel.
+    /// One Adam step over all parameters (see [`super::Adam::step`] for the formula): the same
+    /// expressions in every kernel but `matrixmultiply`, which keeps the earlier form
+    /// θ −= s·m / (√v / √c2 + ε) so that it reproduces earlier results; the others use Kingma
+    /// and Ba's equivalent θ −= (s·√c2)·m / (√v + ε·√c2), one division fewer per parameter.
     #[allow(clippy::too_many_arguments)]
     pub fn adam(
         self,
@@ -555,10 +557,14 @@ impl Kernel {
         c2_sqrt: f32,
     ) {
         assert!(grad.len() == params.len() && m.len() == params.len() && v.len() == params.len());
-        elementwise!(
-            self,
-            adam_body(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
-        )
+        if self == Kernel::Matrixmultiply {
+            adam_body::<false>(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
+        } else {
+            elementwise!(
+                self,
+                adam_folded(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
+            )
+        }
     }
 
     /// Polyak averaging θ' ← θ' + τ·(θ − θ').
@@ -608,7 +614,7 @@ fn column_block<const W: usize>(m: &[f32], cols: usize, out: &mut [f32], mut j: 
 
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn adam_body(
+fn adam_folded(
     params: &mut [f32],
     grad: &[f32],
     m: &mut [f32],
@@ -619,6 +625,23 @@ fn adam_body(
     step: f32,
     c2_sqrt: f32,
 ) {
+    adam_body::<true>(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn adam_body<const FOLDED: bool>(
+    params: &mut [f32],
+    grad: &[f32],
+    m: &mut [f32],
+    v: &mut [f32],
+    b1: f32,
+    b2: f32,
+    eps: f32,
+    step: f32,
+    c2_sqrt: f32,
+) {
+    let (folded_step, folded_eps) = (step * c2_sqrt, eps * c2_sqrt);
     for (((p, g), m), v) in params
         .iter_mut()
         .zip(grad)
@@ -636,7 +659,11 @@ fn adam_body(
         let vi = if vi < f32::MIN_POSITIVE { 0.0 } else { vi };
         *m = mi;
         *v = vi;
-        *p -= step * mi / (vi.sqrt() / c2_sqrt + eps);
+        if FOLDED {
+            *p -= folded_step * mi / (vi.sqrt() + folded_eps);
+        } else {
+            *p -= step * mi / (vi.sqrt() / c2_sqrt + eps);
+        }
     }
 }
 
