@@ -238,6 +238,14 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// The preset's name on the command line (`fast`, `paper`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::Fast => "fast",
+        }
+    }
+
     /// The preset's file name in `experiments/`.
     pub fn file_name(self) -> &'static str {
         match self {

@@ -16,13 +16,14 @@ pub enum Error {
         /// What is wrong and what is accepted.
         reason: String,
     },
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    /// A file could not be read or written. (The OS error is part of the message, not a
+    /// `source`, so that error chains print it once.)
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The underlying error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A file was read but could not be parsed (syntax, unknown key, wrong type).
     #[error("{path}: {message}")]
@@ -78,7 +79,7 @@ impl Error {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            cause: source,
         }
     }
 }

@@ -50,6 +50,7 @@ pub fn run_explore(
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
     job.check()?;
+    claim(job, out)?;
     let maze = Maze::new(&job.maze)?;
     let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
     let clock = Instant::now();
@@ -64,13 +65,6 @@ pub fn run_explore(
         archive_states: found.archive.len(),
         archive_bins: found.archive.bins(),
     };
-    let config_text = toml::to_string(job).map_err(|e| Error::Parse {
-        path: out.join("config.toml"),
-        message: e.to_string(),
-    })?;
-    write_atomic(&out.join("config.toml"), |w| {
-        w.write_all(config_text.as_bytes())
-    })?;
     write_record(&out.join("summary.csv"), &summary)?;
     write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
     write_archive_csv(&maze, &found, &out.join("archive.csv"))?;
@@ -79,14 +73,15 @@ pub fn run_explore(
     Ok((summary, seconds))
 }
 
-/// Writes the resolved job as `config.toml`, so that `--config` re-runs exactly this job.
-fn write_config<T: Serialize>(job: &T, out: &Path) -> Result<()> {
-    let path = out.join("config.toml");
+/// Claims `out` for `job` before any work ([`crate::record::claim_out_dir`]): writes the
+/// resolved job as `config.toml` (so that `--config` re-runs exactly this job), refusing a
+/// path that is not a writable folder or a folder of another run.
+fn claim<T: Serialize>(job: &T, out: &Path) -> Result<()> {
     let text = toml::to_string(job).map_err(|e| Error::Parse {
-        path: path.clone(),
+        path: out.join("config.toml"),
         message: e.to_string(),
     })?;
-    write_atomic(&path, |w| w.write_all(text.as_bytes()))
+    crate::record::claim_out_dir(out, &text)
 }
 
 /// Writes `timing.toml`: wall-clock data, which is not deterministic and so never goes into
@@ -218,6 +213,7 @@ pub fn run_train(
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
     job.check()?;
+    claim(job, out)?;
     let maze = Maze::new(&job.maze)?;
     let clock = Instant::now();
     let result = train_vanilla(
@@ -245,7 +241,6 @@ pub fn run_train(
             .find(|e| e.success >= 0.95)
             .map(|e| e.steps),
     };
-    write_config(job, out)?;
     write_record(&out.join("summary.csv"), &summary)?;
     crate::record::write_records(&out.join("evals.csv"), &result.evals)?;
     let side = job.train.visit_bin;
@@ -340,6 +335,7 @@ pub fn run_pbcs(
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
     job.check()?;
+    claim(job, out)?;
     let maze = Maze::new(&job.maze)?;
     let seeds = Seeds::new(job.seed);
     let clock = Instant::now();
@@ -417,7 +413,6 @@ pub fn run_pbcs(
         trajectory_len: found.trajectory.len(),
         phase2_trajectory_len: tau.len(),
     };
-    write_config(job, out)?;
     write_record(&out.join("record.csv"), &record)?;
     write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
     write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;

@@ -65,6 +65,38 @@ pub fn write_atomic_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>
     Ok(())
 }
 
+/// Claims `dir` as the output folder of the run whose resolved config is `config_text`, before
+/// any work: `dir` is created if needed and must be a writable folder, and a folder that
+/// already holds another run (a `config.toml` with other contents) is refused, so a run never
+/// silently replaces a different run's files and never fails for its folder after the work.
+/// The config is written first, so the folder says whose it is from the start; re-running the
+/// same config into its own folder is allowed (runs are deterministic).
+pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::io(
+            dir,
+            std::io::Error::other("exists and is not a folder; choose another output folder"),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let config = dir.join("config.toml");
+    match std::fs::read_to_string(&config) {
+        Ok(stored) if stored != config_text => {
+            return Err(Error::io(
+                dir,
+                std::io::Error::other(
+                    "holds another run (its config.toml differs from this run's); choose \
+                     another output folder or delete this one",
+                ),
+            ))
+        }
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(Error::io(&config, e)),
+    }
+    write_atomic(&config, |w| w.write_all(config_text.as_bytes()))
+}
+
 /// Writes a CSV file atomically: a header and rows of already-formatted fields.
 pub fn write_csv<R, I>(path: &Path, header: &[String], rows: I) -> Result<()>
 where

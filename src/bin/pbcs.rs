@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, MazeConfig, Preset, RunJob, TrainJob};
 use pbcs::learner::{ActorUpdate, Algo};
 use serde::de::DeserializeOwned;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -29,7 +30,7 @@ struct RunArgs {
     #[arg(long)]
     config: Option<PathBuf>,
     /// Maze size N (2..=100); overrides `maze.size`.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_maze_size)]
     maze: Option<usize>,
     /// Maze layout seed; overrides `maze.seed`.
     #[arg(long, allow_negative_numbers = true)]
@@ -37,7 +38,9 @@ struct RunArgs {
     /// Run seed; overrides `seed`.
     #[arg(long, allow_negative_numbers = true)]
     seed: Option<u64>,
-    /// Output folder [default: out/<command>/maze<N>-m<maze seed>-s<seed>[-<algo>]].
+    /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
+    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact]].
+    /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
     out: Option<PathBuf>,
     /// No progress bar.
@@ -172,8 +175,8 @@ enum Command {
         /// Maze sizes.
         #[arg(long, value_delimiter = ',', default_value = "2,5,7,10,15")]
         sizes: Vec<usize>,
-        /// Number of seeds: runs seeds 0..SEEDS.
-        #[arg(long, default_value_t = 10)]
+        /// Number of seeds: runs seeds 0..SEEDS (at least 1).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
         seeds: u64,
         /// Runs at a time (one thread each).
         #[arg(long, default_value_t = 2)]
@@ -311,7 +314,25 @@ enum ExpCommand {
     },
 }
 
+/// `--maze`: a whole number from 2 to 100, said so for anything else (a negative number
+/// included).
+fn parse_maze_size(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if (2..=100).contains(&n) => Ok(n as usize),
+        _ => Err(format!(
+            "the maze size is a whole number from 2 to 100, got {s:?}"
+        )),
+    }
+}
+
 fn main() -> ExitCode {
+    // `pbcs exp list | head`: a closed pipe ends the program quietly, as for other command-line
+    // tools, instead of a panic in println!.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // One thread per process (use cores for seeds): pin candle's thread pool before any candle
     // call, unless the user chose otherwise. Our own kernels are single-threaded.
     for var in ["RAYON_NUM_THREADS", "CANDLE_NUM_THREADS"] {
@@ -362,7 +383,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(g) = gamma {
                 job.learner.gamma = g;
             }
-            pbcs_run(&run, &job)
+            // The default folder names the procedure, so runs of two presets or configs never
+            // meet in one folder.
+            let label = match &run.config {
+                Some(path) => path
+                    .file_stem()
+                    .map_or("config".into(), |s| s.to_string_lossy().into_owned()),
+                None => preset.name().to_string(),
+            };
+            pbcs_run(&run, &job, &label)
         }
         Command::Table {
             config,
@@ -816,7 +845,7 @@ fn kind_name(kind: pbcs::pbcs::EventKind) -> &'static str {
     }
 }
 
-fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
+fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
     job.check()?;
     let mut suffix = String::new();
     if !job.phase2.chaining {
@@ -825,15 +854,25 @@ fn pbcs_run(run: &RunArgs, job: &RunJob) -> anyhow::Result<()> {
     if job.phase2.start == pbcs::pbcs::StartMode::Exact {
         suffix.push_str("-exact");
     }
-    let out = run.out_dir("run", &job.maze, job.seed, &suffix);
+    let out = run.out_dir(&format!("run/{label}"), &job.maze, job.seed, &suffix);
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
+    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
+    let lines = !run.quiet && !std::io::stderr().is_terminal();
     let (record, seconds) = pbcs::jobs::run_pbcs(job, &out, |skill, p| {
         if skill != current_skill {
             finished += current;
             current_skill = skill;
+            if lines {
+                eprintln!(
+                    "[{:.0} s] {skill} skills found, building skill {}; {finished} phase-2 env \
+                     steps so far",
+                    clock.elapsed().as_secs_f64(),
+                    skill + 1
+                );
+            }
         }
         current = p.steps.train + p.steps.test;
         let total = finished + current;

@@ -337,7 +337,18 @@ impl SkillChain {
             path: dir.join("manifest.toml"),
             message: e.to_string(),
         })?;
-        crate::record::write_atomic(&dir.join("manifest.toml"), |w| w.write_all(text.as_bytes()))
+        crate::record::write_atomic(&dir.join("manifest.toml"), |w| w.write_all(text.as_bytes()))?;
+        // A chain saved here before may have had more skills: its extra policy files go, so the
+        // folder holds exactly what the manifest lists.
+        for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+            let path = entry.map_err(|e| Error::io(dir, e))?.path();
+            let name = path.file_name().unwrap_or_default().to_string_lossy();
+            let listed = manifest.skills.iter().any(|s| s.file == name);
+            if name.starts_with("skill") && name.ends_with(".safetensors") && !listed {
+                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+            }
+        }
+        Ok(())
     }
 
     /// Loads a chain saved by [`SkillChain::save`].

@@ -1,0 +1,167 @@
+//! The command line as a user meets it: bad input and unusable output folders are refused
+//! before any work, with a message naming what to fix; no run replaces another's folder; a
+//! closed pipe is not a panic. Each test spawns the `pbcs` binary.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+fn pbcs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args(args)
+        .env_remove("PBCS_KERNEL")
+        .output()
+        .expect("spawn pbcs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Before: `pbcs run --out FILE` trained for the whole run, then failed with "File exists".
+#[test]
+fn an_output_path_that_is_a_file_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("f");
+    std::fs::write(&file, "x").unwrap();
+    for command in ["run", "explore", "train"] {
+        let o = pbcs(&[
+            command,
+            "--maze",
+            "2",
+            "--seed",
+            "0",
+            "--quiet",
+            "--out",
+            path(&file),
+        ]);
+        assert!(!o.status.success(), "{command}");
+        let e = stderr(&o);
+        assert!(
+            e.contains("not a folder") && e.contains(path(&file)),
+            "{command}: {e}"
+        );
+        assert!(!e.contains("PBCS on") || e.contains("not a folder"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(&file).unwrap(),
+            "x",
+            "the file is untouched"
+        );
+    }
+}
+
+/// Before: a run with another config silently replaced a solved run in the default folder.
+#[test]
+fn a_folder_holding_another_run_is_refused_and_left_intact() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("config.toml"), "seed = 99\n").unwrap();
+    std::fs::write(out.join("record.csv"), "precious\n").unwrap();
+    let o = pbcs(&[
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&out),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("holds another run"), "{e}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("record.csv")).unwrap(),
+        "precious\n"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("config.toml")).unwrap(),
+        "seed = 99\n"
+    );
+}
+
+/// The same job into its own folder again is allowed (runs are deterministic) and gives the
+/// same bytes.
+#[test]
+fn rerunning_the_same_job_into_its_folder_gives_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("explore");
+    let args = [
+        "explore",
+        "--maze",
+        "3",
+        "--seed",
+        "1",
+        "--quiet",
+        "--out",
+        path(&out),
+    ];
+    assert!(pbcs(&args).status.success());
+    let first = std::fs::read(out.join("trajectory.csv")).unwrap();
+    let o = pbcs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("trajectory.csv")).unwrap(), first);
+}
+
+#[test]
+fn bad_numbers_get_clear_messages() {
+    let o = pbcs(&["run", "--maze", "-3", "--quiet"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("from 2 to 100") && e.contains("-3"), "{e}");
+    assert!(!e.contains("invalid digit"), "{e}");
+
+    // Before: "0/0 NaN [NaN, NaN]".
+    let o = pbcs(&["table", "--seeds", "0", "--sizes", "2"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("--seeds") && !e.contains("NaN"), "{e}");
+}
+
+#[test]
+fn an_unknown_kernel_is_refused_naming_the_variable() {
+    let o = Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args([
+            "explore",
+            "--maze",
+            "2",
+            "--quiet",
+            "--out",
+            "/nonexistent/never",
+        ])
+        .env("PBCS_KERNEL", "avx9000")
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("PBCS_KERNEL") && e.contains("avx9000"), "{e}");
+}
+
+/// OS errors were printed twice ("(os error 2): … (os error 2)").
+#[test]
+fn an_os_error_is_printed_once() {
+    let o = pbcs(&["run", "--config", "/nonexistent/x.toml", "--quiet"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert_eq!(e.matches("os error").count(), 1, "{e}");
+}
+
+/// Before: `pbcs exp list … | head -1` panicked with "failed printing to stdout".
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_is_not_a_panic() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args(["exp", "list", "experiments/table.toml"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away at once, like `head` after its lines
+    let o = child.wait_with_output().unwrap();
+    let e = stderr(&o);
+    assert!(!e.contains("panicked"), "{e}");
+}
