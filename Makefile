@@ -10,9 +10,12 @@ PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)
 # The figures build has polars (aggregation); the other commands do not need it.
 PBCS_POLARS = $(CARGO) run --release --locked --features polars --quiet --
-PBCS = target/release/pbcs
+# The binary where cargo puts it (CARGO_TARGET_DIR, as .ci/run sets it, or target/); the `bin`
+# rule runs cargo every time, so a stale binary never runs.
+TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
+PBCS = $(TARGET_DIR)/release/pbcs
 
-.PHONY: help build demo test bench lint ci clean figures results results-parallel cell \
+.PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
         commands paper check-paper smoke
 
 help:
@@ -26,7 +29,7 @@ help:
 	@echo "make cell EXP=table CELL=pbcs-maze2 [SEED=3]   re-run one table cell and compare"
 	@echo "make paper     build paper/report.pdf (needs latexmk + texlive)"
 	@echo "make smoke     the whole pipeline on the smoke profile (what CI runs)"
-	@echo "make bench     phase-1 speed, and learner update cost (fused vs candle)"
+	@echo "make bench     phase-1 speed, and learner update cost (every kernel, candle, end to end)"
 	@echo "make lint      rustfmt and clippy"
 	@echo "make ci        what CI runs (.ci/run)"
 
@@ -55,25 +58,27 @@ figures:
 	$(PBCS_POLARS) aggregate $(PROFILE_FLAG)
 	$(PBCS_POLARS) figures $(PROFILE_FLAG)
 
-$(PBCS):
+bin:
 	$(CARGO) build --release --locked
 
-results: $(PBCS)
+results: bin
 	for e in $(EXPERIMENTS); do $(PBCS) exp run experiments/$$e.toml --jobs $(JOBS) $(PROFILE_FLAG) || exit 1; done
 
-results-parallel: $(PBCS)
-	mkdir -p target
-	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) > target/runs-$$e.mk || exit 1; \
-	  $(MAKE) -f target/runs-$$e.mk -j$(JOBS) PBCS=$(PBCS) || exit 1; done
+results-parallel: bin
+	mkdir -p $(TARGET_DIR)
+	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) > $(TARGET_DIR)/runs-$$e.mk || exit 1; \
+	  $(MAKE) -f $(TARGET_DIR)/runs-$$e.mk -j$(JOBS) PBCS=$(PBCS) || exit 1; done
 
-commands: $(PBCS)
+commands: bin
 	@for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml $(PROFILE_FLAG); done
 
-cell: $(PBCS)
+cell: bin
 	@test -n "$(EXP)" -a -n "$(CELL)" || { echo "usage: make cell EXP=table CELL=pbcs-maze2 [SEED=3]"; exit 2; }
 	$(PBCS) exp check experiments/$(EXP).toml --cell $(CELL) $(if $(SEED),--seed $(SEED),) --jobs $(JOBS) $(PROFILE_FLAG)
 
-paper: figures
+paper:
+	@command -v latexmk >/dev/null 2>&1 || { echo "make paper needs latexmk and LaTeX (Debian/Ubuntu: apt install latexmk texlive-latex-extra texlive-science); nothing was built"; exit 2; }
+	$(MAKE) figures
 	cd paper && latexmk -pdf -interaction=nonstopmode report.tex
 
 # Every file the report includes exists (CI runs this after `make figures`).
