@@ -423,6 +423,15 @@ pub fn run_pbcs(
         phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
     )?;
     phase2.chain.save(&out.join("chain"))?;
+    // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
+    // manifest, so `pbcs eval --chain DIR` needs nothing else.
+    let job_text = toml::to_string(job).map_err(|e| Error::Parse {
+        path: out.join("chain/run.toml"),
+        message: e.to_string(),
+    })?;
+    write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
+        w.write_all(job_text.as_bytes())
+    })?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let data = PictureData {
         red_paths: vec![xy(tau)],
@@ -461,6 +470,108 @@ pub fn run_pbcs(
     )?;
     write_timing(out, seconds, record.total_steps)?;
     Ok((record, seconds))
+}
+
+/// The file in a saved chain's folder that holds the job that built it.
+pub const CHAIN_JOB: &str = "run.toml";
+
+/// What `pbcs eval` measured: a saved chain re-run from starts uniform in B_ε(s_0).
+#[derive(Debug, Clone)]
+pub struct ChainEval {
+    /// The job that built the chain (from the chain folder).
+    pub job: RunJob,
+    /// Skills in the chain.
+    pub skills: usize,
+    /// Episodes run.
+    pub episodes: usize,
+    /// Episodes that reached the target.
+    pub successes: usize,
+    /// Wilson 95 % interval of the success rate.
+    pub interval: (f64, f64),
+}
+
+/// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
+/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (the run's own seed
+/// reproduces the run's evaluation exactly), each at most `phase2.eval_max_steps` steps.
+/// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and `eval-s<seed>.png`/`.svg`
+/// (the first rollouts over the maze) into `chain_dir`. A folder without the chain's job
+/// (`run.toml`, or `../config.toml` for chains saved before it existed), a malformed manifest
+/// or bad weights are errors naming the file.
+pub fn eval_chain(chain_dir: &Path, episodes: usize, seed: Option<u64>) -> Result<ChainEval> {
+    if episodes == 0 {
+        return Err(Error::invalid("--episodes", "must be at least 1"));
+    }
+    let own = chain_dir.join(CHAIN_JOB);
+    let job_path = if own.exists() {
+        own
+    } else {
+        let parent = chain_dir.join("..").join("config.toml");
+        if !parent.exists() {
+            return Err(Error::io(
+                &own,
+                std::io::Error::other(
+                    "not found: not a chain saved by `pbcs run` (it writes run.toml beside \
+                     manifest.toml)",
+                ),
+            ));
+        }
+        parent
+    };
+    let job: RunJob = crate::config::load(&job_path)?;
+    let maze = Maze::new(&job.maze)?;
+    let chain = SkillChain::load(chain_dir)?;
+    let seed = seed.unwrap_or(job.seed);
+    let mut rng = Seeds::new(seed).stream(Stream::Eval);
+    let mut rows = Vec::with_capacity(episodes);
+    let mut rollouts = Vec::new();
+    for _ in 0..episodes {
+        let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng);
+        let r = chain.run(&maze, start, job.phase2.eval_max_steps);
+        rows.push([r.success.to_string(), (r.states.len() - 1).to_string()]);
+        if rollouts.len() < DRAWN_ROLLOUTS {
+            rollouts.push(r.states);
+        }
+    }
+    let successes = rows.iter().filter(|r| r[0] == "true").count();
+    let interval = crate::stats::wilson(successes as u64, episodes as u64, 1.96);
+    write_csv(
+        &chain_dir.join(format!("eval-s{seed}.csv")),
+        &["success".to_string(), "steps".to_string()],
+        rows,
+    )?;
+    let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+    let data = PictureData {
+        green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+        circles: chain
+            .skills
+            .iter()
+            .map(|s| {
+                (
+                    (s.activation.center[0], s.activation.center[1]),
+                    s.activation.radius,
+                )
+            })
+            .collect(),
+        ..PictureData::default()
+    };
+    let title = format!(
+        "saved chain, maze {} (layout {}), eval seed {seed}: success {successes}/{episodes}",
+        job.maze.size, job.maze.seed
+    );
+    render_maze(
+        &maze,
+        &data.picture(title),
+        &chain_dir.join(format!("eval-s{seed}.png")),
+        &chain_dir.join(format!("eval-s{seed}.svg")),
+        SVG_MAX_POINTS,
+    )?;
+    Ok(ChainEval {
+        skills: chain.skills.len(),
+        job,
+        episodes,
+        successes,
+        interval,
+    })
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target

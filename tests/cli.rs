@@ -165,3 +165,58 @@ fn a_closed_pipe_is_not_a_panic() {
     let e = stderr(&o);
     assert!(!e.contains("panicked"), "{e}");
 }
+
+/// `pbcs eval --chain DIR` re-runs a saved chain from its folder alone: with the run's own
+/// seed it reproduces the run's evaluation (the reloaded chain acts as the trained one).
+#[test]
+fn a_saved_chain_is_evaluated_from_its_folder_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = pbcs(&[
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let record = std::fs::read_to_string(out.join("record.csv")).unwrap();
+    let header: Vec<&str> = record.lines().next().unwrap().split(',').collect();
+    let row: Vec<&str> = record.lines().nth(1).unwrap().split(',').collect();
+    let rate: f64 = row[header.iter().position(|h| *h == "success_rate").unwrap()]
+        .parse()
+        .unwrap();
+    // Moved elsewhere: the chain folder is all `eval` needs.
+    let moved = dir.path().join("moved");
+    std::fs::rename(out.join("chain"), &moved).unwrap();
+    let o = pbcs(&["eval", "--chain", path(&moved)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(moved.join("eval-s0.csv")).unwrap();
+    let wins = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("true"))
+        .count();
+    assert_eq!(csv.lines().count(), 101);
+    assert_eq!(wins as f64 / 100.0, rate);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Wilson 95 %"));
+    assert!(moved.join("eval-s0.png").exists());
+
+    // Broken weights: an error naming the file, no panic.
+    std::fs::write(moved.join("skill0.safetensors"), b"not a tensor file").unwrap();
+    let o = pbcs(&["eval", "--chain", path(&moved)]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("skill0.safetensors") && !e.contains("panicked"),
+        "{e}"
+    );
+
+    // Not a chain folder at all.
+    let o = pbcs(&["eval", "--chain", path(dir.path())]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("run.toml"), "{}", stderr(&o));
+}

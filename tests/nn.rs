@@ -317,3 +317,17 @@ fn save_and_load_round_trip_and_bad_files_are_clear_errors() {
         .to_string();
     assert!(msg.contains("none.safetensors"), "{msg}");
 }
+
+/// A saved policy with a NaN or infinite weight is refused on load, naming the file.
+#[test]
+fn loading_non_finite_weights_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.safetensors");
+    let mut rng = Seeds::new(1).stream(Stream::Init);
+    let mut net = Mlp::new(&[2, 8, 2], Head::Tanh(vec![1.0, 1.0]), &mut rng);
+    net.params[5] = f32::NAN;
+    net.save(&path).unwrap();
+    let mut fresh = Mlp::new(&[2, 8, 2], Head::Tanh(vec![1.0, 1.0]), &mut rng);
+    let e = fresh.load(&path).unwrap_err().to_string();
+    assert!(e.contains("p.safetensors") && e.contains("not finite"), "{e}");
+}

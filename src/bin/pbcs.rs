@@ -145,6 +145,19 @@ enum Command {
         #[arg(long)]
         steps: Option<u64>,
     },
+    /// Re-run a chain saved by `pbcs run` (its `chain/` folder) on its maze: success rate with
+    /// its Wilson interval; writes eval-s<seed>.csv and a picture into the chain folder.
+    Eval {
+        /// The chain folder (`<run folder>/chain`).
+        #[arg(long)]
+        chain: PathBuf,
+        /// Episodes, each from a start uniform in B_ε(s_0).
+        #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
+        episodes: u64,
+        /// Seed of the start states [default: the run's seed, which reproduces its evaluation].
+        #[arg(long)]
+        seed: Option<u64>,
+    },
     /// PBCS: phase 1, then phase 2 (Backplay, shaped training, skill chaining); evaluate the
     /// chain; write the record, the chain and a picture.
     Run {
@@ -392,6 +405,29 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 None => preset.name().to_string(),
             };
             pbcs_run(&run, &job, &label)
+        }
+        Command::Eval {
+            chain,
+            episodes,
+            seed,
+        } => {
+            let e = pbcs::jobs::eval_chain(&chain, episodes as usize, seed)?;
+            let seed = seed.unwrap_or(e.job.seed);
+            println!(
+                "chain {} ({} skills) on maze {} (layout seed {}), start seed {seed}: success \
+                 {}/{} = {:.1} % [Wilson 95 % {:.1}, {:.1} %]",
+                chain.display(),
+                e.skills,
+                e.job.maze.size,
+                e.job.maze.seed,
+                e.successes,
+                e.episodes,
+                100.0 * e.successes as f64 / e.episodes as f64,
+                100.0 * e.interval.0,
+                100.0 * e.interval.1
+            );
+            println!("wrote {}/eval-s{seed}.{{csv,png,svg}}", chain.display());
+            Ok(())
         }
         Command::Table {
             config,

@@ -299,13 +299,20 @@ impl Mlp {
     }
 
     /// Loads parameters saved by [`Mlp::save`] into a network of this shape. A missing file,
-    /// a corrupt file, or tensors of other names or shapes are errors naming the file.
+    /// a corrupt file, tensors of other names or shapes, or a non-finite weight are errors
+    /// naming the file.
     pub fn load(&mut self, path: &Path) -> Result<()> {
         let params = candle_ref::load_params(path, &self.tensor_names())?;
         if params.len() != self.params.len() {
             return Err(Error::Parse {
                 path: path.to_path_buf(),
                 message: "parameter count does not match the network".into(),
+            });
+        }
+        if let Some(i) = params.iter().position(|x| !x.is_finite()) {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                message: format!("parameter {i} is not finite ({})", params[i]),
             });
         }
         self.params = params;
