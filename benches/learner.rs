@@ -222,7 +222,7 @@ fn main() {
             .join(", ")
     );
     println!();
-    println!("DDPG update, obs 2, act 2, one thread (best of 5 runs; candle 3): µs per update (% of the matmul rate)");
+    println!("DDPG update, obs 2, act 2, one thread (best of 5 interleaved rounds; candle: best of 3): µs per update (% of the matmul rate)");
     let mut header = "| hidden | batch |".to_string();
     for k in &kernels {
         header += &format!(" {} |", k.name());
@@ -235,26 +235,41 @@ fn main() {
             let flops = update_flops(h, b);
             let batch = random_batch(b, 0);
             let mut row = format!("| {h} | {b} |");
-            let mut times = std::collections::HashMap::new();
-            let mut l0 = None;
-            for &k in &kernels {
-                // The portable kernel is slow enough that fewer updates give a stable number.
-                let scale = if k == Kernel::Portable { 10 } else { 1 };
-                let n = (if h * b >= 256 * 64 { 100 } else { 1000 }) / scale;
-                let mut l = Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
-                l.set_kernel(k);
-                for _ in 0..20 {
-                    l.update(&batch);
-                }
-                let t = best_of(5, || {
-                    for _ in 0..n {
-                        black_box(l.update(&batch));
+            // Kernels measured in interleaved rounds (each round times every kernel once), so a
+            // slow spell of a shared machine hits them all alike; the best round counts.
+            let mut learners: Vec<(Kernel, Learner, usize)> = kernels
+                .iter()
+                .map(|&k| {
+                    // The portable kernel is slow enough that fewer updates give a stable number.
+                    let scale = if k == Kernel::Portable { 10 } else { 1 };
+                    let n = (if h * b >= 256 * 64 { 100 } else { 1000 }) / scale;
+                    let mut l =
+                        Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
+                    l.set_kernel(k);
+                    for _ in 0..20 {
+                        l.update(&batch);
                     }
-                }) / n as f64;
-                times.insert(k, t);
-                row += &format!(" {:.0} ({:.0} %) |", t * 1e6, 100.0 * flops / t / rate);
-                l0 = Some(l);
+                    (k, l, n)
+                })
+                .collect();
+            let mut times: std::collections::HashMap<Kernel, f64> =
+                kernels.iter().map(|&k| (k, f64::INFINITY)).collect();
+            for _round in 0..5 {
+                for (k, l, n) in &mut learners {
+                    let t = best_of(1, || {
+                        for _ in 0..*n {
+                            black_box(l.update(&batch));
+                        }
+                    }) / *n as f64;
+                    let best = times.get_mut(k).unwrap();
+                    *best = best.min(t);
+                }
             }
+            for k in &kernels {
+                let t = times[k];
+                row += &format!(" {:.0} ({:.0} %) |", t * 1e6, 100.0 * flops / t / rate);
+            }
+            let l0 = learners.pop().map(|(_, l, _)| l);
             let l = l0.unwrap();
             let mut c = CandleDdpg::new(&l);
             for _ in 0..5 {
@@ -279,10 +294,21 @@ fn main() {
     if std::env::var_os("PBCS_BENCH_QUICK").is_none() {
         println!();
         println!(
-            "end to end: `pbcs run --maze 10 --seed 0` (fast preset), first 200k environment steps"
+            "end to end: `pbcs run --maze 10 --seed 0` (fast preset), first 200k environment steps (best of 2, alternating)"
         );
-        let (before, tr0, te0) = end_to_end(Kernel::Matrixmultiply, 200_000);
-        let (after, tr1, te1) = end_to_end(best, 200_000);
+        // Alternating, twice each, the faster of each pair counting.
+        let (mut before, mut after) = ((0.0, 0, 0), (0.0, 0, 0));
+        for _ in 0..2 {
+            let m = end_to_end(Kernel::Matrixmultiply, 200_000);
+            let f = end_to_end(best, 200_000);
+            if m.0 > before.0 {
+                before = m;
+            }
+            if f.0 > after.0 {
+                after = f;
+            }
+        }
+        let ((before, tr0, te0), (after, tr1, te1)) = (before, after);
         println!(
             "  matrixmultiply: {before:.0} steps/s ({tr0} training, {te0} test); {}: {after:.0} \
              steps/s ({tr1} training, {te1} test); {:.2}×",

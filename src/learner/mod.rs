@@ -272,8 +272,7 @@ pub struct Learner {
 fn concat_rows(x: &[f32], dx: usize, y: &[f32], dy: usize, out: &mut Vec<f32>) {
     out.clear();
     for (xr, yr) in x.chunks_exact(dx).zip(y.chunks_exact(dy)) {
-        out.extend_from_slice(xr);
-        out.extend_from_slice(yr);
+        out.extend(xr.iter().chain(yr).copied());
     }
 }
 

@@ -88,13 +88,15 @@ impl Replay {
         ] {
             v.clear();
         }
+        // Element-wise copies: rows are a few floats, where a `memmove` call per row costs
+        // more than the copy (5 % of a PBCS run).
         for _ in 0..n {
             let i = rng.random_range(0..self.len);
-            out.obs.extend_from_slice(&self.obs[i * o..(i + 1) * o]);
-            out.act.extend_from_slice(&self.act[i * a..(i + 1) * a]);
+            out.obs.extend(self.obs[i * o..(i + 1) * o].iter().copied());
+            out.act.extend(self.act[i * a..(i + 1) * a].iter().copied());
             out.rew.push(self.rew[i]);
             out.next_obs
-                .extend_from_slice(&self.next_obs[i * o..(i + 1) * o]);
+                .extend(self.next_obs[i * o..(i + 1) * o].iter().copied());
             out.done.push(self.done[i]);
         }
     }
