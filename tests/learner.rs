@@ -263,3 +263,40 @@ fn invalid_hyper_parameters_are_rejected_with_the_field() {
         assert!(err.to_string().contains(field));
     }
 }
+
+/// Sampled rows are whole transitions (s, a, r, s', terminal stay together), and a full ring
+/// keeps only the newest `capacity` of them.
+#[test]
+fn replay_samples_whole_transitions_from_the_newest() {
+    use pbcs::learner::replay::{Batch, Replay};
+    let mut replay = Replay::new(10, 2, 2);
+    for i in 0..25 {
+        let f = i as f32;
+        replay.push(
+            &[f, -f],
+            &[0.5 * f, 1.0],
+            f,
+            &[f + 1.0, -f - 1.0],
+            i % 3 == 0,
+        );
+    }
+    assert_eq!(replay.len(), 10);
+    let mut rng = pbcs::rng::Seeds::new(0).stream(pbcs::rng::Stream::Replay);
+    let mut b = Batch::default();
+    replay.sample(200, &mut rng, &mut b);
+    assert_eq!(
+        (b.len, b.obs.len(), b.act.len(), b.rew.len()),
+        (200, 400, 400, 200)
+    );
+    for k in 0..200 {
+        let f = b.rew[k];
+        assert!(
+            (15.0..25.0).contains(&f),
+            "an overwritten transition came back: {f}"
+        );
+        assert_eq!(&b.obs[2 * k..2 * k + 2], &[f, -f]);
+        assert_eq!(&b.act[2 * k..2 * k + 2], &[0.5 * f, 1.0]);
+        assert_eq!(&b.next_obs[2 * k..2 * k + 2], &[f + 1.0, -f - 1.0]);
+        assert_eq!(b.done[k], f32::from(u8::from(f as usize % 3 == 0)));
+    }
+}

@@ -329,5 +329,8 @@ fn loading_non_finite_weights_is_an_error() {
     net.save(&path).unwrap();
     let mut fresh = Mlp::new(&[2, 8, 2], Head::Tanh(vec![1.0, 1.0]), &mut rng);
     let e = fresh.load(&path).unwrap_err().to_string();
-    assert!(e.contains("p.safetensors") && e.contains("not finite"), "{e}");
+    assert!(
+        e.contains("p.safetensors") && e.contains("not finite"),
+        "{e}"
+    );
 }

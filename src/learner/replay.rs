@@ -1,4 +1,5 @@
-//! The replay buffer: flat `f32` arrays, a ring of fixed capacity, uniform sampling.
+//! The replay buffer: one flat `f32` array of transitions, a ring of fixed capacity, uniform
+//! sampling.
 
 use crate::rng::Rng;
 use rand::Rng as _;
@@ -21,6 +22,10 @@ pub struct Batch {
 }
 
 /// A ring buffer of transitions (s, a, r, s', terminal).
+///
+/// Each transition is one row `[s, a, r, s', terminal]` of a single array, so sampling one
+/// reads one place in memory (one cache line for the maze's 8 floats) rather than five: the
+/// random reads of a million-transition buffer were 6 % of a PBCS run.
 #[derive(Debug, Clone)]
 pub struct Replay {
     capacity: usize,
@@ -28,11 +33,7 @@ pub struct Replay {
     act_dim: usize,
     len: usize,
     next: usize,
-    obs: Vec<f32>,
-    act: Vec<f32>,
-    rew: Vec<f32>,
-    next_obs: Vec<f32>,
-    done: Vec<f32>,
+    rows: Vec<f32>,
 }
 
 impl Replay {
@@ -44,12 +45,13 @@ impl Replay {
             act_dim,
             len: 0,
             next: 0,
-            obs: vec![0.0; capacity * obs_dim],
-            act: vec![0.0; capacity * act_dim],
-            rew: vec![0.0; capacity],
-            next_obs: vec![0.0; capacity * obs_dim],
-            done: vec![0.0; capacity],
+            rows: vec![0.0; capacity * (2 * obs_dim + act_dim + 2)],
         }
+    }
+
+    /// Floats per stored transition.
+    fn width(&self) -> usize {
+        2 * self.obs_dim + self.act_dim + 2
     }
 
     /// Stored transitions.
@@ -64,12 +66,17 @@ impl Replay {
 
     /// Stores a transition, overwriting the oldest when full.
     pub fn push(&mut self, obs: &[f32], act: &[f32], rew: f32, next_obs: &[f32], terminal: bool) {
-        let (i, o, a) = (self.next, self.obs_dim, self.act_dim);
-        self.obs[i * o..(i + 1) * o].copy_from_slice(obs);
-        self.act[i * a..(i + 1) * a].copy_from_slice(act);
-        self.rew[i] = rew;
-        self.next_obs[i * o..(i + 1) * o].copy_from_slice(next_obs);
-        self.done[i] = f32::from(u8::from(terminal));
+        let (i, o, a, w) = (self.next, self.obs_dim, self.act_dim, self.width());
+        assert!(
+            obs.len() == o && next_obs.len() == o && act.len() == a,
+            "replay: sizes"
+        );
+        let row = &mut self.rows[i * w..(i + 1) * w];
+        row[..o].copy_from_slice(obs);
+        row[o..o + a].copy_from_slice(act);
+        row[o + a] = rew;
+        row[o + a + 1..2 * o + a + 1].copy_from_slice(next_obs);
+        row[2 * o + a + 1] = f32::from(u8::from(terminal));
         self.next = (i + 1) % self.capacity;
         self.len = (self.len + 1).min(self.capacity);
     }
@@ -88,16 +95,18 @@ impl Replay {
         ] {
             v.clear();
         }
-        // Element-wise copies: rows are a few floats, where a `memmove` call per row costs
-        // more than the copy (5 % of a PBCS run).
+        let w = self.width();
+        // Element-wise copies: rows are a few floats, where a `memmove` call per field costs
+        // more than the copy.
         for _ in 0..n {
             let i = rng.random_range(0..self.len);
-            out.obs.extend(self.obs[i * o..(i + 1) * o].iter().copied());
-            out.act.extend(self.act[i * a..(i + 1) * a].iter().copied());
-            out.rew.push(self.rew[i]);
+            let row = &self.rows[i * w..(i + 1) * w];
+            out.obs.extend(row[..o].iter().copied());
+            out.act.extend(row[o..o + a].iter().copied());
+            out.rew.push(row[o + a]);
             out.next_obs
-                .extend(self.next_obs[i * o..(i + 1) * o].iter().copied());
-            out.done.push(self.done[i]);
+                .extend(row[o + a + 1..2 * o + a + 1].iter().copied());
+            out.done.push(row[2 * o + a + 1]);
         }
     }
 }
