@@ -297,6 +297,9 @@ fn replay_samples_whole_transitions_from_the_newest() {
         assert_eq!(&b.obs[2 * k..2 * k + 2], &[f, -f]);
         assert_eq!(&b.act[2 * k..2 * k + 2], &[0.5 * f, 1.0]);
         assert_eq!(&b.next_obs[2 * k..2 * k + 2], &[f + 1.0, -f - 1.0]);
-        assert_eq!(b.done[k], f32::from(u8::from(f as usize % 3 == 0)));
+        assert_eq!(
+            b.done[k],
+            f32::from(u8::from((f as usize).is_multiple_of(3)))
+        );
     }
 }
