@@ -648,7 +648,18 @@ pub fn sweep(
                 };
                 let p = &runs[i];
                 let clock = std::time::Instant::now();
-                match run_cell_seed(exp, p.cell, p.seed, &exp.cell_dir(results, p.cell)) {
+                let dir = exp.cell_dir(results, p.cell);
+                // One process per run: a second sweep into this folder stops here with a
+                // message instead of doing the run again and replacing its row.
+                let run = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
+                    .and_then(|_lock| {
+                        // Finished by another sweep while this one was planning: read it back.
+                        match read_finished(p.cell, p.seed, &dir)? {
+                            Some(row) => Ok(row),
+                            None => run_cell_seed(exp, p.cell, p.seed, &dir),
+                        }
+                    });
+                match run {
                     Ok(row) => {
                         on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
                         rows.lock().unwrap()[i] = Some(row);

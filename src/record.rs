@@ -97,6 +97,54 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
     write_atomic(&config, |w| w.write_all(config_text.as_bytes()))
 }
 
+/// An exclusive claim on one piece of work (a run of a sweep): the file `path` exists while
+/// the guard lives and is removed when it is dropped. A second claim of the same path fails
+/// with a message naming the file, so two sweeps into one results folder never do the same
+/// run twice or replace each other's rows.
+#[derive(Debug)]
+pub struct WorkLock {
+    path: std::path::PathBuf,
+}
+
+impl WorkLock {
+    /// Takes the lock `path` (its folder is created), or says who holds it.
+    pub fn acquire(path: &Path) -> Result<WorkLock> {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+        {
+            Ok(mut f) => {
+                writeln!(f, "pid = {}", std::process::id()).map_err(|e| Error::io(path, e))?;
+                Ok(WorkLock {
+                    path: path.to_path_buf(),
+                })
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let holder = std::fs::read_to_string(path).unwrap_or_default();
+                Err(Error::io(
+                    path,
+                    std::io::Error::other(format!(
+                        "another process is doing this run ({}); wait for it, or delete this \
+                         file if none is (an interrupted run leaves it behind)",
+                        holder.trim()
+                    )),
+                ))
+            }
+            Err(e) => Err(Error::io(path, e)),
+        }
+    }
+}
+
+impl Drop for WorkLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
 /// Writes a CSV file atomically: a header and rows of already-formatted fields.
 pub fn write_csv<R, I>(path: &Path, header: &[String], rows: I) -> Result<()>
 where

@@ -220,3 +220,27 @@ fn a_saved_chain_is_evaluated_from_its_folder_alone() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("run.toml"), "{}", stderr(&o));
 }
+
+/// Before: an empty config silently ran maze 5 with a 50M-step budget.
+#[test]
+fn a_config_that_leaves_settings_out_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("empty.toml");
+    std::fs::write(&config, "").unwrap();
+    let o = pbcs(&[
+        "explore",
+        "--config",
+        path(&config),
+        "--maze",
+        "2",
+        "--quiet",
+        "--out",
+        path(&dir.path().join("e")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("does not set") && e.contains("maze") && e.contains("defaults"),
+        "{e}"
+    );
+}

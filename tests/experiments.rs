@@ -212,6 +212,30 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     assert!(err.to_string().contains("another config"), "{err}");
 }
 
+/// Two sweeps into one results folder: a run that another process holds (its lock file) is
+/// refused with a message naming the lock, and nothing of it is written; once released, the
+/// run goes ahead and leaves no lock behind.
+#[test]
+fn a_run_another_sweep_holds_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
+    let runs = plan(&exp, Some("exact-maze2"), Some(0)).unwrap();
+    let cell_dir = exp.cell_dir(dir.path(), runs[0].cell);
+    let lock = pbcs::record::WorkLock::acquire(&cell_dir.join("s0.lock")).unwrap();
+    let err = sweep(&exp, &runs, dir.path(), 1, |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("s0.lock") && err.contains("another process"),
+        "{err}"
+    );
+    assert!(!cell_dir.join("s0.csv").exists());
+    drop(lock);
+    sweep(&exp, &runs, dir.path(), 1, |_, _| {}).unwrap();
+    assert!(cell_dir.join("s0.csv").exists());
+    assert!(!cell_dir.join("s0.lock").exists());
+}
+
 /// Stored configs are compared by value: a setting added after a run was stored, absent from
 /// its file, takes its default (the older run's behaviour); a changed value is another job.
 #[test]

@@ -50,7 +50,7 @@ struct RunArgs {
 
 impl RunArgs {
     /// The config file (or the defaults) with the maze and seed flags applied.
-    fn load<T: DeserializeOwned + Check + Default>(
+    fn load<T: DeserializeOwned + Check + Default + serde::Serialize>(
         &self,
         parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
     ) -> anyhow::Result<T> {
@@ -58,13 +58,17 @@ impl RunArgs {
     }
 
     /// The config file (or `default()` without one) with the maze and seed flags applied.
-    fn load_or<T: DeserializeOwned + Check>(
+    fn load_or<T: DeserializeOwned + Check + serde::Serialize>(
         &self,
         default: impl FnOnce() -> anyhow::Result<T>,
         parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
     ) -> anyhow::Result<T> {
         let mut job: T = match &self.config {
-            Some(path) => config::load(path)?,
+            Some(path) => {
+                let job: T = config::load(path)?;
+                note_defaults(path, &job);
+                job
+            }
             None => default()?,
         };
         let (maze, seed) = parts(&mut job);
@@ -109,6 +113,9 @@ struct LearnerArgs {
     /// Actor update; overrides `learner.actor_update`.
     #[arg(long, value_parser = ["gradient", "argmax"])]
     actor: Option<String>,
+    /// Discount γ in [0, 1); overrides `learner.gamma`.
+    #[arg(long)]
+    gamma: Option<f32>,
 }
 
 impl LearnerArgs {
@@ -122,6 +129,9 @@ impl LearnerArgs {
             Some("gradient") => l.actor_update = ActorUpdate::Gradient,
             Some("argmax") => l.actor_update = ActorUpdate::Argmax,
             _ => {}
+        }
+        if let Some(g) = self.gamma {
+            l.gamma = g;
         }
     }
 }
@@ -175,9 +185,6 @@ enum Command {
         /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
         #[arg(long)]
         exact_starts: bool,
-        /// Discount γ; overrides `learner.gamma`.
-        #[arg(long)]
-        gamma: Option<f32>,
     },
     /// The PBCS results table: `pbcs run` for every maze size × seed (resumable: finished runs
     /// are read back, not re-run), then solved counts and step statistics beside the paper's.
@@ -327,6 +334,29 @@ enum ExpCommand {
     },
 }
 
+/// Says which top-level settings a config file leaves to their defaults (an empty file runs
+/// the defaults; the user should know it did).
+fn note_defaults<T: serde::Serialize>(path: &std::path::Path, job: &T) {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let given: toml::Table = toml::from_str(&text).unwrap_or_default();
+    let Ok(toml::Value::Table(all)) = toml::Value::try_from(job) else {
+        return;
+    };
+    let missing: Vec<&str> = all
+        .keys()
+        .filter(|k| !given.contains_key(*k))
+        .map(String::as_str)
+        .collect();
+    if !missing.is_empty() {
+        eprintln!(
+            "note: {} does not set {}: the defaults are used (the run folder's config.toml \
+             lists every value)",
+            path.display(),
+            missing.join(", ")
+        );
+    }
+}
+
 /// `--maze`: a whole number from 2 to 100, said so for anything else (a negative number
 /// included).
 fn parse_maze_size(s: &str) -> Result<usize, String> {
@@ -379,7 +409,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             learner,
             no_chaining,
             exact_starts,
-            gamma,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
             let mut job: RunJob = run.load_or(
@@ -392,9 +421,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             if exact_starts {
                 job.phase2.start = pbcs::pbcs::StartMode::Exact;
-            }
-            if let Some(g) = gamma {
-                job.learner.gamma = g;
             }
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
