@@ -363,7 +363,7 @@ fn parse_maze_size(s: &str) -> Result<usize, String> {
     match s.trim().parse::<i64>() {
         Ok(n) if (2..=100).contains(&n) => Ok(n as usize),
         _ => Err(format!(
-            "the maze size is a whole number from 2 to 100, got {s:?}"
+            "maze.size is a whole number from 2 to 100, got {s:?}"
         )),
     }
 }
