@@ -451,7 +451,7 @@ pub fn run_pbcs(
     };
     data.write_csv(&out.join("picture.csv"))?;
     let title = format!(
-        "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, success {}",
+        "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
         record.variant,
         record.learner,
         job.maze.size,
@@ -459,7 +459,7 @@ pub fn run_pbcs(
         job.seed,
         record.total_steps,
         record.skills,
-        success_rate
+        100.0 * success_rate
     );
     render_maze(
         &maze,
