@@ -4,7 +4,7 @@
 //!
 //! Every figure is written as PNG and SVG with the bundled font (see [`crate::plot`]).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::experiment::{evals_file, picture_file, Cell, Experiment, Job};
 use crate::maze::Maze;
 use crate::plot::{draw_maze, render_figure, Figure, PictureData};
@@ -529,12 +529,4 @@ pub fn render_experiment(
         }
     }
     Ok(files)
-}
-
-/// An error for a figure that needs data that is missing.
-pub fn missing(what: &str, path: &Path) -> Error {
-    Error::Parse {
-        path: path.to_path_buf(),
-        message: format!("{what} is missing (run the experiment, then `make figures`)"),
-    }
 }

@@ -59,11 +59,6 @@ impl Seeds {
         Seeds { seed }
     }
 
-    /// The run seed.
-    pub fn seed(&self) -> u64 {
-        self.seed
-    }
-
     /// The generator of one consumer.
     pub fn stream(&self, stream: Stream) -> Rng {
         self.substream(stream, 0)

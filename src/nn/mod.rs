@@ -157,11 +157,6 @@ impl Mlp {
         (before, before + self.sizes[l] * self.sizes[l + 1])
     }
 
-    /// Multiply-adds of one forward pass per sample (the backward pass costs about twice).
-    pub fn macs_per_sample(&self) -> usize {
-        self.sizes.windows(2).map(|w| w[0] * w[1]).sum()
-    }
-
     /// Runs the batch `x` (`batch` rows of [`Mlp::input_dim`]) forward; returns the output
     /// (`batch` rows of [`Mlp::output_dim`]) and keeps the activations in `ws` for
     /// [`Mlp::backward`].
