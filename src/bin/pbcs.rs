@@ -26,16 +26,17 @@ struct Cli {
 /// Flags shared by every run.
 #[derive(Args)]
 struct RunArgs {
-    /// TOML config; the flags override its fields.
+    /// TOML config; the flags override its fields [default: the built-in defaults (`run`: the
+    /// preset); the run folder's config.toml lists every value used].
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Maze size N (2..=100); overrides `maze.size`.
+    /// Maze size N (2..=100); overrides `maze.size` [default: the config's, else 5].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_maze_size)]
     maze: Option<usize>,
-    /// Maze layout seed; overrides `maze.seed`.
+    /// Maze layout seed; overrides `maze.seed` [default: the config's, else 0].
     #[arg(long, allow_negative_numbers = true)]
     maze_seed: Option<u64>,
-    /// Run seed; overrides `seed`.
+    /// Run seed; overrides `seed` [default: the config's, else 0].
     #[arg(long, allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
@@ -107,13 +108,14 @@ impl RunArgs {
 /// Learner flags shared by `train` and `run`.
 #[derive(Args)]
 struct LearnerArgs {
-    /// Learner preset; overrides `learner.algo`.
+    /// Learner preset; overrides `learner.algo` [default: the config's, else ddpg].
     #[arg(long, value_parser = ["ddpg", "td3"])]
     algo: Option<String>,
-    /// Actor update; overrides `learner.actor_update`.
+    /// Actor update; overrides `learner.actor_update` [default: the config's, else gradient].
     #[arg(long, value_parser = ["gradient", "argmax"])]
     actor: Option<String>,
-    /// Discount γ in [0, 1); overrides `learner.gamma`.
+    /// Discount γ in [0, 1); overrides `learner.gamma` [default: the config's, else 0.9 for
+    /// `run`, 0.99 for `train`].
     #[arg(long)]
     gamma: Option<f32>,
 }
@@ -151,7 +153,7 @@ enum Command {
         run: RunArgs,
         #[command(flatten)]
         learner: LearnerArgs,
-        /// Environment steps; overrides `train.steps`.
+        /// Environment steps; overrides `train.steps` [default: the config's, else 1000000].
         #[arg(long)]
         steps: Option<u64>,
     },
