@@ -43,6 +43,30 @@ pub struct MazePicture<'a> {
     pub circles: Vec<((f32, f32), f32)>,
 }
 
+/// Height of the legend line under the maze.
+const LEGEND_PX: u32 = 18;
+
+/// The legend of what `picture` draws (colours named), empty when it draws nothing but the maze.
+pub fn legend(picture: &MazePicture) -> String {
+    let mut parts = vec!["blue dot: start", "green disc: target"];
+    if !picture.points.is_empty() {
+        parts.push("faint blue: visited states");
+    }
+    if !picture.red_area.is_empty() {
+        parts.push("red squares: explored area");
+    }
+    if !picture.red_paths.is_empty() {
+        parts.push("red: trajectory τ");
+    }
+    if !picture.green_paths.is_empty() {
+        parts.push("green: rollouts");
+    }
+    if !picture.circles.is_empty() {
+        parts.push("purple: activation balls");
+    }
+    parts.join(" · ")
+}
+
 type Chart<'b, DB> = ChartContext<'b, DB, Cartesian2d<RangedCoordf32, RangedCoordf32>>;
 
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
@@ -59,12 +83,34 @@ pub fn draw_maze<DB: DrawingBackend>(
     picture: &MazePicture,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     area.fill(&WHITE)?;
+    // A titled (stand-alone) picture gets a legend line at the bottom, fitted to the width;
+    // untitled panels of a grid do not.
+    let area = if picture.title.is_empty() {
+        area
+    } else {
+        let (w, h) = area.dim_in_pixel();
+        let (area, bottom) = area.split_vertically(h.saturating_sub(LEGEND_PX));
+        let text = legend(picture);
+        let chars = text.chars().count().max(1) as f64;
+        let size = ((w as f64 - 20.0) / (0.55 * chars)).clamp(8.0, 12.0);
+        bottom.draw(&Text::new(
+            text,
+            (10, 2),
+            ("sans-serif", size).into_font().color(&BLACK),
+        ))?;
+        area
+    };
     let n = maze.size() as f32;
     let margin = 0.1;
     let mut builder = ChartBuilder::on(&area);
     builder.margin(10);
     if !picture.title.is_empty() {
-        builder.caption(&picture.title, ("sans-serif", 14));
+        // The whole title fits the width: at most 14 px, smaller for long titles on small
+        // mazes (a glyph is about 0.55 of the font size wide).
+        let width = area.dim_in_pixel().0 as f64 - 20.0;
+        let chars = picture.title.chars().count().max(1) as f64;
+        let size = (width / (0.55 * chars)).clamp(8.0, 14.0);
+        builder.caption(&picture.title, ("sans-serif", size));
     }
     let mut chart: Chart<DB> =
         builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
@@ -90,15 +136,15 @@ pub fn draw_maze<DB: DrawingBackend>(
         let b = w.aabb();
         Rectangle::new([(b.mins.x, b.mins.y), (b.maxs.x, b.maxs.y)], BLACK.filled())
     }))?;
-    // Trajectories.
-    for path in &picture.red_paths {
-        chart.draw_series(LineSeries::new(path.iter().copied(), RED.stroke_width(2)))?;
-    }
+    // Rollouts, then τ on top of them (it would hide under ten rollouts otherwise).
     for path in &picture.green_paths {
         chart.draw_series(LineSeries::new(
             path.iter().copied(),
             RGBColor(0, 170, 0).stroke_width(2),
         ))?;
+    }
+    for path in &picture.red_paths {
+        chart.draw_series(LineSeries::new(path.iter().copied(), RED.stroke_width(2)))?;
     }
     let purple = RGBColor(140, 40, 200);
     for &((cx, cy), r) in &picture.circles {
@@ -183,7 +229,14 @@ pub fn render_maze(
 ) -> Result<()> {
     register_font();
     let side = side_px(maze);
-    let size = (side, side + if picture.title.is_empty() { 0 } else { 30 });
+    let size = (
+        side,
+        side + if picture.title.is_empty() {
+            0
+        } else {
+            30 + LEGEND_PX
+        },
+    );
     crate::record::write_atomic_via_path(png, |tmp| {
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
         draw_maze(root.clone(), maze, picture)
