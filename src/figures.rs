@@ -65,14 +65,22 @@ fn stats_of<'a>(stats: &'a [CellStats], cell: &Cell) -> Option<&'a CellStats> {
     stats.iter().find(|s| s.cell == cell.id)
 }
 
-/// A cell's one-line summary: `7/10 solved · median 171k`.
-fn summary(s: &CellStats) -> String {
-    format!(
-        "{}/{} solved · {}",
-        s.successes,
-        s.n,
-        human_steps(s.steps_median)
-    )
+/// A cell's one-line summary: `7/10 solved · median 171k`, the median environment steps of
+/// the solved seeds; `0/10 solved · budget 400k` when no seed solved (the steps of unsolved
+/// runs say only that the budget ran out, and Backplay checks it between batches of
+/// episodes, so they may pass it by up to one batch).
+pub fn summary(s: &CellStats) -> String {
+    match s.solved_steps_median {
+        Some(m) if s.successes > 0 => {
+            format!("{}/{} solved · median {}", s.successes, s.n, human_steps(m))
+        }
+        _ => format!(
+            "{}/{} solved · budget {}",
+            s.successes,
+            s.n,
+            human_steps(s.budget as f64)
+        ),
+    }
 }
 
 fn centred_text<DB: DrawingBackend>(
@@ -92,16 +100,22 @@ fn centred_text<DB: DrawingBackend>(
 }
 
 /// The results table as a grid of pictures: rows = maze sizes, columns = methods; each cell
-/// shows the first picture seed's run and is labelled with its solved count and median steps
-/// on a green (most seeds solved) or red background.
+/// shows the first picture seed's run and is labelled with its [`summary`] on a green (more
+/// than half the seeds solved) or red background; a legend under the grid says so.
 pub struct ResultsGrid {
     cells: Vec<Vec<Option<(Maze, PictureData, CellStats)>>>,
     rows: Vec<String>,
     columns: Vec<String>,
+    /// The legend's lines (see [`ResultsGrid::legend`]).
+    legend: Vec<String>,
 }
 
 const GRID_CELL: u32 = 280;
 const GRID_LABEL: u32 = 26;
+/// Height of one legend line under the grid.
+const GRID_LEGEND_LINE: u32 = 22;
+/// Width of the row labels.
+const GRID_LEFT: u32 = 70;
 
 impl ResultsGrid {
     /// Collects the grid of `exp` from its table and picture data.
@@ -124,25 +138,81 @@ impl ResultsGrid {
             }
             cells.push(row);
         }
+        let legend = ResultsGrid::legend(exp, &cells);
         Ok(ResultsGrid {
             cells,
             rows: exp.mazes.iter().map(|n| format!("{n}×{n}")).collect(),
             columns: exp.methods.iter().map(|(_, l)| l.clone()).collect(),
+            legend,
         })
+    }
+
+    /// What the bands and the pictures show, one line each; the first line follows the two
+    /// colour swatches drawn before it.
+    fn legend(
+        exp: &Experiment,
+        cells: &[Vec<Option<(Maze, PictureData, CellStats)>>],
+    ) -> Vec<String> {
+        let mut lines = vec![
+            "more than half the seeds solved / half or fewer (grey: no runs yet)".to_string(),
+            "band: seeds solved / seeds · median environment steps of the solved seeds, \
+             or the step budget when none solved"
+                .to_string(),
+        ];
+        // Everything any panel draws, each name once, in the order the panels name them.
+        let mut parts: Vec<String> = Vec::new();
+        for (_, data, _) in cells.iter().flatten().flatten() {
+            for part in crate::plot::legend(&data.picture(String::new())).split(" · ") {
+                if !parts.iter().any(|p| p == part) {
+                    parts.push(part.to_string());
+                }
+            }
+        }
+        if let (Some(seed), false) = (exp.picture_seeds.first(), parts.is_empty()) {
+            lines.push(format!(
+                "pictures: seed {seed}'s run — {}",
+                parts.join(" · ")
+            ));
+        }
+        lines
     }
 }
 
 impl Figure for ResultsGrid {
     fn size(&self) -> (u32, u32) {
         (
-            70 + GRID_CELL * self.columns.len() as u32,
-            40 + (GRID_CELL + GRID_LABEL) * self.rows.len() as u32,
+            GRID_LEFT + GRID_CELL * self.columns.len() as u32,
+            40 + (GRID_CELL + GRID_LABEL) * self.rows.len() as u32
+                + 8
+                + GRID_LEGEND_LINE * self.legend.len() as u32,
         )
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (w, h) = root.dim_in_pixel();
+        let (root, footer) =
+            root.split_vertically(h - 8 - GRID_LEGEND_LINE * self.legend.len() as u32);
+        // The legend: two colour swatches before the first line.
+        for (i, line) in self.legend.iter().enumerate() {
+            let y = 8 + GRID_LEGEND_LINE as i32 * i as i32;
+            let mut x = GRID_LEFT as i32;
+            if i == 0 {
+                for colour in [GREEN_BG, RED_BG] {
+                    footer.draw(&Rectangle::new([(x, y), (x + 28, y + 16)], colour.filled()))?;
+                    x += 34;
+                }
+            }
+            let size = (w as f64 - x as f64 - 10.0) / (0.55 * line.chars().count().max(1) as f64);
+            footer.draw(&Text::new(
+                line.clone(),
+                (x, y),
+                ("sans-serif", size.clamp(8.0, 15.0))
+                    .into_font()
+                    .color(&BLACK),
+            ))?;
+        }
         let (header, body) = root.split_vertically(40);
-        let (_, header) = header.split_horizontally(70);
+        let (_, header) = header.split_horizontally(GRID_LEFT);
         for (area, label) in header
             .split_evenly((1, self.columns.len()))
             .iter()
@@ -150,7 +220,7 @@ impl Figure for ResultsGrid {
         {
             centred_text(area, label, 18, &BLACK)?;
         }
-        let (left, grid) = body.split_horizontally(70);
+        let (left, grid) = body.split_horizontally(GRID_LEFT);
         for (area, label) in left
             .split_evenly((self.rows.len(), 1))
             .iter()
@@ -504,7 +574,13 @@ pub fn render_experiment(
                     if let (Some(s), Some(data)) =
                         (stats_of(stats, c), cell_picture(exp, results, c)?)
                     {
-                        panels.push((cell_maze(c)?, data, format!("{}: {}", c.label, summary(s))));
+                        let title = format!(
+                            "{}, maze {n}×{n}, seed {}: {}",
+                            c.label,
+                            exp.picture_seeds[0],
+                            summary(s)
+                        );
+                        panels.push((cell_maze(c)?, data, title));
                     }
                 }
                 if !panels.is_empty() {
@@ -529,4 +605,77 @@ pub fn render_experiment(
         }
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(successes: u64, steps_median: f64, solved: Option<f64>) -> CellStats {
+        CellStats {
+            experiment: "table".into(),
+            cell: "pbcs-maze5".into(),
+            method: "pbcs".into(),
+            label: "PBCS".into(),
+            maze: 5,
+            n: 10,
+            successes,
+            success_rate: successes as f64 / 10.0,
+            wilson_lo: 0.0,
+            wilson_hi: 1.0,
+            steps_median,
+            steps_q1: steps_median,
+            steps_q3: steps_median,
+            steps_min: steps_median,
+            steps_max: steps_median,
+            solved_steps_median: solved,
+            skills_median: 1.0,
+            success_rate_median: 0.0,
+            budget: 400_000,
+            paper_steps: None,
+            paper_solved: None,
+        }
+    }
+
+    #[test]
+    fn summary_names_the_median_of_solved_runs_or_the_budget() {
+        // Unsolved runs stop at the first check past the budget (401 580 here): the band
+        // states the budget, never a step count above it.
+        assert_eq!(
+            summary(&stats(0, 401_580.0, None)),
+            "0/10 solved · budget 400k"
+        );
+        // Solved: the median of the solved runs, labelled, not the median over all runs.
+        assert_eq!(
+            summary(&stats(7, 300_000.0, Some(171_000.0))),
+            "7/10 solved · median 171k"
+        );
+        assert_eq!(human_steps(1_573_000.0), "1.57M");
+    }
+
+    #[test]
+    fn grid_legend_names_colours_band_and_pictures() {
+        let exp = crate::experiment::Experiment::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/table.toml"),
+            Some("smoke"),
+        )
+        .unwrap();
+        let data = PictureData {
+            red_paths: vec![vec![(0.5, 0.5), (1.0, 1.0)]],
+            ..PictureData::default()
+        };
+        let maze = cell_maze(&exp.cells[0]).unwrap();
+        let cells = vec![vec![Some((maze, data, stats(1, 1.0, Some(1.0))))]];
+        let legend = ResultsGrid::legend(&exp, &cells);
+        assert!(legend[0].contains("more than half the seeds solved"));
+        assert!(legend[1].contains("median environment steps of the solved seeds"));
+        assert!(legend[1].contains("step budget"));
+        assert_eq!(
+            legend[2],
+            format!(
+                "pictures: seed {}'s run — blue dot: start · green disc: target · red: trajectory τ",
+                exp.picture_seeds[0]
+            )
+        );
+    }
 }

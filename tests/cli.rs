@@ -183,6 +183,13 @@ fn a_saved_chain_is_evaluated_from_its_folder_alone() {
         path(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The run's line gives the chain's success as a percentage (before: "chain success 1").
+    assert!(
+        String::from_utf8_lossy(&o.stdout)
+            .contains("SOLVED — chain success 100 % over 100 episodes"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     let record = std::fs::read_to_string(out.join("record.csv")).unwrap();
     let header: Vec<&str> = record.lines().next().unwrap().split(',').collect();
     let row: Vec<&str> = record.lines().nth(1).unwrap().split(',').collect();

@@ -956,7 +956,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
     .with_context(|| format!("PBCS on maze {} seed {}", job.maze.size, job.seed))?;
     bar.finish_and_clear();
     println!(
-        "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {} over {} \
+        "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {:.0} % over {} \
          episodes, {} skills{}",
         record.variant,
         record.learner,
@@ -968,7 +968,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
         } else {
             "not solved"
         },
-        record.success_rate,
+        100.0 * record.success_rate,
         job.phase2.eval_episodes,
         record.skills,
         if record.failure.is_empty() {
