@@ -69,8 +69,8 @@ fn end_to_end(kernel: Kernel, steps: u64) -> (f64, u64, u64) {
         |_, _| {},
     )
     .unwrap();
-    let tau = pbcs::pbcs::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
-    let out = pbcs::pbcs::chain_skills(
+    let tau = pbcs::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+    let out = pbcs::phase2::chain_skills(
         &maze,
         &tau,
         &job.learner,

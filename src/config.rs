@@ -17,7 +17,7 @@
 
 use crate::error::{Error, Result};
 use crate::learner::LearnerConfig;
-use crate::pbcs::Phase2Config;
+use crate::phase2::Phase2Config;
 use crate::train::TrainConfig;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};

@@ -42,9 +42,24 @@ pub enum Error {
         /// Environment steps performed.
         steps: u64,
     },
-    /// Writing a CSV record failed.
-    #[error("csv: {0}")]
-    Csv(#[from] csv::Error),
+    /// Reading or writing a CSV file failed (its path named).
+    #[error("{path}: {cause}")]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// The CSV reader's or writer's error (it locates the record).
+        cause: csv::Error,
+    },
+    /// One run of a sweep failed: which cell and seed, and why.
+    #[error("cell {cell} seed {seed}: {cause}")]
+    Run {
+        /// The cell's id.
+        cell: String,
+        /// The run seed.
+        seed: u64,
+        /// Why it failed.
+        cause: Box<Error>,
+    },
     /// Aggregating results failed (polars), or its numbers disagreed with the plain check.
     #[error("aggregate {experiment}: {message}")]
     Aggregate {
@@ -72,6 +87,14 @@ impl Error {
         Error::Invalid {
             field: field.into(),
             reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Csv`].
+    pub fn csv(path: impl Into<PathBuf>, cause: csv::Error) -> Self {
+        Error::Csv {
+            path: path.into(),
+            cause,
         }
     }
 

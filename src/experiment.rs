@@ -28,12 +28,10 @@
 
 use crate::config::{Check, RunJob, TrainJob};
 use crate::error::{Error, Result};
-use crate::jobs::{run_pbcs, run_train};
+use crate::jobs::{PbcsRun, TrainRun};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// What a method runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -105,10 +103,115 @@ struct ExperimentSpec {
     methods: Vec<MethodSpec>,
     #[serde(default, rename = "profile")]
     profiles: BTreeMap<String, ProfileSpec>,
+    #[serde(default, rename = "figure")]
+    figures: Vec<FigureSpec>,
+}
+
+/// A figure an experiment declares (`[[figure]]` in its file, `kind` naming the variant);
+/// `pbcs figures` draws each into `<name>.png` and `<name>.svg`. An experiment that declares
+/// none gets one [`FigureSpec::Bars`] named after it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FigureSpec {
+    /// The results table as a grid of pictures: rows = mazes, columns = methods.
+    Grid {
+        /// File stem.
+        name: String,
+    },
+    /// One enlarged picture per maze of `method`'s first picture seed: `<name><N>`.
+    Mazes {
+        /// File stem, followed by the maze size.
+        name: String,
+        /// The method drawn.
+        method: String,
+    },
+    /// Learning curves of the experiment's vanilla methods (drawn only if it has some).
+    Curves {
+        /// File stem.
+        name: String,
+    },
+    /// Success rate per maze and method with Wilson 95 % error bars.
+    Bars {
+        /// File stem.
+        name: String,
+    },
+    /// The `methods`' pictures side by side, on the maze where the solved counts of the first
+    /// two differ most (the smallest such maze on ties).
+    Panels {
+        /// File stem.
+        name: String,
+        /// The methods shown, in order (at least two).
+        methods: Vec<String>,
+    },
+}
+
+impl FigureSpec {
+    /// The figure's file stem.
+    pub fn name(&self) -> &str {
+        match self {
+            FigureSpec::Grid { name }
+            | FigureSpec::Mazes { name, .. }
+            | FigureSpec::Curves { name }
+            | FigureSpec::Bars { name }
+            | FigureSpec::Panels { name, .. } => name,
+        }
+    }
+
+    /// The methods the figure names.
+    fn methods(&self) -> Vec<&str> {
+        match self {
+            FigureSpec::Mazes { method, .. } => vec![method.as_str()],
+            FigureSpec::Panels { methods, .. } => methods.iter().map(String::as_str).collect(),
+            _ => Vec::new(),
+        }
+    }
 }
 
 fn default_picture_seeds() -> Vec<u64> {
     vec![0]
+}
+
+/// Every declared figure has a file-name-safe, unique name and names only methods of the
+/// experiment.
+fn check_figures(path: &Path, figures: &[FigureSpec], methods: &[(String, String)]) -> Result<()> {
+    let mut names = BTreeSet::new();
+    for (i, f) in figures.iter().enumerate() {
+        let field = |what: &str| format!("figure[{i}].{what} in {}", path.display());
+        let name = f.name();
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        {
+            return Err(Error::invalid(
+                field("name"),
+                format!("must be letters, digits, `_` or `-`, got `{name}`"),
+            ));
+        }
+        if !names.insert(name) {
+            return Err(Error::invalid(
+                field("name"),
+                format!("`{name}` is used twice"),
+            ));
+        }
+        for m in f.methods() {
+            if !methods.iter().any(|(n, _)| n == m) {
+                return Err(Error::invalid(
+                    field("method"),
+                    format!("the experiment has no method `{m}`"),
+                ));
+            }
+        }
+        if let FigureSpec::Panels { methods: ms, .. } = f {
+            if ms.len() < 2 {
+                return Err(Error::invalid(
+                    field("methods"),
+                    "needs at least two methods",
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A resolved job of either kind.
@@ -197,6 +300,8 @@ pub struct Experiment {
     pub methods: Vec<(String, String)>,
     /// Cells, maze-major in the file's order of mazes and methods.
     pub cells: Vec<Cell>,
+    /// The figures it declares, in order.
+    pub figures: Vec<FigureSpec>,
 }
 
 /// Merges `from` into `into`: tables merge key by key, anything else replaces.
@@ -352,8 +457,8 @@ impl Experiment {
                 });
             }
         }
+        check_figures(path, &spec.figures, &methods)?;
         Ok(Experiment {
-            name,
             title: spec.title,
             description: if prof.description.is_empty() {
                 spec.description
@@ -364,6 +469,12 @@ impl Experiment {
             first_seed: spec.first_seed,
             seed_count,
             picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
+            figures: if spec.figures.is_empty() {
+                vec![FigureSpec::Bars { name: name.clone() }]
+            } else {
+                spec.figures
+            },
+            name,
             mazes,
             methods,
             cells,
@@ -453,18 +564,19 @@ fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
     dir.join(format!("s{seed}{suffix}"))
 }
 
-/// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last). Runs in a
-/// scratch folder; only the raw files are kept.
+/// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
+/// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
+/// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
+/// `s<seed>.evals.csv` (vanilla), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
+/// job) and `s<seed>.csv` (the row).
 pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
-    let scratch = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-    let tmp = scratch.path();
-    let mut keep = vec![("timing.toml", ".timing.toml")];
-    let row = match &job {
+    let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
-            let (s, _) = run_train(j, tmp, |_, _| {})?;
-            keep.push(("evals.csv", ".evals.csv"));
-            RawRow {
+            let run = TrainRun::compute(j, |_, _| {})?;
+            crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
+            let s = &run.summary;
+            let row = RawRow {
                 experiment: exp.name.clone(),
                 cell: cell.id.clone(),
                 method: cell.method.clone(),
@@ -484,7 +596,7 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
                 gamma: j.learner.gamma,
                 chaining: false,
                 starts: String::new(),
-                solved: s.final_success >= 0.95,
+                solved: s.final_success >= crate::jobs::SOLVED_AT,
                 success_rate: s.final_success,
                 env_steps: s.env_steps,
                 budget: j.train.steps,
@@ -494,11 +606,13 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
                 test_steps: 0,
                 skills: 0,
                 failure: String::new(),
-            }
+            };
+            (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
-            let (r, _) = run_pbcs(j, tmp, |_, _| {})?;
-            RawRow {
+            let run = PbcsRun::compute(j, |_, _| {})?;
+            let r = run.record;
+            let row = RawRow {
                 experiment: exp.name.clone(),
                 cell: cell.id.clone(),
                 method: cell.method.clone(),
@@ -520,19 +634,13 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
                 test_steps: r.test_steps,
                 skills: r.skills,
                 failure: r.failure,
-            }
+            };
+            (row, run.seconds, run.picture)
         }
     };
+    crate::jobs::write_timing(&run_file(dir, seed, ".timing.toml"), seconds, row.env_steps)?;
     if exp.picture_seeds.contains(&seed) {
-        keep.push(("picture.csv", ".picture.csv"));
-    }
-    for (from, suffix) in keep {
-        let to = run_file(dir, seed, suffix);
-        let src = tmp.join(from);
-        crate::record::write_atomic(&to, |w| {
-            let bytes = std::fs::read(&src)?;
-            w.write_all(&bytes)
-        })?;
+        picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
     }
     let config = job.to_toml();
     crate::record::write_atomic(&run_file(dir, seed, ".toml"), |w| {
@@ -565,23 +673,21 @@ pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow
 
 /// Reads one raw row file.
 pub fn read_row(path: &Path) -> Result<RawRow> {
-    let mut reader = csv::Reader::from_path(path).map_err(Error::Csv)?;
+    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
     reader
         .deserialize()
         .next()
         .ok_or_else(|| parse_err(path, "empty raw row file"))?
-        .map_err(Error::Csv)
+        .map_err(|e| Error::csv(path, e))
 }
 
-/// Wall seconds of a finished run, from its timing file (None if absent).
+/// Wall seconds of a finished run, from its timing file (None if absent or unreadable).
 pub fn read_wall_seconds(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> Option<f64> {
-    let text =
-        std::fs::read_to_string(run_file(&exp.cell_dir(results, cell), seed, ".timing.toml"))
-            .ok()?;
-    text.lines().find_map(|l| {
-        l.strip_prefix("wall_seconds = ")
-            .and_then(|v| v.trim().parse().ok())
-    })
+    let path = run_file(&exp.cell_dir(results, cell), seed, ".timing.toml");
+    crate::record::Timing::read(&path)
+        .ok()
+        .flatten()
+        .map(|t| t.wall_seconds)
 }
 
 /// Path of the picture data of (cell, seed), if it was kept.
@@ -634,58 +740,49 @@ pub fn sweep(
         rows.push(done);
     }
     let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
-    let next = AtomicUsize::new(0);
-    let rows = Mutex::new(rows);
-    let first_error: Mutex<Option<Error>> = Mutex::new(None);
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.max(1) {
-            scope.spawn(|| loop {
-                if first_error.lock().unwrap().is_some() {
-                    break;
+    let ran = run_parallel(&todo, jobs, |&i| {
+        let p = &runs[i];
+        let clock = std::time::Instant::now();
+        let dir = exp.cell_dir(results, p.cell);
+        // One process per run: a second sweep into this folder stops here with a message
+        // instead of doing the run again and replacing its row.
+        let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
+            .and_then(|_lock| {
+                // Finished by another sweep while this one was planning: read it back.
+                match read_finished(p.cell, p.seed, &dir)? {
+                    Some(row) => Ok(row),
+                    None => run_cell_seed(exp, p.cell, p.seed, &dir),
                 }
-                let Some(&i) = todo.get(next.fetch_add(1, Ordering::SeqCst)) else {
-                    break;
-                };
-                let p = &runs[i];
-                let clock = std::time::Instant::now();
-                let dir = exp.cell_dir(results, p.cell);
-                // One process per run: a second sweep into this folder stops here with a
-                // message instead of doing the run again and replacing its row.
-                let run = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
-                    .and_then(|_lock| {
-                        // Finished by another sweep while this one was planning: read it back.
-                        match read_finished(p.cell, p.seed, &dir)? {
-                            Some(row) => Ok(row),
-                            None => run_cell_seed(exp, p.cell, p.seed, &dir),
-                        }
-                    });
-                match run {
-                    Ok(row) => {
-                        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
-                        rows.lock().unwrap()[i] = Some(row);
-                    }
-                    Err(e) => {
-                        let mut slot = first_error.lock().unwrap();
-                        if slot.is_none() {
-                            *slot = Some(Error::invalid(
-                                "run",
-                                format!("cell {} seed {}: {e}", p.cell.id, p.seed),
-                            ));
-                        }
-                    }
-                }
-            });
-        }
-    });
-    if let Some(e) = first_error.into_inner().unwrap() {
-        return Err(e);
+            })
+            .map_err(|e| Error::Run {
+                cell: p.cell.id.clone(),
+                seed: p.seed,
+                cause: Box::new(e),
+            })?;
+        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
+        Ok(row)
+    })?;
+    for (i, row) in todo.into_iter().zip(ran) {
+        rows[i] = Some(row);
     }
-    Ok(rows
-        .into_inner()
-        .unwrap()
-        .into_iter()
-        .map(|r| r.expect("every run finished"))
-        .collect())
+    Ok(rows.into_iter().flatten().collect())
+}
+
+/// `f` on every item, `jobs` at a time (a pool of `jobs` threads, one item per task), the
+/// results in the items' order. After the first error no new item starts, and that error is
+/// returned. Every run is single-threaded and seeded by its own job, so `jobs` changes the
+/// wall clock, never a byte.
+pub fn run_parallel<T: Sync, R: Send>(
+    items: &[T],
+    jobs: usize,
+    f: impl Fn(&T) -> Result<R> + Sync,
+) -> Result<Vec<R>> {
+    use rayon::prelude::*;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| Error::invalid("jobs", e.to_string()))?;
+    pool.install(|| items.par_iter().with_max_len(1).map(&f).collect())
 }
 
 /// Every (cell, seed) of the experiment, or of one cell, or one seed.

@@ -4,8 +4,8 @@
 //!
 //! Every figure is written as PNG and SVG with the bundled font (see [`crate::plot`]).
 
-use crate::error::Result;
-use crate::experiment::{evals_file, picture_file, Cell, Experiment, Job};
+use crate::error::{Error, Result};
+use crate::experiment::{evals_file, picture_file, Cell, Experiment, FigureSpec, Job};
 use crate::maze::Maze;
 use crate::plot::{draw_maze, render_figure, Figure, PictureData};
 use crate::tables::CellStats;
@@ -103,12 +103,15 @@ fn centred_text<DB: DrawingBackend>(
 /// shows the first picture seed's run and is labelled with its [`summary`] on a green (more
 /// than half the seeds solved) or red background; a legend under the grid says so.
 pub struct ResultsGrid {
-    cells: Vec<Vec<Option<(Maze, PictureData, CellStats)>>>,
+    cells: Vec<Vec<Option<GridCell>>>,
     rows: Vec<String>,
     columns: Vec<String>,
     /// The legend's lines (see [`ResultsGrid::legend`]).
     legend: Vec<String>,
 }
+
+/// One drawn cell of the grid: its maze, its picture seed's run and its statistics.
+type GridCell = (Maze, PictureData, CellStats);
 
 const GRID_CELL: u32 = 280;
 const GRID_LABEL: u32 = 26;
@@ -149,10 +152,7 @@ impl ResultsGrid {
 
     /// What the bands and the pictures show, one line each; the first line follows the two
     /// colour swatches drawn before it.
-    fn legend(
-        exp: &Experiment,
-        cells: &[Vec<Option<(Maze, PictureData, CellStats)>>],
-    ) -> Vec<String> {
+    fn legend(exp: &Experiment, cells: &[Vec<Option<GridCell>>]) -> Vec<String> {
         let mut lines = vec![
             "more than half the seeds solved / half or fewer (grey: no runs yet)".to_string(),
             "band: seeds solved / seeds · median environment steps of the solved seeds, \
@@ -414,11 +414,12 @@ impl Curves {
                     if !path.exists() {
                         continue;
                     }
-                    let mut reader = csv::Reader::from_path(&path)?;
+                    let mut reader =
+                        csv::Reader::from_path(&path).map_err(|e| Error::csv(&path, e))?;
                     for rec in reader.deserialize::<EvalPoint>() {
-                        let e = rec?;
+                        let e = rec.map_err(|e| Error::csv(&path, e))?;
                         let slot = by_step.entry(e.steps).or_default();
-                        slot.0 += u64::from(e.success >= 0.95);
+                        slot.0 += u64::from(e.success >= crate::jobs::SOLVED_AT);
                         slot.1 += 1;
                         slot.2 += f64::from(e.mean_return);
                     }
@@ -514,10 +515,9 @@ impl Figure for Curves {
     }
 }
 
-/// Draws every figure of `exp` whose data exists into `out`, returning the files written.
-/// Which figures an experiment gets depends on its name: `table` (grid, enlarged pictures,
-/// learning curves), `curves` (learning curves over the full budget), `gamma` (bars), `unseen`
-/// (panels, bars); any other experiment gets bars.
+/// Draws every figure `exp` declares ([`FigureSpec`]) into `out` from its table `stats` and
+/// the raw picture and evaluation files under `results`; returns the files written. A figure
+/// whose data is missing (no picture kept, no vanilla method for curves) is skipped.
 pub fn render_experiment(
     exp: &Experiment,
     results: &Path,
@@ -525,52 +525,68 @@ pub fn render_experiment(
     out: &Path,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    match exp.name.as_str() {
-        "table" => {
-            let grid = ResultsGrid::new(exp, results, stats)?;
-            files.extend(render_figure(&grid, &out.join("results_grid"))?);
-            for c in exp.cells.iter().filter(|c| c.method == "pbcs") {
-                let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?)
-                else {
-                    continue;
-                };
-                let maze = cell_maze(c)?;
-                let title = format!(
-                    "PBCS, maze {0}×{0}, seed {1}: phase-1 τ (red), chain rollouts (green), \
-                     activation balls (purple) — {2}",
-                    c.maze,
-                    exp.picture_seeds[0],
-                    summary(s)
-                );
-                let stem = out.join(format!("results_maze{}", c.maze));
-                crate::plot::render_maze(
-                    &maze,
-                    &data.picture(title),
-                    &stem.with_extension("png"),
-                    &stem.with_extension("svg"),
-                    20_000,
-                )?;
-                files.push(stem.with_extension("png"));
-                files.push(stem.with_extension("svg"));
+    for figure in &exp.figures {
+        let stem = out.join(figure.name());
+        match figure {
+            FigureSpec::Grid { .. } => {
+                let grid = ResultsGrid::new(exp, results, stats)?;
+                files.extend(render_figure(&grid, &stem)?);
             }
-            if let Some(curves) = Curves::new(exp, results)? {
-                files.extend(render_figure(&curves, &out.join("curves"))?);
+            FigureSpec::Mazes { name, method } => {
+                for c in exp.cells.iter().filter(|c| &c.method == method) {
+                    let (Some(s), Some(data)) =
+                        (stats_of(stats, c), cell_picture(exp, results, c)?)
+                    else {
+                        continue;
+                    };
+                    let maze = cell_maze(c)?;
+                    let title = format!(
+                        "{0}, maze {1}×{1}, seed {2}: phase-1 τ (red), chain rollouts (green), \
+                         activation balls (purple) — {3}",
+                        c.label,
+                        c.maze,
+                        exp.picture_seeds[0],
+                        summary(s)
+                    );
+                    let stem = out.join(format!("{name}{}", c.maze));
+                    crate::plot::render_maze(
+                        &maze,
+                        &data.picture(title),
+                        &stem.with_extension("png"),
+                        &stem.with_extension("svg"),
+                        20_000,
+                    )?;
+                    files.push(stem.with_extension("png"));
+                    files.push(stem.with_extension("svg"));
+                }
             }
-        }
-        "unseen" => {
-            // The maze where the two methods differ most (first on ties).
-            let pick = exp.mazes.iter().copied().max_by_key(|&n| {
-                let rate = |m: &str| {
+            FigureSpec::Curves { .. } => {
+                if let Some(curves) = Curves::new(exp, results)? {
+                    files.extend(render_figure(&curves, &stem)?);
+                }
+            }
+            FigureSpec::Bars { .. } => {
+                files.extend(render_figure(&SuccessBars::new(exp, stats), &stem)?);
+            }
+            FigureSpec::Panels { methods, .. } => {
+                let solved = |n: usize, m: &str| {
                     stats
                         .iter()
                         .find(|s| s.maze == n && s.method == m)
                         .map_or(0, |s| s.successes as i64)
                 };
-                ((rate("ball") - rate("exact")).abs(), -(n as i64))
-            });
-            if let Some(n) = pick {
+                let pick = exp.mazes.iter().copied().max_by_key(|&n| {
+                    (
+                        (solved(n, &methods[0]) - solved(n, &methods[1])).abs(),
+                        -(n as i64),
+                    )
+                });
+                let Some(n) = pick else { continue };
                 let mut panels = Vec::new();
-                for c in exp.cells.iter().filter(|c| c.maze == n) {
+                for m in methods {
+                    let Some(c) = exp.cells.iter().find(|c| c.maze == n && &c.method == m) else {
+                        continue;
+                    };
                     if let (Some(s), Some(data)) =
                         (stats_of(stats, c), cell_picture(exp, results, c)?)
                     {
@@ -584,24 +600,9 @@ pub fn render_experiment(
                     }
                 }
                 if !panels.is_empty() {
-                    files.extend(render_figure(&Panels { panels }, &out.join("unseen"))?);
+                    files.extend(render_figure(&Panels { panels }, &stem)?);
                 }
             }
-            files.extend(render_figure(
-                &SuccessBars::new(exp, stats),
-                &out.join("unseen_bars"),
-            )?);
-        }
-        "curves" => {
-            if let Some(curves) = Curves::new(exp, results)? {
-                files.extend(render_figure(&curves, &out.join("curves_1m"))?);
-            }
-        }
-        name => {
-            files.extend(render_figure(
-                &SuccessBars::new(exp, stats),
-                &out.join(name),
-            )?);
         }
     }
     Ok(files)

@@ -1,5 +1,9 @@
-//! Jobs: a validated config in, result files out. The CLI's subcommands are thin wrappers
-//! around these functions, so tests exercise exactly what users run.
+//! Runs: a validated job in, an outcome out. Each kind of run is a type whose `compute` is a
+//! function from the job to the outcome that writes nothing ([`ExploreRun`], [`TrainRun`],
+//! [`PbcsRun`]), and whose `write` puts the outcome into a folder (CSVs, pictures, the saved
+//! chain). [`run_explore`], [`run_train`] and [`run_pbcs`] claim a folder, compute and write:
+//! the CLI's subcommands are thin wrappers around them, so tests exercise exactly what users
+//! run; the sweep ([`crate::experiment::run_cell_seed`]) computes and keeps only its raw files.
 //!
 //! Result files are CSV (deterministic: same config, same bytes) written atomically; the
 //! wall-clock time of a job lives beside them in `timing.toml`, never inside a CSV.
@@ -9,7 +13,7 @@ use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
-use crate::pbcs::{chain_skills, Progress, SkillChain, StartMode};
+use crate::phase2::{chain_skills, Phase2Outcome, Progress, SkillChain, StartMode};
 use crate::plot::{render_maze, MazePicture, PictureData};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
@@ -38,12 +42,69 @@ pub struct ExploreSummary {
     pub archive_bins: usize,
 }
 
+/// A run counts as solved when its evaluation (greedy episodes of a vanilla policy, or of a
+/// PBCS chain) reaches the target in at least this fraction of episodes.
+pub const SOLVED_AT: f32 = 0.95;
+
 /// Most archive points drawn in the SVG picture (the PNG draws them all).
 const SVG_MAX_POINTS: usize = 20_000;
 
-/// Runs phase 1 for `job` and writes into `out`: `config.toml` (the resolved job),
-/// `summary.csv`, `trajectory.csv`, `archive.csv`, `explore.png`, `explore.svg` and
-/// `timing.toml`. `progress(steps, archive_len)` is called during the run.
+/// One phase-1 run's outcome ([`ExploreRun::compute`]): the summary row, everything
+/// exploration found and the wall-clock seconds; [`ExploreRun::write`] writes it.
+#[derive(Debug, Clone)]
+pub struct ExploreRun {
+    /// The maze explored.
+    pub maze: Maze,
+    /// The one-row summary.
+    pub summary: ExploreSummary,
+    /// τ and the archive.
+    pub found: Exploration<Point<f32>>,
+    /// Wall-clock seconds of the run (not deterministic).
+    pub seconds: f64,
+}
+
+impl ExploreRun {
+    /// Runs phase 1 for `job`; `progress(steps, archive_len)` is called during the run.
+    /// Writes nothing.
+    pub fn compute(job: &ExploreJob, progress: impl FnMut(u64, usize)) -> Result<ExploreRun> {
+        job.check()?;
+        let maze = Maze::new(&job.maze)?;
+        let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
+        let clock = Instant::now();
+        let found = explore(&maze, &job.explore, &mut rng, progress)?;
+        let seconds = clock.elapsed().as_secs_f64();
+        let summary = ExploreSummary {
+            maze: job.maze.size,
+            maze_seed: job.maze.seed,
+            seed: job.seed,
+            env_steps: found.env_steps,
+            trajectory_len: found.trajectory.len(),
+            archive_states: found.archive.len(),
+            archive_bins: found.archive.bins(),
+        };
+        Ok(ExploreRun {
+            maze,
+            summary,
+            found,
+            seconds,
+        })
+    }
+
+    /// Writes into `out`: `summary.csv`, `trajectory.csv`, `archive.csv`, `explore.png`,
+    /// `explore.svg` and `timing.toml`.
+    pub fn write(&self, job: &ExploreJob, out: &Path) -> Result<()> {
+        let (maze, found) = (&self.maze, &self.found);
+        write_record(&out.join("summary.csv"), &self.summary)?;
+        write_trajectory_csv(maze, found, &out.join("trajectory.csv"))?;
+        write_archive_csv(maze, found, &out.join("archive.csv"))?;
+        render_exploration(maze, found, job, out)?;
+        write_timing(&out.join("timing.toml"), self.seconds, found.env_steps)
+    }
+}
+
+/// Runs phase 1 for `job` into `out`: claims the folder (writing `config.toml`, the resolved
+/// job) before any work, then [`ExploreRun::compute`] and [`ExploreRun::write`].
+/// `progress(steps, archive_len)` is called during the run.
 pub fn run_explore(
     job: &ExploreJob,
     out: &Path,
@@ -51,26 +112,9 @@ pub fn run_explore(
 ) -> Result<(ExploreSummary, f64)> {
     job.check()?;
     claim(job, out)?;
-    let maze = Maze::new(&job.maze)?;
-    let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
-    let clock = Instant::now();
-    let found = explore(&maze, &job.explore, &mut rng, progress)?;
-    let seconds = clock.elapsed().as_secs_f64();
-    let summary = ExploreSummary {
-        maze: job.maze.size,
-        maze_seed: job.maze.seed,
-        seed: job.seed,
-        env_steps: found.env_steps,
-        trajectory_len: found.trajectory.len(),
-        archive_states: found.archive.len(),
-        archive_bins: found.archive.bins(),
-    };
-    write_record(&out.join("summary.csv"), &summary)?;
-    write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
-    write_archive_csv(&maze, &found, &out.join("archive.csv"))?;
-    render_exploration(&maze, &found, job, out)?;
-    write_timing(out, seconds, found.env_steps)?;
-    Ok((summary, seconds))
+    let run = ExploreRun::compute(job, progress)?;
+    run.write(job, out)?;
+    Ok((run.summary, run.seconds))
 }
 
 /// Claims `out` for `job` before any work ([`crate::record::claim_out_dir`]): writes the
@@ -84,17 +128,9 @@ fn claim<T: Serialize>(job: &T, out: &Path) -> Result<()> {
     crate::record::claim_out_dir(out, &text)
 }
 
-/// Writes `timing.toml`: wall-clock data, which is not deterministic and so never goes into
-/// a CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply`
-/// gives the same bytes, so a byte difference between machines can be told apart).
-fn write_timing(out: &Path, seconds: f64, env_steps: u64) -> Result<()> {
-    let text = format!(
-        "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n\
-         wall_seconds = {seconds:.6}\nsteps_per_second = {:.0}\nkernel = \"{}\"\n",
-        env_steps as f64 / seconds.max(1e-9),
-        crate::nn::kernel::Kernel::active().name()
-    );
-    write_atomic(&out.join("timing.toml"), |w| w.write_all(text.as_bytes()))
+/// Writes a run's `timing.toml` at `path` ([`crate::record::Timing`]).
+pub fn write_timing(path: &Path, seconds: f64, env_steps: u64) -> Result<()> {
+    crate::record::Timing::now(seconds, env_steps).write(path)
 }
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
@@ -200,13 +236,117 @@ pub struct TrainSummary {
     pub best_success: f32,
     /// Bins of side `train.visit_bin` visited during training.
     pub visited_bins: usize,
-    /// Environment steps at the first evaluation whose greedy success was ≥ 95 %, if any.
+    /// Environment steps at the first evaluation whose greedy success was ≥ [`SOLVED_AT`], if any.
     pub first_success_steps: Option<u64>,
 }
 
-/// Trains the vanilla baseline of `job` on the maze's own reward and writes into `out`:
-/// `config.toml`, `summary.csv`, `evals.csv` (one row per evaluation), `visited.csv` (lower-left
-/// corners of visited bins), `actor.safetensors`, `train.png`, `train.svg`, `timing.toml`.
+/// One vanilla training run's outcome ([`TrainRun::compute`]); [`TrainRun::write`] writes it.
+pub struct TrainRun {
+    /// The maze trained on.
+    pub maze: Maze,
+    /// The one-row summary.
+    pub summary: TrainSummary,
+    /// Evaluations, visited bins, the trained learner.
+    pub result: crate::train::TrainOutcome,
+    /// What `train.png` draws: the visited bins as red squares.
+    pub picture: PictureData,
+    /// Wall-clock seconds of the run (not deterministic).
+    pub seconds: f64,
+}
+
+impl TrainRun {
+    /// Trains the vanilla baseline of `job` on the maze's own reward;
+    /// `progress(steps, success)` is called at each evaluation. Writes nothing.
+    pub fn compute(job: &TrainJob, progress: impl FnMut(u64, f32)) -> Result<TrainRun> {
+        job.check()?;
+        let maze = Maze::new(&job.maze)?;
+        let clock = Instant::now();
+        let result = train_vanilla(
+            &maze,
+            &job.learner,
+            &job.train,
+            &Seeds::new(job.seed),
+            progress,
+        )?;
+        let seconds = clock.elapsed().as_secs_f64();
+        let summary = TrainSummary {
+            maze: job.maze.size,
+            maze_seed: job.maze.seed,
+            seed: job.seed,
+            algo: job.learner.algo.name().to_string(),
+            actor_update: job.learner.actor_update.name().to_string(),
+            env_steps: job.train.steps,
+            episodes: result.episodes,
+            final_success: result.evals.last().map_or(0.0, |e| e.success),
+            best_success: result.evals.iter().map(|e| e.success).fold(0.0, f32::max),
+            visited_bins: result.visited.len(),
+            first_success_steps: result
+                .evals
+                .iter()
+                .find(|e| e.success >= SOLVED_AT)
+                .map(|e| e.steps),
+        };
+        let side = job.train.visit_bin;
+        let picture = PictureData {
+            red_area: result
+                .visited
+                .iter()
+                .map(|b| (b[0] as f32 * side, b[1] as f32 * side))
+                .collect(),
+            red_area_side: side,
+            ..PictureData::default()
+        };
+        Ok(TrainRun {
+            maze,
+            summary,
+            result,
+            picture,
+            seconds,
+        })
+    }
+
+    /// Writes into `out`: `summary.csv`, `evals.csv` (one row per evaluation), `visited.csv`
+    /// (lower-left corners of visited bins), `actor.safetensors`, `picture.csv`, `train.png`,
+    /// `train.svg`, `timing.toml`.
+    pub fn write(&self, job: &TrainJob, out: &Path) -> Result<()> {
+        let summary = &self.summary;
+        write_record(&out.join("summary.csv"), summary)?;
+        crate::record::write_records(&out.join("evals.csv"), &self.result.evals)?;
+        write_csv(
+            &out.join("visited.csv"),
+            &["x".to_string(), "y".to_string()],
+            self.picture
+                .red_area
+                .iter()
+                .map(|(x, y)| [x.to_string(), y.to_string()]),
+        )?;
+        self.result
+            .learner
+            .actor
+            .save(&out.join("actor.safetensors"))?;
+        self.picture.write_csv(&out.join("picture.csv"))?;
+        let title = format!(
+            "{} on maze {} (layout {}), seed {}: {} steps, greedy success {:.0} %",
+            summary.algo,
+            job.maze.size,
+            job.maze.seed,
+            job.seed,
+            job.train.steps,
+            100.0 * summary.final_success
+        );
+        render_maze(
+            &self.maze,
+            &self.picture.picture(title),
+            &out.join("train.png"),
+            &out.join("train.svg"),
+            SVG_MAX_POINTS,
+        )?;
+        write_timing(&out.join("timing.toml"), self.seconds, job.train.steps)
+    }
+}
+
+/// Trains the vanilla baseline of `job` into `out`: claims the folder (writing
+/// `config.toml`) before any work, then [`TrainRun::compute`] and [`TrainRun::write`].
 pub fn run_train(
     job: &TrainJob,
     out: &Path,
@@ -214,71 +354,9 @@ pub fn run_train(
 ) -> Result<(TrainSummary, f64)> {
     job.check()?;
     claim(job, out)?;
-    let maze = Maze::new(&job.maze)?;
-    let clock = Instant::now();
-    let result = train_vanilla(
-        &maze,
-        &job.learner,
-        &job.train,
-        &Seeds::new(job.seed),
-        progress,
-    )?;
-    let seconds = clock.elapsed().as_secs_f64();
-    let summary = TrainSummary {
-        maze: job.maze.size,
-        maze_seed: job.maze.seed,
-        seed: job.seed,
-        algo: job.learner.algo.name().to_string(),
-        actor_update: job.learner.actor_update.name().to_string(),
-        env_steps: job.train.steps,
-        episodes: result.episodes,
-        final_success: result.evals.last().map_or(0.0, |e| e.success),
-        best_success: result.evals.iter().map(|e| e.success).fold(0.0, f32::max),
-        visited_bins: result.visited.len(),
-        first_success_steps: result
-            .evals
-            .iter()
-            .find(|e| e.success >= 0.95)
-            .map(|e| e.steps),
-    };
-    write_record(&out.join("summary.csv"), &summary)?;
-    crate::record::write_records(&out.join("evals.csv"), &result.evals)?;
-    let side = job.train.visit_bin;
-    let corners: Vec<(f32, f32)> = result
-        .visited
-        .iter()
-        .map(|b| (b[0] as f32 * side, b[1] as f32 * side))
-        .collect();
-    write_csv(
-        &out.join("visited.csv"),
-        &["x".to_string(), "y".to_string()],
-        corners.iter().map(|(x, y)| [x.to_string(), y.to_string()]),
-    )?;
-    result.learner.actor.save(&out.join("actor.safetensors"))?;
-    let data = PictureData {
-        red_area: corners,
-        red_area_side: side,
-        ..PictureData::default()
-    };
-    data.write_csv(&out.join("picture.csv"))?;
-    let title = format!(
-        "{} on maze {} (layout {}), seed {}: {} steps, success {}",
-        summary.algo,
-        job.maze.size,
-        job.maze.seed,
-        job.seed,
-        job.train.steps,
-        summary.final_success
-    );
-    render_maze(
-        &maze,
-        &data.picture(title),
-        &out.join("train.png"),
-        &out.join("train.svg"),
-        SVG_MAX_POINTS,
-    )?;
-    write_timing(out, seconds, job.train.steps)?;
-    Ok((summary, seconds))
+    let run = TrainRun::compute(job, progress)?;
+    run.write(job, out)?;
+    Ok((run.summary, run.seconds))
 }
 
 /// The per-run record of PBCS (`record.csv`): every count the results table needs.
@@ -300,7 +378,7 @@ pub struct RunRecord {
     pub gamma: f32,
     /// ε.
     pub epsilon: f32,
-    /// Whether the chain reaches the target in at least 95 % of the evaluation episodes.
+    /// Whether the chain reaches the target in at least [`SOLVED_AT`] of the evaluation episodes.
     pub solved: bool,
     /// Fraction of evaluation episodes that reached the target.
     pub success_rate: f32,
@@ -325,10 +403,206 @@ pub struct RunRecord {
 /// Chain rollouts drawn in the picture.
 const DRAWN_ROLLOUTS: usize = 10;
 
-/// Runs PBCS for `job` and writes into `out`: `config.toml`, `record.csv`, `skills.csv` (one row
-/// per skill: K, T, ball), `trace.csv` (every test, training round and verification: skill,
-/// K, T, event, success, env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the saved chain), `run.png`, `run.svg`,
-/// `timing.toml`. `progress(skill, report)` is called during phase 2.
+/// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
+/// the evaluation's rollouts; [`PbcsRun::write`] writes it.
+#[derive(Debug, Clone)]
+pub struct PbcsRun {
+    /// The maze solved.
+    pub maze: Maze,
+    /// The `record.csv` row.
+    pub record: RunRecord,
+    /// What phase 1 found (τ and the archive).
+    pub found: Exploration<Point<f32>>,
+    /// The trajectory phase 2 worked on (τ, or τ shortened).
+    pub tau: Vec<Point<f32>>,
+    /// The chain, its step counts and Backplay's trace.
+    pub phase2: Phase2Outcome,
+    /// What `run.png` draws: τ, the first evaluation rollouts, the activation balls.
+    pub picture: PictureData,
+    /// Wall-clock seconds of the run (not deterministic).
+    pub seconds: f64,
+}
+
+impl PbcsRun {
+    /// Runs PBCS for `job`: phase 1, phase 2 ([`chain_skills`]), then the chain's evaluation
+    /// from starts uniform in B_ε(s_0). `progress(skill, report)` is called during phase 2.
+    /// Writes nothing.
+    pub fn compute(job: &RunJob, progress: impl FnMut(usize, Progress)) -> Result<PbcsRun> {
+        job.check()?;
+        let maze = Maze::new(&job.maze)?;
+        let seeds = Seeds::new(job.seed);
+        let clock = Instant::now();
+        let mut rng = seeds.stream(Stream::Explore);
+        let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
+        let tau = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+        let phase2 = chain_skills(
+            &maze,
+            &tau,
+            &job.learner,
+            &job.phase2,
+            &seeds,
+            found.env_steps,
+            progress,
+        )?;
+        // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
+        let mut rng_eval = seeds.stream(Stream::Eval);
+        let mut rollouts = Vec::new();
+        let mut wins = 0;
+        if phase2.failure.is_none() && !phase2.chain.skills.is_empty() {
+            for _ in 0..job.phase2.eval_episodes {
+                let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng_eval);
+                let r = phase2.chain.run(&maze, start, job.phase2.eval_max_steps);
+                wins += usize::from(r.success);
+                if rollouts.len() < DRAWN_ROLLOUTS {
+                    rollouts.push(r.states);
+                }
+            }
+        }
+        let seconds = clock.elapsed().as_secs_f64();
+        let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
+        let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
+        let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+        let picture = PictureData {
+            red_paths: vec![xy(&tau)],
+            green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+            circles: ball_circles(&phase2.chain),
+            ..PictureData::default()
+        };
+        Ok(PbcsRun {
+            maze,
+            record,
+            found,
+            tau,
+            phase2,
+            picture,
+            seconds,
+        })
+    }
+
+    /// Writes into `out`: `record.csv`, `skills.csv` (one row per skill: K, T, ball),
+    /// `trace.csv` (every test, training round and verification: skill, K, T, event, success,
+    /// env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the
+    /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `run.png`, `run.svg`,
+    /// `timing.toml`.
+    pub fn write(&self, job: &RunJob, out: &Path) -> Result<()> {
+        let (record, phase2) = (&self.record, &self.phase2);
+        write_record(&out.join("record.csv"), record)?;
+        write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;
+        write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
+        crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
+        write_csv(
+            &out.join("trace.timing.csv"),
+            &["seconds".to_string()],
+            phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
+        )?;
+        phase2.chain.save(&out.join("chain"))?;
+        // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
+        // manifest, so `pbcs eval --chain DIR` needs nothing else.
+        let job_text = toml::to_string(job).map_err(|e| Error::Parse {
+            path: out.join("chain/run.toml"),
+            message: e.to_string(),
+        })?;
+        write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
+            w.write_all(job_text.as_bytes())
+        })?;
+        self.picture.write_csv(&out.join("picture.csv"))?;
+        let title = format!(
+            "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
+            record.variant,
+            record.learner,
+            job.maze.size,
+            job.maze.seed,
+            job.seed,
+            record.total_steps,
+            record.skills,
+            100.0 * record.success_rate
+        );
+        render_maze(
+            &self.maze,
+            &self.picture.picture(title),
+            &out.join("run.png"),
+            &out.join("run.svg"),
+            SVG_MAX_POINTS,
+        )?;
+        write_timing(&out.join("timing.toml"), self.seconds, record.total_steps)
+    }
+}
+
+impl RunRecord {
+    /// The record of `job` from what its run found.
+    fn new(
+        job: &RunJob,
+        found: &Exploration<Point<f32>>,
+        phase2: &Phase2Outcome,
+        phase2_trajectory_len: usize,
+        success_rate: f32,
+    ) -> RunRecord {
+        let lc = &job.learner;
+        RunRecord {
+            maze: job.maze.size,
+            maze_seed: job.maze.seed,
+            seed: job.seed,
+            variant: if job.phase2.chaining {
+                "pbcs"
+            } else {
+                "pbcs_no_chaining"
+            }
+            .into(),
+            learner: format!(
+                "{}{}",
+                lc.algo.name(),
+                if lc.actor_update == crate::learner::ActorUpdate::Argmax {
+                    "_am"
+                } else {
+                    ""
+                }
+            ),
+            starts: match job.phase2.start {
+                StartMode::Ball => "ball",
+                StartMode::Exact => "exact",
+            }
+            .into(),
+            gamma: lc.gamma,
+            epsilon: job.phase2.epsilon,
+            solved: phase2.failure.is_none() && success_rate >= SOLVED_AT,
+            success_rate,
+            failure: phase2
+                .failure
+                .map(|f| match f {
+                    crate::phase2::Failure::BackplayFailed => "backplay_failed",
+                    crate::phase2::Failure::NoChaining => "no_chaining",
+                    crate::phase2::Failure::Budget => "budget",
+                })
+                .unwrap_or("")
+                .into(),
+            phase1_steps: found.env_steps,
+            train_steps: phase2.steps.train,
+            test_steps: phase2.steps.test,
+            total_steps: found.env_steps + phase2.steps.train + phase2.steps.test,
+            skills: phase2.chain.skills.len(),
+            trajectory_len: found.trajectory.len(),
+            phase2_trajectory_len,
+        }
+    }
+}
+
+/// The activation balls of `chain` as drawn circles.
+fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
+    chain
+        .skills
+        .iter()
+        .map(|s| {
+            (
+                (s.activation.center[0], s.activation.center[1]),
+                s.activation.radius,
+            )
+        })
+        .collect()
+}
+
+/// Runs PBCS for `job` into `out`: claims the folder (writing `config.toml`) before any work,
+/// then [`PbcsRun::compute`] and [`PbcsRun::write`]. `progress(skill, report)` is called
+/// during phase 2.
 pub fn run_pbcs(
     job: &RunJob,
     out: &Path,
@@ -336,140 +610,9 @@ pub fn run_pbcs(
 ) -> Result<(RunRecord, f64)> {
     job.check()?;
     claim(job, out)?;
-    let maze = Maze::new(&job.maze)?;
-    let seeds = Seeds::new(job.seed);
-    let clock = Instant::now();
-    let mut rng = seeds.stream(Stream::Explore);
-    let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-    let tau = &crate::pbcs::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
-    let phase2 = chain_skills(
-        &maze,
-        tau,
-        &job.learner,
-        &job.phase2,
-        &seeds,
-        found.env_steps,
-        progress,
-    )?;
-    // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
-    let mut rng_eval = seeds.stream(Stream::Eval);
-    let mut rollouts = Vec::new();
-    let mut wins = 0;
-    if phase2.failure.is_none() && !phase2.chain.skills.is_empty() {
-        for _ in 0..job.phase2.eval_episodes {
-            let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng_eval);
-            let r = phase2.chain.run(&maze, start, job.phase2.eval_max_steps);
-            wins += usize::from(r.success);
-            if rollouts.len() < DRAWN_ROLLOUTS {
-                rollouts.push(r.states);
-            }
-        }
-    }
-    let seconds = clock.elapsed().as_secs_f64();
-    let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
-    let lc = &job.learner;
-    let record = RunRecord {
-        maze: job.maze.size,
-        maze_seed: job.maze.seed,
-        seed: job.seed,
-        variant: if job.phase2.chaining {
-            "pbcs"
-        } else {
-            "pbcs_no_chaining"
-        }
-        .into(),
-        learner: format!(
-            "{}{}",
-            lc.algo.name(),
-            if lc.actor_update == crate::learner::ActorUpdate::Argmax {
-                "_am"
-            } else {
-                ""
-            }
-        ),
-        starts: match job.phase2.start {
-            StartMode::Ball => "ball",
-            StartMode::Exact => "exact",
-        }
-        .into(),
-        gamma: lc.gamma,
-        epsilon: job.phase2.epsilon,
-        solved: phase2.failure.is_none() && success_rate >= 0.95,
-        success_rate,
-        failure: phase2
-            .failure
-            .map(|f| match f {
-                crate::pbcs::Failure::BackplayFailed => "backplay_failed",
-                crate::pbcs::Failure::NoChaining => "no_chaining",
-                crate::pbcs::Failure::Budget => "budget",
-            })
-            .unwrap_or("")
-            .into(),
-        phase1_steps: found.env_steps,
-        train_steps: phase2.steps.train,
-        test_steps: phase2.steps.test,
-        total_steps: found.env_steps + phase2.steps.train + phase2.steps.test,
-        skills: phase2.chain.skills.len(),
-        trajectory_len: found.trajectory.len(),
-        phase2_trajectory_len: tau.len(),
-    };
-    write_record(&out.join("record.csv"), &record)?;
-    write_trajectory_csv(&maze, &found, &out.join("trajectory.csv"))?;
-    write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
-    crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
-    write_csv(
-        &out.join("trace.timing.csv"),
-        &["seconds".to_string()],
-        phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
-    )?;
-    phase2.chain.save(&out.join("chain"))?;
-    // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
-    // manifest, so `pbcs eval --chain DIR` needs nothing else.
-    let job_text = toml::to_string(job).map_err(|e| Error::Parse {
-        path: out.join("chain/run.toml"),
-        message: e.to_string(),
-    })?;
-    write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
-        w.write_all(job_text.as_bytes())
-    })?;
-    let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
-    let data = PictureData {
-        red_paths: vec![xy(tau)],
-        green_paths: rollouts.iter().map(|r| xy(r)).collect(),
-        circles: phase2
-            .chain
-            .skills
-            .iter()
-            .map(|s| {
-                (
-                    (s.activation.center[0], s.activation.center[1]),
-                    s.activation.radius,
-                )
-            })
-            .collect(),
-        ..PictureData::default()
-    };
-    data.write_csv(&out.join("picture.csv"))?;
-    let title = format!(
-        "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
-        record.variant,
-        record.learner,
-        job.maze.size,
-        job.maze.seed,
-        job.seed,
-        record.total_steps,
-        record.skills,
-        100.0 * success_rate
-    );
-    render_maze(
-        &maze,
-        &data.picture(title),
-        &out.join("run.png"),
-        &out.join("run.svg"),
-        SVG_MAX_POINTS,
-    )?;
-    write_timing(out, seconds, record.total_steps)?;
-    Ok((record, seconds))
+    let run = PbcsRun::compute(job, progress)?;
+    run.write(job, out)?;
+    Ok((run.record, run.seconds))
 }
 
 /// The file in a saved chain's folder that holds the job that built it.
@@ -542,16 +685,7 @@ pub fn eval_chain(chain_dir: &Path, episodes: usize, seed: Option<u64>) -> Resul
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let data = PictureData {
         green_paths: rollouts.iter().map(|r| xy(r)).collect(),
-        circles: chain
-            .skills
-            .iter()
-            .map(|s| {
-                (
-                    (s.activation.center[0], s.activation.center[1]),
-                    s.activation.radius,
-                )
-            })
-            .collect(),
+        circles: ball_circles(&chain),
         ..PictureData::default()
     };
     let title = format!(
@@ -593,20 +727,21 @@ fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
     write_csv(path, &header, rows)
 }
 
-/// The paper's PBCS step counts (results table, one seed each), by maze size.
+/// The paper's PBCS step counts (results table, one seed each), by maze size: the `pbcs`
+/// method's `paper_steps` in `experiments/table.toml`, the one place they are written (read
+/// at compile time, so the binary needs no experiments folder).
 pub fn paper_pbcs_steps(maze: usize) -> Option<u64> {
-    match maze {
-        2 => Some(321_000),
-        5 => Some(5_000_000),
-        7 => Some(6_000_000),
-        10 => Some(8_000_000),
-        15 => Some(22_000_000),
-        _ => None,
-    }
+    let table: toml::Table = include_str!("../experiments/table.toml").parse().ok()?;
+    table
+        .get("method")?
+        .as_array()?
+        .iter()
+        .find(|m| m.get("name").and_then(|v| v.as_str()) == Some("pbcs"))?
+        .get("paper_steps")?
+        .get(maze.to_string())?
+        .as_integer()
+        .and_then(|v| u64::try_from(v).ok())
 }
-
-/// A finished cell of a grid: its record and wall seconds, or its error.
-type CellResult = Result<(RunRecord, f64)>;
 
 /// Runs PBCS for every (size, seed) of a grid into `out/maze<N>-s<S>/`, `jobs` runs at a time
 /// (one thread each), skipping cells whose `record.csv` already exists (an interrupted sweep
@@ -624,36 +759,18 @@ pub fn run_grid(
         .iter()
         .flat_map(|&n| seeds.iter().map(move |&s| (n, s)))
         .collect();
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results: std::sync::Mutex<Vec<Option<CellResult>>> =
-        std::sync::Mutex::new((0..cells.len()).map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                let Some(&(n, seed)) = cells.get(i) else {
-                    break;
-                };
-                let mut job = base.clone();
-                job.maze.size = n;
-                job.seed = seed;
-                let dir = out.join(format!("maze{n}-s{seed}"));
-                let r = read_record(&dir, &job)
-                    .transpose()
-                    .unwrap_or_else(|| run_pbcs(&job, &dir, |_, _| {}));
-                if let Ok((rec, secs)) = &r {
-                    on_done(rec, *secs);
-                }
-                results.lock().unwrap()[i] = Some(r);
-            });
-        }
-    });
-    results
-        .into_inner()
-        .unwrap()
-        .into_iter()
-        .map(|r| r.expect("every cell ran"))
-        .collect()
+    crate::experiment::run_parallel(&cells, jobs, |&(n, seed)| {
+        let mut job = base.clone();
+        job.maze.size = n;
+        job.seed = seed;
+        let dir = out.join(format!("maze{n}-s{seed}"));
+        let (rec, secs) = match read_record(&dir, &job)? {
+            Some(done) => done,
+            None => run_pbcs(&job, &dir, |_, _| {})?,
+        };
+        on_done(&rec, secs);
+        Ok((rec, secs))
+    })
 }
 
 /// The record of a finished run of `job` in `dir`, if there is one. A finished run of another
@@ -677,7 +794,7 @@ fn read_record(dir: &Path, job: &RunJob) -> Result<Option<(RunRecord, f64)>> {
                 .into(),
         });
     }
-    let mut reader = csv::Reader::from_path(&path).map_err(Error::Csv)?;
+    let mut reader = csv::Reader::from_path(&path).map_err(|e| Error::csv(&path, e))?;
     let record: RunRecord = reader
         .deserialize()
         .next()
@@ -685,15 +802,8 @@ fn read_record(dir: &Path, job: &RunJob) -> Result<Option<(RunRecord, f64)>> {
             path: path.clone(),
             message: "empty record".into(),
         })?
-        .map_err(Error::Csv)?;
-    let seconds = std::fs::read_to_string(dir.join("timing.toml"))
-        .ok()
-        .and_then(|t| {
-            t.lines().find_map(|l| {
-                l.strip_prefix("wall_seconds = ")
-                    .and_then(|v| v.trim().parse().ok())
-            })
-        })
-        .unwrap_or(f64::NAN);
+        .map_err(|e| Error::csv(&path, e))?;
+    let seconds =
+        crate::record::Timing::read(&dir.join("timing.toml"))?.map_or(f64::NAN, |t| t.wall_seconds);
     Ok(Some((record, seconds)))
 }

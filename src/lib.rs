@@ -13,12 +13,14 @@
 //! | Settings the paper gives or leaves open | [`config`] |
 //! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
 //! | Results table, "Vanilla" columns | [`train`] (training on the environment's own reward) |
-//! | Phase 2: Algorithm 1 (skill chaining), 2 (Backplay), 3 (training with reward shaping) | [`pbcs`] |
+//! | Phase 2: Algorithm 1 (skill chaining), 2 (Backplay), 3 (training with reward shaping) | [`phase2`] |
 //! | Wilson score intervals (appendix on γ) | [`stats`] |
 //!
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
 //! result files atomically, [`plot`] draws mazes with plotters, and [`jobs`] turns a config
-//! into result files (what the `pbcs` command runs).
+//! into an outcome and writes it (what the `pbcs` command runs). The experiment pipeline:
+//! [`experiment`] (grids of cells × seeds, declared in TOML, swept with resume), [`tables`]
+//! and `aggregate` (per-cell statistics), [`figures`] and [`report`] (figures, claims, LaTeX).
 //!
 //! ```
 //! use pbcs::config::ExploreJob;
@@ -36,6 +38,7 @@
 
 #[cfg(feature = "polars")]
 pub mod aggregate;
+pub mod check;
 pub mod config;
 pub mod env;
 pub mod error;
@@ -43,10 +46,11 @@ pub mod experiment;
 pub mod explore;
 pub mod figures;
 pub mod jobs;
+pub mod launch;
 pub mod learner;
 pub mod maze;
 pub mod nn;
-pub mod pbcs;
+pub mod phase2;
 pub mod plot;
 pub mod record;
 pub mod report;

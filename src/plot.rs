@@ -344,7 +344,7 @@ impl PictureData {
 
     /// Reads data written by [`PictureData::write_csv`].
     pub fn read_csv(path: &Path) -> Result<PictureData> {
-        let mut reader = csv::Reader::from_path(path)?;
+        let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
         let mut data = PictureData::default();
         let bad = |line: u64, what: &str| Error::Parse {
             path: path.to_path_buf(),
@@ -357,7 +357,7 @@ impl PictureData {
             paths[i].push(p);
         };
         for (line, rec) in reader.records().enumerate() {
-            let rec = rec?;
+            let rec = rec.map_err(|e| Error::csv(path, e))?;
             let line = line as u64 + 2;
             let num = |k: usize| -> Result<f32> {
                 rec.get(k)

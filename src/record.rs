@@ -184,3 +184,97 @@ pub fn write_records<T: serde::Serialize>(path: &Path, records: &[T]) -> Result<
         Ok(())
     })
 }
+
+/// A run's `timing.toml`: the wall clock, which is not deterministic and so never goes into a
+/// CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply` gives
+/// the same bytes, so a byte difference between machines can be told apart). Files written
+/// before the kernel was recorded lack it: those rows were computed with `matrixmultiply`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Timing {
+    /// Wall-clock seconds of the run.
+    pub wall_seconds: f64,
+    /// Environment steps per wall-clock second (rounded).
+    pub steps_per_second: u64,
+    /// The layer kernel's name, if recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernel: Option<String>,
+}
+
+impl Timing {
+    /// The timing of a run that took `seconds` for `env_steps` steps with the active kernel.
+    pub fn now(seconds: f64, env_steps: u64) -> Timing {
+        Timing {
+            wall_seconds: (seconds * 1e6).round() / 1e6,
+            steps_per_second: (env_steps as f64 / seconds.max(1e-9)).round() as u64,
+            kernel: Some(crate::nn::kernel::Kernel::active().name().to_string()),
+        }
+    }
+
+    /// Writes `path` atomically, with a comment line saying why it is not in the CSVs.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let body = toml::to_string(self).map_err(|e| Error::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let text = format!(
+            "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n{body}"
+        );
+        write_atomic(path, |w| w.write_all(text.as_bytes()))
+    }
+
+    /// Reads `path`: `Ok(None)` if there is no such file, an error naming it if it is malformed.
+    pub fn read(path: &Path) -> Result<Option<Timing>> {
+        match std::fs::read_to_string(path) {
+            Ok(text) => toml::from_str(&text).map(Some).map_err(|e| Error::Parse {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            }),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io(path, e)),
+        }
+    }
+
+    /// The kernel that computed the run: as recorded, else `matrixmultiply`.
+    pub fn kernel_name(&self) -> &str {
+        self.kernel.as_deref().unwrap_or("matrixmultiply")
+    }
+}
+
+#[cfg(test)]
+mod timing_tests {
+    use super::Timing;
+
+    #[test]
+    fn timing_files_old_and_new_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        // A file written before the kernel was recorded (committed rows hold such files).
+        let old = dir.path().join("old.timing.toml");
+        std::fs::write(
+            &old,
+            "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n\
+             wall_seconds = 205.050875\nsteps_per_second = 4877\n",
+        )
+        .unwrap();
+        let t = Timing::read(&old).unwrap().unwrap();
+        assert_eq!(t.wall_seconds, 205.050875);
+        assert_eq!(t.steps_per_second, 4877);
+        assert_eq!(t.kernel_name(), "matrixmultiply");
+        // Written and read back.
+        let new = dir.path().join("new.timing.toml");
+        let t = Timing {
+            wall_seconds: 1.5,
+            steps_per_second: 200,
+            kernel: Some("avx2".into()),
+        };
+        t.write(&new).unwrap();
+        assert_eq!(Timing::read(&new).unwrap(), Some(t));
+        assert!(std::fs::read_to_string(&new)
+            .unwrap()
+            .starts_with("# wall-clock time"));
+        // Absent: None; malformed: an error naming the file.
+        assert_eq!(Timing::read(&dir.path().join("none.toml")).unwrap(), None);
+        std::fs::write(&old, "wall_seconds = \"soon\"\n").unwrap();
+        let e = Timing::read(&old).unwrap_err().to_string();
+        assert!(e.contains("old.timing.toml"), "{e}");
+    }
+}

@@ -121,7 +121,7 @@ pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
     reader
         .deserialize()
         .collect::<std::result::Result<Vec<_>, _>>()
-        .map_err(Error::Csv)
+        .map_err(|e| Error::csv(path, e))
 }
 
 /// Writes a table atomically.

@@ -106,7 +106,31 @@ fn bad_experiment_files_name_the_problem() {
             "nowhere.toml",
         ),
     ];
-    for (i, (text, needle)) in cases.iter().enumerate() {
+    let figure = |body: &str| format!("{head}{}[[figure]]\n{body}\n", method("a", ""));
+    let figure_cases = [
+        (
+            figure("kind = \"mazes\"\nname = \"m\"\nmethod = \"b\""),
+            "no method `b`",
+        ),
+        (figure("kind = \"pie\"\nname = \"p\""), "pie"),
+        (figure("kind = \"bars\"\nname = \"../x\""), "figure[0].name"),
+        (
+            figure("kind = \"panels\"\nname = \"p\"\nmethods = [\"a\"]"),
+            "figure[0].methods",
+        ),
+        (
+            format!(
+                "{}[[figure]]\nkind = \"bars\"\nname = \"g\"\n",
+                figure("kind = \"grid\"\nname = \"g\"")
+            ),
+            "used twice",
+        ),
+        (
+            figure("kind = \"bars\"\nname = \"b\"\ncolour = 1"),
+            "colour",
+        ),
+    ];
+    for (i, (text, needle)) in cases.iter().chain(&figure_cases).enumerate() {
         let path = write(dir.path(), &format!("bad{i}.toml"), text);
         let err = Experiment::load(&path, None).unwrap_err().to_string();
         assert!(
@@ -254,4 +278,139 @@ fn stored_configs_compare_by_value() {
     assert!(!job.same_as(&text.replace("fast_tests = false", "fast_tests = true")));
     assert!(!job.same_as("not toml ["));
     assert!(!exp.cells[0].job.with_seed(4).same_as(&text));
+}
+
+/// The paper's PBCS step counts have one source, `experiments/table.toml`, which the `pbcs
+/// table` printer reads too.
+#[test]
+fn the_papers_step_counts_come_from_the_table_experiment() {
+    let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
+        .iter()
+        .map(|&n| pbcs::jobs::paper_pbcs_steps(n))
+        .collect();
+    assert_eq!(
+        steps,
+        [
+            Some(321_000),
+            Some(5_000_000),
+            Some(6_000_000),
+            Some(8_000_000),
+            Some(22_000_000),
+            None
+        ]
+    );
+}
+
+/// A malformed CSV file is an error naming the file (before: "csv: …" without a path).
+#[test]
+fn a_bad_csv_file_is_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let row = dir.path().join("s0.csv");
+    std::fs::write(&row, "experiment,cell\ntable\n").unwrap();
+    let e = pbcs::experiment::read_row(&row).unwrap_err().to_string();
+    assert!(e.contains("s0.csv"), "{e}");
+    let picture = dir.path().join("s0.picture.csv");
+    std::fs::write(&picture, "layer,index,x,y,r\nred,0,not-a-number,1,0\n").unwrap();
+    let e = pbcs::plot::PictureData::read_csv(&picture)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("s0.picture.csv"), "{e}");
+}
+
+/// Figures are declared by the experiment files (no experiment name in the Rust): the
+/// committed ones declare the paper's figures, and a file without `[[figure]]` gets bars.
+#[test]
+fn experiments_declare_their_figures() {
+    use pbcs::experiment::FigureSpec;
+    let names = |file: &str| -> Vec<String> {
+        Experiment::load(Path::new(file), None)
+            .unwrap()
+            .figures
+            .iter()
+            .map(|f| f.name().to_string())
+            .collect()
+    };
+    assert_eq!(
+        names("experiments/table.toml"),
+        ["results_grid", "results_maze", "curves"]
+    );
+    assert_eq!(names("experiments/gamma.toml"), ["gamma"]);
+    assert_eq!(names("experiments/unseen.toml"), ["unseen", "unseen_bars"]);
+    assert_eq!(names("experiments/curves.toml"), ["curves_1m"]);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy("experiments/pbcs_paper.toml", dir.path().join("base.toml")).unwrap();
+    let path = write(
+        dir.path(),
+        "mine.toml",
+        "title = \"t\"\nseeds = 1\nmazes = [2]\n[[method]]\nname = \"a\"\nkind = \"pbcs\"\nbase = \"base.toml\"\n",
+    );
+    assert_eq!(
+        Experiment::load(&path, None).unwrap().figures,
+        [FigureSpec::Bars {
+            name: "mine".into()
+        }]
+    );
+}
+
+/// `pbcs exp list --slurm`: one array task per (cell, seed), and task i runs exactly the i-th
+/// (cell, seed) of the grid (checked by running the script with `PBCS=echo`).
+#[test]
+fn the_slurm_script_runs_one_cell_seed_per_array_task() {
+    use pbcs::launch::Launch;
+    let file = Path::new("experiments/table.toml");
+    let exp = Experiment::load(file, Some("smoke")).unwrap();
+    let results = Path::new("/scratch/results");
+    let launch = Launch::new(&exp, file, Some("smoke"), Some(results));
+    let runs = launch.runs();
+    assert_eq!(runs.len(), exp.cells.len() * exp.seeds().len());
+    let script = launch.slurm(results);
+    assert!(script.starts_with("#!/bin/bash\n"));
+    assert!(
+        script.contains(&format!("#SBATCH --array=0-{}\n", runs.len() - 1)),
+        "{script}"
+    );
+    // Every #SBATCH line comes before the first command (sbatch stops reading there).
+    let first_command = script
+        .lines()
+        .position(|l| !l.is_empty() && !l.starts_with('#'))
+        .unwrap();
+    assert!(script
+        .lines()
+        .skip(first_command)
+        .all(|l| !l.starts_with("#SBATCH")));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("runs.sbatch");
+    std::fs::write(&path, &script).unwrap();
+    for (i, p) in runs.iter().enumerate() {
+        let o = std::process::Command::new("bash")
+            .arg(&path)
+            .env("PBCS", "echo")
+            .env("SLURM_ARRAY_TASK_ID", i.to_string())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(
+            String::from_utf8_lossy(&o.stdout).trim(),
+            format!(
+                "exp run experiments/table.toml --profile smoke --results /scratch/results --cell {} --seed {} --jobs 1",
+                p.cell.id, p.seed
+            )
+        );
+        assert_eq!(launch.args(p), String::from_utf8_lossy(&o.stdout).trim());
+    }
+    // The makefile: one rule per run, its target the run's raw row.
+    let mk = launch.makefile(results);
+    for p in &runs {
+        let target = exp
+            .cell_dir(results, p.cell)
+            .join(format!("s{}.csv", p.seed));
+        assert!(
+            mk.contains(&format!(
+                "{}:\n\t$(PBCS) {} >/dev/null",
+                target.display(),
+                launch.args(p)
+            )),
+            "{mk}"
+        );
+    }
 }

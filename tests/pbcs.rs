@@ -3,9 +3,9 @@
 
 use pbcs::env::{Env, Step};
 use pbcs::nn::{Head, Mlp};
-use pbcs::pbcs::backplay::{backplay, backplay_candidates, Backplayer, Walk};
-use pbcs::pbcs::goal::Inputs;
-use pbcs::pbcs::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
+use pbcs::phase2::backplay::{backplay, backplay_candidates, Backplayer, Walk};
+use pbcs::phase2::goal::Inputs;
+use pbcs::phase2::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 use std::collections::HashMap;
 
@@ -265,7 +265,7 @@ fn candidates_are_every_saved_skill_in_order() {
 
 #[test]
 fn verification_falls_back_to_a_shorter_reach() {
-    use pbcs::pbcs::verified;
+    use pbcs::phase2::verified;
     // Saved (K, π): (3, 0), (2, 0), (1, 3). The farthest (1, π 3) fails its verification,
     // (2, π 0) passes: it is kept, and its verification used the requested episodes.
     let mut b = Scripted {
@@ -545,6 +545,36 @@ mod end_to_end {
             assert!(x == y, "{f} differs between two runs of one seed");
         }
     }
+
+    /// A run is a function from its job to its outcome: `PbcsRun::compute` returns what
+    /// `run_pbcs` writes (the same record, and the same bytes once written).
+    #[test]
+    fn a_computed_run_is_what_the_written_run_holds() {
+        let mut j = job(5);
+        j.phase2.max_env_steps = 30_000;
+        let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let (written, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
+        let run = pbcs::jobs::PbcsRun::compute(&j, |_, _| {}).unwrap();
+        assert_eq!(run.record, written);
+        assert_eq!(run.tau.len(), written.phase2_trajectory_len);
+        assert_eq!(run.phase2.chain.skills.len(), written.skills);
+        run.write(&j, b.path()).unwrap();
+        for f in [
+            "record.csv",
+            "trace.csv",
+            "picture.csv",
+            "chain/manifest.toml",
+        ] {
+            let (x, y) = (
+                std::fs::read(a.path().join(f)).unwrap(),
+                std::fs::read(b.path().join(f)).unwrap(),
+            );
+            assert!(
+                x == y,
+                "{f}: the written outcome differs from run_pbcs's file"
+            );
+        }
+    }
 }
 
 /// Algorithm 3's goal and inputs: one region decides reached, reward and potential.
@@ -554,8 +584,8 @@ mod algorithm3 {
     use pbcs::env::Env;
     use pbcs::maze::Maze;
     use pbcs::nn::{Head, Mlp};
-    use pbcs::pbcs::goal::{Goal, GoalKind, Inputs, REACHED_REWARD};
-    use pbcs::pbcs::{Ball, Skill, SkillChain};
+    use pbcs::phase2::goal::{Goal, GoalKind, Inputs, REACHED_REWARD};
+    use pbcs::phase2::{Ball, Skill, SkillChain};
     use pbcs::rng::{Seeds, Stream};
 
     fn maze2() -> Maze {
@@ -795,9 +825,9 @@ mod skill_task {
     use pbcs::env::Env;
     use pbcs::learner::{Learner, LearnerConfig};
     use pbcs::maze::Maze;
-    use pbcs::pbcs::backplay::Backplayer;
-    use pbcs::pbcs::shaped::SkillTask;
-    use pbcs::pbcs::StartMode;
+    use pbcs::phase2::backplay::Backplayer;
+    use pbcs::phase2::shaped::SkillTask;
+    use pbcs::phase2::StartMode;
 
     fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {
         let maze = Maze::new(&MazeConfig {

@@ -113,6 +113,13 @@ impl Kernel {
         }
     }
 
+    /// Whether the kernels named `a` and `b` (as in `timing.toml`) compute the same bytes:
+    /// the same kernel, or AVX2 and AVX-512, which sum in the same order (`tests/kernel.rs`).
+    pub fn same_bytes(a: &str, b: &str) -> bool {
+        let fma = |k: &str| k == Kernel::Avx2.name() || k == Kernel::Avx512.name();
+        a == b || (fma(a) && fma(b))
+    }
+
     /// Whether this CPU can run the kernel.
     pub fn available(self) -> bool {
         match self {

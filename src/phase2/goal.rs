@@ -13,7 +13,7 @@
 //!   space).
 //!
 //! ```
-//! use pbcs::pbcs::goal::{Goal, Inputs, REACHED_REWARD};
+//! use pbcs::phase2::goal::{Goal, Inputs, REACHED_REWARD};
 //!
 //! // Skill goal B_ε(τ_T) with τ_T = (1, 1), ε = 0.1.
 //! let goal = Goal::ball(vec![1.0, 1.0], 0.1);

@@ -1,0 +1,239 @@
+//! Re-running committed rows (`make cell`, `pbcs exp check`): the runs of one cell are repeated
+//! in a scratch folder and compared with the committed raw rows, byte for byte, and where the
+//! bytes differ, statistically: does the new success rate lie inside the committed rows'
+//! Wilson 95 % interval? The layer kernels recorded beside the rows explain a byte difference
+//! between machines ([`crate::nn::kernel::Kernel`]).
+
+use crate::error::{Error, Result};
+use crate::experiment::{plan, read_finished, sweep, Event, Experiment, Pending, RawRow};
+use crate::record::Timing;
+use crate::stats::wilson;
+use crate::tables::Z95;
+use std::path::Path;
+
+/// One seed's comparison.
+#[derive(Debug, Clone)]
+pub struct SeedCheck {
+    /// The run seed.
+    pub seed: u64,
+    /// Whether the fresh row has the committed row's bytes.
+    pub identical: bool,
+    /// The committed row.
+    pub committed: RawRow,
+    /// The fresh row.
+    pub fresh: RawRow,
+}
+
+/// What re-running a cell found.
+#[derive(Debug, Clone)]
+pub struct CellCheck {
+    /// The cell's id.
+    pub cell: String,
+    /// Every seed re-run, in order.
+    pub seeds: Vec<SeedCheck>,
+    /// The kernels that computed the committed rows (sorted, each once; `matrixmultiply` for
+    /// rows written before kernels were recorded).
+    pub committed_kernels: Vec<String>,
+    /// The kernel that computed the fresh rows.
+    pub kernel: String,
+}
+
+/// The verdict of a [`CellCheck`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Every row reproduced byte for byte.
+    Match,
+    /// Some bytes differ, but the new success rate lies inside the committed interval.
+    WithinInterval,
+    /// The new success rate lies outside the committed interval.
+    Outside,
+}
+
+impl CellCheck {
+    /// Runs.
+    pub fn n(&self) -> u64 {
+        self.seeds.len() as u64
+    }
+
+    /// Rows reproduced byte for byte.
+    pub fn identical(&self) -> u64 {
+        self.seeds.iter().filter(|s| s.identical).count() as u64
+    }
+
+    /// Solved runs among the committed rows.
+    pub fn solved_committed(&self) -> u64 {
+        self.seeds.iter().filter(|s| s.committed.solved).count() as u64
+    }
+
+    /// Solved runs among the fresh rows.
+    pub fn solved_now(&self) -> u64 {
+        self.seeds.iter().filter(|s| s.fresh.solved).count() as u64
+    }
+
+    /// The Wilson 95 % interval of the committed success rate.
+    pub fn interval(&self) -> (f64, f64) {
+        wilson(self.solved_committed(), self.n(), Z95)
+    }
+
+    /// Match, within the committed interval, or outside it.
+    pub fn verdict(&self) -> Verdict {
+        if self.identical() == self.n() {
+            return Verdict::Match;
+        }
+        let (lo, hi) = self.interval();
+        let rate = self.solved_now() as f64 / self.n() as f64;
+        if (lo..=hi).contains(&rate) {
+            Verdict::WithinInterval
+        } else {
+            Verdict::Outside
+        }
+    }
+
+    /// Why bytes may differ: the committed rows came from a kernel that sums in another order
+    /// than this run's (None when every committed kernel gives this run's bytes).
+    pub fn kernel_note(&self) -> Option<String> {
+        let same = |k: &str| crate::nn::kernel::Kernel::same_bytes(k, &self.kernel);
+        if self.committed_kernels.iter().all(|k| same(k)) {
+            return None;
+        }
+        Some(format!(
+            "the committed rows were computed with the {} kernel, this run with {}; kernels sum \
+             in different orders, so bytes differ. `PBCS_KERNEL={} make cell ...` compares like \
+             with like",
+            self.committed_kernels.join(", "),
+            self.kernel,
+            self.committed_kernels[0]
+        ))
+    }
+}
+
+/// Re-runs `cell` of `exp` (every seed, or `seed`) into a scratch folder, `jobs` at a time,
+/// and compares with the committed rows under `results`. A missing committed row is an error
+/// naming the folder. `on_event` is called as the sweep goes.
+pub fn check_cell(
+    exp: &Experiment,
+    results: &Path,
+    cell: &str,
+    seed: Option<u64>,
+    jobs: usize,
+    on_event: impl Fn(&Pending, &Event) + Sync,
+) -> Result<CellCheck> {
+    let runs = plan(exp, Some(cell), seed)?;
+    let c = exp.cell(cell)?;
+    let committed_dir = exp.cell_dir(results, c);
+    let mut committed = Vec::new();
+    for p in &runs {
+        match read_finished(p.cell, p.seed, &committed_dir)? {
+            Some(r) => committed.push(r),
+            None => {
+                return Err(Error::invalid(
+                    "cell",
+                    format!(
+                        "no committed row for cell {cell} seed {} in {}",
+                        p.seed,
+                        committed_dir.display()
+                    ),
+                ))
+            }
+        }
+    }
+    let scratch = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
+    let fresh = sweep(exp, &runs, scratch.path(), jobs, on_event)?;
+    let fresh_dir = exp.cell_dir(scratch.path(), c);
+    let read = |p: &Path| std::fs::read(p).map_err(|e| Error::io(p, e));
+    let mut seeds = Vec::new();
+    let mut committed_kernels = Vec::new();
+    for (p, (old, new)) in runs.iter().zip(committed.into_iter().zip(fresh)) {
+        let name = format!("s{}.csv", p.seed);
+        let identical = read(&committed_dir.join(&name))? == read(&fresh_dir.join(&name))?;
+        let timing = Timing::read(&committed_dir.join(format!("s{}.timing.toml", p.seed)))
+            .ok()
+            .flatten();
+        committed_kernels
+            .push(timing.map_or_else(|| "matrixmultiply".into(), |t| t.kernel_name().to_string()));
+        seeds.push(SeedCheck {
+            seed: p.seed,
+            identical,
+            committed: old,
+            fresh: new,
+        });
+    }
+    committed_kernels.sort();
+    committed_kernels.dedup();
+    Ok(CellCheck {
+        cell: cell.to_string(),
+        seeds,
+        committed_kernels,
+        kernel: crate::nn::kernel::Kernel::active().name().to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(solved: bool) -> RawRow {
+        let csv = format!(
+            "experiment,cell,method,kind,maze,maze_seed,seed,learner,gamma,chaining,starts,solved,\
+             success_rate,env_steps,budget,first_success_steps,phase1_steps,train_steps,\
+             test_steps,skills,failure\n\
+             table,pbcs-maze2,pbcs,pbcs,2,0,0,ddpg,0.9,true,ball,{solved},1.0,1,400000,,1,0,0,1,\n"
+        );
+        csv::Reader::from_reader(csv.as_bytes())
+            .deserialize()
+            .next()
+            .unwrap()
+            .unwrap()
+    }
+
+    /// `solved` committed / fresh per seed, and whether the bytes matched.
+    fn check(seeds: &[(bool, bool, bool)], committed: &[&str], now: &str) -> CellCheck {
+        CellCheck {
+            cell: "pbcs-maze2".into(),
+            seeds: seeds
+                .iter()
+                .enumerate()
+                .map(|(i, &(identical, old, new))| SeedCheck {
+                    seed: i as u64,
+                    identical,
+                    committed: row(old),
+                    fresh: row(new),
+                })
+                .collect(),
+            committed_kernels: committed.iter().map(|s| s.to_string()).collect(),
+            kernel: now.into(),
+        }
+    }
+
+    #[test]
+    fn verdicts_follow_bytes_then_the_wilson_interval() {
+        let all = |x: (bool, bool, bool)| vec![x; 10];
+        assert_eq!(
+            check(&all((true, true, true)), &["avx2"], "avx2").verdict(),
+            Verdict::Match
+        );
+        // 10/10 committed: Wilson 95 % [0.72, 1]; 8/10 now lies inside, 5/10 outside.
+        let mut s = all((false, true, true));
+        for x in &mut s[..2] {
+            x.2 = false;
+        }
+        assert_eq!(
+            check(&s, &["avx2"], "avx2").verdict(),
+            Verdict::WithinInterval
+        );
+        for x in &mut s[..5] {
+            x.2 = false;
+        }
+        assert_eq!(check(&s, &["avx2"], "avx2").verdict(), Verdict::Outside);
+    }
+
+    #[test]
+    fn a_kernel_difference_is_explained_unless_the_kernels_agree() {
+        let s = [(false, true, true)];
+        assert!(check(&s, &["avx512"], "avx2").kernel_note().is_none());
+        let note = check(&s, &["matrixmultiply"], "avx2")
+            .kernel_note()
+            .unwrap();
+        assert!(note.contains("PBCS_KERNEL=matrixmultiply"), "{note}");
+    }
+}
