@@ -39,6 +39,7 @@
 #[cfg(feature = "polars")]
 pub mod aggregate;
 pub mod check;
+pub mod claims;
 pub mod config;
 pub mod env;
 pub mod error;

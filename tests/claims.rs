@@ -8,10 +8,27 @@
 //! test asserts what our data says and names the difference, so that new data that changes the
 //! picture fails the test and is looked at.
 
+use pbcs::claims::{beats, fails, solves, Claim, Verdict};
 use pbcs::experiment::{read_raw, Experiment};
-use pbcs::report::{beats, fails, solves, Verdict};
 use pbcs::tables::{cell_stats, read_table, table_path, CellStats};
 use std::path::Path;
+
+/// The paper's claims (`experiments/claims.toml`) evaluated on these tables.
+fn claims(
+    table: Vec<CellStats>,
+    gamma: Vec<CellStats>,
+    unseen: Vec<CellStats>,
+    curves: Vec<CellStats>,
+) -> Vec<Claim> {
+    let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
+    let tables = [
+        ("table".to_string(), table),
+        ("gamma".to_string(), gamma),
+        ("unseen".to_string(), unseen),
+        ("curves".to_string(), curves),
+    ];
+    pbcs::claims::claims(&specs, &tables)
+}
 
 fn table(name: &str) -> Vec<CellStats> {
     read_table(&table_path(Path::new("results"), name))
@@ -134,11 +151,11 @@ fn within_our_step_cap_pbcs_does_not_solve_the_larger_mazes() {
 
 #[test]
 fn the_generated_claims_agree_with_these_tests() {
-    let claims = pbcs::report::claims(
-        &table("table"),
-        &table("gamma"),
-        &table("unseen"),
-        &table("curves"),
+    let claims = claims(
+        table("table"),
+        table("gamma"),
+        table("unseen"),
+        table("curves"),
     );
     let verdict = |id: &str| {
         claims
@@ -168,7 +185,7 @@ fn gamma_study_pbcs_without_chaining_fails_at_either_gamma() {
             s.n
         );
     }
-    let claims = pbcs::report::claims(&table("table"), &g, &table("unseen"), &table("curves"));
+    let claims = claims(table("table"), g, table("unseen"), table("curves"));
     let gamma = claims
         .iter()
         .find(|c| c.id == "gamma_lower_better")
@@ -195,7 +212,7 @@ fn unseen_states_ball_starts_beat_exact_starts_on_maze_2() {
     for b in u.iter().filter(|s| s.method == "ball") {
         assert!(!beats(cell(&u, "exact", b.maze), b), "maze {}", b.maze);
     }
-    let claims = pbcs::report::claims(&table("table"), &table("gamma"), &u, &table("curves"));
+    let claims = claims(table("table"), table("gamma"), u, table("curves"));
     let unseen = claims.iter().find(|c| c.id == "unseen_states").unwrap();
     assert_eq!(unseen.verdict, Verdict::Agrees);
 }
@@ -255,9 +272,57 @@ fn at_the_papers_budget_vanilla_baselines_sometimes_solve_maze_2_never_maze_5() 
         d.successes,
         d.n
     );
-    let claims = pbcs::report::claims(&table("table"), &table("gamma"), &table("unseen"), &c);
+    let claims = claims(table("table"), table("gamma"), table("unseen"), c);
     for id in ["vanilla_ddpg_fails", "vanilla_td3_fails"] {
         let v = claims.iter().find(|x| x.id == id).unwrap().verdict;
         assert_eq!(v, Verdict::Inconclusive, "{id}");
     }
+}
+
+/// The claims are data: every claim of `experiments/claims.toml` names a committed experiment
+/// and methods it has; a malformed claims file is an error naming the file.
+#[test]
+fn the_claims_file_names_real_experiments_and_methods() {
+    use pbcs::claims::{load_claims, ClaimTest};
+    let specs = load_claims(Path::new("experiments/claims.toml")).unwrap();
+    assert_eq!(specs.len(), 9);
+    for c in &specs {
+        let exp = Experiment::load(
+            Path::new(&format!("experiments/{}.toml", c.experiment)),
+            None,
+        )
+        .unwrap_or_else(|e| panic!("claim {}: {e}", c.id));
+        let methods: Vec<&str> = match &c.test {
+            ClaimTest::FailsEverywhere { method, .. }
+            | ClaimTest::SolvesEverywhere { method }
+            | ClaimTest::StepsBelowPaper { method } => vec![method],
+            ClaimTest::Beats { method, than, .. } => vec![method, than],
+            ClaimTest::Pooled { methods } => methods.iter().map(|(m, _)| m.as_str()).collect(),
+        };
+        for m in methods {
+            assert!(
+                exp.methods.iter().any(|(n, _)| n == m),
+                "claim {}: experiment {} has no method {m}",
+                c.id,
+                c.experiment
+            );
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("claims.toml");
+    for text in [
+        "[[claim]]\nid = \"x\"\npaper = \"p\"\nexperiment = \"table\"\ntest = { kind = \"wins\", method = \"a\" }\n",
+        "[[claim]]\nid = \"x\"\npaper = \"p\"\nexperiment = \"table\"\ntest = { kind = \"pooled\", methods = [[\"a\", \"A\"]] }\n",
+        "[[claim]]\nid = \"x\"\npaper = \"p\"\ntest = { kind = \"solves_everywhere\", method = \"a\" }\n",
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let e = load_claims(&bad).unwrap_err().to_string();
+        assert!(e.contains("claims.toml"), "{e}");
+    }
+    // A claim whose experiment has no table here is left out, not an error.
+    let claims = pbcs::claims::claims(&specs, &[("gamma".to_string(), table("gamma"))]);
+    assert_eq!(
+        claims.iter().map(|c| c.id.as_str()).collect::<Vec<_>>(),
+        ["gamma_lower_better", "argmax_actor"]
+    );
 }

@@ -197,7 +197,13 @@ fn smoke_profile_runs_end_to_end_deterministically() {
     }
     let figures = a.path().join("figures");
     let tex = a.path().join("tex");
-    let files = pbcs::report::render_all(&loaded, a.path(), &figures, &tex).unwrap();
+    let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
+    let claims = pbcs::claims::claims(&specs, &tables);
+    let files = pbcs::report::render_all(&loaded, &claims, a.path(), &figures, &tex).unwrap();
     for name in [
         "results_grid.png",
         "results_grid.svg",

@@ -534,6 +534,8 @@ fn make_figures(
     tex: Option<PathBuf>,
 ) -> anyhow::Result<()> {
     let (exps, results) = set.load()?;
+    // The claims file first: a bad one stops before any work.
+    let specs = pbcs::claims::load_claims(&set.experiments.join("claims.toml"))?;
     let figures = figures.unwrap_or_else(|| results.join("figures"));
     let tex = tex.unwrap_or_else(|| match &set.profile {
         None => PathBuf::from("paper/generated"),
@@ -574,20 +576,14 @@ fn make_figures(
         }
         loaded.push((exp, stats));
     }
-    let files = pbcs::report::render_all(&loaded, &results, &figures, &tex)?;
-    let named = |n: &str| {
-        loaded
-            .iter()
-            .find(|(e, _)| e.name == n)
-            .map_or(Vec::new(), |(_, s)| s.clone())
-    };
+    let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    let claims = pbcs::claims::claims(&specs, &tables);
+    let files = pbcs::report::render_all(&loaded, &claims, &results, &figures, &tex)?;
     println!("\nthe paper's claims against our tables:");
-    for c in pbcs::report::claims(
-        &named("table"),
-        &named("gamma"),
-        &named("unseen"),
-        &named("curves"),
-    ) {
+    for c in &claims {
         println!(
             "- {} — {}: {}",
             c.id,

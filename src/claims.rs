@@ -1,0 +1,549 @@
+//! The paper's claims checked against our tables. The claims are data: `experiments/claims.toml`
+//! lists them in the report's order, each with the paper's statement, the experiment whose
+//! table judges it and the test ([`ClaimTest`]); [`claims`] evaluates them. The LaTeX that
+//! shows them is [`crate::report`]'s.
+//!
+//! A claim is judged with 95 % Wilson score intervals: a method *fails reliably* on a maze when
+//! the upper end of its success interval is below 1/2, *solves reliably* when the lower end is
+//! above 1/2, and one method *beats* another when their intervals are disjoint. Anything else
+//! is *inconclusive*.
+
+use crate::error::{Error, Result};
+use crate::figures::human_steps;
+use crate::tables::CellStats;
+use serde::Deserialize;
+use std::path::Path;
+
+/// How our data stands to a claim of the paper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Our data supports the claim at 95 %.
+    Agrees,
+    /// Our data supports the opposite at 95 %.
+    Disagrees,
+    /// Neither.
+    Inconclusive,
+    /// The paper makes no claim (it shows the experiment without stating a result).
+    NoClaim,
+}
+
+impl Verdict {
+    /// A word for tables.
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Agrees => "agrees",
+            Verdict::Disagrees => "disagrees",
+            Verdict::Inconclusive => "inconclusive",
+            Verdict::NoClaim => "no claim in the paper",
+        }
+    }
+}
+
+/// One claim of the paper, our numbers, and the verdict.
+#[derive(Debug, Clone)]
+pub struct Claim {
+    /// Short id (`vanilla_ddpg_fails`).
+    pub id: String,
+    /// What the paper says.
+    pub paper: String,
+    /// What our data says, with numbers.
+    pub ours: String,
+    /// How they relate.
+    pub verdict: Verdict,
+}
+
+/// Fails reliably: Wilson upper end below 1/2.
+pub fn fails(s: &CellStats) -> bool {
+    s.wilson_hi < 0.5
+}
+
+/// Solves reliably: Wilson lower end above 1/2.
+pub fn solves(s: &CellStats) -> bool {
+    s.wilson_lo > 0.5
+}
+
+/// `a` beats `b`: the intervals are disjoint with `a` above.
+pub fn beats(a: &CellStats, b: &CellStats) -> bool {
+    a.wilson_lo > b.wilson_hi
+}
+
+/// Compares method `a` with method `b` maze by maze: `a` beats `b` on a maze when their Wilson
+/// intervals are disjoint with `a` above. The verdict agrees with "a does better than b" when
+/// `a` beats `b` on some maze and `b` beats `a` on none; it disagrees when `b` beats `a`
+/// somewhere; otherwise it is inconclusive. Returns one "maze N: A k/n […] vs B k/n […]" part
+/// per maze both methods have, and the verdict.
+fn per_maze(
+    stats: &[CellStats],
+    (a, a_name): (&str, &str),
+    (b, b_name): (&str, &str),
+) -> (Vec<String>, Verdict) {
+    let mut parts = Vec::new();
+    let (mut a_wins, mut b_wins) = (false, false);
+    for s in cells(stats, a) {
+        if let Some(t) = find(stats, b, s.maze) {
+            parts.push(format!(
+                "maze {}: {a_name} {} vs {b_name} {}",
+                s.maze,
+                k_of_n(s),
+                k_of_n(t)
+            ));
+            a_wins |= beats(s, t);
+            b_wins |= beats(t, s);
+        }
+    }
+    let verdict = if b_wins {
+        Verdict::Disagrees
+    } else if a_wins {
+        Verdict::Agrees
+    } else {
+        Verdict::Inconclusive
+    };
+    (parts, verdict)
+}
+
+fn k_of_n(s: &CellStats) -> String {
+    format!(
+        "{}/{} [{:.2}, {:.2}]",
+        s.successes, s.n, s.wilson_lo, s.wilson_hi
+    )
+}
+
+fn cells<'a>(stats: &'a [CellStats], method: &str) -> Vec<&'a CellStats> {
+    stats.iter().filter(|s| s.method == method).collect()
+}
+
+pub(crate) fn find<'a>(stats: &'a [CellStats], method: &str, maze: usize) -> Option<&'a CellStats> {
+    stats.iter().find(|s| s.method == method && s.maze == maze)
+}
+
+/// Pools a method's cells over mazes (counts added; interval recomputed).
+fn pooled(stats: &[CellStats], method: &str) -> Option<CellStats> {
+    let c = cells(stats, method);
+    let first = (*c.first()?).clone();
+    let (k, n) = c
+        .iter()
+        .fold((0, 0), |(k, n), s| (k + s.successes, n + s.n));
+    Some(CellStats {
+        cell: format!("{method}-pooled"),
+        ..first.with_counts(k, n)
+    })
+}
+
+/// "Method fails on every maze", judged maze by maze on the 10-seed cells of `stats` and, where
+/// `longer` has the same method and maze, on those runs at a larger budget (the paper's; fewer
+/// seeds). Per maze: a longer cell that solves disagrees; one with any success leaves the maze
+/// inconclusive (the method reached the target within the paper's budget, but not reliably);
+/// otherwise the 10-seed cell decides (fails: agrees, solves: disagrees, else inconclusive).
+/// The claim agrees when every maze does and disagrees when any maze does.
+fn fails_everywhere(
+    id: &str,
+    paper: &str,
+    stats: &[CellStats],
+    longer: &[CellStats],
+    method: &str,
+) -> Option<Claim> {
+    let c = cells(stats, method);
+    if c.is_empty() {
+        return None;
+    }
+    let mut parts = Vec::new();
+    let mut verdicts = Vec::new();
+    for s in c {
+        let mut part = format!(
+            "maze {}: {} solved within {} steps",
+            s.maze,
+            k_of_n(s),
+            human_steps(s.budget as f64)
+        );
+        let long = find(longer, method, s.maze).filter(|l| l.budget > s.budget);
+        if let Some(l) = long {
+            part.push_str(&format!(
+                ", {} within {}",
+                k_of_n(l),
+                human_steps(l.budget as f64)
+            ));
+        }
+        parts.push(part);
+        verdicts.push(match long {
+            Some(l) if solves(l) => Verdict::Disagrees,
+            Some(l) if l.successes > 0 => Verdict::Inconclusive,
+            _ if fails(s) => Verdict::Agrees,
+            _ if solves(s) => Verdict::Disagrees,
+            _ => Verdict::Inconclusive,
+        });
+    }
+    let verdict = if verdicts.contains(&Verdict::Disagrees) {
+        Verdict::Disagrees
+    } else if verdicts.iter().all(|v| *v == Verdict::Agrees) {
+        Verdict::Agrees
+    } else {
+        Verdict::Inconclusive
+    };
+    Some(Claim {
+        id: id.into(),
+        paper: paper.into(),
+        ours: parts.join("; "),
+        verdict,
+    })
+}
+
+/// One claim of the paper as `experiments/claims.toml` states it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClaimSpec {
+    /// Short id (`vanilla_ddpg_fails`).
+    pub id: String,
+    /// What the paper says.
+    pub paper: String,
+    /// The experiment whose table judges it.
+    pub experiment: String,
+    /// How it is judged.
+    pub test: ClaimTest,
+}
+
+/// How a claim is judged on an experiment's table (`test = { kind = "...", ... }`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClaimTest {
+    /// `method` fails on every maze; where experiment `longer` ran the same method and maze at a
+    /// larger budget, those runs weigh in (see [`fails_everywhere`]).
+    FailsEverywhere {
+        /// The method.
+        method: String,
+        /// An experiment with the same method at a larger budget.
+        #[serde(default)]
+        longer: Option<String>,
+    },
+    /// `method` solves every maze: agrees when every maze is solved reliably, disagrees when
+    /// one fails reliably.
+    SolvesEverywhere {
+        /// The method.
+        method: String,
+    },
+    /// `method` does better than `than`, maze by maze ([`per_maze`]); with `pooled`, the
+    /// counts pooled over mazes decide where no maze does.
+    Beats {
+        /// The method said to do better.
+        method: String,
+        /// Its name in the text.
+        label: String,
+        /// The method it is compared with.
+        than: String,
+        /// That method's name in the text.
+        than_label: String,
+        /// Whether pooled counts decide an inconclusive per-maze verdict.
+        #[serde(default)]
+        pooled: bool,
+    },
+    /// The median steps of `method`'s solved runs lie below the paper's, on every maze with a
+    /// solved run and a paper figure (inconclusive otherwise).
+    StepsBelowPaper {
+        /// The method.
+        method: String,
+    },
+    /// No claim in the paper: the pooled counts of `methods` (method, label), the first two
+    /// set against each other.
+    Pooled {
+        /// (method, label), at least two.
+        methods: Vec<(String, String)>,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClaimsFile {
+    #[serde(rename = "claim")]
+    claims: Vec<ClaimSpec>,
+}
+
+/// Reads the claims file (`experiments/claims.toml`), in order; a malformed file or a `pooled`
+/// test with fewer than two methods is an error naming the file.
+pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file: ClaimsFile = toml::from_str(&text).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    for (i, c) in file.claims.iter().enumerate() {
+        if let ClaimTest::Pooled { methods } = &c.test {
+            if methods.len() < 2 {
+                return Err(Error::Parse {
+                    path: path.to_path_buf(),
+                    message: format!("claim[{i}] ({}): `pooled` needs at least two methods", c.id),
+                });
+            }
+        }
+    }
+    Ok(file.claims)
+}
+
+/// Evaluates `specs` on the experiments' tables (name, per-cell statistics), in order. A claim
+/// whose experiment has no table here, or whose cells are missing, is left out.
+pub fn claims(specs: &[ClaimSpec], tables: &[(String, Vec<CellStats>)]) -> Vec<Claim> {
+    let table = |name: &str| -> &[CellStats] {
+        tables
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(&[], |(_, s)| s.as_slice())
+    };
+    specs
+        .iter()
+        .filter_map(|spec| evaluate(spec, table(&spec.experiment), &table))
+        .collect()
+}
+
+fn evaluate<'a>(
+    spec: &ClaimSpec,
+    stats: &[CellStats],
+    table: &impl Fn(&str) -> &'a [CellStats],
+) -> Option<Claim> {
+    let claim = |ours: String, verdict: Verdict| Claim {
+        id: spec.id.clone(),
+        paper: spec.paper.clone(),
+        ours,
+        verdict,
+    };
+    match &spec.test {
+        ClaimTest::FailsEverywhere { method, longer } => fails_everywhere(
+            &spec.id,
+            &spec.paper,
+            stats,
+            longer.as_deref().map_or(&[], table),
+            method,
+        ),
+        ClaimTest::SolvesEverywhere { method } => {
+            let c = cells(stats, method);
+            if c.is_empty() {
+                return None;
+            }
+            let verdict = if c.iter().all(|s| solves(s)) {
+                Verdict::Agrees
+            } else if c.iter().any(|s| fails(s)) {
+                Verdict::Disagrees
+            } else {
+                Verdict::Inconclusive
+            };
+            let ours = c
+                .iter()
+                .map(|s| {
+                    format!(
+                        "maze {}: {} within {} steps",
+                        s.maze,
+                        k_of_n(s),
+                        human_steps(s.budget as f64)
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; ");
+            Some(claim(ours, verdict))
+        }
+        ClaimTest::Beats {
+            method,
+            label,
+            than,
+            than_label,
+            pooled: false,
+        } => {
+            let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
+            (!parts.is_empty()).then(|| claim(parts.join("; "), verdict))
+        }
+        ClaimTest::Beats {
+            method,
+            label,
+            than,
+            than_label,
+            pooled: true,
+        } => {
+            // Per maze, and pooled over mazes (more seeds per bar; it decides when no maze
+            // does).
+            let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
+            let (a, b) = (pooled(stats, method)?, pooled(stats, than)?);
+            let verdict = match verdict {
+                Verdict::Inconclusive if beats(&a, &b) => Verdict::Agrees,
+                Verdict::Inconclusive if beats(&b, &a) => Verdict::Disagrees,
+                v => v,
+            };
+            let ours = format!(
+                "{}; pooled: {} vs {}",
+                parts.join("; "),
+                k_of_n(&a),
+                k_of_n(&b)
+            );
+            Some(claim(ours, verdict))
+        }
+        ClaimTest::StepsBelowPaper { method } => {
+            let mut parts = Vec::new();
+            let mut below = Vec::new();
+            for s in cells(stats, method) {
+                if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
+                    parts.push(format!(
+                        "maze {}: median {} over {} solved runs vs the paper's {}",
+                        s.maze,
+                        human_steps(m),
+                        s.successes,
+                        human_steps(p as f64)
+                    ));
+                    below.push(m < p as f64);
+                }
+            }
+            if below.is_empty() {
+                return None;
+            }
+            let ours = format!(
+                "{} (sizes with no solved run have no median)",
+                parts.join("; ")
+            );
+            let verdict = if below.iter().all(|&b| b) {
+                Verdict::Agrees
+            } else {
+                Verdict::Inconclusive
+            };
+            Some(claim(ours, verdict))
+        }
+        ClaimTest::Pooled { methods } => {
+            let (m0, l0) = &methods[0];
+            let (m1, l1) = &methods[1];
+            let (a, b) = (pooled(stats, m0)?, pooled(stats, m1)?);
+            let mut ours = format!(
+                "pooled over mazes: {l0} {} vs {l1} {}",
+                k_of_n(&a),
+                k_of_n(&b)
+            );
+            for (m, l) in &methods[2..] {
+                if let Some(p) = pooled(stats, m) {
+                    ours.push_str(&format!("; {l} {}", k_of_n(&p)));
+                }
+            }
+            Some(claim(ours, Verdict::NoClaim))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
+    fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
+        CellStats {
+            experiment: "t".into(),
+            cell: format!("{method}-maze{maze}"),
+            method: method.into(),
+            label: method.into(),
+            maze,
+            n: 0,
+            successes: 0,
+            success_rate: 0.0,
+            wilson_lo: 0.0,
+            wilson_hi: 0.0,
+            steps_median: 1.0,
+            steps_q1: 1.0,
+            steps_q3: 1.0,
+            steps_min: 1.0,
+            steps_max: 1.0,
+            solved_steps_median: None,
+            skills_median: 0.0,
+            success_rate_median: 0.0,
+            budget: 1,
+            paper_steps: None,
+            paper_solved: None,
+        }
+        .with_counts(k, n)
+    }
+
+    #[test]
+    fn per_maze_agrees_when_one_maze_separates_and_none_reverses() {
+        // 10/10 is [0.72, 1.00], 2/10 is [0.06, 0.51]: disjoint. 0/10 against 0/10: a tie.
+        let stats = [
+            cell("a", 2, 10, 10),
+            cell("b", 2, 2, 10),
+            cell("a", 3, 0, 10),
+            cell("b", 3, 0, 10),
+        ];
+        let (parts, verdict) = per_maze(&stats, ("a", "A"), ("b", "B"));
+        assert_eq!(verdict, Verdict::Agrees);
+        assert_eq!(parts.len(), 2);
+        assert!(parts[0].starts_with("maze 2: A 10/10 [0.72, 1.00] vs B 2/10 [0.06, 0.51]"));
+        // Pooled, the same counts overlap (10/20 [0.30, 0.70] against 2/20 [0.03, 0.30] is a
+        // near miss), which is why the verdict is per maze.
+        let (a, b) = (pooled(&stats, "a").unwrap(), pooled(&stats, "b").unwrap());
+        assert!(!beats(&a, &b), "{} vs {}", k_of_n(&a), k_of_n(&b));
+    }
+
+    #[test]
+    fn fails_everywhere_weighs_runs_at_the_papers_budget() {
+        let with_budget = |mut c: CellStats, b: u64| {
+            c.budget = b;
+            c
+        };
+        let table = [
+            with_budget(cell("ddpg", 2, 0, 10), 100_000),
+            with_budget(cell("ddpg", 5, 0, 10), 100_000),
+        ];
+        let verdict = |longer: &[CellStats]| {
+            fails_everywhere("x", "", &table, longer, "ddpg")
+                .unwrap()
+                .verdict
+        };
+        // No longer runs, or longer runs that never succeed: the 10-seed failures decide.
+        assert_eq!(verdict(&[]), Verdict::Agrees);
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 0, 3), 1_000_000)]),
+            Verdict::Agrees
+        );
+        // 2 of 3 at the paper's budget: reached, not reliably. 10 of 10: the claim is wrong.
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 2, 3), 1_000_000)]),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 5, 10, 10), 1_000_000)]),
+            Verdict::Disagrees
+        );
+        // A "longer" cell with no larger budget is not evidence about a larger budget.
+        assert_eq!(
+            verdict(&[with_budget(cell("ddpg", 2, 2, 3), 100_000)]),
+            Verdict::Agrees
+        );
+        let claim = fails_everywhere(
+            "x",
+            "",
+            &table,
+            &[with_budget(cell("ddpg", 2, 2, 3), 1_000_000)],
+            "ddpg",
+        )
+        .unwrap();
+        assert!(
+            claim.ours.starts_with(
+                "maze 2: 0/10 [0.00, 0.28] solved within 100k steps, 2/3 [0.21, 0.94] within 1.00M"
+            ),
+            "{}",
+            claim.ours
+        );
+    }
+
+    #[test]
+    fn per_maze_disagrees_when_any_maze_reverses_and_is_inconclusive_on_overlaps() {
+        let reversed = [
+            cell("a", 2, 10, 10),
+            cell("b", 2, 0, 10),
+            cell("a", 5, 0, 10),
+            cell("b", 5, 10, 10),
+        ];
+        assert_eq!(
+            per_maze(&reversed, ("a", "A"), ("b", "B")).1,
+            Verdict::Disagrees
+        );
+        // 6/10 [0.31, 0.83] against 3/10 [0.11, 0.60]: overlapping.
+        let close = [cell("a", 2, 6, 10), cell("b", 2, 3, 10)];
+        assert_eq!(
+            per_maze(&close, ("a", "A"), ("b", "B")).1,
+            Verdict::Inconclusive
+        );
+        // A maze only one method has is not compared.
+        let alone = [cell("a", 2, 10, 10)];
+        let (parts, verdict) = per_maze(&alone, ("a", "A"), ("b", "B"));
+        assert!(parts.is_empty());
+        assert_eq!(verdict, Verdict::Inconclusive);
+    }
+}
