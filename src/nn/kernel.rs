@@ -880,10 +880,16 @@ mod generic {
                     bias: bias_j,
                     post: post_ij,
                 };
+                // A tile whose last vector is full is compiled without masks, so its inner
+                // loop holds no branch on the tail (measured: the AVX2 loop had one per k).
+                let full = tail == S::LANES;
                 macro_rules! pick {
                     ($(($r:literal, $v:literal)),*) => {
-                        match (mr, nv) {
-                            $(($r, $v) => tile::<S, $r, $v>(args),)*
+                        match (mr, nv, full) {
+                            $(
+                                ($r, $v, true) => tile::<S, $r, $v, true>(args),
+                                ($r, $v, false) => tile::<S, $r, $v, false>(args),
+                            )*
                             _ => unreachable!("tile {mr} × {nv} larger than the kernel's"),
                         }
                     };
@@ -937,10 +943,12 @@ mod generic {
     }
 
     /// One MR × (NR vectors) block of C: MR·NR accumulators in registers, one fused
-    /// multiply-add each per k, then bias and epilogue on the way out.
+    /// multiply-add each per k, then bias and epilogue on the way out. `FULL`: the last vector
+    /// has all its lanes (no masked loads or stores).
     #[inline(always)]
-    unsafe fn tile<S: Simd, const MR: usize, const NR: usize>(t: Tile) {
-        let full = t.tail == S::LANES;
+    unsafe fn tile<S: Simd, const MR: usize, const NR: usize, const FULL: bool>(t: Tile) {
+        debug_assert_eq!(FULL, t.tail == S::LANES);
+        let full = FULL;
         let last = S::mask(t.tail);
         let load = |p: *const f32, v: usize| {
             if v + 1 < NR || full {
