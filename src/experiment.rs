@@ -528,7 +528,8 @@ pub struct RawRow {
     pub maze_seed: u64,
     /// Run seed.
     pub seed: u64,
-    /// `ddpg`, `td3`, with `_am` for the argmax actor.
+    /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
+    /// argmax actor.
     pub learner: String,
     /// γ.
     pub gamma: f32,
@@ -584,15 +585,7 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
                 maze: s.maze,
                 maze_seed: s.maze_seed,
                 seed,
-                learner: format!(
-                    "{}{}",
-                    s.algo,
-                    if s.actor_update == "argmax" {
-                        "_am"
-                    } else {
-                        ""
-                    }
-                ),
+                learner: j.learner.record_name(),
                 gamma: j.learner.gamma,
                 chaining: false,
                 starts: String::new(),

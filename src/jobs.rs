@@ -370,7 +370,8 @@ pub struct RunRecord {
     pub seed: u64,
     /// `pbcs` or `pbcs_no_chaining`.
     pub variant: String,
-    /// `ddpg`, `td3`, with `_am` for the argmax actor.
+    /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
+    /// argmax actor.
     pub learner: String,
     /// `ball` or `exact` starts.
     pub starts: String,
@@ -548,15 +549,7 @@ impl RunRecord {
                 "pbcs_no_chaining"
             }
             .into(),
-            learner: format!(
-                "{}{}",
-                lc.algo.name(),
-                if lc.actor_update == crate::learner::ActorUpdate::Argmax {
-                    "_am"
-                } else {
-                    ""
-                }
-            ),
+            learner: lc.record_name(),
             starts: match job.phase2.start {
                 StartMode::Ball => "ball",
                 StartMode::Exact => "exact",

@@ -127,6 +127,15 @@ impl Default for LearnerConfig {
 }
 
 impl LearnerConfig {
+    /// The learner's name in result rows: `ddpg` or `td3`, with `_am` for the argmax actor.
+    pub fn record_name(&self) -> String {
+        let suffix = match self.actor_update {
+            ActorUpdate::Argmax => "_am",
+            ActorUpdate::Gradient => "",
+        };
+        format!("{}{suffix}", self.algo.name())
+    }
+
     /// The DDPG preset.
     pub fn ddpg() -> Self {
         LearnerConfig::default()
