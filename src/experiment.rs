@@ -105,6 +105,32 @@ struct ExperimentSpec {
     profiles: BTreeMap<String, ProfileSpec>,
     #[serde(default, rename = "figure")]
     figures: Vec<FigureSpec>,
+    #[serde(default)]
+    report: ReportSpec,
+}
+
+/// What the report's generated LaTeX takes from an experiment besides its per-cell table
+/// (`[report]` in its file).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReportSpec {
+    /// Write `table.tex`: the results table (mazes × methods, the paper's figures below).
+    #[serde(default)]
+    pub results_table: bool,
+    /// Write `settings.tex`: the settings of these methods' jobs on the first maze, quoted by
+    /// the report instead of retyped.
+    #[serde(default)]
+    pub settings: Option<SettingsSpec>,
+}
+
+/// The methods whose settings `settings.tex` quotes.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsSpec {
+    /// A PBCS method (phase 2 and learner settings).
+    pub pbcs: String,
+    /// A vanilla method (budget, γ, episode length, learning starts).
+    pub vanilla: String,
 }
 
 /// A figure an experiment declares (`[[figure]]` in its file, `kind` naming the variant);
@@ -214,6 +240,28 @@ fn check_figures(path: &Path, figures: &[FigureSpec], methods: &[(String, String
     Ok(())
 }
 
+/// The methods `[report].settings` names exist and are of the kind it says.
+fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> Result<()> {
+    let Some(settings) = &report.settings else {
+        return Ok(());
+    };
+    for (field, method, pbcs) in [
+        ("pbcs", &settings.pbcs, true),
+        ("vanilla", &settings.vanilla, false),
+    ] {
+        let ok = cells
+            .iter()
+            .any(|c| &c.method == method && matches!(c.job, Job::Pbcs(_)) == pbcs);
+        if !ok {
+            return Err(Error::invalid(
+                format!("report.settings.{field} in {}", path.display()),
+                format!("the experiment has no {field} method `{method}`"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A resolved job of either kind.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
@@ -302,6 +350,8 @@ pub struct Experiment {
     pub cells: Vec<Cell>,
     /// The figures it declares, in order.
     pub figures: Vec<FigureSpec>,
+    /// What the report takes from it besides its table.
+    pub report: ReportSpec,
 }
 
 /// Merges `from` into `into`: tables merge key by key, anything else replaces.
@@ -458,6 +508,7 @@ impl Experiment {
             }
         }
         check_figures(path, &spec.figures, &methods)?;
+        check_report(path, &spec.report, &cells)?;
         Ok(Experiment {
             title: spec.title,
             description: if prof.description.is_empty() {
@@ -469,6 +520,7 @@ impl Experiment {
             first_seed: spec.first_seed,
             seed_count,
             picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
+            report: spec.report,
             figures: if spec.figures.is_empty() {
                 vec![FigureSpec::Bars { name: name.clone() }]
             } else {

@@ -237,18 +237,20 @@ pub fn render_all(
         let text = cells_table_tex(stats);
         crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         files.push(path);
-        if exp.name == "table" {
-            for (name, text) in [
-                (
-                    "table.tex",
-                    results_table_tex(stats, &exp.mazes, &exp.methods),
-                ),
-                ("settings.tex", settings_tex(exp)),
-            ] {
-                let path = tex_dir.join(name);
-                crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-                files.push(path);
-            }
+        let mut extra = Vec::new();
+        if exp.report.results_table {
+            extra.push((
+                "table.tex",
+                results_table_tex(stats, &exp.mazes, &exp.methods),
+            ));
+        }
+        if let Some(settings) = &exp.report.settings {
+            extra.push(("settings.tex", settings_tex(exp, settings)));
+        }
+        for (name, text) in extra {
+            let path = tex_dir.join(name);
+            crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+            files.push(path);
         }
     }
     let tables: Vec<(String, Vec<CellStats>)> = experiments
@@ -266,9 +268,13 @@ pub fn render_all(
     Ok(files)
 }
 
-/// `settings.tex`: the settings of the table's PBCS and DDPG cells (maze 2) as
-/// `\setting{<name>}`, so that the report quotes the configs instead of retyping them.
-pub fn settings_tex(exp: &crate::experiment::Experiment) -> String {
+/// `settings.tex`: the settings of the `settings.pbcs` and `settings.vanilla` cells of the
+/// first maze as `\setting{<name>}`, so that the report quotes the configs instead of retyping
+/// them.
+pub fn settings_tex(
+    exp: &crate::experiment::Experiment,
+    settings: &crate::experiment::SettingsSpec,
+) -> String {
     use crate::experiment::Job;
     let mut s = String::from(GENERATED);
     s.push_str("\\providecommand{\\setting}[1]{\\csname setting:#1\\endcsname}\n");
@@ -280,8 +286,8 @@ pub fn settings_tex(exp: &crate::experiment::Experiment) -> String {
         );
     };
     for c in exp.cells.iter().filter(|c| c.maze == exp.mazes[0]) {
-        match (&c.job, c.method.as_str()) {
-            (Job::Pbcs(j), "pbcs") => {
+        match &c.job {
+            Job::Pbcs(j) if c.method == settings.pbcs => {
                 let (p, l) = (&j.phase2, &j.learner);
                 put("alpha", p.alpha.to_string());
                 put("beta", p.beta.to_string());
@@ -309,7 +315,7 @@ pub fn settings_tex(exp: &crate::experiment::Experiment) -> String {
                 put("argmaxsamples", l.argmax_samples.to_string());
                 put("mazeseed", j.maze.seed.to_string());
             }
-            (Job::Vanilla(j), "ddpg") => {
+            Job::Vanilla(j) if c.method == settings.vanilla => {
                 put("vanillabudget", human_steps(j.train.steps as f64));
                 put("vanillagamma", j.learner.gamma.to_string());
                 put("episodesteps", j.train.max_episode_steps.to_string());

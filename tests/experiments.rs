@@ -129,6 +129,13 @@ fn bad_experiment_files_name_the_problem() {
             figure("kind = \"bars\"\nname = \"b\"\ncolour = 1"),
             "colour",
         ),
+        (
+            format!(
+                "{head}{}[report]\nsettings = {{ pbcs = \"a\", vanilla = \"a\" }}\n",
+                method("a", "")
+            ),
+            "report.settings.vanilla",
+        ),
     ];
     for (i, (text, needle)) in cases.iter().chain(&figure_cases).enumerate() {
         let path = write(dir.path(), &format!("bad{i}.toml"), text);
