@@ -341,6 +341,10 @@ enum ExpCommand {
         /// Runs at a time.
         #[arg(long, default_value_t = 2)]
         jobs: usize,
+        /// Fail unless every row is reproduced byte for byte (what CI asks of the rows the
+        /// current code must reproduce).
+        #[arg(long)]
+        exact: bool,
     },
 }
 
@@ -487,7 +491,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 cell,
                 seed,
                 jobs,
-            } => exp_check(&exp, &cell, seed, jobs),
+                exact,
+            } => exp_check(&exp, &cell, seed, jobs, exact),
         },
     }
 }
@@ -720,7 +725,13 @@ fn exp_list(args: &ExpArgs, make: bool, slurm: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn exp_check(args: &ExpArgs, cell: &str, seed: Option<u64>, jobs: usize) -> anyhow::Result<()> {
+fn exp_check(
+    args: &ExpArgs,
+    cell: &str,
+    seed: Option<u64>,
+    jobs: usize,
+    exact: bool,
+) -> anyhow::Result<()> {
     use pbcs::check::{check_cell, Verdict};
     let (exp, results) = args.load()?;
     let runs = pbcs::experiment::plan(&exp, Some(cell), seed)?;
@@ -760,6 +771,10 @@ fn exp_check(args: &ExpArgs, cell: &str, seed: Option<u64>, jobs: usize) -> anyh
             println!("MATCH: the committed rows are reproduced exactly");
             Ok(())
         }
+        Verdict::WithinInterval if exact => anyhow::bail!(
+            "--exact: {} of {n} rows differ from the committed bytes",
+            n - check.identical()
+        ),
         Verdict::WithinInterval => {
             println!(
                 "DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed interval"
