@@ -251,3 +251,52 @@ fn a_config_that_leaves_settings_out_says_so() {
         "{e}"
     );
 }
+
+/// The Makefile runs the binary cargo builds (before: a hard-coded `target/release/pbcs`,
+/// rc 127 under `CARGO_TARGET_DIR`, and a stale binary never rebuilt), and `make paper`
+/// without LaTeX says what to install before building anything. Needs `make` (skipped, with a
+/// message, where it is absent).
+#[test]
+fn the_makefile_uses_cargos_binary_and_checks_latex_first() {
+    let make = |args: &[&str], env: &[(&str, &str)]| {
+        let mut c = Command::new("make");
+        c.args(args).envs(env.iter().copied());
+        c.output()
+    };
+    let Ok(o) = make(
+        &["-n", "cell", "EXP=table", "CELL=ddpg-maze2", "SEED=0"],
+        &[("CARGO_TARGET_DIR", "/elsewhere/tgt")],
+    ) else {
+        eprintln!("make is not installed: skipped");
+        return;
+    };
+    let plan = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The `bin` prerequisite always asks cargo (which rebuilds a stale binary), then runs the
+    // binary where cargo put it.
+    assert!(plan.contains("cargo build --release"), "{plan}");
+    assert!(
+        plan.contains("/elsewhere/tgt/release/pbcs exp check experiments/table.toml --cell ddpg-maze2 --seed 0"),
+        "{plan}"
+    );
+    // `make paper` with no latexmk on PATH (a PATH holding only `make`): a clear message,
+    // exit 2, nothing built.
+    let which = Command::new("sh")
+        .args(["-c", "command -v make"])
+        .output()
+        .unwrap();
+    let make_path = String::from_utf8_lossy(&which.stdout).trim().to_string();
+    let bin = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(&make_path, bin.path().join("make")).unwrap();
+    let o = Command::new(bin.path().join("make"))
+        .arg("paper")
+        .env("PATH", bin.path())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("needs latexmk") && out.contains("apt install"),
+        "{out}"
+    );
+}
