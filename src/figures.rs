@@ -655,6 +655,21 @@ mod tests {
     }
 
     #[test]
+    fn the_printed_cells_table_has_one_row_per_cell() {
+        let mut c = stats(7, 300_000.0, Some(171_000.0));
+        c.wilson_lo = 0.4;
+        c.wilson_hi = 0.89;
+        c.paper_steps = Some(5_000_000);
+        c.paper_solved = Some(true);
+        assert_eq!(
+            crate::tables::markdown(&[c]),
+            "| cell | solved | Wilson 95 % | env steps median [q1, q3] | paper |\n\
+             | --- | --- | --- | --- | --- |\n\
+             | pbcs-maze5 | 7/10 | [0.40, 0.89] | 300k [300k, 300k] | 5.00M S |\n"
+        );
+    }
+
+    #[test]
     fn grid_legend_names_colours_band_and_pictures() {
         let exp = crate::experiment::Experiment::load(
             &Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/table.toml"),

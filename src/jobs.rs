@@ -736,6 +736,39 @@ pub fn paper_pbcs_steps(maze: usize) -> Option<u64> {
         .and_then(|v| u64::try_from(v).ok())
 }
 
+/// A grid's records (with wall seconds) as a markdown table, one row per size: solved k/n,
+/// environment steps median [min, max], the paper's steps and the ratio, median skills and
+/// wall seconds. What `pbcs table` prints.
+pub fn grid_markdown(results: &[(RunRecord, f64)], sizes: &[usize]) -> String {
+    let mut s = String::from(
+        "| maze | solved | env steps, median [min, max] | paper | median / paper | skills, median | wall s, median |\n\
+         | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    for &n in sizes {
+        let rows: Vec<&(RunRecord, f64)> = results.iter().filter(|(r, _)| r.maze == n).collect();
+        let mut steps: Vec<f64> = rows.iter().map(|(r, _)| r.total_steps as f64).collect();
+        let mut skills: Vec<f64> = rows.iter().map(|(r, _)| r.skills as f64).collect();
+        let mut secs: Vec<f64> = rows.iter().map(|(_, s)| *s).collect();
+        let med = |v: &mut Vec<f64>| crate::stats::median(v);
+        let solved = rows.iter().filter(|(r, _)| r.solved).count();
+        let paper = paper_pbcs_steps(n);
+        // `median` sorts: first and last are then the extremes.
+        let m = med(&mut steps);
+        s.push_str(&format!(
+            "| {n} | {solved}/{} | {:.0} [{:.0}, {:.0}] | {} | {} | {:.0} | {:.0} |\n",
+            rows.len(),
+            m,
+            steps.first().copied().unwrap_or(f64::NAN),
+            steps.last().copied().unwrap_or(f64::NAN),
+            paper.map_or("-".into(), |p| p.to_string()),
+            paper.map_or("-".into(), |p| format!("{:.2}", m / p as f64)),
+            med(&mut skills),
+            med(&mut secs),
+        ));
+    }
+    s
+}
+
 /// Runs PBCS for every (size, seed) of a grid into `out/maze<N>-s<S>/`, `jobs` runs at a time
 /// (one thread each), skipping cells whose `record.csv` already exists (an interrupted sweep
 /// resumes). Returns every record, in (size, seed) order, and the wall seconds of each run
@@ -799,4 +832,46 @@ fn read_record(dir: &Path, job: &RunJob) -> Result<Option<(RunRecord, f64)>> {
     let seconds =
         crate::record::Timing::read(&dir.join("timing.toml"))?.map_or(f64::NAN, |t| t.wall_seconds);
     Ok(Some((record, seconds)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(maze: usize, seed: u64, solved: bool, steps: u64, skills: usize) -> RunRecord {
+        RunRecord {
+            maze,
+            maze_seed: 0,
+            seed,
+            variant: "pbcs".into(),
+            learner: "ddpg".into(),
+            starts: "ball".into(),
+            gamma: 0.9,
+            epsilon: 0.1,
+            solved,
+            success_rate: if solved { 1.0 } else { 0.0 },
+            failure: String::new(),
+            phase1_steps: 0,
+            train_steps: steps,
+            test_steps: 0,
+            total_steps: steps,
+            skills,
+            trajectory_len: 2,
+            phase2_trajectory_len: 2,
+        }
+    }
+
+    #[test]
+    fn the_grid_table_gives_median_extremes_and_the_papers_ratio() {
+        let results = [
+            (record(2, 0, true, 300_000, 2), 10.0),
+            (record(2, 1, false, 100_000, 3), 30.0),
+            (record(2, 2, true, 200_000, 2), 20.0),
+        ];
+        let table = grid_markdown(&results, &[2]);
+        assert_eq!(
+            table.lines().nth(2).unwrap(),
+            "| 2 | 2/3 | 200000 [100000, 300000] | 321000 | 0.62 | 2 | 20 |"
+        );
+    }
 }

@@ -124,6 +124,41 @@ pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
         .map_err(|e| Error::csv(path, e))
 }
 
+/// The cells as a markdown table: solved k/n, Wilson interval, median and quartile steps, the
+/// paper's figure (S solved, F failed). What `pbcs figures` prints.
+pub fn markdown(stats: &[CellStats]) -> String {
+    use crate::figures::human_steps;
+    let mut s = String::from(
+        "| cell | solved | Wilson 95 % | env steps median [q1, q3] | paper |\n\
+         | --- | --- | --- | --- | --- |\n",
+    );
+    for c in stats {
+        let paper = c.paper_steps.map_or("-".into(), |p| {
+            format!(
+                "{} {}",
+                human_steps(p as f64),
+                if c.paper_solved == Some(true) {
+                    "S"
+                } else {
+                    "F"
+                }
+            )
+        });
+        s.push_str(&format!(
+            "| {} | {}/{} | [{:.2}, {:.2}] | {} [{}, {}] | {paper} |\n",
+            c.cell,
+            c.successes,
+            c.n,
+            c.wilson_lo,
+            c.wilson_hi,
+            human_steps(c.steps_median),
+            human_steps(c.steps_q1),
+            human_steps(c.steps_q3),
+        ));
+    }
+    s
+}
+
 /// Writes a table atomically.
 pub fn write_table(path: &Path, rows: &[CellStats]) -> Result<()> {
     crate::record::write_records(path, rows)

@@ -555,30 +555,7 @@ fn make_figures(
         }
         let stats = pbcs::tables::read_table(&path)?;
         println!("\n{} — {}", exp.name, exp.title);
-        println!("| cell | solved | Wilson 95 % | env steps median [q1, q3] | paper |");
-        println!("| --- | --- | --- | --- | --- |");
-        for s in &stats {
-            println!(
-                "| {} | {}/{} | [{:.2}, {:.2}] | {} [{}, {}] | {} |",
-                s.cell,
-                s.successes,
-                s.n,
-                s.wilson_lo,
-                s.wilson_hi,
-                pbcs::figures::human_steps(s.steps_median),
-                pbcs::figures::human_steps(s.steps_q1),
-                pbcs::figures::human_steps(s.steps_q3),
-                s.paper_steps.map_or("-".into(), |p| format!(
-                    "{} {}",
-                    pbcs::figures::human_steps(p as f64),
-                    if s.paper_solved == Some(true) {
-                        "S"
-                    } else {
-                        "F"
-                    }
-                ))
-            );
-        }
+        print!("{}", pbcs::tables::markdown(&stats));
         loaded.push((exp, stats));
     }
     let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
@@ -833,30 +810,7 @@ fn table(
         records.first().map_or("", |r| r.variant.as_str()),
         out.display()
     );
-    println!("| maze | solved | env steps, median [min, max] | paper | median / paper | skills, median | wall s, median |");
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
-    for &n in sizes {
-        let rows: Vec<&(pbcs::jobs::RunRecord, f64)> =
-            results.iter().filter(|(r, _)| r.maze == n).collect();
-        let mut steps: Vec<f64> = rows.iter().map(|(r, _)| r.total_steps as f64).collect();
-        let mut skills: Vec<f64> = rows.iter().map(|(r, _)| r.skills as f64).collect();
-        let mut secs: Vec<f64> = rows.iter().map(|(_, s)| *s).collect();
-        let med = |v: &mut Vec<f64>| pbcs::stats::median(v);
-        let solved = rows.iter().filter(|(r, _)| r.solved).count();
-        let paper = pbcs::jobs::paper_pbcs_steps(n);
-        let m = med(&mut steps);
-        println!(
-            "| {n} | {solved}/{} | {:.0} [{:.0}, {:.0}] | {} | {} | {:.0} | {:.0} |",
-            rows.len(),
-            m,
-            steps.first().copied().unwrap_or(f64::NAN),
-            steps.last().copied().unwrap_or(f64::NAN),
-            paper.map_or("-".into(), |p| p.to_string()),
-            paper.map_or("-".into(), |p| format!("{:.2}", m / p as f64)),
-            med(&mut skills),
-            med(&mut secs),
-        );
-    }
+    print!("{}", pbcs::jobs::grid_markdown(&results, sizes));
     Ok(())
 }
 
