@@ -300,3 +300,31 @@ fn the_makefile_uses_cargos_binary_and_checks_latex_first() {
         "{out}"
     );
 }
+
+/// Without a terminal (logs, CI, cluster jobs) a long run says what it is doing: a line per
+/// skill found (before: nothing until the end). Also the smaller probes: `--help` names where
+/// defaults come from, `train` takes `--gamma`, a grid of 0 seeds is refused.
+#[test]
+fn without_a_terminal_a_run_prints_a_line_per_skill() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    // stderr is a pipe here, not a terminal; maze 2 seed 0 (fast preset) builds 2 skills.
+    let o = pbcs(&["run", "--maze", "2", "--seed", "0", "--out", path(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    let lines: Vec<&str> = e.lines().filter(|l| l.contains("skills found")).collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("1 skills found, building skill 2")),
+        "{e}"
+    );
+
+    let help = String::from_utf8_lossy(&pbcs(&["run", "--help"]).stdout).into_owned();
+    assert!(help.contains("default"), "{help}");
+    let help = String::from_utf8_lossy(&pbcs(&["train", "--help"]).stdout).into_owned();
+    assert!(help.contains("--gamma"), "{help}");
+    let o = pbcs(&["table", "--seeds", "0"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--seeds"), "{}", stderr(&o));
+}
