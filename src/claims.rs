@@ -206,7 +206,7 @@ pub struct ClaimSpec {
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ClaimTest {
     /// `method` fails on every maze; where experiment `longer` ran the same method and maze at a
-    /// larger budget, those runs weigh in (see [`fails_everywhere`]).
+    /// larger budget, those runs weigh in (see `fails_everywhere`).
     FailsEverywhere {
         /// The method.
         method: String,
@@ -220,7 +220,7 @@ pub enum ClaimTest {
         /// The method.
         method: String,
     },
-    /// `method` does better than `than`, maze by maze ([`per_maze`]); with `pooled`, the
+    /// `method` does better than `than`, maze by maze (`per_maze`); with `pooled`, the
     /// counts pooled over mazes decide where no maze does.
     Beats {
         /// The method said to do better.

@@ -28,7 +28,7 @@
 
 use crate::config::{Check, RunJob, TrainJob};
 use crate::error::{Error, Result};
-use crate::jobs::{PbcsRun, TrainRun};
+use crate::runs::{PbcsRun, TrainRun};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -641,7 +641,7 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
                 gamma: j.learner.gamma,
                 chaining: false,
                 starts: String::new(),
-                solved: s.final_success >= crate::jobs::SOLVED_AT,
+                solved: s.final_success >= crate::runs::SOLVED_AT,
                 success_rate: s.final_success,
                 env_steps: s.env_steps,
                 budget: j.train.steps,
@@ -683,7 +683,7 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
             (row, run.seconds, run.picture)
         }
     };
-    crate::jobs::write_timing(&run_file(dir, seed, ".timing.toml"), seconds, row.env_steps)?;
+    crate::runs::write_timing(&run_file(dir, seed, ".timing.toml"), seconds, row.env_steps)?;
     if exp.picture_seeds.contains(&seed) {
         picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
     }

@@ -419,7 +419,7 @@ impl Curves {
                     for rec in reader.deserialize::<EvalPoint>() {
                         let e = rec.map_err(|e| Error::csv(&path, e))?;
                         let slot = by_step.entry(e.steps).or_default();
-                        slot.0 += u64::from(e.success >= crate::jobs::SOLVED_AT);
+                        slot.0 += u64::from(e.success >= crate::runs::SOLVED_AT);
                         slot.1 += 1;
                         slot.2 += f64::from(e.mean_return);
                     }

@@ -17,14 +17,17 @@
 //! | Wilson score intervals (appendix on γ) | [`stats`] |
 //!
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
-//! result files atomically, [`plot`] draws mazes with plotters, and [`jobs`] turns a config
+//! result files atomically, [`plot`] draws mazes with plotters, and [`runs`] turns a config
 //! into an outcome and writes it (what the `pbcs` command runs). The experiment pipeline:
 //! [`experiment`] (grids of cells × seeds, declared in TOML, swept with resume), [`tables`]
-//! and `aggregate` (per-cell statistics), [`figures`] and [`report`] (figures, claims, LaTeX).
+//! and `aggregate` (per-cell statistics), [`figures`], [`claims`] (the paper's claims, as
+//! data) and [`report`] (LaTeX); [`launch`] (make, SLURM) and [`check`] (re-running committed
+//! rows). Words: a *job* is a validated config (`config::RunJob`, …), a *run* executes one
+//! ([`runs`]), `--jobs N` is how many runs go at once.
 //!
 //! ```
 //! use pbcs::config::ExploreJob;
-//! use pbcs::jobs::run_explore;
+//! use pbcs::runs::run_explore;
 //!
 //! let mut job = ExploreJob::default();
 //! job.maze.size = 2;
@@ -46,7 +49,6 @@ pub mod error;
 pub mod experiment;
 pub mod explore;
 pub mod figures;
-pub mod jobs;
 pub mod launch;
 pub mod learner;
 pub mod maze;
@@ -56,6 +58,7 @@ pub mod plot;
 pub mod record;
 pub mod report;
 pub mod rng;
+pub mod runs;
 pub mod stats;
 pub mod tables;
 pub mod toy;

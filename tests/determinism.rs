@@ -1,7 +1,7 @@
 //! Same seed, same bytes: every result file of a job is byte-identical across runs.
 
 use pbcs::config::ExploreJob;
-use pbcs::jobs::run_explore;
+use pbcs::runs::run_explore;
 use std::path::Path;
 
 const FILES: [&str; 6] = [
@@ -74,7 +74,7 @@ fn the_maze_seed_changes_the_layout_not_the_run_seed() {
 #[test]
 fn vanilla_training_is_byte_identical_per_seed() {
     use pbcs::config::TrainJob;
-    use pbcs::jobs::run_train;
+    use pbcs::runs::run_train;
     let mut job = TrainJob::default();
     job.maze.size = 2;
     job.seed = 3;

@@ -299,7 +299,7 @@ fn stored_configs_compare_by_value() {
 fn the_papers_step_counts_come_from_the_table_experiment() {
     let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
         .iter()
-        .map(|&n| pbcs::jobs::paper_pbcs_steps(n))
+        .map(|&n| pbcs::runs::paper_pbcs_steps(n))
         .collect();
     assert_eq!(
         steps,

@@ -470,7 +470,7 @@ fn a_saved_chain_loads_and_runs_the_same() {
 
 mod end_to_end {
     use pbcs::config::RunJob;
-    use pbcs::jobs::run_pbcs;
+    use pbcs::runs::run_pbcs;
 
     fn job(seed: u64) -> RunJob {
         let mut job = RunJob::default();
@@ -506,15 +506,15 @@ mod end_to_end {
         let mut j = job(0);
         j.phase2.max_env_steps = 5_000;
         let dir = tempfile::tempdir().unwrap();
-        let first = pbcs::jobs::run_grid(&j, &[2], &[0, 1], dir.path(), 2, |_, _| {}).unwrap();
+        let first = pbcs::runs::run_grid(&j, &[2], &[0, 1], dir.path(), 2, |_, _| {}).unwrap();
         assert_eq!(first.len(), 2);
-        let again = pbcs::jobs::run_grid(&j, &[2], &[0, 1], dir.path(), 1, |_, _| {}).unwrap();
-        let records = |v: &[(pbcs::jobs::RunRecord, f64)]| {
+        let again = pbcs::runs::run_grid(&j, &[2], &[0, 1], dir.path(), 1, |_, _| {}).unwrap();
+        let records = |v: &[(pbcs::runs::RunRecord, f64)]| {
             v.iter().map(|(r, _)| r.clone()).collect::<Vec<_>>()
         };
         assert_eq!(records(&first), records(&again));
         j.phase2.epsilon = 0.15;
-        let err = pbcs::jobs::run_grid(&j, &[2], &[0], dir.path(), 1, |_, _| {}).unwrap_err();
+        let err = pbcs::runs::run_grid(&j, &[2], &[0], dir.path(), 1, |_, _| {}).unwrap_err();
         assert!(err.to_string().contains("another config"), "{err}");
     }
 
@@ -554,7 +554,7 @@ mod end_to_end {
         j.phase2.max_env_steps = 30_000;
         let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
         let (written, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
-        let run = pbcs::jobs::PbcsRun::compute(&j, |_, _| {}).unwrap();
+        let run = pbcs::runs::PbcsRun::compute(&j, |_, _| {}).unwrap();
         assert_eq!(run.record, written);
         assert_eq!(run.tau.len(), written.phase2_trajectory_len);
         assert_eq!(run.phase2.chain.skills.len(), written.skills);

@@ -2,7 +2,7 @@
 //! (vanilla DDPG / TD3 baselines), `run` (PBCS), `eval` (re-run a saved chain), `table` (a
 //! PBCS grid of sizes × seeds), `exp` (experiment grids: run, list, check), and with the
 //! `polars` feature `aggregate` and `figures`. A run subcommand loads an optional TOML config,
-//! applies the flags over it, validates the result and calls `pbcs::jobs`; the others call
+//! applies the flags over it, validates the result and calls `pbcs::runs`; the others call
 //! `pbcs::experiment`, `pbcs::aggregate`, `pbcs::figures` and `pbcs::report`.
 
 use anyhow::Context;
@@ -451,7 +451,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             episodes,
             seed,
         } => {
-            let e = pbcs::jobs::eval_chain(&chain, episodes as usize, seed)?;
+            let e = pbcs::runs::eval_chain(&chain, episodes as usize, seed)?;
             let seed = seed.unwrap_or(e.job.seed);
             println!(
                 "chain {} ({} skills) on maze {} (layout seed {}), start seed {seed}: success \
@@ -791,7 +791,7 @@ fn table(
         ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}")
             .expect("valid template"),
     );
-    let results = pbcs::jobs::run_grid(&job, sizes, &seed_list, &out, jobs, |r, secs| {
+    let results = pbcs::runs::run_grid(&job, sizes, &seed_list, &out, jobs, |r, secs| {
         bar.inc(1);
         bar.set_message(format!(
             "maze {} seed {}: {} in {} steps ({secs:.0} s)",
@@ -810,7 +810,7 @@ fn table(
         records.first().map_or("", |r| r.variant.as_str()),
         out.display()
     );
-    print!("{}", pbcs::jobs::grid_markdown(&results, sizes));
+    print!("{}", pbcs::runs::grid_markdown(&results, sizes));
     Ok(())
 }
 
@@ -838,7 +838,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
     // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
     let lines = !run.quiet && !std::io::stderr().is_terminal();
-    let (record, seconds) = pbcs::jobs::run_pbcs(job, &out, |skill, p| {
+    let (record, seconds) = pbcs::runs::run_pbcs(job, &out, |skill, p| {
         if skill != current_skill {
             finished += current;
             current_skill = skill;
@@ -914,7 +914,7 @@ fn explore(run: &RunArgs) -> anyhow::Result<()> {
         "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]",
         None,
     );
-    let (summary, seconds) = pbcs::jobs::run_explore(&job, &out, |steps, states| {
+    let (summary, seconds) = pbcs::runs::run_explore(&job, &out, |steps, states| {
         bar.set_position(steps);
         bar.set_message(format!("{states} archived states"));
     })
@@ -957,7 +957,7 @@ fn train(run: &RunArgs, learner: &LearnerArgs, steps: Option<u64>) -> anyhow::Re
         "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}",
         Some(job.train.steps),
     );
-    let (summary, seconds) = pbcs::jobs::run_train(&job, &out, |steps, success| {
+    let (summary, seconds) = pbcs::runs::run_train(&job, &out, |steps, success| {
         bar.set_position(steps);
         bar.set_message(format!("greedy success {success}"));
     })
