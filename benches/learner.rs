@@ -59,32 +59,14 @@ fn end_to_end(kernel: Kernel, steps: u64) -> (f64, u64, u64) {
     job.maze.size = 10;
     job.seed = 0;
     job.phase2.max_env_steps = steps;
+    // The run stops at the budget (maze 10 needs ~1M steps), so no evaluation is timed.
     let t = Instant::now();
-    let maze = pbcs::maze::Maze::new(&job.maze).unwrap();
-    let seeds = Seeds::new(job.seed);
-    let found = pbcs::explore::explore(
-        &maze,
-        &job.explore,
-        &mut seeds.stream(Stream::Explore),
-        |_, _| {},
-    )
-    .unwrap();
-    let tau = pbcs::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
-    let out = pbcs::phase2::chain_skills(
-        &maze,
-        &tau,
-        &job.learner,
-        &job.phase2,
-        &seeds,
-        found.env_steps,
-        |_, _| {},
-    )
-    .unwrap();
-    let total = found.env_steps + out.steps.train + out.steps.test;
+    let run = pbcs::runs::PbcsRun::compute(&job, |_, _| {}).unwrap();
+    let r = &run.record;
     (
-        total as f64 / t.elapsed().as_secs_f64(),
-        out.steps.train,
-        out.steps.test,
+        r.total_steps as f64 / t.elapsed().as_secs_f64(),
+        r.train_steps,
+        r.test_steps,
     )
 }
 

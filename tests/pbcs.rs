@@ -528,21 +528,35 @@ mod end_to_end {
         let (ra, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
         run_pbcs(&j, b.path(), |_, _| {}).unwrap();
         assert!(ra.total_steps > 0);
-        for f in [
-            "record.csv",
-            "skills.csv",
-            "trace.csv",
-            "trajectory.csv",
-            "config.toml",
-            "run.png",
-            "run.svg",
-            "chain/manifest.toml",
-        ] {
+        same_files(
+            a.path(),
+            b.path(),
+            &[
+                "record.csv",
+                "skills.csv",
+                "trace.csv",
+                "trajectory.csv",
+                "config.toml",
+                "run.png",
+                "run.svg",
+                "chain/manifest.toml",
+            ],
+        );
+    }
+
+    /// Each of `files` has the same bytes under `a` and under `b`.
+    fn same_files(a: &std::path::Path, b: &std::path::Path, files: &[&str]) {
+        for f in files {
             let (x, y) = (
-                std::fs::read(a.path().join(f)).unwrap(),
-                std::fs::read(b.path().join(f)).unwrap(),
+                std::fs::read(a.join(f)).unwrap(),
+                std::fs::read(b.join(f)).unwrap(),
             );
-            assert!(x == y, "{f} differs between two runs of one seed");
+            assert!(
+                x == y,
+                "{f} differs between {} and {}",
+                a.display(),
+                b.display()
+            );
         }
     }
 
@@ -559,21 +573,16 @@ mod end_to_end {
         assert_eq!(run.tau.len(), written.phase2_trajectory_len);
         assert_eq!(run.phase2.chain.skills.len(), written.skills);
         run.write(&j, b.path()).unwrap();
-        for f in [
-            "record.csv",
-            "trace.csv",
-            "picture.csv",
-            "chain/manifest.toml",
-        ] {
-            let (x, y) = (
-                std::fs::read(a.path().join(f)).unwrap(),
-                std::fs::read(b.path().join(f)).unwrap(),
-            );
-            assert!(
-                x == y,
-                "{f}: the written outcome differs from run_pbcs's file"
-            );
-        }
+        same_files(
+            a.path(),
+            b.path(),
+            &[
+                "record.csv",
+                "trace.csv",
+                "picture.csv",
+                "chain/manifest.toml",
+            ],
+        );
     }
 }
 
