@@ -6,8 +6,9 @@
 //! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`), the mazes, the
 //! seeds, and named profiles (`smoke` for CI, `full` for the paper's budgets) that override
 //! seeds, mazes and fields. Resolving a cell is a deep merge of TOML tables in this order:
-//! base file ← method `set` ← profile's table for the method's kind; then `maze.size` and
-//! `seed` are set. The merged table is parsed with unknown keys denied, so a typo in an
+//! base file ← method `set` ← profile's table for the method's kind ← the file's `by_maze`
+//! table for the cell's maze size ← the profile's `by_maze`; then `maze.size` and `seed` are
+//! set. A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
 //! ```
@@ -72,6 +73,34 @@ struct MethodSpec {
     paper_solved: BTreeMap<String, bool>,
 }
 
+/// Fields set on every method of one kind: `vanilla = { … }` changes the [`TrainJob`]s,
+/// `pbcs = { … }` the [`RunJob`]s.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KindTables {
+    #[serde(default)]
+    vanilla: toml::Table,
+    #[serde(default)]
+    pbcs: toml::Table,
+}
+
+impl KindTables {
+    /// The profile's table for `kind` (`vanilla = …` or `pbcs = …` in the profile).
+    fn of_profile(prof: &ProfileSpec, kind: Kind) -> &toml::Table {
+        match kind {
+            Kind::Vanilla => &prof.vanilla,
+            Kind::Pbcs => &prof.pbcs,
+        }
+    }
+
+    fn of(&self, kind: Kind) -> &toml::Table {
+        match kind {
+            Kind::Vanilla => &self.vanilla,
+            Kind::Pbcs => &self.pbcs,
+        }
+    }
+}
+
 /// A named profile: smaller (`smoke`) or larger (`full`) versions of the same grid.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -85,6 +114,12 @@ struct ProfileSpec {
     vanilla: toml::Table,
     #[serde(default)]
     pbcs: toml::Table,
+    /// Fields set on one maze size only (`[profile.<p>.by_maze."15"]`), after the rest.
+    #[serde(default)]
+    by_maze: BTreeMap<String, KindTables>,
+    /// Methods this profile adds after the file's own (`[[profile.<p>.method]]`).
+    #[serde(default, rename = "method")]
+    methods: Vec<MethodSpec>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -101,6 +136,10 @@ struct ExperimentSpec {
     mazes: Vec<usize>,
     #[serde(rename = "method")]
     methods: Vec<MethodSpec>,
+    /// Fields set on one maze size only (`[by_maze."15"]`, e.g. a budget per size), applied
+    /// after the methods' own and the profile's kind tables.
+    #[serde(default)]
+    by_maze: BTreeMap<String, KindTables>,
     #[serde(default, rename = "profile")]
     profiles: BTreeMap<String, ProfileSpec>,
     #[serde(default, rename = "figure")]
@@ -410,11 +449,25 @@ impl Experiment {
         if mazes.iter().collect::<BTreeSet<_>>().len() != mazes.len() {
             return Err(Error::invalid("mazes", "maze sizes must be unique"));
         }
-        if spec.methods.is_empty() {
+        let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
+        if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
         }
+        for (field, by_maze) in [
+            ("by_maze", &spec.by_maze),
+            ("profile.by_maze", &prof.by_maze),
+        ] {
+            for key in by_maze.keys() {
+                if !key.parse::<usize>().is_ok_and(|n| mazes.contains(&n)) {
+                    return Err(Error::invalid(
+                        format!("{field} in {}", path.display()),
+                        format!("`{key}` is not one of the maze sizes {mazes:?}"),
+                    ));
+                }
+            }
+        }
         let mut names = BTreeSet::new();
-        for m in &spec.methods {
+        for m in all_methods.iter().copied() {
             if m.name.is_empty()
                 || !m
                     .name
@@ -441,49 +494,46 @@ impl Experiment {
                 }
             }
         }
-        // Resolve each method once, then each cell.
+        // Merge each method's tables once, then resolve each cell.
         let mut methods = Vec::new();
         let mut cells = Vec::new();
         let mut resolved = Vec::new();
-        for m in &spec.methods {
+        for m in all_methods.iter().copied() {
             let base_path = folder.join(&m.base);
             let base_text =
                 std::fs::read_to_string(&base_path).map_err(|e| Error::io(&base_path, e))?;
             let mut table: toml::Table =
                 toml::from_str(&base_text).map_err(|e| parse_err(&base_path, e.to_string()))?;
             merge(&mut table, &m.set);
-            merge(
-                &mut table,
-                match m.kind {
-                    Kind::Vanilla => &prof.vanilla,
-                    Kind::Pbcs => &prof.pbcs,
-                },
-            );
-            let what = |e: toml::de::Error| {
-                parse_err(
-                    path,
-                    format!("method `{}` ({} job): {e}", m.name, m.kind.name()),
-                )
-            };
-            let job = match m.kind {
-                Kind::Vanilla => Job::Vanilla(toml::Value::Table(table).try_into().map_err(what)?),
-                Kind::Pbcs => Job::Pbcs(toml::Value::Table(table).try_into().map_err(what)?),
-            };
+            merge(&mut table, KindTables::of_profile(&prof, m.kind));
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((m.name.clone(), label.clone()));
-            resolved.push((m, label, job));
+            resolved.push((m, label, table));
         }
         for &n in &mazes {
-            for (m, label, job) in &resolved {
-                let job = match job {
-                    Job::Vanilla(j) => {
-                        let mut j = j.clone();
+            let key = n.to_string();
+            for (m, label, table) in &resolved {
+                let mut table = table.clone();
+                for by_maze in [&spec.by_maze, &prof.by_maze] {
+                    if let Some(t) = by_maze.get(&key) {
+                        merge(&mut table, t.of(m.kind));
+                    }
+                }
+                let what = |e: toml::de::Error| {
+                    parse_err(
+                        path,
+                        format!("method `{}` ({} job, maze {n}): {e}", m.name, m.kind.name()),
+                    )
+                };
+                let job = match m.kind {
+                    Kind::Vanilla => {
+                        let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
                         j.maze.size = n;
                         j.seed = 0;
                         Job::Vanilla(j)
                     }
-                    Job::Pbcs(j) => {
-                        let mut j = j.clone();
+                    Kind::Pbcs => {
+                        let mut j: RunJob = toml::Value::Table(table).try_into().map_err(what)?;
                         j.maze.size = n;
                         j.seed = 0;
                         Job::Pbcs(j)
@@ -813,10 +863,11 @@ pub fn sweep(
     Ok(rows.into_iter().flatten().collect())
 }
 
-/// `f` on every item, `jobs` at a time (a pool of `jobs` threads, one item per task), the
-/// results in the items' order. After the first error no new item starts, and that error is
-/// returned. Every run is single-threaded and seeded by its own job, so `jobs` changes the
-/// wall clock, never a byte.
+/// `f` on every item, `jobs` at a time (a pool of `jobs` threads), the results in the items'
+/// order. Items start in their order (each free thread takes the next one), so an interrupted
+/// sweep has finished a prefix of its plan: with the table's plan, whole mazes, smallest first.
+/// After the first error no new item starts, and that error is returned. Every run is
+/// single-threaded and seeded by its own job, so `jobs` changes the wall clock, never a byte.
 pub fn run_parallel<T: Sync, R: Send>(
     items: &[T],
     jobs: usize,
@@ -827,7 +878,16 @@ pub fn run_parallel<T: Sync, R: Send>(
         .num_threads(jobs.max(1))
         .build()
         .map_err(|e| Error::invalid("jobs", e.to_string()))?;
-    pool.install(|| items.par_iter().with_max_len(1).map(&f).collect())
+    let mut done: Vec<(usize, R)> = pool.install(|| {
+        items
+            .iter()
+            .enumerate()
+            .par_bridge()
+            .map(|(i, item)| f(item).map(|r| (i, r)))
+            .collect::<Result<_>>()
+    })?;
+    done.sort_by_key(|(i, _)| *i);
+    Ok(done.into_iter().map(|(_, r)| r).collect())
 }
 
 /// Every (cell, seed) of the experiment, or of one cell, or one seed.

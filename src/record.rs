@@ -100,10 +100,40 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
 /// An exclusive claim on one piece of work (a run of a sweep): the file `path` exists while
 /// the guard lives and is removed when it is dropped. A second claim of the same path fails
 /// with a message naming the file, so two sweeps into one results folder never do the same
-/// run twice or replace each other's rows.
+/// run twice or replace each other's rows. The file names the holder (`pid`, `host`): a lock
+/// left behind by an interrupted run on this host, whose process is gone, is taken over, so an
+/// interrupted sweep resumes by being started again.
 #[derive(Debug)]
 pub struct WorkLock {
     path: std::path::PathBuf,
+}
+
+/// This host's name (empty where it cannot be read).
+fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|h| h.trim().to_string())
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .unwrap_or_default()
+}
+
+/// Whether the lock text names a process of this host that no longer runs (known only where
+/// `/proc` lists processes).
+fn holder_is_gone(text: &str) -> bool {
+    let field = |key: &str| {
+        text.lines().find_map(|l| {
+            let (k, v) = l.split_once('=')?;
+            (k.trim() == key).then(|| v.trim().trim_matches('"').to_string())
+        })
+    };
+    let (Some(pid), Some(host)) = (field("pid"), field("host")) else {
+        return false;
+    };
+    let here = host_name();
+    !here.is_empty()
+        && host == here
+        && Path::new("/proc/self").exists()
+        && pid.parse::<u32>().is_ok()
+        && !Path::new("/proc").join(&pid).exists()
 }
 
 impl WorkLock {
@@ -112,13 +142,29 @@ impl WorkLock {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(path)
+        let open = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(path)
+        };
+        let mut opened = open();
+        if matches!(&opened, Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists)
+            && holder_is_gone(&std::fs::read_to_string(path).unwrap_or_default())
         {
+            // Left behind by an interrupted run: take it over.
+            std::fs::remove_file(path).map_err(|e| Error::io(path, e))?;
+            opened = open();
+        }
+        match opened {
             Ok(mut f) => {
-                writeln!(f, "pid = {}", std::process::id()).map_err(|e| Error::io(path, e))?;
+                writeln!(
+                    f,
+                    "pid = {}\nhost = \"{}\"",
+                    std::process::id(),
+                    host_name()
+                )
+                .map_err(|e| Error::io(path, e))?;
                 Ok(WorkLock {
                     path: path.to_path_buf(),
                 })
@@ -198,6 +244,26 @@ pub struct Timing {
     /// The layer kernel's name, if recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kernel: Option<String>,
+    /// The machine that ran it: CPU model and logical cores, if recorded (rows computed on
+    /// another machine say so here).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub machine: Option<String>,
+}
+
+/// This machine in words: the CPU model (`/proc/cpuinfo`, where there is one; else the
+/// architecture) and the number of logical cores.
+pub fn machine() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{model}, {cores} cores")
 }
 
 impl Timing {
@@ -207,6 +273,7 @@ impl Timing {
             wall_seconds: (seconds * 1e6).round() / 1e6,
             steps_per_second: (env_steps as f64 / seconds.max(1e-9)).round() as u64,
             kernel: Some(crate::nn::kernel::Kernel::active().name().to_string()),
+            machine: Some(machine()),
         }
     }
 
@@ -259,13 +326,17 @@ mod timing_tests {
         assert_eq!(t.wall_seconds, 205.050875);
         assert_eq!(t.steps_per_second, 4877);
         assert_eq!(t.kernel_name(), "matrixmultiply");
+        assert_eq!(t.machine, None);
         // Written and read back.
         let new = dir.path().join("new.timing.toml");
         let t = Timing {
             wall_seconds: 1.5,
             steps_per_second: 200,
             kernel: Some("avx2".into()),
+            machine: Some(super::machine()),
         };
+        assert!(t.machine.as_deref().unwrap().ends_with(" cores"));
+        assert_eq!(t.machine, Timing::now(1.0, 1).machine);
         t.write(&new).unwrap();
         assert_eq!(Timing::read(&new).unwrap(), Some(t));
         assert!(std::fs::read_to_string(&new)

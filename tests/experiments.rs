@@ -55,6 +55,59 @@ fn the_table_has_the_papers_columns_and_sizes() {
     );
 }
 
+/// Issue 13's grid: DDPG and TD3 at the paper's 1M steps, every PBCS method at twice the
+/// paper's PBCS steps for its maze, and the `fast` preset as an extra column.
+#[test]
+fn the_full_profile_runs_the_papers_budgets_and_adds_the_fast_column() {
+    use pbcs::experiment::Job;
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("full")).unwrap();
+    let methods: Vec<&str> = exp.methods.iter().map(|(m, _)| m.as_str()).collect();
+    assert_eq!(
+        methods,
+        ["ddpg", "td3", "pbcs_no_chaining", "pbcs", "pbcs_fast"]
+    );
+    let paper = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    for c in &exp.cells {
+        match &c.job {
+            Job::Vanilla(j) => assert_eq!(j.train.steps, 1_000_000, "{}", c.id),
+            Job::Pbcs(j) => {
+                let pbcs = paper.cell(&format!("pbcs-maze{}", c.maze)).unwrap();
+                assert_eq!(
+                    j.phase2.max_env_steps,
+                    2 * pbcs.paper_steps.unwrap(),
+                    "{}",
+                    c.id
+                );
+                assert_eq!(j.maze.size, c.maze);
+            }
+        }
+    }
+    // The added column runs the fast preset and the paper's column the paper preset, with
+    // nothing changed but the maze size and the budget.
+    for (method, file) in [
+        ("pbcs_fast", "experiments/pbcs_fast.toml"),
+        ("pbcs", "experiments/pbcs_paper.toml"),
+    ] {
+        let preset: pbcs::config::RunJob =
+            toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        for &n in &exp.mazes {
+            let mut want = preset.clone();
+            want.seed = 0;
+            want.maze.size = n;
+            want.phase2.max_env_steps = 2 * paper
+                .cell(&format!("pbcs-maze{n}"))
+                .unwrap()
+                .paper_steps
+                .unwrap();
+            assert_eq!(
+                exp.cell(&format!("{method}-maze{n}")).unwrap().job,
+                Job::Pbcs(want),
+                "{method}-maze{n}"
+            );
+        }
+    }
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
@@ -105,6 +158,20 @@ fn bad_experiment_files_name_the_problem() {
             ),
             "nowhere.toml",
         ),
+        (
+            format!(
+                "{head}{}[by_maze]\n\"3\" = {{ pbcs = {{ phase2.beta = 5 }} }}\n",
+                method("a", "")
+            ),
+            "`3` is not one of the maze sizes",
+        ),
+        (
+            format!(
+                "{head}{}[by_maze]\n\"2\" = {{ pbcs = {{ phase2.epsilom = 5 }} }}\n",
+                method("a", "")
+            ),
+            "maze 2",
+        ),
     ];
     let figure = |body: &str| format!("{head}{}[[figure]]\n{body}\n", method("a", ""));
     let figure_cases = [
@@ -145,6 +212,20 @@ fn bad_experiment_files_name_the_problem() {
             "case {i}: `{err}` does not name `{needle}`"
         );
     }
+    // A profile's per-maze fields are validated like the rest, when the profile is used.
+    let profiled = write(
+        dir.path(),
+        "profiled.toml",
+        &format!(
+            "{head}{}[profile.p.by_maze]\n\"2\" = {{ pbcs = {{ phase2.beta = 0 }} }}\n",
+            method("a", "")
+        ),
+    );
+    assert!(Experiment::load(&profiled, None).is_ok());
+    let err = Experiment::load(&profiled, Some("p"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("phase2.beta"), "{err}");
     let ok = write(dir.path(), "ok.toml", &format!("{head}{}", method("a", "")));
     let err = Experiment::load(&ok, Some("nope")).unwrap_err().to_string();
     assert!(err.contains("profile") && err.contains("nope"), "{err}");
@@ -271,6 +352,77 @@ fn a_run_another_sweep_holds_is_refused() {
     sweep(&exp, &runs, dir.path(), 1, |_, _| {}).unwrap();
     assert!(cell_dir.join("s0.csv").exists());
     assert!(!cell_dir.join("s0.lock").exists());
+}
+
+/// The sweep's pool starts items in their order (so an interrupted sweep has done a prefix of
+/// its plan: whole mazes, smallest first), returns results in the items' order, and starts
+/// nothing new after an error.
+#[test]
+fn parallel_runs_start_in_order_and_stop_at_an_error() {
+    use pbcs::experiment::run_parallel;
+    let items: Vec<usize> = (0..24).collect();
+    let started = Mutex::new(Vec::new());
+    let out = run_parallel(&items, 3, |&i| {
+        started.lock().unwrap().push(i);
+        std::thread::sleep(std::time::Duration::from_millis(2 + (i % 3) as u64));
+        Ok(i * 10)
+    })
+    .unwrap();
+    assert_eq!(out, items.iter().map(|i| i * 10).collect::<Vec<_>>());
+    let started = started.into_inner().unwrap();
+    for (p, &i) in started.iter().enumerate() {
+        // Three threads take items in turn: an item starts at most two places off its rank.
+        assert!(p.abs_diff(i) <= 2, "item {i} started {p}th: {started:?}");
+    }
+    let ran = Mutex::new(0);
+    let err = run_parallel(&items, 1, |&i| {
+        *ran.lock().unwrap() += 1;
+        if i == 5 {
+            Err(pbcs::Error::invalid("item", "five"))
+        } else {
+            Ok(i)
+        }
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("five"));
+    assert_eq!(*ran.lock().unwrap(), 6, "items after the error ran");
+}
+
+/// A lock left behind by an interrupted run on this host (its process gone) does not block the
+/// resumed sweep; a lock of another host, whose processes we cannot see, still does.
+#[test]
+fn an_interrupted_runs_lock_is_taken_over_on_its_host() {
+    if !Path::new("/proc/self").exists() {
+        eprintln!("skipped: no /proc on this system");
+        return;
+    }
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // A process that has ended: its pid is not in /proc.
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let gone = child.id();
+    child.wait().unwrap();
+    let path = dir.path().join("s0.lock");
+    std::fs::write(&path, format!("pid = {gone}\nhost = \"{}\"\n", host.trim())).unwrap();
+    let lock = pbcs::record::WorkLock::acquire(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains(&format!("pid = {}", std::process::id())),
+        "{text}"
+    );
+    drop(lock);
+    // Another host's lock, or this process's own, is respected.
+    for text in [
+        format!("pid = {gone}\nhost = \"elsewhere-{}\"\n", host.trim()),
+        format!("pid = {}\nhost = \"{}\"\n", std::process::id(), host.trim()),
+        "pid = 1\n".to_string(),
+    ] {
+        std::fs::write(&path, &text).unwrap();
+        let err = pbcs::record::WorkLock::acquire(&path)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("another process"), "{text}: {err}");
+    }
 }
 
 /// Stored configs are compared by value: a setting added after a run was stored, absent from
