@@ -19,10 +19,19 @@ fn err(exp: &Experiment, e: impl std::fmt::Display) -> Error {
     }
 }
 
-/// The raw rows as a polars DataFrame (one row per run).
-pub fn raw_frame(rows: &[RawRow]) -> PolarsResult<DataFrame> {
+/// The raw rows as a polars DataFrame (one row per run), with the paper's steps for the run's
+/// cell (null where the paper gives none).
+pub fn raw_frame(exp: &Experiment, rows: &[RawRow]) -> PolarsResult<DataFrame> {
+    let paper = |r: &RawRow| {
+        exp.cells
+            .iter()
+            .find(|c| c.id == r.cell)
+            .and_then(|c| c.paper_steps)
+            .map(|p| p as f64)
+    };
     df!(
         "cell" => rows.iter().map(|r| r.cell.clone()).collect::<Vec<_>>(),
+        "paper_steps" => rows.iter().map(paper).collect::<Vec<_>>(),
         "seed" => rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
         "solved" => rows.iter().map(|r| f64::from(u8::from(r.solved))).collect::<Vec<_>>(),
         "env_steps" => rows.iter().map(|r| r.env_steps as f64).collect::<Vec<_>>(),
@@ -54,6 +63,12 @@ pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
                 .filter(col("solved").eq(lit(1.0)))
                 .median()
                 .alias("solved_steps_median"),
+            col("solved")
+                .eq(lit(1.0))
+                .and(steps().lt_eq(col("paper_steps")))
+                .cast(DataType::Float64)
+                .sum()
+                .alias("solved_within_paper"),
             col("skills").median().alias("skills_median"),
             col("success_rate").median().alias("success_rate_median"),
             col("budget").first().alias("budget"),
@@ -65,7 +80,7 @@ pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
 /// Aggregates `rows` of `exp` with polars into one [`CellStats`] per cell with runs, in the
 /// experiment's cell order, and checks every number against the plain-Rust computation.
 pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
-    let grouped = raw_frame(rows)
+    let grouped = raw_frame(exp, rows)
         .and_then(group_cells)
         .map_err(|e| err(exp, e))?;
     let cells = grouped
@@ -94,6 +109,11 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             steps_min: get("steps_min")?,
             steps_max: get("steps_max")?,
             solved_steps_median: num("solved_steps_median", i)?,
+            // Null paper steps count nothing; the paper's figure decides whether there is one.
+            solved_within_paper: match c.paper_steps {
+                Some(_) => Some(get("solved_within_paper")? as u64),
+                None => None,
+            },
             skills_median: get("skills_median")?,
             success_rate_median: get("success_rate_median")?,
             budget: get("budget")? as u64,
@@ -117,6 +137,7 @@ fn same(a: &[CellStats], b: &[CellStats]) -> bool {
         && a.iter().zip(b).all(|(x, y)| {
             x.cell == y.cell
                 && (x.n, x.successes, x.budget) == (y.n, y.successes, y.budget)
+                && x.solved_within_paper == y.solved_within_paper
                 && [
                     (x.steps_median, y.steps_median),
                     (x.steps_q1, y.steps_q1),

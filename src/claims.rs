@@ -442,6 +442,7 @@ mod tests {
             steps_min: 1.0,
             steps_max: 1.0,
             solved_steps_median: None,
+            solved_within_paper: None,
             skills_median: 0.0,
             success_rate_median: 0.0,
             budget: 1,

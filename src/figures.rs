@@ -630,6 +630,7 @@ mod tests {
             steps_min: steps_median,
             steps_max: steps_median,
             solved_steps_median: solved,
+            solved_within_paper: None,
             skills_median: 1.0,
             success_rate_median: 0.0,
             budget: 400_000,

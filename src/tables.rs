@@ -49,6 +49,9 @@ pub struct CellStats {
     pub steps_max: f64,
     /// Median environment steps of the solved runs (empty if none solved).
     pub solved_steps_median: Option<f64>,
+    /// Runs solved within the paper's environment steps for the cell (empty where the paper
+    /// gives none): with a budget of twice the paper's steps, how many also fit in 1×.
+    pub solved_within_paper: Option<u64>,
     /// Median number of skills (PBCS; 0 for vanilla).
     pub skills_median: f64,
     /// Median of the final evaluation's success rate.
@@ -83,6 +86,7 @@ impl CellStats {
             steps_min: 0.0,
             steps_max: 0.0,
             solved_steps_median: None,
+            solved_within_paper: None,
             skills_median: 0.0,
             success_rate_median: 0.0,
             budget: 0,
@@ -190,6 +194,9 @@ pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
                 steps_q3: quantile(&mut steps, 0.75),
                 steps_min: steps[0],
                 steps_max: steps[steps.len() - 1],
+                solved_within_paper: c
+                    .paper_steps
+                    .map(|p| solved.iter().filter(|&&s| s <= p as f64).count() as u64),
                 solved_steps_median: (!solved.is_empty()).then(|| median(&mut solved)),
                 skills_median: median(&mut skills),
                 success_rate_median: median(&mut rate),

@@ -327,4 +327,20 @@ fn without_a_terminal_a_run_prints_a_line_per_skill() {
     let o = pbcs(&["table", "--seeds", "0"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--seeds"), "{}", stderr(&o));
+
+    // A sweep's log (no terminal) gets one line per finished run.
+    let results = dir.path().join("results");
+    let o = pbcs(&[
+        "exp",
+        "run",
+        "experiments/gamma.toml",
+        "--profile",
+        "smoke",
+        "--cell",
+        "g090-maze2",
+        "--results",
+        path(&results),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("g090-maze2 seed 0: "), "{}", stderr(&o));
 }

@@ -633,7 +633,14 @@ fn exp_run(
                 ran.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                 let total = steps.fetch_add(row.env_steps, std::sync::atomic::Ordering::SeqCst)
                     + row.env_steps;
-                bar.println(format!("{} ({secs:.0} s)", describe(row)));
+                let line = format!("{} ({secs:.0} s)", describe(row));
+                // Without a terminal the bar is hidden and drops its lines: a log (nohup, a
+                // cluster's job output) still gets one line per finished run.
+                if bar.is_hidden() {
+                    eprintln!("{line}");
+                } else {
+                    bar.println(line);
+                }
                 bar.set_message(format!(
                     "{:.0} env steps/s",
                     total as f64 / clock.elapsed().as_secs_f64().max(1e-9)
