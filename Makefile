@@ -4,7 +4,9 @@ CARGO ?= cargo
 JOBS ?= 2
 # A profile of the experiment files (`smoke`, `full`); empty: the committed grids.
 PROFILE ?=
-EXPERIMENTS ?= table gamma unseen curves
+# The committed grids; the paper-budget re-run (PROFILE=full) adds `beyond` and leaves out
+# `curves` (its 1M-step curves are the full table's own DDPG and TD3 cells).
+EXPERIMENTS ?= $(if $(filter full,$(PROFILE)),table gamma unseen beyond,$(if $(filter smoke,$(PROFILE)),table gamma unseen curves beyond,table gamma unseen curves))
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)

@@ -200,6 +200,13 @@ pub enum FigureSpec {
         /// File stem.
         name: String,
     },
+    /// Environment steps (median, quartiles) of each cell against the length of its maze's
+    /// shortest path from start to target, on log–log axes, one colour per method, with the
+    /// power law fitted to the cells' medians: does the cost grow like the path?
+    Scaling {
+        /// File stem.
+        name: String,
+    },
     /// The `methods`' pictures side by side, on the maze where the solved counts of the first
     /// two differ most (the smallest such maze on ties).
     Panels {
@@ -218,6 +225,7 @@ impl FigureSpec {
             | FigureSpec::Mazes { name, .. }
             | FigureSpec::Curves { name }
             | FigureSpec::Bars { name }
+            | FigureSpec::Scaling { name }
             | FigureSpec::Panels { name, .. } => name,
         }
     }

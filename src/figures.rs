@@ -358,6 +358,137 @@ impl Figure for SuccessBars {
     }
 }
 
+/// One cell of the scaling figure: (shortest path in moves, median, first and third quartile
+/// of the environment steps, solved k, runs n).
+type ScalingPoint = (f64, f64, f64, f64, u64, u64);
+
+/// Environment steps against the length of the maze's shortest path, log–log, one series per
+/// method, with the least-squares power law through the cells' medians.
+pub struct Scaling {
+    title: String,
+    series: Vec<(String, Vec<ScalingPoint>)>,
+    /// steps ≈ exp(a) · L^b over every cell with runs.
+    fit: Option<(f64, f64)>,
+}
+
+/// Least-squares line through the points (x, y): (intercept, slope); None with fewer than two
+/// distinct x.
+pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (points.len() >= 2 && sxx > 1e-12).then(|| (my - sxy / sxx * mx, sxy / sxx))
+}
+
+impl Scaling {
+    /// The scaling figure of `exp` from its table.
+    pub fn new(exp: &Experiment, stats: &[CellStats]) -> Result<Scaling> {
+        let mut series = Vec::new();
+        let mut logs = Vec::new();
+        for (m, label) in &exp.methods {
+            let mut points = Vec::new();
+            for c in exp.cells.iter().filter(|c| &c.method == m) {
+                let (Some(s), Some(l)) = (stats_of(stats, c), cell_maze(c)?.path_cells()) else {
+                    continue;
+                };
+                let l = l.max(1) as f64;
+                points.push((l, s.steps_median, s.steps_q1, s.steps_q3, s.successes, s.n));
+                logs.push((l.ln(), s.steps_median.max(1.0).ln()));
+            }
+            series.push((label.clone(), points));
+        }
+        Ok(Scaling {
+            title: exp.title.clone(),
+            series,
+            fit: fit_line(&logs),
+        })
+    }
+
+    /// The fitted exponent b of steps ≈ c · L^b, if there are enough cells.
+    pub fn exponent(&self) -> Option<f64> {
+        self.fit.map(|f| f.1)
+    }
+}
+
+impl Figure for Scaling {
+    fn size(&self) -> (u32, u32) {
+        (760, 560)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let points = self.series.iter().flat_map(|s| &s.1);
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, 1.0f64, f64::MAX, 1.0f64);
+        for p in points {
+            (x0, x1) = (x0.min(p.0), x1.max(p.0));
+            (y0, y1) = (y0.min(p.2.max(1.0)), y1.max(p.3));
+        }
+        if x0 > x1 {
+            (x0, y0) = (1.0, 1.0);
+        }
+        let caption = match self.fit {
+            Some((_, b)) => format!("{} — fit over the cells: steps ∝ L^{b:.2}", self.title),
+            None => self.title.clone(),
+        };
+        let mut chart = ChartBuilder::on(root)
+            .caption(caption, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                ((x0 * 0.8)..(x1 * 1.25)).log_scale(),
+                ((y0 * 0.7)..(y1 * 1.4)).log_scale(),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc("shortest path from start to target, L (moves between cells)")
+            .y_desc("environment steps: median, quartiles")
+            .y_label_formatter(&|y| human_steps(*y))
+            .label_style(("sans-serif", 13))
+            .draw()?;
+        if let Some((a, b)) = self.fit {
+            let line = [x0 * 0.8, x1 * 1.25].map(|x| (x, (a + b * x.ln()).exp()));
+            chart
+                .draw_series(LineSeries::new(line, BLACK.mix(0.5).stroke_width(1)))?
+                .label(format!("fit: {:.0} · L^{b:.2}", a.exp()))
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
+        }
+        for (i, (label, points)) in self.series.iter().enumerate() {
+            let colour = PALETTE[i % PALETTE.len()];
+            for p in points {
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(p.0, p.2.max(1.0)), (p.0, p.3)],
+                    colour.stroke_width(2),
+                )))?;
+                if p.4 < p.5 {
+                    chart.draw_series(std::iter::once(Text::new(
+                        format!("{}/{}", p.4, p.5),
+                        (p.0 * 1.04, p.1),
+                        ("sans-serif", 12),
+                    )))?;
+                }
+            }
+            chart
+                .draw_series(
+                    points
+                        .iter()
+                        .map(|p| Circle::new((p.0, p.1), 5, colour.filled())),
+                )?
+                .label(label.clone())
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
 /// Maze pictures side by side, each with a title (the unseen-states contrast).
 pub struct Panels {
     panels: Vec<(Maze, PictureData, String)>,
@@ -568,6 +699,9 @@ pub fn render_experiment(
             FigureSpec::Bars { .. } => {
                 files.extend(render_figure(&SuccessBars::new(exp, stats), &stem)?);
             }
+            FigureSpec::Scaling { .. } => {
+                files.extend(render_figure(&Scaling::new(exp, stats)?, &stem)?);
+            }
             FigureSpec::Panels { methods, .. } => {
                 let solved = |n: usize, m: &str| {
                     stats
@@ -637,6 +771,27 @@ mod tests {
             paper_steps: None,
             paper_solved: None,
         }
+    }
+
+    #[test]
+    fn the_fitted_line_recovers_a_power_law() {
+        // steps = 500 · L^1.5 exactly: the log–log fit gives back ln 500 and 1.5.
+        let pts: Vec<(f64, f64)> = [3.0f64, 8.0, 20.0, 57.0]
+            .iter()
+            .map(|&l| (l.ln(), (500.0 * l.powf(1.5)).ln()))
+            .collect();
+        let (a, b) = fit_line(&pts).unwrap();
+        assert!(
+            (a - 500f64.ln()).abs() < 1e-9 && (b - 1.5).abs() < 1e-12,
+            "{a} {b}"
+        );
+        // Known small case: (0, 1), (1, 3), (2, 5) → y = 1 + 2x.
+        assert_eq!(
+            fit_line(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]),
+            Some((1.0, 2.0))
+        );
+        assert_eq!(fit_line(&[(1.0, 1.0)]), None);
+        assert_eq!(fit_line(&[(2.0, 1.0), (2.0, 3.0)]), None);
     }
 
     #[test]

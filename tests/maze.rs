@@ -109,3 +109,40 @@ fn start_and_target_are_free() {
         assert!(!m.walls().contains_point(&m.target()));
     }
 }
+
+/// Path lengths between cells: symmetric, at least the Manhattan distance and of its parity
+/// (each move changes x + y by one), the start-to-target path of an N×N maze at least
+/// 2(N − 1), and the 2×2 U three moves long.
+#[test]
+fn shortest_paths_between_cells() {
+    let u = Maze::new(&MazeConfig {
+        size: 2,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    assert_eq!(u.path_cells(), Some(3));
+    for n in [3, 5, 9, 15] {
+        for seed in 0..3 {
+            let layout = Layout::generate(n, seed);
+            let maze = Maze::new(&MazeConfig {
+                size: n,
+                seed,
+                ..MazeConfig::default()
+            })
+            .unwrap();
+            let l = maze.path_cells().unwrap();
+            assert!(l >= 2 * (n - 1), "maze {n} seed {seed}: {l}");
+            assert_eq!(Some(l), layout.path_length((0, 0), (n - 1, n - 1)));
+            for (a, b) in [((0, 0), (n - 1, 0)), ((1, 2), (n - 1, n / 2))] {
+                let d = layout.path_length(a, b).unwrap();
+                assert_eq!(Some(d), layout.path_length(b, a));
+                let manhattan = a.0.abs_diff(b.0) + a.1.abs_diff(b.1);
+                assert!(
+                    d >= manhattan && (d - manhattan).is_multiple_of(2),
+                    "{a:?}→{b:?}: {d}"
+                );
+            }
+            assert_eq!(layout.path_length((0, 0), (n, 0)), None);
+        }
+    }
+}

@@ -153,26 +153,52 @@ impl Layout {
 
     /// Cells reachable from (0, 0) through open sides (breadth-first).
     pub fn reachable_from_start(&self) -> usize {
+        self.distances_from((0, 0)).iter().flatten().count()
+    }
+
+    /// The number of moves between neighbouring cells on the shortest path from cell `from`
+    /// to cell `to` through open sides (`None` if `to` cannot be reached or a cell is outside
+    /// the grid). In a perfect maze it is the only path.
+    ///
+    /// ```
+    /// use pbcs::maze::Layout;
+    ///
+    /// // The 2×2 maze is the U: (0,0) → (1,0) → (1,1) → (0,1).
+    /// let u = Layout::generate(2, 0);
+    /// assert_eq!(u.path_length((0, 0), (0, 1)), Some(3));
+    /// assert_eq!(u.path_length((0, 0), (0, 0)), Some(0));
+    /// assert_eq!(u.path_length((0, 0), (2, 0)), None);
+    /// ```
+    pub fn path_length(&self, from: (usize, usize), to: (usize, usize)) -> Option<usize> {
         let n = self.size;
-        let mut seen = vec![false; n * n];
-        let mut queue = std::collections::VecDeque::from([(0usize, 0usize)]);
-        seen[0] = true;
-        let mut count = 0;
+        if from.0 >= n || from.1 >= n || to.0 >= n || to.1 >= n {
+            return None;
+        }
+        self.distances_from(from)[to.1 * n + to.0]
+    }
+
+    /// Moves from `start` to every cell through open sides (breadth-first; `None`:
+    /// unreachable), indexed `y * size + x`.
+    fn distances_from(&self, start: (usize, usize)) -> Vec<Option<usize>> {
+        let n = self.size;
+        let mut dist = vec![None; n * n];
+        let mut queue = std::collections::VecDeque::from([start]);
+        dist[start.1 * n + start.0] = Some(0);
         while let Some((x, y)) = queue.pop_front() {
-            count += 1;
+            let d = dist[y * n + x].unwrap_or(0);
             for side in Side::ALL {
                 if self.has_wall(x, y, side) {
                     continue;
                 }
                 if let Some((nx, ny)) = self.neighbour(x, y, side) {
-                    if !seen[ny * n + nx] {
-                        seen[ny * n + nx] = true;
+                    if dist[ny * n + nx].is_none() {
+                        dist[ny * n + nx] = Some(d + 1);
                         queue.push_back((nx, ny));
                     }
                 }
             }
         }
-        count
+        dist
     }
 
     /// Number of interior walls present.

@@ -109,6 +109,13 @@ impl Maze {
         self.target
     }
 
+    /// The length of the shortest path from the start's cell to the target's cell, in moves
+    /// between cells (the 2×2 U: 3; a perfect N×N maze: at least 2(N − 1)).
+    pub fn path_cells(&self) -> Option<usize> {
+        let cell = |p: Point<f32>| (p.x.floor().max(0.0) as usize, p.y.floor().max(0.0) as usize);
+        self.layout.path_length(cell(self.start), cell(self.target))
+    }
+
     /// Whether `p` is in the success region: ‖p − target‖ < radius (0.2 in the paper).
     #[inline]
     pub fn reached(&self, p: &Point<f32>) -> bool {
