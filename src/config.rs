@@ -109,16 +109,19 @@ impl Check for MazeConfig {
 pub struct ExploreConfig {
     /// Side of the square state-space bins of the archive (0.05 in the paper).
     pub bin_side: f32,
-    /// Budget of environment steps; phase 1 fails with an error if the reward is not found
-    /// within it. (The paper runs until the reward is found.)
-    pub max_steps: u64,
+    /// Budget of environment steps in all; phase 1 fails with an error if the reward is not
+    /// found within it. (The paper runs until the reward is found.) Called `max_steps` before
+    /// (still read, so stored configs compare equal); `phase2.max_steps` is a different thing,
+    /// the length limit of one Backplay episode.
+    #[serde(alias = "max_steps")]
+    pub budget: u64,
 }
 
 impl Default for ExploreConfig {
     fn default() -> Self {
         ExploreConfig {
             bin_side: 0.05,
-            max_steps: 100_000_000,
+            budget: 100_000_000,
         }
     }
 }
@@ -126,8 +129,8 @@ impl Default for ExploreConfig {
 impl Check for ExploreConfig {
     fn check(&self) -> Result<()> {
         positive_finite("explore.bin_side", self.bin_side, 1.0)?;
-        if self.max_steps == 0 {
-            return Err(Error::invalid("explore.max_steps", "must be at least 1"));
+        if self.budget == 0 {
+            return Err(Error::invalid("explore.budget", "must be at least 1"));
         }
         Ok(())
     }

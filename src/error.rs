@@ -36,7 +36,7 @@ pub enum Error {
     /// Phase 1 used its whole step budget without reaching a reward.
     #[error(
         "exploration used its budget of {steps} environment steps without reaching the target \
-         (raise `explore.max_steps`)"
+         (raise `explore.budget`)"
     )]
     ExplorationBudget {
         /// Environment steps performed.

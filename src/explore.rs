@@ -271,7 +271,7 @@ pub struct Exploration<S> {
 }
 
 /// Runs phase 1 on `env` until the first positive reward, or fails after
-/// `config.max_steps` steps. `progress(steps, archive_len)` is called every 65 536 steps.
+/// `config.budget` steps. `progress(steps, archive_len)` is called every 65 536 steps.
 ///
 /// ```
 /// use pbcs::{config::{ExploreConfig, MazeConfig}, env::Env, explore::explore, maze::Maze};
@@ -295,7 +295,7 @@ pub fn explore<E: Env>(
     let s0 = env.start();
     env.observe(&s0, &mut obs);
     let mut archive = Archive::new(s0, &obs, env.action_dim(), config.bin_side);
-    for steps in 1..=config.max_steps {
+    for steps in 1..=config.budget {
         let chosen = archive.select(rng);
         random_action(env, rng, &mut action);
         let step = env.step(archive.state(chosen), &action);
@@ -321,7 +321,7 @@ pub fn explore<E: Env>(
         }
     }
     Err(Error::ExplorationBudget {
-        steps: config.max_steps,
+        steps: config.budget,
     })
 }
 

@@ -34,7 +34,9 @@ fn negative_or_zero_radius_thickness_action_bin_are_rejected() {
         ("[maze]\nwall_thickness = 0.0\n", "maze.wall_thickness"),
         ("[maze]\nmax_action = nan\n", "maze.max_action"),
         ("[explore]\nbin_side = -0.05\n", "explore.bin_side"),
-        ("[explore]\nmax_steps = 0\n", "explore.max_steps"),
+        ("[explore]\nbudget = 0\n", "explore.budget"),
+        // The old name is still read (stored configs), and checked the same way.
+        ("[explore]\nmax_steps = 0\n", "explore.budget"),
     ] {
         let msg = load_err(text);
         assert!(msg.contains(field), "{text:?}: {msg}");

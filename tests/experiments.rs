@@ -443,6 +443,9 @@ fn stored_configs_compare_by_value() {
     assert!(!job.same_as(&text.replace("fast_tests = false", "fast_tests = true")));
     assert!(!job.same_as("not toml ["));
     assert!(!exp.cells[0].job.with_seed(4).same_as(&text));
+    // Phase 1's budget was stored as `explore.max_steps` before it was renamed.
+    assert!(text.contains("\nbudget = "), "{text}");
+    assert!(job.same_as(&text.replace("\nbudget = ", "\nmax_steps = ")));
 }
 
 /// The paper's PBCS step counts have one source, `experiments/table.toml`, which the `pbcs

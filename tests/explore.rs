@@ -69,11 +69,11 @@ fn phase1_reports_an_exhausted_budget() {
     let maze = Maze::new(&MazeConfig::default()).unwrap();
     let mut rng = Seeds::new(0).stream(Stream::Explore);
     let cfg = ExploreConfig {
-        max_steps: 100,
+        budget: 100,
         ..ExploreConfig::default()
     };
     let err = explore(&maze, &cfg, &mut rng, |_, _| {}).unwrap_err();
-    assert!(err.to_string().contains("explore.max_steps"), "{err}");
+    assert!(err.to_string().contains("explore.budget"), "{err}");
 }
 
 #[test]
