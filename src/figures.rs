@@ -412,6 +412,13 @@ impl Scaling {
     }
 }
 
+/// The whole powers of ten around [lo, hi] (a log axis over whole decades gets labels).
+fn decades(lo: f64, hi: f64) -> std::ops::Range<f64> {
+    let lo = 10f64.powf(lo.max(1e-9).log10().floor());
+    let hi = 10f64.powf(hi.max(lo).log10().ceil()).max(lo * 10.0);
+    lo..hi
+}
+
 impl Figure for Scaling {
     fn size(&self) -> (u32, u32) {
         (760, 560)
@@ -436,19 +443,17 @@ impl Figure for Scaling {
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(70)
-            .build_cartesian_2d(
-                ((x0 * 0.8)..(x1 * 1.25)).log_scale(),
-                ((y0 * 0.7)..(y1 * 1.4)).log_scale(),
-            )?;
+            .build_cartesian_2d(decades(x0, x1).log_scale(), decades(y0, y1).log_scale())?;
         chart
             .configure_mesh()
             .x_desc("shortest path from start to target, L (moves between cells)")
             .y_desc("environment steps: median, quartiles")
+            .x_label_formatter(&|x| format!("{x:.0}"))
             .y_label_formatter(&|y| human_steps(*y))
             .label_style(("sans-serif", 13))
             .draw()?;
         if let Some((a, b)) = self.fit {
-            let line = [x0 * 0.8, x1 * 1.25].map(|x| (x, (a + b * x.ln()).exp()));
+            let line = [x0, x1].map(|x| (x, (a + b * x.ln()).exp()));
             chart
                 .draw_series(LineSeries::new(line, BLACK.mix(0.5).stroke_width(1)))?
                 .label(format!("fit: {:.0} · L^{b:.2}", a.exp()))
