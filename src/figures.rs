@@ -405,11 +405,6 @@ impl Scaling {
             fit: fit_line(&logs),
         })
     }
-
-    /// The fitted exponent b of steps ≈ c · L^b, if there are enough cells.
-    pub fn exponent(&self) -> Option<f64> {
-        self.fit.map(|f| f.1)
-    }
 }
 
 /// The whole powers of ten around [lo, hi] (a log axis over whole decades gets labels).
