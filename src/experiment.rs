@@ -401,6 +401,28 @@ pub struct Experiment {
     pub report: ReportSpec,
 }
 
+/// Maze sizes of a grid: at least one, each once.
+fn check_mazes(mazes: &[usize]) -> Result<()> {
+    if mazes.is_empty() {
+        return Err(Error::invalid("mazes", "must name at least one maze size"));
+    }
+    if mazes.iter().collect::<BTreeSet<_>>().len() != mazes.len() {
+        return Err(Error::invalid("mazes", "maze sizes must be unique"));
+    }
+    Ok(())
+}
+
+/// A method name is a folder name and part of cell ids: letters, digits and `_` only.
+fn check_method_name(name: &str) -> Result<()> {
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(Error::invalid(
+            "method.name",
+            format!("`{name}`: use letters, digits and `_` only"),
+        ));
+    }
+    Ok(())
+}
+
 /// Merges `from` into `into`: tables merge key by key, anything else replaces.
 fn merge(into: &mut toml::Table, from: &toml::Table) {
     for (k, v) in from {
@@ -451,12 +473,7 @@ impl Experiment {
             return Err(Error::invalid("seeds", "must be at least 1"));
         }
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
-        if mazes.is_empty() {
-            return Err(Error::invalid("mazes", "must name at least one maze size"));
-        }
-        if mazes.iter().collect::<BTreeSet<_>>().len() != mazes.len() {
-            return Err(Error::invalid("mazes", "maze sizes must be unique"));
-        }
+        check_mazes(&mazes)?;
         let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
         if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
@@ -476,17 +493,7 @@ impl Experiment {
         }
         let mut names = BTreeSet::new();
         for m in all_methods.iter().copied() {
-            if m.name.is_empty()
-                || !m
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
-            {
-                return Err(Error::invalid(
-                    "method.name",
-                    format!("`{}`: use letters, digits and `_` only", m.name),
-                ));
-            }
+            check_method_name(&m.name)?;
             if !names.insert(m.name.clone()) {
                 return Err(Error::invalid(
                     "method.name",
@@ -588,6 +595,67 @@ impl Experiment {
             mazes,
             methods,
             cells,
+        })
+    }
+
+    /// An experiment of one PBCS method `name` (letters, digits, `_`) run as `job` on each of
+    /// `sizes` with seeds `0..seeds`, built from a job instead of a file: what `pbcs table`
+    /// sweeps (into `<results>/raw/<name>/<name>-maze<N>/`). Each cell carries the paper's
+    /// PBCS steps for its size ([`crate::runs::paper_pbcs_steps`]); seed 0 keeps its picture.
+    ///
+    /// ```
+    /// use pbcs::experiment::Experiment;
+    /// let exp = Experiment::of_job("mine", &pbcs::config::RunJob::default(), &[2, 5], 3).unwrap();
+    /// assert_eq!(exp.cells[1].id, "mine-maze5");
+    /// assert_eq!(exp.seeds(), vec![0, 1, 2]);
+    /// assert!(Experiment::of_job("mine", &Default::default(), &[2, 2], 3).is_err());
+    /// ```
+    pub fn of_job(name: &str, job: &RunJob, sizes: &[usize], seeds: u64) -> Result<Experiment> {
+        check_method_name(name)?;
+        check_mazes(sizes)?;
+        if seeds == 0 {
+            return Err(Error::invalid("seeds", "must be at least 1"));
+        }
+        let cells = sizes
+            .iter()
+            .map(|&n| {
+                let mut j = job.clone();
+                j.maze.size = n;
+                j.seed = 0;
+                j.check().map_err(|e| match e {
+                    Error::Invalid { field, reason } => Error::Invalid {
+                        field,
+                        reason: format!("{reason} (maze {n})"),
+                    },
+                    other => other,
+                })?;
+                let paper_steps = crate::runs::paper_pbcs_steps(n);
+                Ok(Cell {
+                    id: format!("{name}-maze{n}"),
+                    method: name.to_string(),
+                    label: name.to_string(),
+                    maze: n,
+                    job: Job::Pbcs(j),
+                    paper_steps,
+                    paper_solved: paper_steps.map(|_| true),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Experiment {
+            name: name.to_string(),
+            title: format!("PBCS ({name}) on mazes {sizes:?}"),
+            description: String::new(),
+            profile: None,
+            first_seed: 0,
+            seed_count: seeds,
+            picture_seeds: default_picture_seeds(),
+            mazes: sizes.to_vec(),
+            methods: vec![(name.to_string(), name.to_string())],
+            cells,
+            figures: vec![FigureSpec::Bars {
+                name: name.to_string(),
+            }],
+            report: ReportSpec::default(),
         })
     }
 

@@ -163,6 +163,40 @@ pub fn markdown(stats: &[CellStats]) -> String {
     s
 }
 
+/// A one-method grid (`pbcs table`) as a markdown table, one row per maze: solved k/n and its
+/// Wilson interval, environment steps median [min, max], the paper's PBCS steps and the
+/// ratio of our median to them, median skills and median wall seconds (from `timings`,
+/// `-` where a cell has none).
+pub fn grid_markdown(stats: &[CellStats], timings: &[CellTiming]) -> String {
+    use crate::figures::human_steps;
+    let mut s = String::from(
+        "| maze | solved | Wilson 95 % | env steps median [min, max] | paper | median / paper | skills, median | wall s, median |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    for c in stats {
+        let wall = timings
+            .iter()
+            .find(|t| t.cell == c.cell)
+            .map_or("-".into(), |t| format!("{:.0}", t.wall_median_s));
+        s.push_str(&format!(
+            "| {} | {}/{} | [{:.2}, {:.2}] | {} [{}, {}] | {} | {} | {} | {wall} |\n",
+            c.maze,
+            c.successes,
+            c.n,
+            c.wilson_lo,
+            c.wilson_hi,
+            human_steps(c.steps_median),
+            human_steps(c.steps_min),
+            human_steps(c.steps_max),
+            c.paper_steps.map_or("-".into(), |p| human_steps(p as f64)),
+            c.paper_steps
+                .map_or("-".into(), |p| format!("{:.2}", c.steps_median / p as f64)),
+            c.skills_median,
+        ));
+    }
+    s
+}
+
 /// Writes a table atomically.
 pub fn write_table(path: &Path, rows: &[CellStats]) -> Result<()> {
     crate::record::write_records(path, rows)
@@ -250,4 +284,66 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::RunJob;
+
+    fn row(exp: &Experiment, seed: u64, solved: bool, steps: u64, skills: usize) -> RawRow {
+        let c = &exp.cells[0];
+        RawRow {
+            experiment: exp.name.clone(),
+            cell: c.id.clone(),
+            method: c.method.clone(),
+            kind: "pbcs".into(),
+            maze: c.maze,
+            maze_seed: 0,
+            seed,
+            learner: "ddpg".into(),
+            gamma: 0.9,
+            chaining: true,
+            starts: "ball".into(),
+            solved,
+            success_rate: if solved { 1.0 } else { 0.0 },
+            env_steps: steps,
+            budget: 1_000_000,
+            first_success_steps: None,
+            phase1_steps: 0,
+            train_steps: steps,
+            test_steps: 0,
+            skills,
+            failure: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_grid_table_gives_median_extremes_and_the_papers_ratio() {
+        let exp = Experiment::of_job("mine", &RunJob::default(), &[2], 3).unwrap();
+        let rows = [
+            row(&exp, 0, true, 300_000, 2),
+            row(&exp, 1, false, 100_000, 3),
+            row(&exp, 2, true, 200_000, 2),
+        ];
+        let stats = cell_stats(&exp, &rows);
+        let timings = [CellTiming {
+            cell: "mine-maze2".into(),
+            n: 3,
+            wall_median_s: 20.0,
+            wall_total_s: 60.0,
+            steps_per_s: 10_000.0,
+        }];
+        let table = grid_markdown(&stats, &timings);
+        // 2 of 3: Wilson 95 % [0.21, 0.94]; the paper's 321k steps on maze 2.
+        assert_eq!(
+            table.lines().nth(2).unwrap(),
+            "| 2 | 2/3 | [0.21, 0.94] | 200k [100k, 300k] | 321k | 0.62 | 2 | 20 |"
+        );
+        assert!(grid_markdown(&stats, &[])
+            .lines()
+            .nth(2)
+            .unwrap()
+            .ends_with("| 2 | - |"));
+    }
 }

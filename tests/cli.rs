@@ -120,6 +120,24 @@ fn bad_numbers_get_clear_messages() {
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(e.contains("--seeds") && !e.contains("NaN"), "{e}");
+
+    // A maze size given twice, or one out of range, is refused before any run.
+    let dir = tempfile::tempdir().unwrap();
+    for (sizes, says) in [("2,2", "unique"), ("2,1", "maze.size")] {
+        let o = pbcs(&[
+            "table",
+            "--sizes",
+            sizes,
+            "--seeds",
+            "1",
+            "--out",
+            path(dir.path()),
+        ]);
+        assert!(!o.status.success(), "{sizes}");
+        let e = stderr(&o);
+        assert!(e.contains(says), "{sizes}: {e}");
+    }
+    assert!(!dir.path().join("raw").exists(), "nothing was run");
 }
 
 #[test]

@@ -499,22 +499,52 @@ mod end_to_end {
         assert!(solved >= 2, "{report:#?}");
     }
 
-    /// A grid resumes: finished cells are read back (same records), and a folder of another
-    /// config is refused rather than mixed in.
+    /// `pbcs table`'s grid ([`Experiment::of_job`] through the sweep) gives each seed the row
+    /// of `pbcs run` on the same job, resumes (finished runs read back, same rows) and refuses
+    /// a folder of another config rather than mixing it in.
+    ///
+    /// [`Experiment::of_job`]: pbcs::experiment::Experiment::of_job
     #[test]
-    fn grid_resumes_and_refuses_another_config() {
+    fn a_grid_gives_pbcs_runs_rows_resumes_and_refuses_another_config() {
+        use pbcs::experiment::{plan, sweep, Experiment};
         let mut j = job(0);
         j.phase2.max_env_steps = 5_000;
         let dir = tempfile::tempdir().unwrap();
-        let first = pbcs::runs::run_grid(&j, &[2], &[0, 1], dir.path(), 2, |_, _| {}).unwrap();
+        let exp = Experiment::of_job("small", &j, &[2], 2).unwrap();
+        let runs = plan(&exp, None, None).unwrap();
+        let first = sweep(&exp, &runs, dir.path(), 2, |_, _| {}).unwrap();
         assert_eq!(first.len(), 2);
-        let again = pbcs::runs::run_grid(&j, &[2], &[0, 1], dir.path(), 1, |_, _| {}).unwrap();
-        let records = |v: &[(pbcs::runs::RunRecord, f64)]| {
-            v.iter().map(|(r, _)| r.clone()).collect::<Vec<_>>()
-        };
-        assert_eq!(records(&first), records(&again));
+        for row in &first {
+            let mut single = j.clone();
+            single.seed = row.seed;
+            let run_dir = tempfile::tempdir().unwrap();
+            let (r, _) = run_pbcs(&single, run_dir.path(), |_, _| {}).unwrap();
+            assert_eq!(
+                (r.solved, r.total_steps, r.skills, &r.failure),
+                (row.solved, row.env_steps, row.skills, &row.failure),
+                "seed {}",
+                row.seed
+            );
+        }
+        let ran_again = std::sync::atomic::AtomicUsize::new(0);
+        let again = sweep(&exp, &runs, dir.path(), 1, |_, e| {
+            if matches!(e, pbcs::experiment::Event::Ran(..)) {
+                ran_again.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            }
+        })
+        .unwrap();
+        assert_eq!(first, again);
+        assert_eq!(ran_again.into_inner(), 0);
         j.phase2.epsilon = 0.15;
-        let err = pbcs::runs::run_grid(&j, &[2], &[0], dir.path(), 1, |_, _| {}).unwrap_err();
+        let other = Experiment::of_job("small", &j, &[2], 1).unwrap();
+        let err = sweep(
+            &other,
+            &plan(&other, None, None).unwrap(),
+            dir.path(),
+            1,
+            |_, _| {},
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("another config"), "{err}");
     }
 

@@ -191,12 +191,17 @@ enum Command {
         #[arg(long)]
         exact_starts: bool,
     },
-    /// The PBCS results table: `pbcs run` for every maze size × seed (resumable: finished runs
-    /// are read back, not re-run), then solved counts and step statistics beside the paper's.
+    /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
+    /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts
+    /// and step statistics beside the paper's.
     Table {
         /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_paper.toml).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// The procedure, when no --config is given: `fast` (ours, the default, as for `pbcs
+        /// run`) or `paper`.
+        #[arg(long, value_enum, conflicts_with = "config")]
+        preset: Option<Preset>,
         /// Maze sizes.
         #[arg(long, value_delimiter = ',', default_value = "2,5,7,10,15")]
         sizes: Vec<usize>,
@@ -206,7 +211,8 @@ enum Command {
         /// Runs at a time (one thread each).
         #[arg(long, default_value_t = 2)]
         jobs: usize,
-        /// Output folder [default: out/table/<config file stem or "default">].
+        /// Results folder: rows in <OUT>/raw/<name>/, statistics in <OUT>/tables/<name>.csv,
+        /// where <name> is the config's file stem or the preset's name [default: out/table].
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -471,11 +477,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Table {
             config,
+            preset,
             sizes,
             seeds,
             jobs,
             out,
-        } => table(config.as_deref(), &sizes, seeds, jobs, out),
+        } => table(config.as_deref(), preset, &sizes, seeds, jobs, out),
         Command::Aggregate { set } => aggregate(&set),
         Command::Figures { set, figures, tex } => make_figures(&set, figures, tex),
         Command::Exp { command } => match command {
@@ -607,76 +614,65 @@ fn describe(row: &pbcs::experiment::RawRow) -> String {
     )
 }
 
+/// Runs `runs` with [`pbcs::experiment::sweep`] behind a progress bar (finished runs are read
+/// back): one line per run as it finishes, environment steps per second in the bar. Returns
+/// the rows and how many runs ran now.
+fn sweep_with_progress(
+    exp: &pbcs::experiment::Experiment,
+    runs: &[pbcs::experiment::Pending],
+    results: &std::path::Path,
+    jobs: usize,
+) -> anyhow::Result<(Vec<pbcs::experiment::RawRow>, usize)> {
+    use pbcs::experiment::{sweep, Event};
+    use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+    let bar = run_bar(runs.len() as u64);
+    let steps = AtomicU64::new(0);
+    let ran = AtomicUsize::new(0);
+    let clock = std::time::Instant::now();
+    let rows = sweep(exp, runs, results, jobs, |_, event| {
+        bar.inc(1);
+        if let Event::Ran(row, secs) = event {
+            ran.fetch_add(1, Ordering::SeqCst);
+            let total = steps.fetch_add(row.env_steps, Ordering::SeqCst) + row.env_steps;
+            let line = format!("{} ({secs:.0} s)", describe(row));
+            // Without a terminal the bar is hidden and drops its lines: a log (nohup, a
+            // cluster's job output) still gets one line per finished run.
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+            bar.set_message(format!(
+                "{:.0} env steps/s",
+                total as f64 / clock.elapsed().as_secs_f64().max(1e-9)
+            ));
+        }
+    })?;
+    bar.finish_and_clear();
+    Ok((rows, ran.into_inner()))
+}
+
 fn exp_run(
     args: &ExpArgs,
     cell: Option<&str>,
     seed: Option<u64>,
     jobs: usize,
 ) -> anyhow::Result<()> {
-    use pbcs::experiment::{plan, sweep, Event};
     let (exp, results) = args.load()?;
-    let runs = plan(&exp, cell, seed)?;
-    let bar = run_bar(runs.len() as u64);
-    let steps = std::sync::atomic::AtomicU64::new(0);
-    let clock = std::time::Instant::now();
-    let (ran, skipped) = (
-        std::sync::atomic::AtomicUsize::new(0),
-        std::sync::atomic::AtomicUsize::new(0),
-    );
-    let rows = sweep(&exp, &runs, &results, jobs, |_, event| {
-        bar.inc(1);
-        match event {
-            Event::Skipped(_) => {
-                skipped.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-            }
-            Event::Ran(row, secs) => {
-                ran.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                let total = steps.fetch_add(row.env_steps, std::sync::atomic::Ordering::SeqCst)
-                    + row.env_steps;
-                let line = format!("{} ({secs:.0} s)", describe(row));
-                // Without a terminal the bar is hidden and drops its lines: a log (nohup, a
-                // cluster's job output) still gets one line per finished run.
-                if bar.is_hidden() {
-                    eprintln!("{line}");
-                } else {
-                    bar.println(line);
-                }
-                bar.set_message(format!(
-                    "{:.0} env steps/s",
-                    total as f64 / clock.elapsed().as_secs_f64().max(1e-9)
-                ));
-            }
-        }
-    })?;
-    bar.finish_and_clear();
+    let runs = pbcs::experiment::plan(&exp, cell, seed)?;
+    let (rows, ran) = sweep_with_progress(&exp, &runs, &results, jobs)?;
     println!(
-        "{} ({}): {} runs, {} ran now, {} were finished; raw rows in {}",
+        "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
         exp.name,
         exp.profile.as_deref().unwrap_or("committed grid"),
         rows.len(),
-        ran.into_inner(),
-        skipped.into_inner(),
+        rows.len() - ran,
         results.join("raw").join(&exp.name).display()
     );
-    println!("| cell | solved | env steps, median |");
-    println!("| --- | --- | --- |");
-    for c in &exp.cells {
-        let mut v: Vec<f64> = rows
-            .iter()
-            .filter(|r| r.cell == c.id)
-            .map(|r| r.env_steps as f64)
-            .collect();
-        if v.is_empty() {
-            continue;
-        }
-        let solved = rows.iter().filter(|r| r.cell == c.id && r.solved).count();
-        println!(
-            "| {} | {solved}/{} | {:.0} |",
-            c.id,
-            v.len(),
-            pbcs::stats::median(&mut v)
-        );
-    }
+    print!(
+        "{}",
+        pbcs::tables::markdown(&pbcs::tables::cell_stats(&exp, &rows))
+    );
     Ok(())
 }
 
@@ -771,53 +767,57 @@ fn exp_check(
     }
 }
 
+/// `pbcs table`: a one-method experiment built from the config ([`Experiment::of_job`]), run
+/// by the same sweep as `pbcs exp run` (resumable, one lock per run, atomic rows), then shown
+/// per maze beside the paper's steps; the cell statistics go to `<out>/tables/<name>.csv`.
+///
+/// [`Experiment::of_job`]: pbcs::experiment::Experiment::of_job
 fn table(
     config: Option<&std::path::Path>,
+    preset: Option<Preset>,
     sizes: &[usize],
     seeds: u64,
     jobs: usize,
     out: Option<PathBuf>,
 ) -> anyhow::Result<()> {
+    let preset = preset.unwrap_or(Preset::Fast);
     let job: RunJob = match config {
         Some(p) => config::load(p)?,
-        None => RunJob::default(),
+        None => preset.job()?,
     };
-    for &n in sizes {
-        let mut j = job.clone();
-        j.maze.size = n;
-        j.check()?;
-    }
-    let name = config
+    // The preset's name or the config's file stem names the method, its folders and its
+    // table: letters, digits and `_` (other characters become `_`).
+    let name: String = config
         .and_then(|p| p.file_stem())
-        .map_or("default".to_string(), |s| s.to_string_lossy().into_owned());
-    let out = out.unwrap_or_else(|| PathBuf::from(format!("out/table/{name}")));
-    let seed_list: Vec<u64> = (0..seeds).collect();
-    let total = (sizes.len() * seed_list.len()) as u64;
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}")
-            .expect("valid template"),
-    );
-    let results = pbcs::runs::run_grid(&job, sizes, &seed_list, &out, jobs, |r, secs| {
-        bar.inc(1);
-        bar.set_message(format!(
-            "maze {} seed {}: {} in {} steps ({secs:.0} s)",
-            r.maze,
-            r.seed,
-            if r.solved { "solved" } else { "not solved" },
-            r.total_steps
-        ));
-    })?;
-    bar.finish_and_clear();
-    let records: Vec<_> = results.iter().map(|(r, _)| r.clone()).collect();
-    pbcs::record::write_records(&out.join("records.csv"), &records)?;
+        .map_or(preset.name().to_string(), |s| {
+            s.to_string_lossy().into_owned()
+        })
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    let exp = pbcs::experiment::Experiment::of_job(&name, &job, sizes, seeds)?;
+    let out = out.unwrap_or_else(|| PathBuf::from("out/table"));
+    let runs = pbcs::experiment::plan(&exp, None, None)?;
+    let (rows, ran) = sweep_with_progress(&exp, &runs, &out, jobs)?;
+    let stats = pbcs::tables::cell_stats(&exp, &rows);
+    let table = pbcs::tables::table_path(&out, &exp.name);
+    pbcs::tables::write_table(&table, &stats)?;
     println!(
-        "{} ({}), seeds 0..{seeds}; runs in {}",
-        name,
-        records.first().map_or("", |r| r.variant.as_str()),
-        out.display()
+        "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
+         statistics in {}",
+        if job.phase2.chaining {
+            "pbcs"
+        } else {
+            "pbcs_no_chaining"
+        },
+        rows.len() - ran,
+        out.join("raw").join(&exp.name).display(),
+        table.display()
     );
-    print!("{}", pbcs::runs::grid_markdown(&results, sizes));
+    print!(
+        "{}",
+        pbcs::tables::grid_markdown(&stats, &pbcs::tables::cell_timings(&exp, &out, &rows))
+    );
     Ok(())
 }
 
