@@ -29,7 +29,8 @@
 
 use crate::config::{Check, RunJob, TrainJob};
 use crate::error::{Error, Result};
-use crate::runs::{PbcsRun, TrainRun};
+use crate::phase2::{Failure, StartMode};
+use crate::runs::{PbcsRun, RunRecord, TrainRun, TrainSummary};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -699,7 +700,7 @@ pub struct RawRow {
     /// Method name.
     pub method: String,
     /// `vanilla` or `pbcs`.
-    pub kind: String,
+    pub kind: Kind,
     /// Maze size N.
     pub maze: usize,
     /// Maze layout seed.
@@ -714,7 +715,7 @@ pub struct RawRow {
     /// PBCS: whether skill chaining was on.
     pub chaining: bool,
     /// PBCS: `ball` or `exact` starts; empty for vanilla.
-    pub starts: String,
+    pub starts: Option<StartMode>,
     /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
     /// vanilla, the final greedy evaluation does.
     pub solved: bool,
@@ -735,7 +736,66 @@ pub struct RawRow {
     /// PBCS: skills in the chain.
     pub skills: usize,
     /// PBCS: why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
-    pub failure: String,
+    pub failure: Option<Failure>,
+}
+
+impl RawRow {
+    /// The row of a vanilla run of `cell` (`job` with its seed): its summary, under the
+    /// cell's names; the PBCS columns hold 0 or are empty.
+    pub fn vanilla(exp: &Experiment, cell: &Cell, job: &TrainJob, s: &TrainSummary) -> RawRow {
+        RawRow {
+            experiment: exp.name.clone(),
+            cell: cell.id.clone(),
+            method: cell.method.clone(),
+            kind: Kind::Vanilla,
+            maze: s.maze,
+            maze_seed: s.maze_seed,
+            seed: job.seed,
+            learner: job.learner.record_name(),
+            gamma: job.learner.gamma,
+            chaining: false,
+            starts: None,
+            solved: s.final_success >= crate::runs::SOLVED_AT,
+            success_rate: s.final_success,
+            env_steps: s.env_steps,
+            budget: job.train.steps,
+            first_success_steps: s.first_success_steps,
+            phase1_steps: 0,
+            train_steps: 0,
+            test_steps: 0,
+            skills: 0,
+            failure: None,
+        }
+    }
+
+    /// The row of a PBCS run of `cell` (`job` with its seed): its [`RunRecord`] (what `pbcs
+    /// run` writes to `record.csv`) under the cell's names, `env_steps` its `total_steps`;
+    /// the record's τ lengths and ε are left to the job file.
+    pub fn pbcs(exp: &Experiment, cell: &Cell, job: &RunJob, r: RunRecord) -> RawRow {
+        RawRow {
+            experiment: exp.name.clone(),
+            cell: cell.id.clone(),
+            method: cell.method.clone(),
+            kind: Kind::Pbcs,
+            maze: r.maze,
+            maze_seed: r.maze_seed,
+            seed: r.seed,
+            learner: r.learner,
+            gamma: r.gamma,
+            chaining: job.phase2.chaining,
+            starts: Some(r.starts),
+            solved: r.solved,
+            success_rate: r.success_rate,
+            env_steps: r.total_steps,
+            budget: job.phase2.max_env_steps,
+            first_success_steps: None,
+            phase1_steps: r.phase1_steps,
+            train_steps: r.train_steps,
+            test_steps: r.test_steps,
+            skills: r.skills,
+            failure: r.failure,
+        }
+    }
 }
 
 /// Raw file names of one run.
@@ -754,58 +814,12 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
         Job::Vanilla(j) => {
             let run = TrainRun::compute(j, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
-            let s = &run.summary;
-            let row = RawRow {
-                experiment: exp.name.clone(),
-                cell: cell.id.clone(),
-                method: cell.method.clone(),
-                kind: "vanilla".into(),
-                maze: s.maze,
-                maze_seed: s.maze_seed,
-                seed,
-                learner: j.learner.record_name(),
-                gamma: j.learner.gamma,
-                chaining: false,
-                starts: String::new(),
-                solved: s.final_success >= crate::runs::SOLVED_AT,
-                success_rate: s.final_success,
-                env_steps: s.env_steps,
-                budget: j.train.steps,
-                first_success_steps: s.first_success_steps,
-                phase1_steps: 0,
-                train_steps: 0,
-                test_steps: 0,
-                skills: 0,
-                failure: String::new(),
-            };
+            let row = RawRow::vanilla(exp, cell, j, &run.summary);
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
             let run = PbcsRun::compute(j, |_, _| {})?;
-            let r = run.record;
-            let row = RawRow {
-                experiment: exp.name.clone(),
-                cell: cell.id.clone(),
-                method: cell.method.clone(),
-                kind: "pbcs".into(),
-                maze: r.maze,
-                maze_seed: r.maze_seed,
-                seed,
-                learner: r.learner,
-                gamma: r.gamma,
-                chaining: j.phase2.chaining,
-                starts: r.starts,
-                solved: r.solved,
-                success_rate: r.success_rate,
-                env_steps: r.total_steps,
-                budget: j.phase2.max_env_steps,
-                first_success_steps: None,
-                phase1_steps: r.phase1_steps,
-                train_steps: r.train_steps,
-                test_steps: r.test_steps,
-                skills: r.skills,
-                failure: r.failure,
-            };
+            let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)
         }
     };

@@ -13,7 +13,7 @@ use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
-use crate::phase2::{chain_skills, Phase2Outcome, Progress, SkillChain, StartMode};
+use crate::phase2::{chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode};
 use crate::plot::{render_maze, MazePicture, PictureData};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
@@ -369,12 +369,12 @@ pub struct RunRecord {
     /// Run seed.
     pub seed: u64,
     /// `pbcs` or `pbcs_no_chaining`.
-    pub variant: String,
+    pub variant: Variant,
     /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
     /// argmax actor.
     pub learner: String,
     /// `ball` or `exact` starts.
-    pub starts: String,
+    pub starts: StartMode,
     /// γ of the learner.
     pub gamma: f32,
     /// ε.
@@ -384,7 +384,7 @@ pub struct RunRecord {
     /// Fraction of evaluation episodes that reached the target.
     pub success_rate: f32,
     /// Why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
-    pub failure: String,
+    pub failure: Option<Failure>,
     /// Environment steps of phase 1.
     pub phase1_steps: u64,
     /// Environment steps of phase-2 training episodes.
@@ -399,6 +399,26 @@ pub struct RunRecord {
     pub trajectory_len: usize,
     /// States of the trajectory phase 2 worked on (τ, or τ shortened).
     pub phase2_trajectory_len: usize,
+}
+
+/// Which PBCS a record comes from (`phase2.chaining`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Variant {
+    /// PBCS: skill chaining on.
+    Pbcs,
+    /// PBCS without skill chaining (the paper's ablation).
+    PbcsNoChaining,
+}
+
+impl Variant {
+    /// Its name in records and messages (its serde name): `pbcs`, `pbcs_no_chaining`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Pbcs => "pbcs",
+            Variant::PbcsNoChaining => "pbcs_no_chaining",
+        }
+    }
 }
 
 /// Chain rollouts drawn in the picture.
@@ -509,7 +529,7 @@ impl PbcsRun {
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
             "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
-            record.variant,
+            record.variant.name(),
             record.learner,
             job.maze.size,
             job.maze.seed,
@@ -544,30 +564,17 @@ impl RunRecord {
             maze_seed: job.maze.seed,
             seed: job.seed,
             variant: if job.phase2.chaining {
-                "pbcs"
+                Variant::Pbcs
             } else {
-                "pbcs_no_chaining"
-            }
-            .into(),
+                Variant::PbcsNoChaining
+            },
             learner: lc.record_name(),
-            starts: match job.phase2.start {
-                StartMode::Ball => "ball",
-                StartMode::Exact => "exact",
-            }
-            .into(),
+            starts: job.phase2.start,
             gamma: lc.gamma,
             epsilon: job.phase2.epsilon,
             solved: phase2.failure.is_none() && success_rate >= SOLVED_AT,
             success_rate,
-            failure: phase2
-                .failure
-                .map(|f| match f {
-                    crate::phase2::Failure::BackplayFailed => "backplay_failed",
-                    crate::phase2::Failure::NoChaining => "no_chaining",
-                    crate::phase2::Failure::Budget => "budget",
-                })
-                .unwrap_or("")
-                .into(),
+            failure: phase2.failure,
             phase1_steps: found.env_steps,
             train_steps: phase2.steps.train,
             test_steps: phase2.steps.test,

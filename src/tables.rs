@@ -297,14 +297,14 @@ mod tests {
             experiment: exp.name.clone(),
             cell: c.id.clone(),
             method: c.method.clone(),
-            kind: "pbcs".into(),
+            kind: crate::experiment::Kind::Pbcs,
             maze: c.maze,
             maze_seed: 0,
             seed,
             learner: "ddpg".into(),
             gamma: 0.9,
             chaining: true,
-            starts: "ball".into(),
+            starts: Some(crate::phase2::StartMode::Ball),
             solved,
             success_rate: if solved { 1.0 } else { 0.0 },
             env_steps: steps,
@@ -314,7 +314,7 @@ mod tests {
             train_steps: steps,
             test_steps: 0,
             skills,
-            failure: String::new(),
+            failure: None,
         }
     }
 

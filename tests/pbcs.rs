@@ -491,7 +491,7 @@ mod end_to_end {
             let dir = tempfile::tempdir().unwrap();
             let (r, _) = run_pbcs(&j, dir.path(), |_, _| {}).unwrap();
             report.push(format!(
-                "seed {seed}: solved {} success {} steps {} skills {} failure '{}'",
+                "seed {seed}: solved {} success {} steps {} skills {} failure {:?}",
                 r.solved, r.success_rate, r.total_steps, r.skills, r.failure
             ));
             solved += usize::from(r.solved);

@@ -606,11 +606,8 @@ fn describe(row: &pbcs::experiment::RawRow) -> String {
         if row.solved { "solved" } else { "not solved" },
         row.success_rate,
         row.env_steps,
-        if row.failure.is_empty() {
-            String::new()
-        } else {
-            format!(", {}", row.failure)
-        }
+        row.failure
+            .map_or(String::new(), |f| format!(", {}", f.name()))
     )
 }
 
@@ -878,7 +875,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
     println!(
         "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {:.0} % over {} \
          episodes, {} skills{}",
-        record.variant,
+        record.variant.name(),
         record.learner,
         record.maze,
         record.maze_seed,
@@ -891,11 +888,9 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
         100.0 * record.success_rate,
         job.phase2.eval_episodes,
         record.skills,
-        if record.failure.is_empty() {
-            String::new()
-        } else {
-            format!(", stopped: {}", record.failure)
-        }
+        record
+            .failure
+            .map_or(String::new(), |f| format!(", stopped: {}", f.name()))
     );
     println!(
         "env steps: phase 1 {}, training {}, tests {}, total {}; |τ| = {}; {:.1} s",

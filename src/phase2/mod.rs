@@ -434,6 +434,18 @@ pub enum Failure {
     Budget,
 }
 
+impl Failure {
+    /// Its name in records and messages (its serde name): `backplay_failed`, `no_chaining`,
+    /// `budget`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Failure::BackplayFailed => "backplay_failed",
+            Failure::NoChaining => "no_chaining",
+            Failure::Budget => "budget",
+        }
+    }
+}
+
 /// The output of phase 2.
 #[derive(Debug, Clone)]
 pub struct Phase2Outcome {
