@@ -87,9 +87,10 @@ pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
     s
 }
 
-/// The results table: rows = mazes, columns = methods; each entry "k/n solved, median steps"
-/// (and, where the paper solved it, how many runs solved it within the paper's steps), with
-/// the paper's "steps S/F" below it.
+/// The results table: rows = mazes, columns = methods; each entry on three short lines (so
+/// that five methods fit the page): "k/n (j), median steps", where j counts the runs solved
+/// within the paper's steps (only where the paper solved the cell); the Wilson 95 % interval
+/// in grey; the paper's "steps S/F" in italics.
 pub fn results_table_tex(
     rows: &[CellStats],
     mazes: &[usize],
@@ -103,29 +104,43 @@ pub fn results_table_tex(
     }
     s.push_str(" \\\\\n\\midrule\n");
     for &n in mazes {
+        let cells: Vec<Option<&CellStats>> =
+            methods.iter().map(|(m, _)| find(rows, m, n)).collect();
         let _ = write!(s, "${n}\\times{n}$");
-        for (m, _) in methods {
-            match find(rows, m, n) {
+        for c in &cells {
+            match c {
                 Some(c) => {
+                    let within = match (c.paper_solved, c.solved_within_paper) {
+                        (Some(true), Some(k)) => format!(" ({k})"),
+                        _ => String::new(),
+                    };
                     let _ = write!(
                         s,
-                        " & {}/{} \\textcolor{{gray}}{{[{:.2}, {:.2}]}}, {}",
+                        " & {}/{}{within}, {}",
                         c.successes,
                         c.n,
-                        c.wilson_lo,
-                        c.wilson_hi,
                         human_steps(c.steps_median)
                     );
-                    if let (Some(true), Some(k)) = (c.paper_solved, c.solved_within_paper) {
-                        let _ = write!(s, " \\textcolor{{gray}}{{({k} in the paper's steps)}}");
-                    }
                 }
                 None => s.push_str(" & --"),
             }
         }
         s.push_str(" \\\\\n");
-        for (m, _) in methods {
-            let paper = find(rows, m, n).and_then(|c| {
+        for c in &cells {
+            match c {
+                Some(c) => {
+                    let _ = write!(
+                        s,
+                        " & \\textcolor{{gray}}{{\\small [{:.2}, {:.2}]}}",
+                        c.wilson_lo, c.wilson_hi
+                    );
+                }
+                None => s.push_str(" &"),
+            }
+        }
+        s.push_str(" \\\\\n");
+        for c in &cells {
+            let paper = c.and_then(|c| {
                 c.paper_steps.map(|p| {
                     format!(
                         "{} {}",
@@ -144,7 +159,7 @@ pub fn results_table_tex(
                 paper.unwrap_or_else(|| "--".into())
             );
         }
-        s.push_str(" \\\\[2pt]\n");
+        s.push_str(" \\\\[3pt]\n");
     }
     s.push_str("\\bottomrule\n\\end{tabular}\n");
     s
@@ -337,4 +352,41 @@ pub fn settings_tex(
     }
     put("seeds", exp.seed_count.to_string());
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::Experiment;
+
+    /// Three short lines per maze: "k/n (j), median", the interval, the paper's figure; a
+    /// method without the cell gets dashes.
+    #[test]
+    fn the_results_table_puts_counts_interval_and_paper_on_three_lines() {
+        let exp = Experiment::of_job("pbcs", &Default::default(), &[2], 10).unwrap();
+        let cell = CellStats {
+            steps_median: 195_000.0,
+            solved_within_paper: Some(8),
+            ..CellStats::counted(&exp, &exp.cells[0], 9, 10)
+        };
+        let methods = [
+            ("pbcs".to_string(), "PBCS".to_string()),
+            ("other".to_string(), "Other".to_string()),
+        ];
+        let tex = results_table_tex(&[cell], &[2], &methods);
+        let lines: Vec<&str> = tex
+            .lines()
+            .skip_while(|l| !l.starts_with("\\midrule"))
+            .collect();
+        assert_eq!(lines[1], "$2\\times2$ & 9/10 (8), 195k & -- \\\\");
+        assert_eq!(
+            lines[2],
+            " & \\textcolor{gray}{\\small [0.60, 0.98]} & \\\\"
+        );
+        assert_eq!(
+            lines[3],
+            " & \\textit{\\small paper: 321k S} & \\textit{\\small paper: --} \\\\[3pt]"
+        );
+        assert!(tex.contains("\\begin{tabular}{rcc}") && tex.contains("maze & PBCS & Other"));
+    }
 }
