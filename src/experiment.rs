@@ -30,7 +30,7 @@
 use crate::config::{Check, RunJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
-use crate::runs::{PbcsRun, RunRecord, TrainRun, TrainSummary};
+use crate::runs::{PbcsRun, RunRecord, TrainRun, TrainSummary, Variant};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -376,7 +376,8 @@ pub struct Cell {
 /// A resolved experiment: every cell's job, the seeds, the profile.
 #[derive(Debug, Clone)]
 pub struct Experiment {
-    /// The file stem (`table` for `experiments/table.toml`): the name of its raw folder.
+    /// The file stem (`table` for `experiments/table.toml`; for [`Experiment::of_job`], the
+    /// name given): the name of its raw folder.
     pub name: String,
     /// Title, for tables and figures.
     pub title: String,
@@ -601,8 +602,9 @@ impl Experiment {
 
     /// An experiment of one PBCS method `name` (letters, digits, `_`) run as `job` on each of
     /// `sizes` with seeds `0..seeds`, built from a job instead of a file: what `pbcs table`
-    /// sweeps (into `<results>/raw/<name>/<name>-maze<N>/`). Each cell carries the paper's
-    /// PBCS steps for its size ([`crate::runs::paper_pbcs_steps`]); seed 0 keeps its picture.
+    /// sweeps (into `<results>/raw/<name>/<name>-maze<N>/`, in the order of `sizes`). Each
+    /// cell carries the paper's run of the same variant (with or without chaining) on its size
+    /// ([`crate::runs::paper_figures`]); seed 0 keeps its picture.
     ///
     /// ```
     /// use pbcs::experiment::Experiment;
@@ -630,7 +632,12 @@ impl Experiment {
                     },
                     other => other,
                 })?;
-                let paper_steps = crate::runs::paper_pbcs_steps(n);
+                let variant = if job.phase2.chaining {
+                    Variant::Pbcs
+                } else {
+                    Variant::PbcsNoChaining
+                };
+                let (paper_steps, paper_solved) = crate::runs::paper_figures(variant, n);
                 Ok(Cell {
                     id: format!("{name}-maze{n}"),
                     method: name.to_string(),
@@ -638,7 +645,7 @@ impl Experiment {
                     maze: n,
                     job: Job::Pbcs(j),
                     paper_steps,
-                    paper_solved: paper_steps.map(|_| true),
+                    paper_solved,
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -849,8 +856,9 @@ pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow
     if !cell.job.with_seed(seed).same_as(&stored) {
         return Err(parse_err(
             &config_path,
-            "this finished run used another config than the experiment file now gives; \
-             remove the cell's folder to re-run it, or restore the experiment file",
+            "this finished run used another config than the experiment now gives (its file, or \
+             `pbcs table`'s preset or config); remove the cell's folder to re-run it, restore \
+             the file, or choose another results folder (--results, --out)",
         ));
     }
     read_row(&path).map(Some)

@@ -359,7 +359,8 @@ pub fn run_train(
     Ok((run.summary, run.seconds))
 }
 
-/// The per-run record of PBCS (`record.csv`): every count the results table needs.
+/// The per-run record of PBCS (`record.csv` of `pbcs run`): its counts, τ's lengths and ε. A
+/// sweep keeps it as a [`crate::experiment::RawRow`] ([`crate::experiment::RawRow::pbcs`]).
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct RunRecord {
     /// Maze size N.
@@ -727,18 +728,31 @@ fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
     write_csv(path, &header, rows)
 }
 
-/// The paper's PBCS step counts (results table, one seed each), by maze size: the `pbcs`
-/// method's `paper_steps` in `experiments/table.toml`, the one place they are written (read
-/// at compile time, so the binary needs no experiments folder).
-pub fn paper_pbcs_steps(maze: usize) -> Option<u64> {
-    let table: toml::Table = include_str!("../experiments/table.toml").parse().ok()?;
-    table
-        .get("method")?
-        .as_array()?
-        .iter()
-        .find(|m| m.get("name").and_then(|v| v.as_str()) == Some("pbcs"))?
-        .get("paper_steps")?
-        .get(maze.to_string())?
-        .as_integer()
-        .and_then(|v| u64::try_from(v).ok())
+/// The paper's single run of `variant` on a maze (results table, one seed each): its
+/// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
+/// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at
+/// compile time, so the binary needs no experiments folder). `(None, None)` for a size the
+/// paper did not run.
+///
+/// ```
+/// use pbcs::runs::{paper_figures, Variant};
+/// assert_eq!(paper_figures(Variant::Pbcs, 2), (Some(321_000), Some(true)));
+/// assert_eq!(paper_figures(Variant::PbcsNoChaining, 2), (Some(146_000), Some(false)));
+/// assert_eq!(paper_figures(Variant::Pbcs, 3), (None, None));
+/// ```
+pub fn paper_figures(variant: Variant, maze: usize) -> (Option<u64>, Option<bool>) {
+    let table: Option<toml::Table> = include_str!("../experiments/table.toml").parse().ok();
+    let method = table.as_ref().and_then(|t| {
+        t.get("method")?
+            .as_array()?
+            .iter()
+            .find(|m| m.get("name").and_then(|v| v.as_str()) == Some(variant.name()))
+    });
+    let field = |name: &str| method.and_then(|m| m.get(name)?.get(maze.to_string()));
+    (
+        field("paper_steps")
+            .and_then(|v| v.as_integer())
+            .and_then(|v| u64::try_from(v).ok()),
+        field("paper_solved").and_then(|v| v.as_bool()),
+    )
 }

@@ -3,7 +3,8 @@
 //!
 //! The tables are produced by `pbcs aggregate` with polars (the `polars` cargo feature, see
 //! [`crate::aggregate`]); this module holds their row type, reads and writes them, and
-//! computes the same statistics in plain Rust, which the aggregation checks polars against.
+//! computes the same statistics in plain Rust, which the aggregation checks polars against
+//! and `pbcs table` (one method, no polars) writes directly.
 
 use crate::error::{Error, Result};
 use crate::experiment::{Cell, Experiment, RawRow};

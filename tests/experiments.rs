@@ -448,13 +448,14 @@ fn stored_configs_compare_by_value() {
     assert!(job.same_as(&text.replace("\nbudget = ", "\nmax_steps = ")));
 }
 
-/// The paper's PBCS step counts have one source, `experiments/table.toml`, which the `pbcs
-/// table` printer reads too.
+/// The paper's figures have one source, `experiments/table.toml`, which `pbcs table` reads
+/// too: the chained PBCS's and the unchained one's, by size.
 #[test]
 fn the_papers_step_counts_come_from_the_table_experiment() {
+    use pbcs::runs::{paper_figures, Variant};
     let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
         .iter()
-        .map(|&n| pbcs::runs::paper_pbcs_steps(n))
+        .map(|&n| paper_figures(Variant::Pbcs, n).0)
         .collect();
     assert_eq!(
         steps,
@@ -467,6 +468,29 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
             None
         ]
     );
+    assert_eq!(paper_figures(Variant::Pbcs, 15).1, Some(true));
+    assert_eq!(
+        paper_figures(Variant::PbcsNoChaining, 10),
+        (Some(694_000), Some(false))
+    );
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    for c in exp
+        .cells
+        .iter()
+        .filter(|c| c.method == "pbcs" || c.method == "pbcs_no_chaining")
+    {
+        let variant = if c.method == "pbcs" {
+            Variant::Pbcs
+        } else {
+            Variant::PbcsNoChaining
+        };
+        assert_eq!(
+            paper_figures(variant, c.maze),
+            (c.paper_steps, c.paper_solved),
+            "{}",
+            c.id
+        );
+    }
 }
 
 /// A malformed CSV file is an error naming the file (before: "csv: …" without a path).

@@ -513,17 +513,16 @@ mod end_to_end {
         let exp = Experiment::of_job("small", &j, &[2], 2).unwrap();
         let runs = plan(&exp, None, None).unwrap();
         let first = sweep(&exp, &runs, dir.path(), 2, |_, _| {}).unwrap();
-        assert_eq!(first.len(), 2);
-        for row in &first {
+        assert_eq!(first.iter().map(|r| r.seed).collect::<Vec<_>>(), [0, 1]);
+        for (seed, row) in [0, 1].into_iter().zip(&first) {
             let mut single = j.clone();
-            single.seed = row.seed;
+            single.seed = seed;
             let run_dir = tempfile::tempdir().unwrap();
             let (r, _) = run_pbcs(&single, run_dir.path(), |_, _| {}).unwrap();
             assert_eq!(
-                (r.solved, r.total_steps, r.skills, &r.failure),
-                (row.solved, row.env_steps, row.skills, &row.failure),
-                "seed {}",
-                row.seed
+                pbcs::experiment::RawRow::pbcs(&exp, &exp.cells[0], &single, r),
+                *row,
+                "seed {seed}"
             );
         }
         let ran_again = std::sync::atomic::AtomicUsize::new(0);
@@ -600,6 +599,11 @@ mod end_to_end {
         let (written, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
         let run = pbcs::runs::PbcsRun::compute(&j, |_, _| {}).unwrap();
         assert_eq!(run.record, written);
+        // The record's enums are written as the names the CSVs have always held.
+        let text = std::fs::read_to_string(a.path().join("record.csv")).unwrap();
+        let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+        assert_eq!((row[3], row[5]), ("pbcs", "ball"), "{text}");
+        assert_eq!(row[3], written.variant.name());
         assert_eq!(run.tau.len(), written.phase2_trajectory_len);
         assert_eq!(run.phase2.chain.skills.len(), written.skills);
         run.write(&j, b.path()).unwrap();

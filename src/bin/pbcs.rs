@@ -803,10 +803,11 @@ fn table(
         "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
          statistics in {}",
         if job.phase2.chaining {
-            "pbcs"
+            pbcs::runs::Variant::Pbcs
         } else {
-            "pbcs_no_chaining"
-        },
+            pbcs::runs::Variant::PbcsNoChaining
+        }
+        .name(),
         rows.len() - ran,
         out.join("raw").join(&exp.name).display(),
         table.display()
