@@ -1,9 +1,10 @@
 //! The `pbcs` command line, a thin layer over the library: `explore` (phase 1), `train`
-//! (vanilla DDPG / TD3 baselines), `run` (PBCS), `eval` (re-run a saved chain), `table` (a
-//! PBCS grid of sizes × seeds), `exp` (experiment grids: run, list, check), and with the
-//! `polars` feature `aggregate` and `figures`. A run subcommand loads an optional TOML config,
-//! applies the flags over it, validates the result and calls `pbcs::runs`; the others call
-//! `pbcs::experiment`, `pbcs::aggregate`, `pbcs::figures` and `pbcs::report`.
+//! (vanilla DDPG / TD3 baselines), `run` (PBCS), `eval` (re-run a saved chain), `table` (one
+//! PBCS preset or config on sizes × seeds, as a one-method experiment), `exp` (experiment
+//! grids: run, list, check), `aggregate` (with the `polars` feature) and `figures`. A run
+//! subcommand loads an optional TOML config, applies the flags over it, validates the result
+//! and calls `pbcs::runs`; the others call `pbcs::experiment`, `pbcs::tables`,
+//! `pbcs::aggregate`, `pbcs::figures` and `pbcs::report`.
 
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
