@@ -682,3 +682,22 @@ fn committed_raw_rows_round_trip_byte_for_byte() {
         assert_eq!(read_row(&path).unwrap(), row);
     }
 }
+
+/// `beyond` compares two layouts on each size: they must be two different mazes on every size.
+/// Layouts 0 and 1 of the 3×3 maze are the same maze (the file once used them).
+#[test]
+fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
+    use pbcs::maze::Layout;
+    assert_eq!(Layout::generate(3, 0), Layout::generate(3, 1));
+    let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
+    for &n in &exp.mazes {
+        let layouts: Vec<Layout> = exp
+            .cells
+            .iter()
+            .filter(|c| c.maze == n)
+            .map(|c| pbcs::figures::cell_maze(c).unwrap().layout().clone())
+            .collect();
+        assert_eq!(layouts.len(), 2, "maze {n}");
+        assert_ne!(layouts[0], layouts[1], "maze {n}");
+    }
+}
