@@ -403,6 +403,17 @@ pub struct Experiment {
     pub report: ReportSpec,
 }
 
+/// A validation error with where it happened (`where_`) added to its reason.
+fn located(e: Error, where_: &str) -> Error {
+    match e {
+        Error::Invalid { field, reason } => Error::Invalid {
+            field,
+            reason: format!("{reason} ({where_})"),
+        },
+        other => other,
+    }
+}
+
 /// Maze sizes of a grid: at least one, each once.
 fn check_mazes(mazes: &[usize]) -> Result<()> {
     if mazes.is_empty() {
@@ -556,13 +567,8 @@ impl Experiment {
                         Job::Pbcs(j)
                     }
                 };
-                job.check().map_err(|e| match e {
-                    Error::Invalid { field, reason } => Error::Invalid {
-                        field,
-                        reason: format!("{reason} (method `{}`, maze {n})", m.name),
-                    },
-                    other => other,
-                })?;
+                job.check()
+                    .map_err(|e| located(e, &format!("method `{}`, maze {n}", m.name)))?;
                 cells.push(Cell {
                     id: format!("{}-maze{n}", m.name),
                     method: m.name.clone(),
@@ -625,13 +631,7 @@ impl Experiment {
                 let mut j = job.clone();
                 j.maze.size = n;
                 j.seed = 0;
-                j.check().map_err(|e| match e {
-                    Error::Invalid { field, reason } => Error::Invalid {
-                        field,
-                        reason: format!("{reason} (maze {n})"),
-                    },
-                    other => other,
-                })?;
+                j.check().map_err(|e| located(e, &format!("maze {n}")))?;
                 let variant = if job.phase2.chaining {
                     Variant::Pbcs
                 } else {
