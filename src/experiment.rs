@@ -4,11 +4,11 @@
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
 //! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`), the mazes, the
-//! seeds, and named profiles (`smoke` for CI, `full` for the paper's budgets) that override
+//! seeds, and named profiles (`smoke` for CI) that override
 //! seeds, mazes and fields. Resolving a cell is a deep merge of TOML tables in this order:
-//! base file ← method `set` ← profile's table for the method's kind ← the file's `by_maze`
-//! table for the cell's maze size ← the profile's `by_maze`; then `maze.size` and `seed` are
-//! set. A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
+//! base file ← method `set` ← the file's `by_maze` table for the cell's maze size ← the
+//! profile's table for the method's kind ← the profile's `by_maze`; then `maze.size` and
+//! `seed` are set (a profile overrides everything the file sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
 //! ```
@@ -138,7 +138,7 @@ struct ExperimentSpec {
     #[serde(rename = "method")]
     methods: Vec<MethodSpec>,
     /// Fields set on one maze size only (`[by_maze."15"]`, e.g. a budget per size), applied
-    /// after the methods' own and the profile's kind tables.
+    /// after the methods' own tables and before the profile's.
     #[serde(default)]
     by_maze: BTreeMap<String, KindTables>,
     #[serde(default, rename = "profile")]
@@ -533,7 +533,6 @@ impl Experiment {
             let mut table: toml::Table =
                 toml::from_str(&base_text).map_err(|e| parse_err(&base_path, e.to_string()))?;
             merge(&mut table, &m.set);
-            merge(&mut table, KindTables::of_profile(&prof, m.kind));
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((m.name.clone(), label.clone()));
             resolved.push((m, label, table));
@@ -542,10 +541,12 @@ impl Experiment {
             let key = n.to_string();
             for (m, label, table) in &resolved {
                 let mut table = table.clone();
-                for by_maze in [&spec.by_maze, &prof.by_maze] {
-                    if let Some(t) = by_maze.get(&key) {
-                        merge(&mut table, t.of(m.kind));
-                    }
+                if let Some(t) = spec.by_maze.get(&key) {
+                    merge(&mut table, t.of(m.kind));
+                }
+                merge(&mut table, KindTables::of_profile(&prof, m.kind));
+                if let Some(t) = prof.by_maze.get(&key) {
+                    merge(&mut table, t.of(m.kind));
                 }
                 let what = |e: toml::de::Error| {
                     parse_err(
