@@ -491,15 +491,22 @@ impl Experiment {
         if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
         }
-        for (field, by_maze) in [
-            ("by_maze", &spec.by_maze),
-            ("profile.by_maze", &prof.by_maze),
+        // The file's `by_maze` may name any size the file or one of its profiles runs (a
+        // profile narrows the sizes); a profile's, only the sizes that profile runs.
+        let mut file_mazes: BTreeSet<usize> = spec.mazes.iter().copied().collect();
+        for p in spec.profiles.values() {
+            file_mazes.extend(p.mazes.iter().flatten());
+        }
+        let file_mazes: Vec<usize> = file_mazes.into_iter().collect();
+        for (field, by_maze, sizes) in [
+            ("by_maze", &spec.by_maze, &file_mazes),
+            ("profile.by_maze", &prof.by_maze, &mazes),
         ] {
             for key in by_maze.keys() {
-                if !key.parse::<usize>().is_ok_and(|n| mazes.contains(&n)) {
+                if !key.parse::<usize>().is_ok_and(|n| sizes.contains(&n)) {
                     return Err(Error::invalid(
                         format!("{field} in {}", path.display()),
-                        format!("`{key}` is not one of the maze sizes {mazes:?}"),
+                        format!("`{key}` is not one of the maze sizes {sizes:?}"),
                     ));
                 }
             }

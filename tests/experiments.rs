@@ -21,7 +21,7 @@ fn every_experiment_file_parses_with_unique_cells() {
         assert!(names.contains(want), "experiments/{want}.toml is missing");
     }
     for f in files() {
-        for profile in [None, Some("smoke")] {
+        for profile in [None, Some("smoke"), Some("full")] {
             let exp = Experiment::load(&f, profile)
                 .unwrap_or_else(|e| panic!("{} ({profile:?}): {e}", f.display()));
             let ids: BTreeSet<&str> = exp.cells.iter().map(|c| c.id.as_str()).collect();
@@ -217,6 +217,28 @@ fn bad_experiment_files_name_the_problem() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("phase2.beta"), "{err}");
+    // The file's per-maze fields may name a size a profile leaves out (a smoke profile runs
+    // one size of the file's grid); they apply where the size is run, under the profile's own
+    // fields.
+    let narrowed = write(
+        dir.path(),
+        "narrowed.toml",
+        &format!(
+            "title = \"t\"\nseeds = 1\nmazes = [2, 3]\n{}[by_maze]\n\"3\" = {{ pbcs = {{ phase2.beta = 7 }} }}\n\"2\" = {{ pbcs = {{ phase2.beta = 6 }} }}\n[profile.small]\nmazes = [2]\npbcs = {{ phase2.beta = 5 }}\n",
+            method("a", "")
+        ),
+    );
+    let beta = |profile: Option<&str>, id: &str| match &Experiment::load(&narrowed, profile)
+        .unwrap()
+        .cell(id)
+        .unwrap()
+        .job
+    {
+        pbcs::experiment::Job::Pbcs(j) => j.phase2.beta,
+        _ => unreachable!(),
+    };
+    assert_eq!((beta(None, "a-maze2"), beta(None, "a-maze3")), (6, 7));
+    assert_eq!(beta(Some("small"), "a-maze2"), 5);
     let ok = write(dir.path(), "ok.toml", &format!("{head}{}", method("a", "")));
     let err = Experiment::load(&ok, Some("nope")).unwrap_err().to_string();
     assert!(err.contains("profile") && err.contains("nope"), "{err}");
@@ -607,7 +629,7 @@ fn committed_raw_rows_round_trip_byte_for_byte() {
     use pbcs::phase2::{Failure, StartMode};
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    let mut stack = vec![root.join("results/raw")];
+    let mut stack = vec![root.join("results/raw"), root.join("results-full/raw")];
     while let Some(dir) = stack.pop() {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
@@ -694,37 +716,39 @@ fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
 
 /// Every committed raw row was computed from its experiment file as it is now: each
 /// `results/raw/<experiment>/<cell>/s<seed>.toml` is the job the file resolves for that cell
-/// and seed, and every folder there is a cell of the file. A changed experiment file (a budget,
-/// a preset) without re-run rows fails here, not silently in `make figures`.
+/// and seed (under `results-full/raw/`, with the `full` profile), and every folder there is a
+/// cell of the file. A changed experiment file (a budget, a preset) without re-run rows fails
+/// here, not silently in `make figures`.
 #[test]
 fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
-    let raw = Path::new("results/raw");
     let mut checked = 0;
-    for f in files() {
-        let exp = Experiment::load(&f, None).unwrap();
-        let Ok(entries) = std::fs::read_dir(raw.join(&exp.name)) else {
-            continue;
-        };
-        for e in entries {
-            let dir = e.unwrap().path();
-            let id = dir.file_name().unwrap().to_string_lossy().into_owned();
-            let cell = exp.cell(&id).unwrap_or_else(|e| {
-                panic!("{}: not a cell of {}: {e}", dir.display(), f.display())
-            });
-            for seed in exp.seeds() {
-                let path = dir.join(format!("s{seed}.toml"));
-                let Ok(text) = std::fs::read_to_string(&path) else {
-                    continue;
-                };
-                assert!(
-                    cell.job.with_seed(seed).same_as(&text),
-                    "{}: not the job {} resolves",
-                    path.display(),
-                    f.display()
-                );
-                checked += 1;
+    for (raw, profile) in [("results/raw", None), ("results-full/raw", Some("full"))] {
+        for f in files() {
+            let exp = Experiment::load(&f, profile).unwrap();
+            let Ok(entries) = std::fs::read_dir(Path::new(raw).join(&exp.name)) else {
+                continue;
+            };
+            for e in entries {
+                let dir = e.unwrap().path();
+                let id = dir.file_name().unwrap().to_string_lossy().into_owned();
+                let cell = exp.cell(&id).unwrap_or_else(|e| {
+                    panic!("{}: not a cell of {}: {e}", dir.display(), f.display())
+                });
+                for seed in exp.seeds() {
+                    let path = dir.join(format!("s{seed}.toml"));
+                    let Ok(text) = std::fs::read_to_string(&path) else {
+                        continue;
+                    };
+                    assert!(
+                        cell.job.with_seed(seed).same_as(&text),
+                        "{}: not the job {} ({profile:?}) resolves",
+                        path.display(),
+                        f.display()
+                    );
+                    checked += 1;
+                }
             }
         }
     }
-    assert!(checked > 100, "only {checked} committed jobs");
+    assert!(checked > 300, "only {checked} committed jobs");
 }
