@@ -4,11 +4,11 @@
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
 //! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`), the mazes, the
-//! seeds, and named profiles (`smoke` for CI, `full` for the paper's budgets) that override
+//! seeds, and named profiles (`smoke` for CI) that override
 //! seeds, mazes and fields. Resolving a cell is a deep merge of TOML tables in this order:
-//! base file ← method `set` ← profile's table for the method's kind ← the file's `by_maze`
-//! table for the cell's maze size ← the profile's `by_maze`; then `maze.size` and `seed` are
-//! set. A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
+//! base file ← method `set` ← the file's `by_maze` table for the cell's maze size ← the
+//! profile's table for the method's kind ← the profile's `by_maze`; then `maze.size` and
+//! `seed` are set (a profile overrides everything the file sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
 //! ```
@@ -138,7 +138,7 @@ struct ExperimentSpec {
     #[serde(rename = "method")]
     methods: Vec<MethodSpec>,
     /// Fields set on one maze size only (`[by_maze."15"]`, e.g. a budget per size), applied
-    /// after the methods' own and the profile's kind tables.
+    /// after the methods' own tables and before the profile's.
     #[serde(default)]
     by_maze: BTreeMap<String, KindTables>,
     #[serde(default, rename = "profile")]
@@ -491,15 +491,22 @@ impl Experiment {
         if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
         }
-        for (field, by_maze) in [
-            ("by_maze", &spec.by_maze),
-            ("profile.by_maze", &prof.by_maze),
+        // The file's `by_maze` may name any size the file or one of its profiles runs (a
+        // profile narrows the sizes); a profile's, only the sizes that profile runs.
+        let mut file_mazes: BTreeSet<usize> = spec.mazes.iter().copied().collect();
+        for p in spec.profiles.values() {
+            file_mazes.extend(p.mazes.iter().flatten());
+        }
+        let file_mazes: Vec<usize> = file_mazes.into_iter().collect();
+        for (field, by_maze, sizes) in [
+            ("by_maze", &spec.by_maze, &file_mazes),
+            ("profile.by_maze", &prof.by_maze, &mazes),
         ] {
             for key in by_maze.keys() {
-                if !key.parse::<usize>().is_ok_and(|n| mazes.contains(&n)) {
+                if !key.parse::<usize>().is_ok_and(|n| sizes.contains(&n)) {
                     return Err(Error::invalid(
                         format!("{field} in {}", path.display()),
-                        format!("`{key}` is not one of the maze sizes {mazes:?}"),
+                        format!("`{key}` is not one of the maze sizes {sizes:?}"),
                     ));
                 }
             }
@@ -533,7 +540,6 @@ impl Experiment {
             let mut table: toml::Table =
                 toml::from_str(&base_text).map_err(|e| parse_err(&base_path, e.to_string()))?;
             merge(&mut table, &m.set);
-            merge(&mut table, KindTables::of_profile(&prof, m.kind));
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((m.name.clone(), label.clone()));
             resolved.push((m, label, table));
@@ -542,10 +548,12 @@ impl Experiment {
             let key = n.to_string();
             for (m, label, table) in &resolved {
                 let mut table = table.clone();
-                for by_maze in [&spec.by_maze, &prof.by_maze] {
-                    if let Some(t) = by_maze.get(&key) {
-                        merge(&mut table, t.of(m.kind));
-                    }
+                if let Some(t) = spec.by_maze.get(&key) {
+                    merge(&mut table, t.of(m.kind));
+                }
+                merge(&mut table, KindTables::of_profile(&prof, m.kind));
+                if let Some(t) = prof.by_maze.get(&key) {
+                    merge(&mut table, t.of(m.kind));
                 }
                 let what = |e: toml::de::Error| {
                     parse_err(

@@ -14,18 +14,12 @@ use pbcs::tables::{cell_stats, read_table, table_path, CellStats};
 use std::path::Path;
 
 /// The paper's claims (`experiments/claims.toml`) evaluated on these tables.
-fn claims(
-    table: Vec<CellStats>,
-    gamma: Vec<CellStats>,
-    unseen: Vec<CellStats>,
-    curves: Vec<CellStats>,
-) -> Vec<Claim> {
+fn claims(table: Vec<CellStats>, gamma: Vec<CellStats>, unseen: Vec<CellStats>) -> Vec<Claim> {
     let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
     let tables = [
         ("table".to_string(), table),
         ("gamma".to_string(), gamma),
         ("unseen".to_string(), unseen),
-        ("curves".to_string(), curves),
     ];
     pbcs::claims::claims(&specs, &tables)
 }
@@ -43,14 +37,12 @@ fn cell<'a>(t: &'a [CellStats], method: &str, maze: usize) -> &'a CellStats {
 
 #[test]
 fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
-    for name in ["table", "gamma", "unseen", "curves"] {
+    for name in ["table", "gamma", "unseen"] {
         let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
-        if name != "curves" {
-            assert!(
-                exp.seed_count >= 10,
-                "{name}: the claims need 10 seeds per cell"
-            );
-        }
+        assert!(
+            exp.seed_count >= 10,
+            "{name}: the claims need 10 seeds per cell"
+        );
         let committed = table(name);
         assert_eq!(
             committed.len(),
@@ -103,60 +95,101 @@ fn vanilla_ddpg_and_td3_fail_on_the_larger_mazes() {
     }
 }
 
+/// PBCS without chaining at twice the paper's PBCS steps: it fails on every maze from 5×5 up
+/// (0/10 each), but on the 2×2 maze 2 of 10 runs solve it, so "fails" (the upper end of the
+/// interval below 1/2) cannot be shown there and the claim's verdict is inconclusive; PBCS
+/// with chaining does better with disjoint intervals wherever it solves the maze.
 #[test]
-fn pbcs_without_chaining_fails_more_often_than_pbcs() {
+fn pbcs_without_chaining_fails_from_5x5_up_and_does_worse_than_pbcs() {
     let t = table("table");
     for n in [2, 5, 7, 10, 15] {
         let (nc, full) = (cell(&t, "pbcs_no_chaining", n), cell(&t, "pbcs", n));
-        assert!(
-            fails(nc),
-            "no chaining on maze {n}: {}/{}",
-            nc.successes,
-            nc.n
-        );
         assert!(nc.successes <= full.successes, "maze {n}");
+        if n > 2 {
+            assert!(
+                fails(nc),
+                "no chaining on maze {n}: {}/{}",
+                nc.successes,
+                nc.n
+            );
+        }
+        if solves(full) {
+            assert!(beats(full, nc), "maze {n}");
+        }
     }
-    // Significant where PBCS solves: disjoint intervals on the 2×2 maze.
-    assert!(beats(cell(&t, "pbcs", 2), cell(&t, "pbcs_no_chaining", 2)));
+    let nc2 = cell(&t, "pbcs_no_chaining", 2);
+    assert!(
+        nc2.successes > 0 && !fails(nc2),
+        "no chaining on maze 2: {}/{} — update the report",
+        nc2.successes,
+        nc2.n
+    );
 }
 
+/// At twice the paper's steps, the paper's procedure solves most runs of every size, and the
+/// 2×2, 7×7 and 10×10 mazes with 95 % confidence; its solved runs take fewer steps than the
+/// paper's single run on every size.
 #[test]
-fn pbcs_solves_the_2x2_maze_below_the_papers_step_count() {
+fn pbcs_solves_most_runs_of_every_size_in_fewer_steps_than_the_paper() {
     let t = table("table");
-    let s = cell(&t, "pbcs", 2);
-    assert!(solves(s), "{}/{}", s.successes, s.n);
-    assert!(s.solved_steps_median.unwrap() < s.paper_steps.unwrap() as f64);
-}
-
-/// The paper solves every size (one seed each, 5M–22M steps for 5×5 and up). Under our cap of
-/// 400k steps per run, PBCS solves none of the larger mazes: a difference of budget that this
-/// test records, so that a change to it (new data, a better learner) is noticed.
-#[test]
-fn within_our_step_cap_pbcs_does_not_solve_the_larger_mazes() {
-    let t = table("table");
-    for n in [5, 7, 10, 15] {
+    for n in [2, 5, 7, 10, 15] {
         let s = cell(&t, "pbcs", n);
+        assert_eq!(s.budget, 2 * s.paper_steps.unwrap(), "maze {n}");
+        assert!(2 * s.successes > s.n, "maze {n}: {}/{}", s.successes, s.n);
         assert!(
-            s.budget < s.paper_steps.unwrap(),
-            "maze {n}: the cap is the reason"
+            s.solved_steps_median.unwrap() < s.paper_steps.unwrap() as f64,
+            "maze {n}"
         );
+    }
+    for n in [2, 7, 10] {
+        let s = cell(&t, "pbcs", n);
+        assert!(solves(s), "maze {n}: {}/{}", s.successes, s.n);
+    }
+}
+
+/// How the paper's procedure fails (the report's "How the paper's procedure fails"): every
+/// unsolved PBCS run of the table built a complete chain within its budget (no failure
+/// recorded, at least one skill) whose evaluation then fell short of the 95 % that counts as
+/// solved.
+#[test]
+fn every_unsolved_pbcs_run_built_a_complete_chain_that_failed_its_evaluation() {
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    let unsolved: Vec<_> = rows
+        .iter()
+        .filter(|r| r.method == "pbcs" && !r.solved)
+        .collect();
+    assert!(
+        !unsolved.is_empty(),
+        "every PBCS run solved — update the report"
+    );
+    for r in unsolved {
+        let id = format!("{} seed {}", r.cell, r.seed);
+        assert_eq!(r.failure, None, "{id}");
+        assert!(r.skills > 0 && r.env_steps < r.budget, "{id}");
+        assert!(r.success_rate < 0.95, "{id}: {}", r.success_rate);
+    }
+}
+
+/// Not a claim of the paper: the `fast` preset (chain verification and repair, adaptive
+/// Backplay) solves every size with 95 % confidence, in at most a quarter of the paper's steps
+/// (median of the solved runs).
+#[test]
+fn the_fast_preset_solves_every_size_in_a_quarter_of_the_papers_steps() {
+    let t = table("table");
+    for n in [2, 5, 7, 10, 15] {
+        let (f, paper) = (cell(&t, "pbcs_fast", n), cell(&t, "pbcs", n));
+        assert!(solves(f), "maze {n}: {}/{}", f.successes, f.n);
         assert!(
-            fails(s),
-            "maze {n}: {}/{} solved — update the report",
-            s.successes,
-            s.n
+            f.solved_steps_median.unwrap() <= paper.paper_steps.unwrap() as f64 / 4.0,
+            "maze {n}"
         );
     }
 }
 
 #[test]
 fn the_generated_claims_agree_with_these_tests() {
-    let claims = claims(
-        table("table"),
-        table("gamma"),
-        table("unseen"),
-        table("curves"),
-    );
+    let claims = claims(table("table"), table("gamma"), table("unseen"));
     let verdict = |id: &str| {
         claims
             .iter()
@@ -164,9 +197,10 @@ fn the_generated_claims_agree_with_these_tests() {
             .unwrap_or_else(|| panic!("claim {id} missing"))
             .verdict
     };
-    assert_eq!(verdict("no_chaining_fails"), Verdict::Agrees);
+    assert_eq!(verdict("no_chaining_fails"), Verdict::Inconclusive);
     assert_eq!(verdict("chaining_helps"), Verdict::Agrees);
-    assert_eq!(verdict("pbcs_solves_all"), Verdict::Disagrees);
+    assert_eq!(verdict("pbcs_steps"), Verdict::Agrees);
+    assert_eq!(verdict("pbcs_solves_all"), Verdict::Inconclusive);
 }
 
 /// The paper's appendix: on small mazes, PBCS without chaining succeeds more often with
@@ -185,7 +219,7 @@ fn gamma_study_pbcs_without_chaining_fails_at_either_gamma() {
             s.n
         );
     }
-    let claims = claims(table("table"), g, table("unseen"), table("curves"));
+    let claims = claims(table("table"), g, table("unseen"));
     let gamma = claims
         .iter()
         .find(|c| c.id == "gamma_lower_better")
@@ -212,67 +246,75 @@ fn unseen_states_ball_starts_beat_exact_starts_on_maze_2() {
     for b in u.iter().filter(|s| s.method == "ball") {
         assert!(!beats(cell(&u, "exact", b.maze), b), "maze {}", b.maze);
     }
-    let claims = claims(table("table"), table("gamma"), u, table("curves"));
+    let claims = claims(table("table"), table("gamma"), u);
     let unseen = claims.iter().find(|c| c.id == "unseen_states").unwrap();
     assert_eq!(unseen.verdict, Verdict::Agrees);
 }
 
 /// Determinism on the committed data: where two experiments hold the same resolved job (the
-/// same `s<seed>.toml`, e.g. the table's PBCS cell and the unseen study's ε-ball cell), their
-/// rows were computed in different sweeps, with other runs beside them, and must agree in
-/// every column but the experiment, cell and method names.
+/// same `s<seed>.toml`: the table's PBCS cell on maze 2 and the unseen study's ε-ball cell of
+/// the paper-budget re-run), their rows were computed in different sweeps, with other runs
+/// beside them, and must agree in every column but the experiment, cell and method names.
 #[test]
 fn the_same_job_in_two_experiments_gave_the_same_row() {
     use std::collections::BTreeMap;
+    let table_exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let unseen_full = Experiment::load(Path::new("experiments/unseen.toml"), Some("full")).unwrap();
+    assert_eq!(
+        table_exp.cell("pbcs-maze2").unwrap().job,
+        unseen_full.cell("ball-maze2").unwrap().job
+    );
     let mut by_job: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
-    for name in ["table", "gamma", "unseen", "curves"] {
-        let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
-        for c in &exp.cells {
-            for seed in exp.seeds() {
-                let dir = Path::new("results/raw").join(name).join(&c.id);
-                let job = std::fs::read_to_string(dir.join(format!("s{seed}.toml"))).unwrap();
-                let csv = std::fs::read_to_string(dir.join(format!("s{seed}.csv"))).unwrap();
-                let row = csv.lines().nth(1).unwrap();
-                let rest: Vec<&str> = row.splitn(4, ',').collect();
-                by_job
-                    .entry(job)
-                    .or_default()
-                    .push((format!("{name}/{}/s{seed}", c.id), rest[3].to_string()));
+    for raw in ["results/raw", "results-full/raw"] {
+        for e in std::fs::read_dir(raw).unwrap() {
+            let exp_dir = e.unwrap().path();
+            for c in std::fs::read_dir(&exp_dir).unwrap() {
+                let dir = c.unwrap().path();
+                for f in std::fs::read_dir(&dir).unwrap() {
+                    let path = f.unwrap().path();
+                    let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                    let Some(stem) = name.strip_suffix(".toml") else {
+                        continue;
+                    };
+                    let Ok(csv) = std::fs::read_to_string(dir.join(format!("{stem}.csv"))) else {
+                        continue;
+                    };
+                    let job = std::fs::read_to_string(&path).unwrap();
+                    let row = csv.lines().nth(1).unwrap();
+                    let rest: Vec<&str> = row.splitn(4, ',').collect();
+                    by_job
+                        .entry(job)
+                        .or_default()
+                        .push((path.display().to_string(), rest[3].to_string()));
+                }
             }
         }
     }
-    let mut shared = 0;
     for runs in by_job.values().filter(|r| r.len() > 1) {
-        shared += 1;
         for (id, row) in &runs[1..] {
             assert_eq!(row, &runs[0].1, "{id} differs from {}", runs[0].0);
         }
     }
-    // table pbcs = unseen ball, table pbcs_no_chaining = gamma g090 (maze 2, 10 seeds each).
-    assert!(shared >= 20, "only {shared} shared jobs");
 }
 
 /// The paper runs the baselines for 1M steps (one seed) and reports failure on every maze. At
-/// that budget (`curves.toml`, 3 seeds), neither baseline reaches the target on 5×5, but on
-/// the 2×2 maze DDPG's final greedy policy does in some seeds: too few seeds to call either
-/// way, so the generated verdicts are inconclusive (the table's 10-seed failures are within
-/// 100k steps). This test records that difference.
+/// that budget over 10 seeds, neither baseline reaches the target on any maze from 5×5 up, but
+/// on the 2×2 maze the final greedy policy does in some seeds and not in others (DDPG 5, TD3 4
+/// of 10): neither "fails" nor "solves", so the generated verdicts are inconclusive.
 #[test]
-fn at_the_papers_budget_vanilla_baselines_sometimes_solve_maze_2_never_maze_5() {
-    let c = table("curves");
+fn at_the_papers_budget_vanilla_baselines_sometimes_solve_maze_2() {
+    let t = table("table");
     for algo in ["ddpg", "td3"] {
-        let s = cell(&c, algo, 5);
-        assert_eq!(s.successes, 0, "{algo} maze 5 at 1M — update the report");
+        let s = cell(&t, algo, 2);
         assert_eq!(s.budget, 1_000_000);
+        assert!(
+            s.successes > 0 && !solves(s) && !fails(s),
+            "{algo} maze 2 at 1M: {}/{} — update the report",
+            s.successes,
+            s.n
+        );
     }
-    let d = cell(&c, "ddpg", 2);
-    assert!(
-        d.successes > 0 && !solves(d),
-        "ddpg maze 2 at 1M: {}/{}",
-        d.successes,
-        d.n
-    );
-    let claims = claims(table("table"), table("gamma"), table("unseen"), c);
+    let claims = claims(table("table"), table("gamma"), table("unseen"));
     for id in ["vanilla_ddpg_fails", "vanilla_td3_fails"] {
         let v = claims.iter().find(|x| x.id == id).unwrap().verdict;
         assert_eq!(v, Verdict::Inconclusive, "{id}");

@@ -33,40 +33,31 @@ fn every_experiment_file_parses_with_unique_cells() {
             );
             assert_eq!(exp.cells.len(), exp.mazes.len() * exp.methods.len());
         }
-        // The committed grid holds at least 10 seeds per cell, except the learning-curve
-        // picture (`curves.toml`, 3 seeds at the paper's 1M steps), which no claim rests on.
+        // The committed grid holds at least 10 seeds per cell.
         let exp = Experiment::load(&f, None).unwrap();
-        if exp.name != "curves" {
-            assert!(exp.seed_count >= 10, "{}", f.display());
-        }
+        assert!(exp.seed_count >= 10, "{}", f.display());
     }
 }
 
+/// The results table: the paper's columns and sizes at the paper's budgets (DDPG and TD3 1M
+/// steps, every PBCS method twice the paper's PBCS steps for its maze), and the `fast` preset
+/// as an extra column.
 #[test]
-fn the_table_has_the_papers_columns_and_sizes() {
+fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
+    use pbcs::experiment::Job;
     let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
     assert_eq!(exp.mazes, [2, 5, 7, 10, 15]);
-    let methods: Vec<&str> = exp.methods.iter().map(|(m, _)| m.as_str()).collect();
-    assert_eq!(methods, ["ddpg", "td3", "pbcs_no_chaining", "pbcs"]);
-    let pbcs2 = exp.cell("pbcs-maze2").unwrap();
-    assert_eq!(
-        (pbcs2.paper_steps, pbcs2.paper_solved),
-        (Some(321_000), Some(true))
-    );
-}
-
-/// Issue 13's grid: DDPG and TD3 at the paper's 1M steps, every PBCS method at twice the
-/// paper's PBCS steps for its maze, and the `fast` preset as an extra column.
-#[test]
-fn the_full_profile_runs_the_papers_budgets_and_adds_the_fast_column() {
-    use pbcs::experiment::Job;
-    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("full")).unwrap();
     let methods: Vec<&str> = exp.methods.iter().map(|(m, _)| m.as_str()).collect();
     assert_eq!(
         methods,
         ["ddpg", "td3", "pbcs_no_chaining", "pbcs", "pbcs_fast"]
     );
-    let paper = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let pbcs2 = exp.cell("pbcs-maze2").unwrap();
+    assert_eq!(
+        (pbcs2.paper_steps, pbcs2.paper_solved),
+        (Some(321_000), Some(true))
+    );
+    let paper = &exp;
     for c in &exp.cells {
         match &c.job {
             Job::Vanilla(j) => assert_eq!(j.train.steps, 1_000_000, "{}", c.id),
@@ -226,6 +217,28 @@ fn bad_experiment_files_name_the_problem() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("phase2.beta"), "{err}");
+    // The file's per-maze fields may name a size a profile leaves out (a smoke profile runs
+    // one size of the file's grid); they apply where the size is run, under the profile's own
+    // fields.
+    let narrowed = write(
+        dir.path(),
+        "narrowed.toml",
+        &format!(
+            "title = \"t\"\nseeds = 1\nmazes = [2, 3]\n{}[by_maze]\n\"3\" = {{ pbcs = {{ phase2.beta = 7 }} }}\n\"2\" = {{ pbcs = {{ phase2.beta = 6 }} }}\n[profile.small]\nmazes = [2]\npbcs = {{ phase2.beta = 5 }}\n",
+            method("a", "")
+        ),
+    );
+    let beta = |profile: Option<&str>, id: &str| match &Experiment::load(&narrowed, profile)
+        .unwrap()
+        .cell(id)
+        .unwrap()
+        .job
+    {
+        pbcs::experiment::Job::Pbcs(j) => j.phase2.beta,
+        _ => unreachable!(),
+    };
+    assert_eq!((beta(None, "a-maze2"), beta(None, "a-maze3")), (6, 7));
+    assert_eq!(beta(Some("small"), "a-maze2"), 5);
     let ok = write(dir.path(), "ok.toml", &format!("{head}{}", method("a", "")));
     let err = Experiment::load(&ok, Some("nope")).unwrap_err().to_string();
     assert!(err.contains("profile") && err.contains("nope"), "{err}");
@@ -528,7 +541,6 @@ fn experiments_declare_their_figures() {
     );
     assert_eq!(names("experiments/gamma.toml"), ["gamma"]);
     assert_eq!(names("experiments/unseen.toml"), ["unseen", "unseen_bars"]);
-    assert_eq!(names("experiments/curves.toml"), ["curves_1m"]);
     let dir = tempfile::tempdir().unwrap();
     std::fs::copy("experiments/pbcs_paper.toml", dir.path().join("base.toml")).unwrap();
     let path = write(
@@ -700,4 +712,43 @@ fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
         assert_eq!(layouts.len(), 2, "maze {n}");
         assert_ne!(layouts[0], layouts[1], "maze {n}");
     }
+}
+
+/// Every committed raw row was computed from its experiment file as it is now: each
+/// `results/raw/<experiment>/<cell>/s<seed>.toml` is the job the file resolves for that cell
+/// and seed (under `results-full/raw/`, with the `full` profile), and every folder there is a
+/// cell of the file. A changed experiment file (a budget, a preset) without re-run rows fails
+/// here, not silently in `make figures`.
+#[test]
+fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
+    let mut checked = 0;
+    for (raw, profile) in [("results/raw", None), ("results-full/raw", Some("full"))] {
+        for f in files() {
+            let exp = Experiment::load(&f, profile).unwrap();
+            let Ok(entries) = std::fs::read_dir(Path::new(raw).join(&exp.name)) else {
+                continue;
+            };
+            for e in entries {
+                let dir = e.unwrap().path();
+                let id = dir.file_name().unwrap().to_string_lossy().into_owned();
+                let cell = exp.cell(&id).unwrap_or_else(|e| {
+                    panic!("{}: not a cell of {}: {e}", dir.display(), f.display())
+                });
+                for seed in exp.seeds() {
+                    let path = dir.join(format!("s{seed}.toml"));
+                    let Ok(text) = std::fs::read_to_string(&path) else {
+                        continue;
+                    };
+                    assert!(
+                        cell.job.with_seed(seed).same_as(&text),
+                        "{}: not the job {} ({profile:?}) resolves",
+                        path.display(),
+                        f.display()
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 300, "only {checked} committed jobs");
 }

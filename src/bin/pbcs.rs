@@ -284,7 +284,7 @@ fn results_dir(results: Option<&PathBuf>, profile: Option<&str>) -> PathBuf {
 /// Which experiment, which profile, where its results live.
 #[derive(Args)]
 struct ExpArgs {
-    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml, curves.toml).
+    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml, beyond.toml).
     file: PathBuf,
     /// A profile of the file (`smoke`, `full`); none: the committed grid.
     #[arg(long)]
