@@ -340,10 +340,17 @@ impl Figure for SuccessBars {
                         BLACK.stroke_width(2),
                     )))?;
                 }
+                // The count above the bar (the text hangs below its anchor), or, for a bar
+                // reaching the top, inside it in white, clear of the interval's cap.
+                let (y, ink) = if s.success_rate > 0.9 {
+                    (s.success_rate - 0.03, WHITE)
+                } else {
+                    (s.success_rate + 0.03, BLACK)
+                };
                 chart.draw_series(std::iter::once(Text::new(
                     format!("{}/{}", s.successes, s.n),
-                    (x + 0.2 * width, (s.success_rate + 0.03).min(1.0)),
-                    ("sans-serif", 13),
+                    (x + 0.2 * width, y),
+                    ("sans-serif", 13).into_font().color(&ink),
                 )))?;
             }
         }
