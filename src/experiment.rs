@@ -3,12 +3,14 @@
 //! its own raw CSV row.
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
-//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`), the mazes, the
-//! seeds, and named profiles (`smoke` for CI) that override
-//! seeds, mazes and fields. Resolving a cell is a deep merge of TOML tables in this order:
-//! base file ← method `set` ← the file's `by_maze` table for the cell's maze size ← the
-//! profile's table for the method's kind ← the profile's `by_maze`; then `maze.size` and
-//! `seed` are set (a profile overrides everything the file sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is parsed with unknown keys denied, so a typo in an
+//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
+//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI; `full` where a
+//! committed grid is still capped) that override seeds, mazes and fields. Resolving a cell is
+//! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
+//! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
+//! `by_maze`; then `maze.size` and `seed` are set (a profile overrides everything the file
+//! sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
+//! parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
 //! ```

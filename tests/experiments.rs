@@ -57,12 +57,11 @@ fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
         (pbcs2.paper_steps, pbcs2.paper_solved),
         (Some(321_000), Some(true))
     );
-    let paper = &exp;
     for c in &exp.cells {
         match &c.job {
             Job::Vanilla(j) => assert_eq!(j.train.steps, 1_000_000, "{}", c.id),
             Job::Pbcs(j) => {
-                let pbcs = paper.cell(&format!("pbcs-maze{}", c.maze)).unwrap();
+                let pbcs = exp.cell(&format!("pbcs-maze{}", c.maze)).unwrap();
                 assert_eq!(
                     j.phase2.max_env_steps,
                     2 * pbcs.paper_steps.unwrap(),
@@ -85,7 +84,7 @@ fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
             let mut want = preset.clone();
             want.seed = 0;
             want.maze.size = n;
-            want.phase2.max_env_steps = 2 * paper
+            want.phase2.max_env_steps = 2 * exp
                 .cell(&format!("pbcs-maze{n}"))
                 .unwrap()
                 .paper_steps
