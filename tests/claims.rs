@@ -252,49 +252,38 @@ fn unseen_states_ball_starts_beat_exact_starts_on_maze_2() {
 }
 
 /// Determinism on the committed data: where two experiments hold the same resolved job (the
-/// same `s<seed>.toml`: the table's PBCS cell on maze 2 and the unseen study's ε-ball cell of
-/// the paper-budget re-run), their rows were computed in different sweeps, with other runs
-/// beside them, and must agree in every column but the experiment, cell and method names.
+/// same `s<seed>.toml`: the table's PBCS cell on maze 2 and the unseen study's ε-ball cell),
+/// their rows were computed in different sweeps, with other runs beside them, and must agree in
+/// every column but the experiment, cell and method names.
 #[test]
 fn the_same_job_in_two_experiments_gave_the_same_row() {
     use std::collections::BTreeMap;
-    let table_exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
-    let unseen_full = Experiment::load(Path::new("experiments/unseen.toml"), Some("full")).unwrap();
-    assert_eq!(
-        table_exp.cell("pbcs-maze2").unwrap().job,
-        unseen_full.cell("ball-maze2").unwrap().job
-    );
     let mut by_job: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
-    for raw in ["results/raw", "results-full/raw"] {
-        for e in std::fs::read_dir(raw).unwrap() {
-            let exp_dir = e.unwrap().path();
-            for c in std::fs::read_dir(&exp_dir).unwrap() {
-                let dir = c.unwrap().path();
-                for f in std::fs::read_dir(&dir).unwrap() {
-                    let path = f.unwrap().path();
-                    let name = path.file_name().unwrap().to_string_lossy().into_owned();
-                    let Some(stem) = name.strip_suffix(".toml") else {
-                        continue;
-                    };
-                    let Ok(csv) = std::fs::read_to_string(dir.join(format!("{stem}.csv"))) else {
-                        continue;
-                    };
-                    let job = std::fs::read_to_string(&path).unwrap();
-                    let row = csv.lines().nth(1).unwrap();
-                    let rest: Vec<&str> = row.splitn(4, ',').collect();
-                    by_job
-                        .entry(job)
-                        .or_default()
-                        .push((path.display().to_string(), rest[3].to_string()));
-                }
+    for name in ["table", "gamma", "unseen", "beyond"] {
+        let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
+        for c in &exp.cells {
+            for seed in exp.seeds() {
+                let dir = exp.cell_dir(Path::new("results"), c);
+                let job = std::fs::read_to_string(dir.join(format!("s{seed}.toml"))).unwrap();
+                let csv = std::fs::read_to_string(dir.join(format!("s{seed}.csv"))).unwrap();
+                let row = csv.lines().nth(1).unwrap();
+                let rest: Vec<&str> = row.splitn(4, ',').collect();
+                by_job
+                    .entry(job)
+                    .or_default()
+                    .push((format!("{name}/{}/s{seed}", c.id), rest[3].to_string()));
             }
         }
     }
+    let mut shared = 0;
     for runs in by_job.values().filter(|r| r.len() > 1) {
+        shared += 1;
         for (id, row) in &runs[1..] {
             assert_eq!(row, &runs[0].1, "{id} differs from {}", runs[0].0);
         }
     }
+    // table pbcs-maze2 = unseen ball-maze2, 10 seeds.
+    assert!(shared >= 10, "only {shared} shared jobs");
 }
 
 /// The paper runs the baselines for 1M steps (one seed) and reports failure on every maze. At
