@@ -66,14 +66,22 @@ fn stats_of<'a>(stats: &'a [CellStats], cell: &Cell) -> Option<&'a CellStats> {
 }
 
 /// A cell's one-line summary: `7/10 solved · median 171k`, the median environment steps of
-/// the solved seeds; `0/10 solved · budget 400k` when no seed solved (the steps of unsolved
-/// runs say only that the budget ran out, and Backplay checks it between batches of
-/// episodes, so they may pass it by up to one batch).
+/// the solved seeds. When no seed solved: `0/10 solved · budget 400k` if a run reached the
+/// budget (its steps say only that the budget ran out, and Backplay checks it between batches
+/// of episodes, so it may pass it by up to one batch), else `0/10 solved · median 329k (all
+/// runs)`, the runs having stopped on their own (a complete chain that failed its evaluation,
+/// or a run without chaining at its first failure).
 pub fn summary(s: &CellStats) -> String {
     match s.solved_steps_median {
         Some(m) if s.successes > 0 => {
             format!("{}/{} solved · median {}", s.successes, s.n, human_steps(m))
         }
+        _ if s.steps_max < s.budget as f64 => format!(
+            "{}/{} solved · median {} (all runs)",
+            s.successes,
+            s.n,
+            human_steps(s.steps_median)
+        ),
         _ => format!(
             "{}/{} solved · budget {}",
             s.successes,
@@ -155,8 +163,8 @@ impl ResultsGrid {
     fn legend(exp: &Experiment, cells: &[Vec<Option<GridCell>>]) -> Vec<String> {
         let mut lines = vec![
             "more than half the seeds solved / half or fewer (grey: no runs yet)".to_string(),
-            "band: seeds solved / seeds · median environment steps of the solved seeds, \
-             or the step budget when none solved"
+            "band: seeds solved / seeds · median environment steps of the solved seeds; \
+             when none solved, the step budget if a run reached it, else all runs' median"
                 .to_string(),
         ];
         // Everything any panel draws, each name once, in the order the panels name them.
@@ -802,13 +810,22 @@ mod tests {
     }
 
     #[test]
-    fn summary_names_the_median_of_solved_runs_or_the_budget() {
+    fn summary_names_the_median_of_solved_runs_or_of_all_runs_or_the_budget() {
         // Unsolved runs stop at the first check past the budget (401 580 here): the band
         // states the budget, never a step count above it.
         assert_eq!(
             summary(&stats(0, 401_580.0, None)),
             "0/10 solved · budget 400k"
         );
+        // Unsolved runs that all stopped before the budget: their own median, so labelled.
+        assert_eq!(
+            summary(&stats(0, 329_000.0, None)),
+            "0/10 solved · median 329k (all runs)"
+        );
+        // One run at the budget is enough for the budget to be what the band says.
+        let mut mixed = stats(0, 329_000.0, None);
+        mixed.steps_max = 400_900.0;
+        assert_eq!(summary(&mixed), "0/10 solved · budget 400k");
         // Solved: the median of the solved runs, labelled, not the median over all runs.
         assert_eq!(
             summary(&stats(7, 300_000.0, Some(171_000.0))),

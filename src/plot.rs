@@ -136,15 +136,19 @@ pub fn draw_maze<DB: DrawingBackend>(
         let b = w.aabb();
         Rectangle::new([(b.mins.x, b.mins.y), (b.maxs.x, b.maxs.y)], BLACK.filled())
     }))?;
-    // Rollouts, then τ on top of them (it would hide under ten rollouts otherwise).
+    // Rollouts, then τ on top of them (it would hide under ten rollouts otherwise). Each
+    // segment is its own 2-pixel line: the bitmap backend joins a wide polyline with mitres,
+    // and at a near reversal (τ is a random walk) a mitre spikes far out of the maze.
+    let segments = |path: &[(f32, f32)], style: ShapeStyle| {
+        path.windows(2)
+            .map(move |w| PathElement::new(vec![w[0], w[1]], style))
+            .collect::<Vec<_>>()
+    };
     for path in &picture.green_paths {
-        chart.draw_series(LineSeries::new(
-            path.iter().copied(),
-            RGBColor(0, 170, 0).stroke_width(2),
-        ))?;
+        chart.draw_series(segments(path, RGBColor(0, 170, 0).stroke_width(2)))?;
     }
     for path in &picture.red_paths {
-        chart.draw_series(LineSeries::new(path.iter().copied(), RED.stroke_width(2)))?;
+        chart.draw_series(segments(path, RED.stroke_width(2)))?;
     }
     let purple = RGBColor(140, 40, 200);
     for &((cx, cy), r) in &picture.circles {
