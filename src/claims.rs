@@ -547,4 +547,46 @@ mod tests {
         assert!(parts.is_empty());
         assert_eq!(verdict, Verdict::Inconclusive);
     }
+
+    #[test]
+    fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_a_verdict() {
+        let spec = |test: ClaimTest| ClaimSpec {
+            id: "x".into(),
+            paper: "p".into(),
+            experiment: "t".into(),
+            test,
+        };
+        let beats = |pooled: bool| {
+            spec(ClaimTest::Beats {
+                method: "a".into(),
+                label: "A".into(),
+                than: "b".into(),
+                than_label: "B".into(),
+                pooled,
+            })
+        };
+        // 6/10 against 2/10 on two mazes: each overlaps ([0.31, 0.83] and [0.06, 0.51]),
+        // pooled 12/20 [0.39, 0.78] against 4/20 [0.08, 0.42] does not.
+        let stats = vec![
+            cell("a", 2, 6, 10),
+            cell("b", 2, 2, 10),
+            cell("a", 3, 6, 10),
+            cell("b", 3, 2, 10),
+        ];
+        let tables = [("t".to_string(), stats)];
+        let verdict = |s: ClaimSpec| claims(&[s], &tables)[0].verdict;
+        assert_eq!(verdict(beats(false)), Verdict::Inconclusive);
+        assert_eq!(verdict(beats(true)), Verdict::Agrees);
+        let shown = claims(
+            &[spec(ClaimTest::Pooled {
+                methods: vec![("a".into(), "A".into()), ("b".into(), "B".into())],
+            })],
+            &tables,
+        );
+        assert_eq!(shown[0].verdict, Verdict::NoClaim);
+        assert_eq!(
+            shown[0].ours,
+            "pooled over mazes: A 12/20 [0.39, 0.78] vs B 4/20 [0.08, 0.42]"
+        );
+    }
 }

@@ -203,14 +203,21 @@ fn the_generated_claims_agree_with_these_tests() {
     assert_eq!(verdict("pbcs_solves_all"), Verdict::Inconclusive);
 }
 
-/// The paper's appendix: on small mazes, PBCS without chaining succeeds more often with
-/// γ = 0.9 than with γ = 0.99. In our implementation it fails on the 2×2 maze at either γ and
-/// with either actor (as the paper's own results table has it fail on 2×2), so the direction
-/// cannot be seen: the verdict is inconclusive, and this test asserts that every bar fails.
+/// The paper's appendix on γ: on small mazes, PBCS without chaining succeeds more often with
+/// γ = 0.9 than with γ = 0.99, and an actor that maximises the critic over sampled actions
+/// ("(am)") is the paper's test that a weak reward signal hampers DDPG's actor update. Over ten
+/// seeds with no step cap: with the gradient actor the direction is the paper's on the 2×2 maze
+/// but not significant (the verdict is inconclusive); with the argmax actor γ = 0.9 solves every
+/// 2×2 seed and γ = 0.99 none, and the argmax actor beats the gradient actor at γ = 0.9 (both
+/// verdicts agree). No bar at γ = 0.99 and no bar on the 3×3 maze solves anything: a single
+/// skill never covers those trajectories.
 #[test]
-fn gamma_study_pbcs_without_chaining_fails_at_either_gamma() {
+fn gamma_study_lower_gamma_and_the_argmax_actor_help_on_maze_2_only() {
     let g = table("gamma");
-    for s in &g {
+    for s in g
+        .iter()
+        .filter(|s| s.maze == 3 || s.method.starts_with("g099"))
+    {
         assert!(
             fails(s),
             "{}: {}/{} — update the report",
@@ -219,32 +226,58 @@ fn gamma_study_pbcs_without_chaining_fails_at_either_gamma() {
             s.n
         );
     }
+    let (g090, g090_am) = (cell(&g, "g090", 2), cell(&g, "g090_am", 2));
+    assert!(
+        solves(g090_am),
+        "g090_am-maze2: {}/{}",
+        g090_am.successes,
+        g090_am.n
+    );
+    assert!(beats(g090_am, g090) && beats(g090_am, cell(&g, "g099_am", 2)));
+    assert!(
+        g090.successes > 0 && !beats(g090, cell(&g, "g099", 2)),
+        "g090-maze2: {}/{} — update the report",
+        g090.successes,
+        g090.n
+    );
     let claims = claims(table("table"), g, table("unseen"));
-    let gamma = claims
-        .iter()
-        .find(|c| c.id == "gamma_lower_better")
-        .unwrap();
-    assert_eq!(gamma.verdict, Verdict::Inconclusive);
+    let verdict = |id: &str| claims.iter().find(|c| c.id == id).unwrap().verdict;
+    assert_eq!(verdict("gamma_lower_better"), Verdict::Inconclusive);
+    assert_eq!(verdict("gamma_lower_better_am"), Verdict::Agrees);
+    assert_eq!(verdict("argmax_actor"), Verdict::Agrees);
 }
 
 /// The paper's appendix on resetting in unseen states: Backplay trained from starts exactly at
-/// τ_K builds chains that fail from nearby starts. On the 2×2 maze, ε-ball starts solve more
-/// runs than exact starts with disjoint 95 % intervals, and on no maze do exact starts do
-/// better; the generated verdict agrees.
+/// τ_K builds chains that fail from nearby starts. With ε-ball starts PBCS solves 9 of 10 runs
+/// on both mazes; with exact starts it solves fewer on both, with disjoint 95 % intervals on the
+/// 3×3 maze (on 2×2 the intervals touch), and the generated verdict agrees.
 #[test]
-fn unseen_states_ball_starts_beat_exact_starts_on_maze_2() {
+fn unseen_states_ball_starts_beat_exact_starts() {
     let u = table("unseen");
-    let (ball, exact) = (cell(&u, "ball", 2), cell(&u, "exact", 2));
+    let (ball, exact) = (cell(&u, "ball", 3), cell(&u, "exact", 3));
     assert!(
         beats(ball, exact),
-        "ball {}/{} vs exact {}/{}",
+        "maze 3: ball {}/{} vs exact {}/{}",
         ball.successes,
         ball.n,
         exact.successes,
         exact.n
     );
     for b in u.iter().filter(|s| s.method == "ball") {
-        assert!(!beats(cell(&u, "exact", b.maze), b), "maze {}", b.maze);
+        let e = cell(&u, "exact", b.maze);
+        assert!(b.successes > e.successes && !beats(e, b), "maze {}", b.maze);
+    }
+    // Backplay itself succeeds with exact starts: every exact-start run built a complete chain
+    // within its budget; what fails is the chain's evaluation from starts off τ.
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), None).unwrap();
+    for r in read_raw(&exp, Path::new("results"))
+        .unwrap()
+        .iter()
+        .filter(|r| r.method == "exact")
+    {
+        let id = format!("{} seed {}", r.cell, r.seed);
+        assert_eq!(r.failure, None, "{id}");
+        assert!(r.skills > 0 && r.env_steps < r.budget, "{id}");
     }
     let claims = claims(table("table"), table("gamma"), u);
     let unseen = claims.iter().find(|c| c.id == "unseen_states").unwrap();
@@ -316,7 +349,7 @@ fn at_the_papers_budget_vanilla_baselines_sometimes_solve_maze_2() {
 fn the_claims_file_names_real_experiments_and_methods() {
     use pbcs::claims::{load_claims, ClaimTest};
     let specs = load_claims(Path::new("experiments/claims.toml")).unwrap();
-    assert_eq!(specs.len(), 9);
+    assert_eq!(specs.len(), 10);
     for c in &specs {
         let exp = Experiment::load(
             Path::new(&format!("experiments/{}.toml", c.experiment)),
@@ -354,6 +387,10 @@ fn the_claims_file_names_real_experiments_and_methods() {
     let claims = pbcs::claims::claims(&specs, &[("gamma".to_string(), table("gamma"))]);
     assert_eq!(
         claims.iter().map(|c| c.id.as_str()).collect::<Vec<_>>(),
-        ["gamma_lower_better", "argmax_actor"]
+        [
+            "gamma_lower_better",
+            "gamma_lower_better_am",
+            "argmax_actor"
+        ]
     );
 }
