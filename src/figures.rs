@@ -398,6 +398,22 @@ pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 impl Scaling {
+    /// The fitted power law steps ≈ c · L^b as (c, b), over every cell with runs.
+    pub fn power_law(&self) -> Option<(f64, f64)> {
+        self.fit.map(|(a, b)| (a.exp(), b))
+    }
+
+    /// Each cell's shortest path L (moves between cells), by cell id.
+    pub fn path_lengths(exp: &Experiment) -> Result<Vec<(String, usize)>> {
+        let mut out = Vec::new();
+        for c in &exp.cells {
+            if let Some(l) = cell_maze(c)?.path_cells() {
+                out.push((c.id.clone(), l));
+            }
+        }
+        Ok(out)
+    }
+
     /// The scaling figure of `exp` from its table.
     pub fn new(exp: &Experiment, stats: &[CellStats]) -> Result<Scaling> {
         let mut series = Vec::new();

@@ -87,6 +87,41 @@ pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
     s
 }
 
+/// For an experiment with a `scaling` figure: each cell's shortest path as
+/// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
+/// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c); empty
+/// otherwise.
+pub fn scaling_numbers_tex(
+    exp: &crate::experiment::Experiment,
+    stats: &[CellStats],
+) -> crate::Result<String> {
+    use crate::experiment::FigureSpec;
+    let mut s = String::new();
+    let def = |s: &mut String, key: &str, v: &str| {
+        let _ = writeln!(
+            s,
+            "\\expandafter\\def\\csname res:{}:{key}\\endcsname{{{}}}",
+            exp.name,
+            tex(v)
+        );
+    };
+    for spec in &exp.figures {
+        let FigureSpec::Scaling { name } = spec else {
+            continue;
+        };
+        if s.is_empty() {
+            for (cell, l) in crate::figures::Scaling::path_lengths(exp)? {
+                def(&mut s, &format!("{cell}:pathlen"), &l.to_string());
+            }
+        }
+        if let Some((c, b)) = crate::figures::Scaling::new(exp, stats)?.power_law() {
+            def(&mut s, &format!("{name}:exponent"), &format!("{b:.2}"));
+            def(&mut s, &format!("{name}:factor"), &format!("{c:.0}"));
+        }
+    }
+    Ok(s)
+}
+
 /// The results table: rows = mazes, columns = methods; each entry on three short lines (so
 /// that five methods fit the page): "k/n (j), median steps", where j counts the runs solved
 /// within the paper's steps (only where the paper solved the cell); the Wilson 95 % interval
@@ -280,10 +315,11 @@ pub fn render_all(
         .iter()
         .map(|(e, s)| (e.name.clone(), s.clone()))
         .collect();
-    for (name, text) in [
-        ("numbers.tex", numbers_tex(&tables)),
-        ("claims.tex", claims_tex(claims)),
-    ] {
+    let mut numbers = numbers_tex(&tables);
+    for (exp, stats) in experiments {
+        numbers.push_str(&scaling_numbers_tex(exp, stats)?);
+    }
+    for (name, text) in [("numbers.tex", numbers), ("claims.tex", claims_tex(claims))] {
         let path = tex_dir.join(name);
         crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         files.push(path);

@@ -284,6 +284,42 @@ fn unseen_states_ball_starts_beat_exact_starts() {
     assert_eq!(unseen.verdict, Verdict::Agrees);
 }
 
+/// Beyond the paper (the report's "Beyond the paper"): the `fast` preset, unchanged, solves
+/// every run on sizes 3 to 20 of two layouts never used while developing it, each chain reaching
+/// the target in every evaluation episode, and its median cost grows close to linearly with
+/// the length L of the maze's shortest path: the fitted exponent lies in [1, 1.25], and the two
+/// cells with the same L (9×9 of layout 0, 6×6 of layout 2) differ by less than 10 %.
+#[test]
+fn the_fast_preset_solves_unseen_sizes_and_layouts_at_a_cost_near_linear_in_the_path() {
+    let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    assert_eq!(rows.len(), exp.cells.len() * exp.seed_count);
+    for r in &rows {
+        assert!(
+            r.solved && r.success_rate == 1.0 && r.env_steps < r.budget,
+            "{} seed {}: solved {}, {} — update the report",
+            r.cell,
+            r.seed,
+            r.solved,
+            r.success_rate
+        );
+    }
+    let b = table("beyond");
+    let (_, exponent) = pbcs::figures::Scaling::new(&exp, &b)
+        .unwrap()
+        .power_law()
+        .unwrap();
+    assert!((1.0..=1.25).contains(&exponent), "steps ∝ L^{exponent}");
+    let paths = pbcs::figures::Scaling::path_lengths(&exp).unwrap();
+    let l = |cell: &str| paths.iter().find(|(c, _)| c == cell).unwrap().1;
+    assert_eq!(l("fast-maze9"), l("fast_l2-maze6"));
+    let (a, c) = (
+        cell(&b, "fast", 9).steps_median,
+        cell(&b, "fast_l2", 6).steps_median,
+    );
+    assert!((a / c - 1.0).abs() < 0.1, "{a} vs {c}");
+}
+
 /// Determinism on the committed data: where two experiments hold the same resolved job (the
 /// same `s<seed>.toml`: the table's PBCS cell on maze 2 and the unseen study's ε-ball cell),
 /// their rows were computed in different sweeps, with other runs beside them, and must agree in

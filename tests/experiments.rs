@@ -751,3 +751,36 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
     // table 250, gamma 80, unseen 40, beyond 100.
     assert!(checked >= 470, "only {checked} committed jobs");
 }
+
+/// The report quotes the scaling figure's fit from `numbers.tex`: on made-up medians that
+/// follow steps = 500 · L^1.5 exactly on `beyond`'s cells, the generated numbers give back the
+/// exponent and the factor, and every cell's path length (at least 2(N − 1) moves on N × N).
+#[test]
+fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
+    use pbcs::tables::{read_table, table_path};
+    let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
+    let paths = pbcs::figures::Scaling::path_lengths(&exp).unwrap();
+    assert_eq!(paths.len(), exp.cells.len());
+    let mut stats = read_table(&table_path(Path::new("results"), "beyond")).unwrap();
+    assert_eq!(stats.len(), exp.cells.len());
+    for s in &mut stats {
+        let (_, l) = paths.iter().find(|(c, _)| c == &s.cell).unwrap();
+        assert!(*l >= 2 * (s.maze - 1), "{}: L = {l}", s.cell);
+        s.steps_median = 500.0 * (*l as f64).powf(1.5);
+        (s.steps_q1, s.steps_q3) = (s.steps_median, s.steps_median);
+    }
+    let tex = pbcs::report::scaling_numbers_tex(&exp, &stats).unwrap();
+    assert!(
+        tex.contains("\\csname res:beyond:scaling:exponent\\endcsname{1.50}"),
+        "{tex}"
+    );
+    assert!(
+        tex.contains("\\csname res:beyond:scaling:factor\\endcsname{500}"),
+        "{tex}"
+    );
+    let (cell, l) = &paths[0];
+    assert!(tex.contains(&format!("res:beyond:{cell}:pathlen\\endcsname{{{l}}}")));
+    // An experiment without a scaling figure adds nothing.
+    let table = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[]).unwrap(), "");
+}
