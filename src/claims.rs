@@ -565,12 +565,12 @@ mod tests {
                 pooled,
             })
         };
-        // 6/10 against 2/10 on two mazes: each overlaps ([0.31, 0.83] and [0.06, 0.51]),
-        // pooled 12/20 [0.39, 0.78] against 4/20 [0.08, 0.42] does not.
+        // 7/10 against 2/10 on two mazes: each overlaps ([0.40, 0.89] and [0.06, 0.51]),
+        // pooled 14/20 [0.48, 0.85] against 4/20 [0.08, 0.42] does not.
         let stats = vec![
-            cell("a", 2, 6, 10),
+            cell("a", 2, 7, 10),
             cell("b", 2, 2, 10),
-            cell("a", 3, 6, 10),
+            cell("a", 3, 7, 10),
             cell("b", 3, 2, 10),
         ];
         let tables = [("t".to_string(), stats)];
@@ -586,7 +586,7 @@ mod tests {
         assert_eq!(shown[0].verdict, Verdict::NoClaim);
         assert_eq!(
             shown[0].ours,
-            "pooled over mazes: A 12/20 [0.39, 0.78] vs B 4/20 [0.08, 0.42]"
+            "pooled over mazes: A 14/20 [0.48, 0.85] vs B 4/20 [0.08, 0.42]"
         );
     }
 }

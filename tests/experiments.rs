@@ -672,7 +672,9 @@ fn committed_raw_rows_round_trip_byte_for_byte() {
         format!("{:?}", Some(StartMode::Exact)),
         format!("{:?}", None::<Failure>),
         format!("{:?}", Some(Failure::NoChaining)),
-        format!("{:?}", Some(Failure::Budget)),
+        // No committed run at the paper's budgets ran out of budget (the 400k-step grids'
+        // did); `Budget` round-trips below on a written row.
+        format!("{:?}", Some(Failure::BackplayFailed)),
     ] {
         assert!(seen.contains(&want), "no committed row has {want}");
     }
