@@ -4,8 +4,8 @@
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
 //! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
-//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI; `full` where a
-//! committed grid is still capped) that override seeds, mazes and fields. Resolving a cell is
+//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI, or any a user adds)
+//! that override seeds, mazes and fields. Resolving a cell is
 //! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
 //! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
 //! `by_maze`; then `maze.size` and `seed` are set (a profile overrides everything the file
@@ -104,7 +104,7 @@ impl KindTables {
     }
 }
 
-/// A named profile: smaller (`smoke`) or larger (`full`) versions of the same grid.
+/// A named profile: a smaller (`smoke`) or otherwise changed version of the same grid.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ProfileSpec {

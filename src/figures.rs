@@ -70,7 +70,7 @@ fn stats_of<'a>(stats: &'a [CellStats], cell: &Cell) -> Option<&'a CellStats> {
 /// budget (its steps say only that the budget ran out, and Backplay checks it between batches
 /// of episodes, so it may pass it by up to one batch), else `0/10 solved · median 329k (all
 /// runs)`, the runs having stopped on their own (a complete chain that failed its evaluation,
-/// or a run without chaining at its first failure).
+/// a run without chaining at its first failure, or Backplay failing at K = 0).
 pub fn summary(s: &CellStats) -> String {
     match s.solved_steps_median {
         Some(m) if s.successes > 0 => {

@@ -89,7 +89,8 @@ pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
 
 /// For an experiment with a `scaling` figure: each cell's shortest path as
 /// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
-/// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c); empty
+/// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c, whole from 10
+/// up, else three decimals); empty
 /// otherwise.
 pub fn scaling_numbers_tex(
     exp: &crate::experiment::Experiment,
@@ -116,7 +117,12 @@ pub fn scaling_numbers_tex(
         }
         if let Some((c, b)) = crate::figures::Scaling::new(exp, stats)?.power_law() {
             def(&mut s, &format!("{name}:exponent"), &format!("{b:.2}"));
-            def(&mut s, &format!("{name}:factor"), &format!("{c:.0}"));
+            let factor = if c >= 10.0 {
+                format!("{c:.0}")
+            } else {
+                format!("{c:.3}")
+            };
+            def(&mut s, &format!("{name}:factor"), &factor);
         }
     }
     Ok(s)

@@ -37,7 +37,7 @@ fn cell<'a>(t: &'a [CellStats], method: &str, maze: usize) -> &'a CellStats {
 
 #[test]
 fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
-    for name in ["table", "gamma", "unseen"] {
+    for name in ["table", "gamma", "unseen", "beyond"] {
         let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
         assert!(
             exp.seed_count >= 10,
@@ -250,7 +250,7 @@ fn gamma_study_lower_gamma_and_the_argmax_actor_help_on_maze_2_only() {
 /// The paper's appendix on resetting in unseen states: Backplay trained from starts exactly at
 /// τ_K builds chains that fail from nearby starts. With ε-ball starts PBCS solves 9 of 10 runs
 /// on both mazes; with exact starts it solves fewer on both, with disjoint 95 % intervals on the
-/// 3×3 maze (on 2×2 the intervals touch), and the generated verdict agrees.
+/// 3×3 maze (on 2×2 the intervals overlap, the direction is the same), and the generated verdict agrees.
 #[test]
 fn unseen_states_ball_starts_beat_exact_starts() {
     let u = table("unseen");
@@ -286,8 +286,9 @@ fn unseen_states_ball_starts_beat_exact_starts() {
 
 /// Beyond the paper (the report's "Beyond the paper"): the `fast` preset, unchanged, solves
 /// every run on sizes 3 to 20 of two layouts never used while developing it, each chain reaching
-/// the target in every evaluation episode, and its median cost grows close to linearly with
-/// the length L of the maze's shortest path: the fitted exponent lies in [1, 1.25], and the two
+/// the target in every evaluation episode, and its median cost grows a little faster than
+/// linearly with the length L of the maze's shortest path: the fitted exponent lies in
+/// (1, 1.2], and the two
 /// cells with the same L (9×9 of layout 0, 6×6 of layout 2) differ by less than 10 %.
 #[test]
 fn the_fast_preset_solves_unseen_sizes_and_layouts_at_a_cost_near_linear_in_the_path() {
@@ -309,7 +310,10 @@ fn the_fast_preset_solves_unseen_sizes_and_layouts_at_a_cost_near_linear_in_the_
         .unwrap()
         .power_law()
         .unwrap();
-    assert!((1.0..=1.25).contains(&exponent), "steps ∝ L^{exponent}");
+    assert!(
+        exponent > 1.0 && exponent <= 1.2,
+        "steps ∝ L^{exponent} — update the report"
+    );
     let paths = pbcs::figures::Scaling::path_lengths(&exp).unwrap();
     let l = |cell: &str| paths.iter().find(|(c, _)| c == cell).unwrap().1;
     assert_eq!(l("fast-maze9"), l("fast_l2-maze6"));

@@ -620,8 +620,8 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
 
 /// The committed raw rows read and written back give the same bytes: the row's enums (kind,
 /// starts, failure) keep the strings the files hold, empty where they do not apply. Every
-/// enum value but one occurs in the committed rows; that one (`backplay_failed`) is written
-/// and read back here, spelled as its `name()`.
+/// enum value but one occurs in the committed rows; that one (`budget`: no run at the paper's
+/// budgets ran out) is written and read back here, spelled as its `name()`, with the others.
 #[test]
 fn committed_raw_rows_round_trip_byte_for_byte() {
     use pbcs::experiment::{read_row, Kind};

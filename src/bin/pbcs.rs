@@ -250,7 +250,7 @@ struct SetArgs {
     /// Folder of the experiment files.
     #[arg(long, default_value = "experiments")]
     experiments: PathBuf,
-    /// Profile (`smoke`, `full`); none: the committed grids.
+    /// Profile (e.g. `smoke`); none: the committed grids.
     #[arg(long)]
     profile: Option<String>,
     /// Results folder [default: results, or results-<profile>].
@@ -286,7 +286,7 @@ fn results_dir(results: Option<&PathBuf>, profile: Option<&str>) -> PathBuf {
 struct ExpArgs {
     /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml, beyond.toml).
     file: PathBuf,
-    /// A profile of the file (`smoke`, `full`); none: the committed grid.
+    /// A profile of the file (e.g. `smoke`); none: the committed grid.
     #[arg(long)]
     profile: Option<String>,
     /// Results folder [default: results, or results-<profile> for a profile].
