@@ -416,12 +416,14 @@ impl Scaling {
 
     /// The scaling figure of `exp` from its table.
     pub fn new(exp: &Experiment, stats: &[CellStats]) -> Result<Scaling> {
+        let paths = Scaling::path_lengths(exp)?;
         let mut series = Vec::new();
         let mut logs = Vec::new();
         for (m, label) in &exp.methods {
             let mut points = Vec::new();
             for c in exp.cells.iter().filter(|c| &c.method == m) {
-                let (Some(s), Some(l)) = (stats_of(stats, c), cell_maze(c)?.path_cells()) else {
+                let path = paths.iter().find(|(id, _)| id == &c.id);
+                let (Some(s), Some(&(_, l))) = (stats_of(stats, c), path) else {
                     continue;
                 };
                 let l = l.max(1) as f64;

@@ -75,37 +75,33 @@ pub fn numbers_tex(tables: &[(String, Vec<CellStats>)]) -> String {
                 ),
             ];
             for (f, v) in fields {
-                let _ = writeln!(
-                    s,
-                    "\\expandafter\\def\\csname res:{exp}:{}:{f}\\endcsname{{{}}}",
-                    r.cell,
-                    tex(&v)
-                );
+                def_res(&mut s, exp, &format!("{}:{f}", r.cell), &v);
             }
         }
     }
     s
 }
 
+/// Appends `\res{<experiment>:<key>}` = `value` (TeX-escaped) to `s`.
+fn def_res(s: &mut String, experiment: &str, key: &str, value: &str) {
+    let _ = writeln!(
+        s,
+        "\\expandafter\\def\\csname res:{experiment}:{key}\\endcsname{{{}}}",
+        tex(value)
+    );
+}
+
 /// For an experiment with a `scaling` figure: each cell's shortest path as
 /// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
 /// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c, whole from 10
-/// up, else three decimals); empty
-/// otherwise.
+/// up, else three decimals); empty otherwise.
 pub fn scaling_numbers_tex(
     exp: &crate::experiment::Experiment,
     stats: &[CellStats],
 ) -> crate::Result<String> {
     use crate::experiment::FigureSpec;
     let mut s = String::new();
-    let def = |s: &mut String, key: &str, v: &str| {
-        let _ = writeln!(
-            s,
-            "\\expandafter\\def\\csname res:{}:{key}\\endcsname{{{}}}",
-            exp.name,
-            tex(v)
-        );
-    };
+    let def = |s: &mut String, key: &str, v: &str| def_res(s, &exp.name, key, v);
     for spec in &exp.figures {
         let FigureSpec::Scaling { name } = spec else {
             continue;
