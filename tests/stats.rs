@@ -69,3 +69,45 @@ fn wilson_narrows_with_n_and_is_monotone_in_k() {
         assert!(b.0 > a.0 && b.1 > a.1, "{k}/20");
     }
 }
+
+#[test]
+fn fisher_exact_matches_scipy() {
+    use pbcs::stats::fisher_exact;
+    // scipy.stats.fisher_exact([[k1, n1 - k1], [k2, n2 - k2]]).pvalue (SciPy 1.x, two-sided).
+    for (k1, n1, k2, n2, want) in [
+        (9, 10, 3, 10, 0.019_766_611_097_880_443),
+        (10, 10, 2, 10, 0.000_714_455_822_814_955_8),
+        (5, 10, 4, 10, 1.0),
+        (7, 10, 2, 10, 0.069_778_518_694_927_36),
+        (0, 10, 0, 10, 1.0),
+        (10, 10, 0, 10, 1.082_508_822_446_903e-5),
+        (6, 10, 10, 10, 0.086_687_306_501_547_99),
+        (3, 20, 12, 20, 0.007_911_693_673_651_405),
+    ] {
+        let p = fisher_exact(k1, n1, k2, n2);
+        assert!(
+            (p - want).abs() < 1e-9 * want.max(1e-3),
+            "{k1}/{n1} vs {k2}/{n2}: {p}"
+        );
+    }
+}
+
+#[test]
+fn fisher_exact_is_symmetric_and_a_probability() {
+    use pbcs::stats::fisher_exact;
+    for n1 in 1..=12u64 {
+        for n2 in [1, 5, 12u64] {
+            for k1 in 0..=n1 {
+                for k2 in 0..=n2 {
+                    let p = fisher_exact(k1, n1, k2, n2);
+                    assert!(p > 0.0 && p <= 1.0, "{k1}/{n1} vs {k2}/{n2}: {p}");
+                    // Swapping the samples, or successes with failures, asks the same question.
+                    assert!((p - fisher_exact(k2, n2, k1, n1)).abs() < 1e-12);
+                    assert!((p - fisher_exact(n1 - k1, n1, n2 - k2, n2)).abs() < 1e-12);
+                }
+            }
+        }
+    }
+    // Equal proportions are never evidence of a difference.
+    assert_eq!(fisher_exact(3, 10, 3, 10), 1.0);
+}
