@@ -45,6 +45,8 @@ pub enum Stream {
     Eval = 7,
     /// Inside a learner update: TD3's target-smoothing noise, the argmax actor's samples.
     Update = 8,
+    /// Starts of the chain's verification episodes (`phase2.chain_verify_episodes`).
+    ChainVerify = 9,
 }
 
 /// A run seed, from which every stream of the run is derived.

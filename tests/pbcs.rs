@@ -932,7 +932,8 @@ mod skill_task {
         let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
         learner.actor = policy;
         let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
-        SkillTask::new(maze, config, states, obs, t, learner, rngs, budget)
+        let goal = config.goal(maze, obs, t);
+        SkillTask::new(maze, config, states, goal, t, learner, rngs, budget)
     }
 
     #[test]
@@ -1058,4 +1059,122 @@ fn a_collapsed_skill_restarts_with_a_fresh_learner_while_restarts_are_left() {
     assert_eq!(made, [(0, 15), (1, 15), (2, 15), (3, 5)]);
     let spans: Vec<(usize, usize)> = skills.iter().map(|(k, t, _)| (*k, *t)).collect();
     assert_eq!(spans, [(0, 5), (5, 15)]);
+}
+
+#[test]
+fn a_limited_chain_run_stops_a_stuck_or_slow_skill() {
+    // A skill pushing into nothing forever: on the plane a zero action never moves, so the
+    // limited run stops after one step (stuck); the plain run spends its whole budget.
+    let mut chain = two_skill_chain();
+    chain.skills[0].policy = constant_policy([0.0, 0.0]);
+    let plain = chain.run(&Plane, [0.0, 0.0], 40);
+    assert_eq!(plain.skill_used.len(), 40);
+    let limited = chain.run_limited(&Plane, [0.0, 0.0], 40, Some(1000));
+    assert_eq!(limited.skill_used.len(), 1);
+    assert!(!limited.success);
+    // A moving skill that needs 8 steps to hand over fails under a limit of 5 actions per
+    // skill, and succeeds under 50 exactly as the plain run does.
+    let chain = two_skill_chain();
+    let slow = chain.run_limited(&Plane, [0.0, 0.0], 100, Some(5));
+    assert_eq!((slow.skill_used.len(), slow.success), (5, false));
+    assert_eq!(
+        chain.run_limited(&Plane, [0.0, 0.0], 100, Some(50)),
+        chain.run(&Plane, [0.0, 0.0], 100)
+    );
+}
+
+mod switches {
+    use pbcs::config::{Check, RunJob};
+    use pbcs::env::Env;
+    use pbcs::maze::Maze;
+    use pbcs::phase2::goal::{Goal, GoalKind};
+    use pbcs::phase2::{EventKind, InputMode, LastGoal};
+    use pbcs::runs::PbcsRun;
+
+    #[test]
+    fn the_paper_as_written_aims_at_the_ball_with_raw_inputs() {
+        let mut job = RunJob::default();
+        job.maze.size = 2;
+        let maze = Maze::new(&job.maze).unwrap();
+        let obs = vec![vec![0.5, 0.5], vec![0.6, 0.5], vec![0.5, 1.32]];
+        let p2 = &mut job.phase2;
+        // The corrections (the default): the target disc, goal-relative unit actions.
+        assert_eq!(p2.goal(&maze, &obs, 2).kind, GoalKind::EnvSuccess);
+        let inputs = p2.inputs(&maze, &p2.goal(&maze, &obs, 2));
+        assert_eq!(
+            (inputs.origin, inputs.action_scale),
+            (vec![0.5, 1.5], vec![0.1, 0.1])
+        );
+        assert_eq!(p2.learner_bounds(&maze), vec![1.0, 1.0]);
+        // As written: B_ε(τ_N), raw coordinates, ±0.1 from the learner itself.
+        p2.last_goal = LastGoal::Ball;
+        p2.inputs = InputMode::Raw;
+        assert_eq!(
+            p2.goal(&maze, &obs, 2),
+            Goal::ball(vec![0.5, 1.32], p2.epsilon)
+        );
+        let inputs = p2.inputs(&maze, &p2.goal(&maze, &obs, 2));
+        assert_eq!(
+            (inputs.origin, inputs.action_scale),
+            (vec![0.0, 0.0], vec![1.0, 1.0])
+        );
+        assert_eq!(p2.learner_bounds(&maze), vec![maze.action_bound(0); 2]);
+        // Other skills' goals do not depend on the switch.
+        assert_eq!(
+            p2.goal(&maze, &obs, 1),
+            Goal::ball(vec![0.6, 0.5], p2.epsilon)
+        );
+    }
+
+    #[test]
+    fn chain_repairs_need_a_chain_verification() {
+        let mut job = RunJob::default();
+        job.phase2.chain_repairs = 2;
+        let err = job.check().unwrap_err().to_string();
+        assert!(err.contains("phase2.chain_repairs"), "{err}");
+        job.phase2.chain_verify_episodes = 50;
+        job.check().unwrap();
+        let bad: Result<RunJob, _> = toml::from_str("[phase2]\ninputs = \"pixels\"\n");
+        assert!(bad.unwrap_err().to_string().contains("pixels"));
+    }
+
+    /// The paper preset's seed 0 on maze 2 builds a chain that reaches the target from 34 of
+    /// 100 evaluation starts (the committed table row). With the chain's verification and
+    /// repair, the first verification fails, the skill where the episodes stall is learned
+    /// again on its section, and the repaired chain passes its verification and solves the
+    /// maze.
+    #[test]
+    fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
+        let mut job = pbcs::config::Preset::Paper.job().unwrap();
+        job.maze.size = 2;
+        job.phase2.max_env_steps = 642_000;
+        job.phase2.chain_verify_episodes = 100;
+        job.phase2.chain_repairs = 5;
+        let run = PbcsRun::compute(&job, |_, _| {}).unwrap();
+        let checks: Vec<_> = run
+            .phase2
+            .trace
+            .iter()
+            .filter(|r| r.event == EventKind::ChainVerify)
+            .collect();
+        assert!(checks.len() >= 2, "{checks:?}");
+        assert!(checks[0].success < 1.0 && checks.last().unwrap().success == 1.0);
+        // The failed check blames a skill by its position and section; the passing one none.
+        assert!(checks[0].skill < 2 && checks[0].t > checks[0].k);
+        let last = checks.last().unwrap();
+        assert_eq!((last.skill, last.k), (run.record.skills, 0));
+        assert!(run.record.solved, "{:?}", run.record);
+        // Chain positions stay consecutive along τ after the splice.
+        let skills = &run.phase2.chain.skills;
+        assert_eq!(skills[0].start_index, 0);
+        for w in skills.windows(2) {
+            assert_eq!(w[0].target_index, w[1].start_index);
+        }
+        assert_eq!(skills.last().unwrap().target_index, run.tau.len() - 1);
+        // Every step counts: the record's total is the last trace row's.
+        assert_eq!(
+            run.record.total_steps,
+            run.phase2.trace.last().unwrap().env_steps
+        );
+    }
 }

@@ -825,6 +825,7 @@ fn kind_name(kind: pbcs::phase2::EventKind) -> &'static str {
         pbcs::phase2::EventKind::Test => "test",
         pbcs::phase2::EventKind::Train => "train",
         pbcs::phase2::EventKind::Verify => "verify",
+        pbcs::phase2::EventKind::ChainVerify => "chain verify",
     }
 }
 

@@ -12,18 +12,20 @@
 //!   executing it uses π_0 until the state enters A_1, then π_1, and so on.
 
 pub mod backplay;
+pub mod chaining;
 pub mod goal;
 pub mod shaped;
+
+pub use chaining::chain_skills;
 
 use crate::config::Check;
 use crate::env::Env;
 use crate::error::{Error, Result};
-use crate::learner::{Learner, LearnerConfig};
 use crate::nn::Mlp;
 use crate::rng::{Seeds, Stream};
 use goal::{Goal, Inputs};
 use serde::{Deserialize, Serialize};
-use shaped::{dist, SkillTask, StepCounts};
+use shaped::{dist, StepCounts};
 use std::path::Path;
 
 /// Where Backplay's episodes start.
@@ -35,6 +37,29 @@ pub enum StartMode {
     Ball,
     /// Exactly at τ_K (the failure that appendix explains).
     Exact,
+}
+
+/// The last skill's goal (the skill whose target is τ_N).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LastGoal {
+    /// Our correction: the environment's own success region ([`goal::Goal::last`]), so the
+    /// last skill is never paid for hovering in the part of B_ε(τ_N) outside the target disc.
+    SuccessRegion,
+    /// The paper as written: B_ε(τ_N), like every other skill.
+    Ball,
+}
+
+/// What a skill's networks see and emit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputMode {
+    /// Our correction: observations relative to the centre of the skill's goal, actions in
+    /// [−1, 1]ᵈ scaled to the environment's bounds ([`goal::Inputs::for_goal`]).
+    GoalRelative,
+    /// The paper as written: raw observations (maze coordinates in [0, N]²) and actions in the
+    /// environment's own bounds (±0.1); exploration noise σ is still a fraction of the bound.
+    Raw,
 }
 
 /// Phase-2 settings (α, β, ε, ...), validated by [`Check::check`].
@@ -84,6 +109,20 @@ pub struct Phase2Config {
     /// in its place. A skill that passes n of n episodes fails at most 3/n of the time (95 %
     /// confidence, the rule of three): β = 50 bounds it by 6 %, 500 episodes by 0.6 %.
     pub verify_episodes: usize,
+    /// Verification of the finished chain (ours; 0 = off, the paper's procedure): the chain
+    /// runs greedily from `chain_verify_episodes` starts uniform in B_ε(s_0) (stream
+    /// `ChainVerify`), each skill allowed `max_steps` steps to hand over, as in its tests. When
+    /// an episode fails, the skill in use when it stopped is repaired ([`chaining`]), and
+    /// the chain is verified again, at most `chain_repairs` times.
+    pub chain_verify_episodes: usize,
+    /// Repairs of the chain after a failed chain verification (see `chain_verify_episodes`).
+    pub chain_repairs: usize,
+    /// The last skill's goal: the environment's success region (our correction, the default)
+    /// or B_ε(τ_N) (the paper as written).
+    pub last_goal: LastGoal,
+    /// What the networks see: goal-relative observations and actions in [−1, 1]ᵈ (our
+    /// correction, the default) or raw coordinates and ±0.1 actions (the paper as written).
+    pub inputs: InputMode,
     /// Budget of environment steps for the whole run (phase 1 included); the run fails when
     /// it is exceeded.
     pub max_env_steps: u64,
@@ -110,6 +149,10 @@ impl Default for Phase2Config {
             restarts: 0,
             fast_tests: false,
             verify_episodes: 0,
+            chain_verify_episodes: 0,
+            chain_repairs: 0,
+            last_goal: LastGoal::SuccessRegion,
+            inputs: InputMode::GoalRelative,
             max_env_steps: 50_000_000,
             eval_episodes: 100,
             eval_max_steps: 5_000,
@@ -150,11 +193,44 @@ impl Check for Phase2Config {
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
         }
+        if self.chain_repairs > 0 && self.chain_verify_episodes == 0 {
+            return Err(Error::invalid(
+                "phase2.chain_repairs",
+                "repairs follow a failed chain verification: set phase2.chain_verify_episodes too",
+            ));
+        }
         Ok(())
     }
 }
 
 impl Phase2Config {
+    /// The goal of the skill whose target is τ_t on a trajectory with observations `obs`
+    /// (τ_0 … τ_N): [`Goal::for_target`], or B_ε(τ_N) for the last skill when
+    /// [`LastGoal::Ball`].
+    pub fn goal<E: Env>(&self, env: &E, obs: &[Vec<f32>], t: usize) -> Goal {
+        match self.last_goal {
+            LastGoal::SuccessRegion => Goal::for_target(env, obs, t, self.epsilon),
+            LastGoal::Ball => Goal::ball(obs[t].clone(), self.epsilon),
+        }
+    }
+
+    /// What the networks of a skill aiming at `goal` see and emit ([`InputMode`]).
+    pub fn inputs<E: Env>(&self, env: &E, goal: &Goal) -> Inputs {
+        match self.inputs {
+            InputMode::GoalRelative => Inputs::for_goal(env, goal),
+            InputMode::Raw => Inputs::new(vec![0.0; env.obs_dim()], vec![1.0; env.action_dim()]),
+        }
+    }
+
+    /// The bounds of the learner's actions: 1 per component with goal-relative inputs (the
+    /// [`Inputs`] scale them), the environment's bounds with raw ones.
+    pub fn learner_bounds<E: Env>(&self, env: &E) -> Vec<f32> {
+        match self.inputs {
+            InputMode::GoalRelative => vec![1.0; env.action_dim()],
+            InputMode::Raw => (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
+        }
+    }
+
     /// Backplay's walk from these settings.
     pub fn walk(&self) -> backplay::Walk {
         backplay::Walk {
@@ -178,6 +254,9 @@ pub enum EventKind {
     Train,
     /// The verification of a finished skill (`phase2.verify_episodes` greedy episodes).
     Verify,
+    /// The verification of the finished chain from B_ε(s_0)
+    /// (`phase2.chain_verify_episodes` episodes).
+    ChainVerify,
 }
 
 /// A progress report from inside Backplay.
@@ -272,6 +351,21 @@ impl SkillChain {
     /// overshoots its goal into a later ball hands over there). Each skill sees its own
     /// [`Inputs`]. An empty chain takes no step.
     pub fn run<E: Env>(&self, env: &E, start: E::State, max_steps: usize) -> Rollout<E::State> {
+        self.run_limited(env, start, max_steps, None)
+    }
+
+    /// [`SkillChain::run`], and with `per_skill = Some(m)` the episode also ends (a failure)
+    /// when one skill has acted `m` times without handing over, or when a step does not move
+    /// the state (a greedy chain on a pure step is then stuck for good): the limits of a
+    /// skill's own tests, used by the chain's verification.
+    pub fn run_limited<E: Env>(
+        &self,
+        env: &E,
+        start: E::State,
+        max_steps: usize,
+        per_skill: Option<usize>,
+    ) -> Rollout<E::State> {
+        let mut acted = 0;
         let mut raw = vec![0.0; env.obs_dim()];
         let mut obs = vec![0.0; env.obs_dim()];
         let mut action = vec![0.0; env.action_dim()];
@@ -293,17 +387,26 @@ impl SkillChain {
                 .find(|&j| self.skills[j].activation.contains(&raw))
             {
                 i = j;
+                acted = 0;
             }
+            if per_skill.is_some_and(|m| acted >= m) {
+                break;
+            }
+            acted += 1;
             let skill = &self.skills[i];
             skill.inputs.observation(&raw, &mut obs);
             let a = skill.policy.forward(&obs, 1, &mut ws);
             skill.inputs.env_action(a, &mut action);
             let step = env.step(&s, &action);
             out.skill_used.push(i);
+            let stuck = per_skill.is_some() && step.state == s;
             s = step.state;
             out.states.push(s.clone());
             if step.reward > 0.0 && step.terminal {
                 out.success = true;
+                break;
+            }
+            if stuck {
                 break;
             }
         }
@@ -593,90 +696,4 @@ pub fn verified<B: backplay::Backplayer>(
         }
     }
     best.map(|(_, i)| candidates.swap_remove(i))
-}
-
-/// Phase 2 on a trajectory τ: [`skill_chaining`] with a [`SkillTask`] (fresh learner, shaped
-/// reward, starts in B_ε(τ_K)) per skill.
-///
-/// Skill n's learner is initialised from the run's seeds for sub-run n, and its starts, noise
-/// and replay sampling read substream n; `spent` is the step count already used (phase 1),
-/// charged against `config.max_env_steps`.
-pub fn chain_skills<E: Env>(
-    env: &E,
-    tau: &[E::State],
-    learner: &LearnerConfig,
-    config: &Phase2Config,
-    seeds: &Seeds,
-    spent: u64,
-    mut progress: impl FnMut(usize, Progress),
-) -> Result<Phase2Outcome> {
-    config.check()?;
-    // The learner acts in [−1, 1]ᵈ; each skill's Inputs scale its actions to the bounds.
-    let unit = vec![1.0; env.action_dim()];
-    let obs: Vec<Vec<f32>> = tau
-        .iter()
-        .map(|s| {
-            let mut o = vec![0.0; env.obs_dim()];
-            env.observe(s, &mut o);
-            o
-        })
-        .collect();
-    let mut steps = StepCounts::default();
-    let spent_cell = std::cell::Cell::new(spent);
-    let clock = std::time::Instant::now();
-    let trace = std::cell::RefCell::new(Vec::new());
-    let progress = std::cell::RefCell::new(&mut progress);
-    let (found, failure) = skill_chaining(
-        tau.len() - 1,
-        config,
-        |n, t| {
-            let n32 = n as u32;
-            let learner = Learner::new(learner, env.obs_dim(), &unit, &seeds.skill(n32))?;
-            let rngs = [
-                seeds.substream(Stream::Start, n32),
-                seeds.substream(Stream::Noise, n32),
-                seeds.substream(Stream::Replay, n32),
-            ];
-            let budget = config.max_env_steps.saturating_sub(spent_cell.get());
-            let mut task = SkillTask::new(env, config, tau, &obs, t, learner, rngs, budget);
-            let (progress, trace, before) = (&progress, &trace, spent_cell.get());
-            task.on_event = Some(Box::new(move |p: Progress| {
-                trace.borrow_mut().push(TraceRow {
-                    skill: n,
-                    k: p.k,
-                    t: p.t,
-                    event: p.kind,
-                    success: p.success,
-                    env_steps: before + p.steps.train + p.steps.test,
-                    seconds: clock.elapsed().as_secs_f64(),
-                });
-                (progress.borrow_mut())(n, p)
-            }));
-            Ok(task)
-        },
-        |task| {
-            steps.train += task.steps.train;
-            steps.test += task.steps.test;
-            spent_cell.set(spent_cell.get() + task.steps.train + task.steps.test);
-        },
-    )?;
-    let skills = found
-        .into_iter()
-        .map(|(k, t, policy)| Skill {
-            policy,
-            activation: Ball {
-                center: obs[k].clone(),
-                radius: config.epsilon,
-            },
-            start_index: k,
-            target_index: t,
-            inputs: Inputs::for_goal(env, &Goal::for_target(env, &obs, t, config.epsilon)),
-        })
-        .collect();
-    Ok(Phase2Outcome {
-        chain: SkillChain { skills },
-        failure,
-        steps,
-        trace: trace.into_inner(),
-    })
 }

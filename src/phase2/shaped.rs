@@ -55,21 +55,26 @@ pub struct SkillTask<'a, E: Env> {
     pub steps: StepCounts,
     /// Steps this task may spend; once spent, tests and rounds return 0 without running.
     budget: u64,
+    /// The learner's action bounds (1 with goal-relative inputs, the environment's with raw
+    /// ones): noise is added in units of the bound and actions are clipped to it.
+    bounds: Vec<f32>,
+    /// States where an executed chain entered this skill's section (chain repair): half of
+    /// the starts at K = 0 are drawn from them, half uniformly in B_ε(τ_0). Empty otherwise.
+    entries: Vec<E::State>,
     /// Called after each test and training round.
     pub on_event: Option<Box<dyn FnMut(super::Progress) + 'a>>,
 }
 
 impl<'a, E: Env> SkillTask<'a, E> {
-    /// The task of reaching τ_T (`t`) along `states` (observations `obs`) with `learner`,
-    /// whose actions must live in [−1, 1]ᵈ; random streams for starts, noise and replay
-    /// sampling are passed in. The goal is B_ε(τ_T), or [`Goal::last`] when T is the last
-    /// index of `states`.
+    /// The task of reaching `goal` (the goal of τ_T, `t`: [`Phase2Config::goal`]) along
+    /// `states` with `learner`, whose actions live in [`Phase2Config::learner_bounds`]; random
+    /// streams for starts, noise and replay sampling are passed in.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         env: &'a E,
         config: &'a Phase2Config,
         states: &'a [E::State],
-        obs: &'a [Vec<f32>],
+        goal: Goal,
         t: usize,
         learner: Learner,
         rngs: [Rng; 3],
@@ -77,8 +82,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     ) -> Self {
         let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
-        let goal = Goal::for_target(env, obs, t, config.epsilon);
-        let inputs = Inputs::for_goal(env, &goal);
+        let inputs = config.inputs(env, &goal);
         SkillTask {
             env,
             config,
@@ -100,8 +104,17 @@ impl<'a, E: Env> SkillTask<'a, E> {
             rng_replay,
             steps: StepCounts::default(),
             budget,
+            bounds: config.learner_bounds(env),
+            entries: Vec::new(),
             on_event: None,
         }
+    }
+
+    /// Draws half of the starts at K = 0 from `entries` (where an executed chain entered
+    /// this section) instead of uniformly in B_ε(τ_0): chain repair.
+    pub fn with_entries(mut self, entries: Vec<E::State>) -> Self {
+        self.entries = entries;
+        self
     }
 
     fn spent_budget(&self) -> bool {
@@ -111,8 +124,13 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// `n` start states around τ_k: uniform in B_ε(τ_k), or τ_k itself
     /// ([`StartMode::Exact`]).
     fn starts(&mut self, k: usize, n: usize) -> Vec<E::State> {
+        use rand::Rng as _;
         (0..n)
             .map(|_| match self.config.start {
+                _ if k == 0 && !self.entries.is_empty() && self.rng_start.random::<bool>() => {
+                    let i = self.rng_start.random_range(0..self.entries.len());
+                    self.entries[i].clone()
+                }
                 StartMode::Ball => {
                     self.env
                         .sample_ball(&self.states[k], self.config.epsilon, &mut self.rng_start)
@@ -163,9 +181,13 @@ impl<'a, E: Env> SkillTask<'a, E> {
             for (j, &lane) in running.iter().enumerate() {
                 let a = &mut actions[j * act_dim..(j + 1) * act_dim];
                 if learn {
+                    // σ is a fraction of the bound: noise is added in units of the bound.
+                    for (x, b) in a.iter_mut().zip(&self.bounds) {
+                        *x /= b;
+                    }
                     self.noise[lane].add(&mut self.rng_noise, a);
-                    for x in a.iter_mut() {
-                        *x = x.clamp(-1.0, 1.0);
+                    for (x, b) in a.iter_mut().zip(&self.bounds) {
+                        *x = x.clamp(-1.0, 1.0) * b;
                     }
                 }
                 self.inputs.env_action(a, &mut env_action);

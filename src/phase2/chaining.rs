@@ -1,0 +1,330 @@
+//! Algorithm 1 on the maze's learning problems ([`chain_skills`]), and the verification and
+//! repair of the finished chain (`repair_chain`, ours).
+//!
+//! Each skill is one fresh learning problem ([`SkillTask`]: a new DDPG, the shaped reward,
+//! starts in B_ε(τ_K)); [`super::skill_chaining`] walks them backwards from τ_N. With
+//! `phase2.chain_verify_episodes` the finished chain is then executed from B_ε(s_0); a skill in
+//! whose section episodes stall is learned again on its section τ_{K_i} … τ_{T_i}, half of the
+//! starts at τ_{K_i} now being the states where the chain really entered its ball, and the
+//! result (one skill, or several when Backplay cannot cover the section at once) replaces it.
+
+use super::shaped::{SkillTask, StepCounts};
+use super::{
+    skill_chaining, Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill,
+    SkillChain, TraceRow,
+};
+use crate::config::Check;
+use crate::env::Env;
+use crate::error::Result;
+use crate::learner::{Learner, LearnerConfig};
+use crate::rng::{Rng, Seeds, Stream};
+use std::cell::{Cell, RefCell};
+use std::time::Instant;
+
+/// Phase 2 on a trajectory τ: [`skill_chaining`] with a [`SkillTask`] (fresh learner, shaped
+/// reward, starts in B_ε(τ_K)) per skill, then, with `phase2.chain_verify_episodes`, the
+/// chain's verification and repair (`repair_chain`, in this module).
+///
+/// Learning problem n's learner is initialised from the run's seeds for sub-run n, and its
+/// starts, noise and replay sampling read substream n (n counts restarts and repairs too, so
+/// it equals the skill's index when nothing restarts); `spent` is the step count already used
+/// (phase 1), charged against `config.max_env_steps`.
+pub fn chain_skills<E: Env>(
+    env: &E,
+    tau: &[E::State],
+    learner: &LearnerConfig,
+    config: &Phase2Config,
+    seeds: &Seeds,
+    spent: u64,
+    mut progress: impl FnMut(usize, Progress),
+) -> Result<Phase2Outcome> {
+    config.check()?;
+    let chainer = Chainer {
+        env,
+        tau,
+        obs: tau
+            .iter()
+            .map(|s| {
+                let mut o = vec![0.0; env.obs_dim()];
+                env.observe(s, &mut o);
+                o
+            })
+            .collect(),
+        learner,
+        config,
+        seeds,
+        spent: Cell::new(spent),
+        made: Cell::new(0),
+        steps: Cell::new(StepCounts::default()),
+        trace: RefCell::new(Vec::new()),
+        clock: Instant::now(),
+        progress: RefCell::new(&mut progress),
+    };
+    let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
+    let mut chain = SkillChain { skills };
+    if failure.is_none() && config.chain_verify_episodes > 0 {
+        failure = repair_chain(&chainer, &mut chain)?;
+    }
+    Ok(Phase2Outcome {
+        chain,
+        failure,
+        steps: chainer.steps.get(),
+        trace: chainer.trace.into_inner(),
+    })
+}
+
+/// The state of one phase 2: τ, the settings, the step count and the trace, shared by the
+/// learning problems it makes.
+pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
+    env: &'a E,
+    tau: &'a [E::State],
+    obs: Vec<Vec<f32>>,
+    learner: &'a LearnerConfig,
+    config: &'a Phase2Config,
+    seeds: &'a Seeds,
+    /// Environment steps of the whole run so far (phase 1 included).
+    spent: Cell<u64>,
+    /// Learning problems made so far (skills, restarts, repairs).
+    made: Cell<usize>,
+    steps: Cell<StepCounts>,
+    trace: RefCell<Vec<TraceRow>>,
+    clock: Instant,
+    progress: RefCell<&'a mut P>,
+}
+
+impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
+    /// Algorithm 1 on the section τ_lo … τ_hi with the goal of τ_hi
+    /// ([`Phase2Config::goal`]): the skills in execution order, with indices on the whole τ.
+    /// `entries` (chain repair) are start states at τ_lo drawn for half of the starts there.
+    fn section(
+        &self,
+        lo: usize,
+        hi: usize,
+        entries: &[E::State],
+    ) -> Result<(Vec<Skill>, Option<Failure>)> {
+        let states = &self.tau[lo..=hi];
+        let (found, failure) = skill_chaining(
+            hi - lo,
+            self.config,
+            |_, t| self.task(states, lo, t, entries),
+            |task| {
+                let mut steps = self.steps.get();
+                steps.train += task.steps.train;
+                steps.test += task.steps.test;
+                self.steps.set(steps);
+                self.spent
+                    .set(self.spent.get() + task.steps.train + task.steps.test);
+            },
+        )?;
+        let skills = found
+            .into_iter()
+            .map(|(k, t, policy)| {
+                let goal = self.config.goal(self.env, &self.obs, lo + t);
+                Skill {
+                    policy,
+                    activation: Ball {
+                        center: self.obs[lo + k].clone(),
+                        radius: self.config.epsilon,
+                    },
+                    start_index: lo + k,
+                    target_index: lo + t,
+                    inputs: self.config.inputs(self.env, &goal),
+                }
+            })
+            .collect();
+        Ok((skills, failure))
+    }
+
+    /// The next fresh learning problem: reach the goal of τ_{lo+t} along `states` = τ_lo ….
+    fn task<'s>(
+        &'s self,
+        states: &'s [E::State],
+        lo: usize,
+        t: usize,
+        entries: &[E::State],
+    ) -> Result<SkillTask<'s, E>> {
+        let n = self.made.get();
+        self.made.set(n + 1);
+        let n32 = n as u32;
+        let (env, config) = (self.env, self.config);
+        let learner = Learner::new(
+            self.learner,
+            env.obs_dim(),
+            &config.learner_bounds(env),
+            &self.seeds.skill(n32),
+        )?;
+        let rngs = [
+            self.seeds.substream(Stream::Start, n32),
+            self.seeds.substream(Stream::Noise, n32),
+            self.seeds.substream(Stream::Replay, n32),
+        ];
+        let budget = config.max_env_steps.saturating_sub(self.spent.get());
+        let goal = config.goal(env, &self.obs, lo + t);
+        let mut task = SkillTask::new(env, config, states, goal, t, learner, rngs, budget)
+            .with_entries(entries.to_vec());
+        let before = self.spent.get();
+        task.on_event = Some(Box::new(move |p: Progress| {
+            self.record(TraceRow {
+                skill: n,
+                k: lo + p.k,
+                t: lo + p.t,
+                event: p.kind,
+                success: p.success,
+                env_steps: before + p.steps.train + p.steps.test,
+                seconds: 0.0,
+            });
+            (self.progress.borrow_mut())(
+                n,
+                Progress {
+                    k: lo + p.k,
+                    t: lo + p.t,
+                    ..p
+                },
+            );
+        }));
+        Ok(task)
+    }
+
+    fn record(&self, mut row: TraceRow) {
+        row.seconds = self.clock.elapsed().as_secs_f64();
+        self.trace.borrow_mut().push(row);
+    }
+
+    fn exhausted(&self) -> bool {
+        self.spent.get() >= self.config.max_env_steps
+    }
+}
+
+/// What one verification of a chain found.
+struct ChainCheck<S> {
+    /// Episodes that reached the target.
+    successes: usize,
+    /// Failed episodes by the chain position of the skill in use when they stopped.
+    stalled: Vec<usize>,
+    /// By chain position: the states where episodes handed control to that skill.
+    entries: Vec<Vec<S>>,
+}
+
+/// Runs `chain` greedily from `episodes` starts uniform in B_ε(s_0), each skill allowed
+/// `max_steps` actions to hand over ([`SkillChain::run_limited`]); the steps are charged as
+/// test steps.
+fn check_chain<E: Env, P: FnMut(usize, Progress)>(
+    c: &Chainer<'_, E, P>,
+    chain: &SkillChain,
+    rng: &mut Rng,
+) -> ChainCheck<E::State> {
+    let n = chain.skills.len();
+    let mut out = ChainCheck {
+        successes: 0,
+        stalled: vec![0; n],
+        entries: vec![Vec::new(); n],
+    };
+    let mut spent = 0;
+    for _ in 0..c.config.chain_verify_episodes {
+        let start = c.env.sample_ball(&c.tau[0], c.config.epsilon, rng);
+        let r = chain.run_limited(
+            c.env,
+            start,
+            c.config.eval_max_steps,
+            Some(c.config.max_steps),
+        );
+        spent += r.skill_used.len() as u64;
+        let mut last = None;
+        for (j, &i) in r.skill_used.iter().enumerate() {
+            if last != Some(i) {
+                out.entries[i].push(r.states[j].clone());
+                last = Some(i);
+            }
+        }
+        if r.success {
+            out.successes += 1;
+        } else if let Some(i) = last {
+            out.stalled[i] += 1;
+        }
+    }
+    let mut steps = c.steps.get();
+    steps.test += spent;
+    c.steps.set(steps);
+    c.spent.set(c.spent.get() + spent);
+    out
+}
+
+/// Verification and repair of a finished chain (ours, `phase2.chain_verify_episodes` and
+/// `phase2.chain_repairs`):
+///
+/// ```text
+/// repeat:
+///     run the chain from chain_verify_episodes starts in B_ε(s_0)   (a chain_verify trace row)
+///     if every episode reached the target, or no repair is left: stop
+///     i = the skill in use when the most failed episodes stopped (the first among ties)
+///     E = the states where the episodes entered skill i
+///     (π_i …) = Algorithm 1 on τ_{K_i} … τ_{T_i}, half of the starts at τ_{K_i} drawn from E
+///     replace skill i by them (one skill, or several: a split)
+/// ```
+///
+/// A repair that finds no skill leaves the chain as it was and ends the repairs; one that runs
+/// out of the step budget ends the run with [`Failure::Budget`]. The chain_verify row's
+/// `skill` is the chain position of the skill blamed (the number of skills when the chain
+/// passed), its K and T that skill's (0 and N when it passed); the repair's own tests and
+/// training rounds follow as the rows of a new learning problem.
+pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
+    c: &Chainer<'_, E, P>,
+    chain: &mut SkillChain,
+) -> Result<Option<Failure>> {
+    let mut rng = c.seeds.stream(Stream::ChainVerify);
+    let mut repairs = 0;
+    loop {
+        if c.exhausted() {
+            return Ok(Some(Failure::Budget));
+        }
+        let check = check_chain(c, chain, &mut rng);
+        let episodes = c.config.chain_verify_episodes;
+        let success = check.successes as f32 / episodes as f32;
+        // The skill where the most failed episodes stopped (the first among ties).
+        let blamed = (0..chain.skills.len())
+            .filter(|&i| check.stalled[i] > 0)
+            .max_by_key(|&i| (check.stalled[i], std::cmp::Reverse(i)));
+        let (skill, k, t) = match blamed {
+            Some(i) => {
+                let s = &chain.skills[i];
+                (i, s.start_index, s.target_index)
+            }
+            None => (chain.skills.len(), 0, c.tau.len() - 1),
+        };
+        c.record(TraceRow {
+            skill,
+            k,
+            t,
+            event: EventKind::ChainVerify,
+            success,
+            env_steps: c.spent.get(),
+            seconds: 0.0,
+        });
+        let steps = c.steps.get();
+        (c.progress.borrow_mut())(
+            c.made.get().saturating_sub(1),
+            Progress {
+                k,
+                t,
+                kind: EventKind::ChainVerify,
+                success,
+                steps,
+            },
+        );
+        let Some(i) = blamed else {
+            return Ok(None);
+        };
+        if repairs == c.config.chain_repairs {
+            return Ok(None);
+        }
+        repairs += 1;
+        let (skills, failure) = c.section(k, t, &check.entries[i])?;
+        match failure {
+            Some(Failure::Budget) => return Ok(Some(Failure::Budget)),
+            Some(_) => return Ok(None),
+            None => {
+                chain.skills.splice(i..=i, skills);
+            }
+        }
+    }
+}
