@@ -74,6 +74,11 @@ struct MethodSpec {
     /// Whether the paper's run solved the maze, by maze size.
     #[serde(default)]
     paper_solved: BTreeMap<String, bool>,
+    /// The maze sizes this method runs, a subset of the experiment's (default: all of them):
+    /// a grid whose rows ask different questions (the ablations) need not run every method
+    /// on every size.
+    #[serde(default)]
+    mazes: Option<Vec<usize>>,
 }
 
 /// Fields set on every method of one kind: `vanilla = { … }` changes the [`TrainJob`]s,
@@ -522,6 +527,17 @@ impl Experiment {
                     format!("`{}` appears twice", m.name),
                 ));
             }
+            if let Some(own) = &m.mazes {
+                if own.is_empty() || own.iter().any(|n| !spec.mazes.contains(n)) {
+                    return Err(Error::invalid(
+                        "method.mazes",
+                        format!(
+                            "method `{}`: {own:?} must be a non-empty subset of `mazes` {:?}",
+                            m.name, spec.mazes
+                        ),
+                    ));
+                }
+            }
             for key in m.paper_steps.keys().chain(m.paper_solved.keys()) {
                 if !key.parse::<usize>().is_ok_and(|n| spec.mazes.contains(&n)) {
                     return Err(Error::invalid(
@@ -549,6 +565,9 @@ impl Experiment {
         for &n in &mazes {
             let key = n.to_string();
             for (m, label, table) in &resolved {
+                if m.mazes.as_ref().is_some_and(|own| !own.contains(&n)) {
+                    continue;
+                }
                 let mut table = table.clone();
                 if let Some(t) = spec.by_maze.get(&key) {
                     merge(&mut table, t.of(m.kind));
