@@ -21,6 +21,12 @@ pub enum Verdict {
     Agrees,
     /// Our data supports the opposite at 95 %.
     Disagrees,
+    /// The intervals overlap, but Fisher's exact two-sided test finds the difference the
+    /// claim states at p < 0.05 (on some maze, or pooled) and none the other way.
+    ExactTestOnly,
+    /// The median steps of our solved runs lie below the paper's single run on every size: a
+    /// statement about our runs and the paper's one run, not a test of a claim.
+    FewerSteps,
     /// Neither.
     Inconclusive,
     /// The paper makes no claim (it shows the experiment without stating a result).
@@ -33,6 +39,8 @@ impl Verdict {
         match self {
             Verdict::Agrees => "agrees",
             Verdict::Disagrees => "disagrees",
+            Verdict::ExactTestOnly => "exact test only (p < 0.05; intervals overlap)",
+            Verdict::FewerSteps => "fewer steps than the paper's run",
             Verdict::Inconclusive => "inconclusive",
             Verdict::NoClaim => "no claim in the paper",
         }
@@ -67,34 +75,67 @@ pub fn beats(a: &CellStats, b: &CellStats) -> bool {
     a.wilson_lo > b.wilson_hi
 }
 
+/// The significance level of Fisher's exact test beside the interval rule.
+pub const EXACT_TEST_LEVEL: f64 = 0.05;
+
+/// `a` does better than `b` by Fisher's exact two-sided test at [`EXACT_TEST_LEVEL`].
+pub fn exact_better(a: &CellStats, b: &CellStats) -> bool {
+    a.success_rate > b.success_rate && exact_p(a, b) < EXACT_TEST_LEVEL
+}
+
+/// Fisher's exact two-sided p-value of two cells' solved counts.
+pub fn exact_p(a: &CellStats, b: &CellStats) -> f64 {
+    crate::stats::fisher_exact(a.successes, a.n, b.successes, b.n)
+}
+
+/// "k/n [lo, hi] vs k/n [lo, hi], Fisher p = …".
+fn versus(a: &CellStats, b: &CellStats, (a_name, b_name): (&str, &str)) -> String {
+    let p = exact_p(a, b);
+    let p = if p < 0.001 {
+        "< 0.001".to_string()
+    } else {
+        format!("= {p:.3}")
+    };
+    format!(
+        "{a_name} {} vs {b_name} {}, Fisher p {p}",
+        k_of_n(a),
+        k_of_n(b)
+    )
+}
+
 /// Compares method `a` with method `b` maze by maze: `a` beats `b` on a maze when their Wilson
 /// intervals are disjoint with `a` above. The verdict agrees with "a does better than b" when
 /// `a` beats `b` on some maze and `b` beats `a` on none; it disagrees when `b` beats `a`
-/// somewhere; otherwise it is inconclusive. Returns one "maze N: A k/n […] vs B k/n […]" part
-/// per maze both methods have, and the verdict.
+/// somewhere; where no interval separates, Fisher's exact test finding `a` better on some
+/// maze (and `b` better on none) gives [`Verdict::ExactTestOnly`]; otherwise it is
+/// inconclusive. Returns one "maze N: A k/n […] vs B k/n […], Fisher p …" part per maze both
+/// methods have, and the verdict.
 fn per_maze(
     stats: &[CellStats],
     (a, a_name): (&str, &str),
     (b, b_name): (&str, &str),
 ) -> (Vec<String>, Verdict) {
     let mut parts = Vec::new();
-    let (mut a_wins, mut b_wins) = (false, false);
+    let (mut a_wins, mut b_wins, mut a_exact, mut b_exact) = (false, false, false, false);
     for s in cells(stats, a) {
         if let Some(t) = find(stats, b, s.maze) {
             parts.push(format!(
-                "maze {}: {a_name} {} vs {b_name} {}",
+                "maze {}: {}",
                 s.maze,
-                k_of_n(s),
-                k_of_n(t)
+                versus(s, t, (a_name, b_name))
             ));
             a_wins |= beats(s, t);
             b_wins |= beats(t, s);
+            a_exact |= exact_better(s, t);
+            b_exact |= exact_better(t, s);
         }
     }
     let verdict = if b_wins {
         Verdict::Disagrees
     } else if a_wins {
         Verdict::Agrees
+    } else if a_exact && !b_exact {
+        Verdict::ExactTestOnly
     } else {
         Verdict::Inconclusive
     };
@@ -359,15 +400,15 @@ fn evaluate<'a>(
             let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
             let (a, b) = (pooled(stats, method)?, pooled(stats, than)?);
             let verdict = match verdict {
-                Verdict::Inconclusive if beats(&a, &b) => Verdict::Agrees,
+                Verdict::Inconclusive | Verdict::ExactTestOnly if beats(&a, &b) => Verdict::Agrees,
                 Verdict::Inconclusive if beats(&b, &a) => Verdict::Disagrees,
+                Verdict::Inconclusive if exact_better(&a, &b) => Verdict::ExactTestOnly,
                 v => v,
             };
             let ours = format!(
-                "{}; pooled: {} vs {}",
+                "{}; pooled: {}",
                 parts.join("; "),
-                k_of_n(&a),
-                k_of_n(&b)
+                versus(&a, &b, (label, than_label))
             );
             Some(claim(ours, verdict))
         }
@@ -394,7 +435,7 @@ fn evaluate<'a>(
                 parts.join("; ")
             );
             let verdict = if below.iter().all(|&b| b) {
-                Verdict::Agrees
+                Verdict::FewerSteps
             } else {
                 Verdict::Inconclusive
             };
@@ -450,6 +491,26 @@ mod tests {
             paper_solved: None,
         }
         .with_counts(k, n)
+    }
+
+    #[test]
+    fn an_exact_test_speaks_where_intervals_overlap() {
+        // 9/10 [0.60, 0.98] against 3/10 [0.11, 0.60]: the intervals touch, Fisher's p is
+        // 0.0198 (SciPy). 5/10 against 4/10: p = 1.
+        let stats = [
+            cell("a", 2, 9, 10),
+            cell("b", 2, 3, 10),
+            cell("a", 3, 5, 10),
+            cell("b", 3, 4, 10),
+        ];
+        assert!(!beats(&stats[0], &stats[1]) && exact_better(&stats[0], &stats[1]));
+        let (parts, verdict) = per_maze(&stats, ("a", "A"), ("b", "B"));
+        assert_eq!(verdict, Verdict::ExactTestOnly);
+        assert!(parts[0].ends_with("Fisher p = 0.020"), "{}", parts[0]);
+        assert!(parts[1].ends_with("Fisher p = 1.000"), "{}", parts[1]);
+        // The other way round the test finds nothing for "b beats a".
+        let (_, verdict) = per_maze(&stats, ("b", "B"), ("a", "A"));
+        assert_eq!(verdict, Verdict::Inconclusive);
     }
 
     #[test]
