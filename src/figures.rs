@@ -19,13 +19,14 @@ type DrawResult<DB> =
 const GREEN_BG: RGBColor = RGBColor(46, 160, 67);
 const RED_BG: RGBColor = RGBColor(200, 50, 50);
 /// Colours of methods in bar charts and curves (colour-blind-safe Okabe–Ito).
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 7] = [
     RGBColor(0, 114, 178),
     RGBColor(230, 159, 0),
     RGBColor(0, 158, 115),
     RGBColor(204, 121, 167),
     RGBColor(86, 180, 233),
     RGBColor(213, 94, 0),
+    RGBColor(120, 120, 120),
 ];
 
 /// `1234567` → `1.23M`, `171000` → `171k`.
@@ -309,23 +310,36 @@ impl Figure for SuccessBars {
             .y_desc("success rate (Wilson 95 % interval)")
             .label_style(("sans-serif", 15))
             .draw()?;
-        let m = self.methods.len() as f64;
-        let width = 0.8 / m;
+        // Each maze's group holds the methods that ran on it (all of them in a full grid),
+        // side by side in the file's order.
+        let slots: Vec<Vec<&str>> = self
+            .mazes
+            .iter()
+            .map(|&n| {
+                self.methods
+                    .iter()
+                    .map(|(name, _)| name.as_str())
+                    .filter(|name| self.stats.iter().any(|s| s.maze == n && s.method == *name))
+                    .collect()
+            })
+            .collect();
         for (j, (name, label)) in self.methods.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
-            let bars: Vec<(f64, &CellStats)> = self
+            let bars: Vec<(f64, f64, &CellStats)> = self
                 .mazes
                 .iter()
                 .enumerate()
                 .filter_map(|(g, &n)| {
+                    let rank = slots[g].iter().position(|m| m == name)?;
+                    let width = 0.8 / slots[g].len() as f64;
                     self.stats
                         .iter()
                         .find(|s| s.maze == n && &s.method == name)
-                        .map(|s| (g as f64 + 0.1 + j as f64 * width, s))
+                        .map(|s| (g as f64 + 0.1 + rank as f64 * width, width, s))
                 })
                 .collect();
             chart
-                .draw_series(bars.iter().map(|&(x, s)| {
+                .draw_series(bars.iter().map(|&(x, width, s)| {
                     Rectangle::new(
                         [(x + 0.1 * width, 0.0), (x + 0.9 * width, s.success_rate)],
                         colour.filled(),
@@ -335,7 +349,7 @@ impl Figure for SuccessBars {
                 .legend(move |(x, y)| {
                     Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled())
                 });
-            for &(x, s) in &bars {
+            for &(x, width, s) in &bars {
                 let c = x + 0.5 * width;
                 let cap = 0.15 * width;
                 for seg in [
