@@ -215,6 +215,13 @@ pub enum FigureSpec {
         /// File stem.
         name: String,
     },
+    /// Each PBCS run's chain success (evaluation episodes from B_ε(s_0) that reached the
+    /// target), one column per cell, the 95 % line of "solved" drawn across: how the table
+    /// reads under other success criteria (`<experiment>.chains.csv`).
+    Chains {
+        /// File stem.
+        name: String,
+    },
     /// The `methods`' pictures side by side, on the maze where the solved counts of the first
     /// two differ most (the smallest such maze on ties).
     Panels {
@@ -234,6 +241,7 @@ impl FigureSpec {
             | FigureSpec::Curves { name }
             | FigureSpec::Bars { name }
             | FigureSpec::Scaling { name }
+            | FigureSpec::Chains { name }
             | FigureSpec::Panels { name, .. } => name,
         }
     }

@@ -387,6 +387,131 @@ impl Figure for SuccessBars {
     }
 }
 
+/// One run of [`ChainSpread`]: seed, chain complete, chain success.
+type ChainRun = (u64, bool, f32);
+
+/// Each PBCS run's chain success, one column per cell (methods in the file's order, mazes
+/// within each), read from `<experiment>.chains.csv`: a dot per complete chain at its
+/// evaluation success, a cross at 0 per run whose chain was never completed, and the 95 %
+/// line above which a run counts as solved.
+pub struct ChainSpread {
+    title: String,
+    /// (method index, maze, runs), in drawing order.
+    columns: Vec<(usize, usize, Vec<ChainRun>)>,
+    methods: Vec<(String, String)>,
+}
+
+impl ChainSpread {
+    /// The figure of `exp`'s `chains`.
+    pub fn new(exp: &Experiment, chains: &[crate::criteria::ChainSuccess]) -> ChainSpread {
+        let mut columns = Vec::new();
+        let methods: Vec<(String, String)> = exp
+            .methods
+            .iter()
+            .filter(|(m, _)| chains.iter().any(|c| &c.method == m))
+            .cloned()
+            .collect();
+        for (j, (m, _)) in methods.iter().enumerate() {
+            for &n in &exp.mazes {
+                let runs: Vec<ChainRun> = chains
+                    .iter()
+                    .filter(|c| &c.method == m && c.maze == n)
+                    .map(|c| (c.seed, c.complete, c.success_rate))
+                    .collect();
+                if !runs.is_empty() {
+                    columns.push((j, n, runs));
+                }
+            }
+        }
+        ChainSpread {
+            title: format!("{}: chain success of each PBCS run", exp.title),
+            columns,
+            methods,
+        }
+    }
+}
+
+impl Figure for ChainSpread {
+    fn size(&self) -> (u32, u32) {
+        ((60 * self.columns.len() as u32 + 200).max(700), 560)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let width = self.columns.len() as f64;
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..width, -0.06..1.06)?;
+        let labels: Vec<String> = self
+            .columns
+            .iter()
+            .map(|(_, n, _)| format!("{n}×{n}"))
+            .collect();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(self.columns.len() * 2 + 1)
+            .x_label_formatter(&move |x: &f64| {
+                let i = x.floor() as usize;
+                if (x - x.floor() - 0.5).abs() < 1e-6 && i < labels.len() {
+                    labels[i].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .y_desc("chain success (evaluation episodes from B_ε(s₀))")
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (0.0, crate::runs::SOLVED_AT as f64),
+                (width, crate::runs::SOLVED_AT as f64),
+            ],
+            BLACK.mix(0.6).stroke_width(1),
+        )))?;
+        for (j, (_, label)) in self.methods.iter().enumerate() {
+            let colour = PALETTE[j % PALETTE.len()];
+            // Seeds spread across the column so equal values stay visible.
+            let spread = |i: usize, seed: u64| i as f64 + 0.2 + 0.06 * (seed % 10) as f64;
+            let columns = self.columns.iter().enumerate().filter(|(_, c)| c.0 == j);
+            let dots: Vec<(f64, f64)> = columns
+                .clone()
+                .flat_map(|(i, (_, _, runs))| {
+                    runs.iter()
+                        .filter(|r| r.1)
+                        .map(move |&(seed, _, p)| (spread(i, seed), p as f64))
+                })
+                .collect();
+            let crosses: Vec<(f64, f64)> = columns
+                .flat_map(|(i, (_, _, runs))| {
+                    runs.iter()
+                        .filter(|r| !r.1)
+                        .map(move |&(seed, _, _)| (spread(i, seed), -0.03))
+                })
+                .collect();
+            chart
+                .draw_series(dots.iter().map(|&p| Circle::new(p, 4, colour.filled())))?
+                .label(label.as_str())
+                .legend(move |(x, y)| Circle::new((x + 7, y), 4, colour.filled()));
+            chart.draw_series(
+                crosses
+                    .iter()
+                    .map(|&p| Cross::new(p, 4, colour.stroke_width(2))),
+            )?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
 /// One cell of the scaling figure: (shortest path in moves, median, first and third quartile
 /// of the environment steps, solved k, runs n).
 type ScalingPoint = (f64, f64, f64, f64, u64, u64);
@@ -745,6 +870,13 @@ pub fn render_experiment(
             }
             FigureSpec::Bars { .. } => {
                 files.extend(render_figure(&SuccessBars::new(exp, stats), &stem)?);
+            }
+            FigureSpec::Chains { .. } => {
+                let path = crate::criteria::chains_path(results, &exp.name);
+                if path.exists() {
+                    let chains = ChainSpread::new(exp, &crate::criteria::read_chains(&path)?);
+                    files.extend(render_figure(&chains, &stem)?);
+                }
             }
             FigureSpec::Scaling { .. } => {
                 files.extend(render_figure(&Scaling::new(exp, stats)?, &stem)?);

@@ -14,7 +14,8 @@
 //! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
 //! | Results table, "Vanilla" columns | [`train`] (training on the environment's own reward) |
 //! | Phase 2: Algorithm 1 (skill chaining), 2 (Backplay), 3 (training with reward shaping) | [`phase2`] |
-//! | Wilson score intervals (appendix on γ) | [`stats`] |
+//! | Wilson score intervals (appendix on γ); Fisher's exact test | [`stats`] |
+//! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
 //! result files atomically, [`plot`] draws mazes with plotters, and [`runs`] turns a config
@@ -44,6 +45,7 @@ pub mod aggregate;
 pub mod check;
 pub mod claims;
 pub mod config;
+pub mod criteria;
 pub mod env;
 pub mod error;
 pub mod experiment;

@@ -202,6 +202,33 @@ pub fn results_table_tex(
     s
 }
 
+/// The PBCS cells' solved counts under each success criterion
+/// ([`crate::criteria::Criteria`]), ours (≥ 95 %) in bold.
+pub fn criteria_tex(rows: &[crate::criteria::Criteria]) -> String {
+    let mut s = String::from(GENERATED);
+    s.push_str("\\begin{tabular}{llrrrrrr}\n\\toprule\n");
+    s.push_str(
+        "method & maze & $n$ & complete chain & $\\geq 50\\,\\%$ & $\\geq 90\\,\\%$ & \
+         $\\geq 95\\,\\%$ (ours) & $100\\,\\%$ \\\\\n\\midrule\n",
+    );
+    for c in rows {
+        let _ = writeln!(
+            s,
+            "{} & {} & {} & {} & {} & {} & \\textbf{{{}}} & {} \\\\",
+            tex(&c.label),
+            c.maze,
+            c.n,
+            c.complete,
+            c.at_0_50,
+            c.at_0_90,
+            c.at_0_95,
+            c.at_1_00
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    s
+}
+
 /// One row per cell: n, solved with its interval, steps median [q1, q3], min–max, skills, the
 /// step budget, and the paper's figure.
 pub fn cells_table_tex(rows: &[CellStats]) -> String {
@@ -269,6 +296,14 @@ pub fn write_tables(
     rows: &[crate::experiment::RawRow],
 ) -> crate::Result<()> {
     crate::tables::write_table(&crate::tables::table_path(results, &exp.name), stats)?;
+    let chains = crate::criteria::chain_successes(exp, rows);
+    if !chains.is_empty() {
+        crate::record::write_records(&crate::criteria::chains_path(results, &exp.name), &chains)?;
+        crate::record::write_records(
+            &crate::criteria::criteria_path(results, &exp.name),
+            &crate::criteria::criteria(&chains),
+        )?;
+    }
     let timing = crate::tables::cell_timings(exp, results, rows);
     crate::record::write_records(
         &results
@@ -297,6 +332,14 @@ pub fn render_all(
         let text = cells_table_tex(stats);
         crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         files.push(path);
+        let chains = crate::criteria::chains_path(results, &exp.name);
+        if chains.exists() {
+            let criteria = crate::criteria::criteria(&crate::criteria::read_chains(&chains)?);
+            let path = tex_dir.join(format!("{}_criteria.tex", exp.name));
+            let text = criteria_tex(&criteria);
+            crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+            files.push(path);
+        }
         let mut extra = Vec::new();
         if exp.report.results_table {
             extra.push((

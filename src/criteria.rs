@@ -1,0 +1,161 @@
+//! How the tables read under other success criteria.
+//!
+//! The paper calls a maze solved "when a controller is able to reliably reach a rewarded
+//! state"; we count a PBCS run as solved when its chain is complete and reaches the target
+//! from at least [`crate::runs::SOLVED_AT`] (95 %) of its evaluation episodes from B_ε(s_0).
+//! This module re-counts every PBCS cell at other thresholds, from the raw rows alone (no new
+//! runs): the chain-success rate of each run ([`ChainSuccess`], `<experiment>.chains.csv`) and
+//! the solved counts per criterion ([`Criteria`], `<experiment>.criteria.csv`).
+//!
+//! ```
+//! use pbcs::criteria::{criteria, ChainSuccess};
+//!
+//! let run = |seed, complete, success_rate| ChainSuccess {
+//!     experiment: "t".into(), cell: "pbcs-maze2".into(), method: "pbcs".into(),
+//!     label: "PBCS".into(), maze: 2, seed, complete, success_rate,
+//! };
+//! let c = &criteria(&[run(0, true, 1.0), run(1, true, 0.93), run(2, false, 0.0)])[0];
+//! assert_eq!((c.n, c.complete, c.at_0_50, c.at_0_90, c.at_0_95, c.at_1_00), (3, 2, 2, 2, 1, 1));
+//! ```
+
+use crate::experiment::{Experiment, Kind, RawRow};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The chain-success thresholds of [`Criteria`]: 0.5, 0.9, 0.95 (ours) and 1.0.
+pub const THRESHOLDS: [f32; 4] = [0.5, 0.9, 0.95, 1.0];
+
+/// One PBCS run's chain: whether phase 2 built it completely and the fraction of evaluation
+/// episodes from B_ε(s_0) that reached the target (0 for an incomplete chain).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChainSuccess {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cell id.
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// Method label.
+    pub label: String,
+    /// Maze size.
+    pub maze: usize,
+    /// Run seed.
+    pub seed: u64,
+    /// Whether phase 2 ended without a failure (a complete chain was evaluated).
+    pub complete: bool,
+    /// Fraction of evaluation episodes that reached the target.
+    pub success_rate: f32,
+}
+
+/// One PBCS cell's solved counts under each criterion: a complete chain, and a complete chain
+/// reaching the target from at least 50, 90, 95 (ours) and 100 % of its evaluation episodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Criteria {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cell id.
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// Method label.
+    pub label: String,
+    /// Maze size.
+    pub maze: usize,
+    /// Runs.
+    pub n: u64,
+    /// Runs whose chain is complete.
+    pub complete: u64,
+    /// Complete chains at ≥ 50 %.
+    pub at_0_50: u64,
+    /// Complete chains at ≥ 90 %.
+    pub at_0_90: u64,
+    /// Complete chains at ≥ 95 % (the tables' "solved").
+    pub at_0_95: u64,
+    /// Complete chains at 100 %.
+    pub at_1_00: u64,
+}
+
+impl Criteria {
+    /// The counts at [`THRESHOLDS`], in order.
+    pub fn at(&self) -> [u64; 4] {
+        [self.at_0_50, self.at_0_90, self.at_0_95, self.at_1_00]
+    }
+}
+
+/// The chain of every PBCS row of `exp`, in the rows' order (vanilla rows are left out: they
+/// have no chain).
+pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
+    rows.iter()
+        .filter(|r| r.kind == Kind::Pbcs)
+        .map(|r| ChainSuccess {
+            experiment: r.experiment.clone(),
+            cell: r.cell.clone(),
+            method: r.method.clone(),
+            label: exp
+                .cell(&r.cell)
+                .map_or_else(|_| r.method.clone(), |c| c.label.clone()),
+            maze: r.maze,
+            seed: r.seed,
+            complete: r.failure.is_none(),
+            success_rate: r.success_rate,
+        })
+        .collect()
+}
+
+/// The solved counts of each cell of `runs` (cells in order of first appearance).
+pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
+    let mut out: Vec<Criteria> = Vec::new();
+    for r in runs {
+        let i = match out.iter().position(|c| c.cell == r.cell) {
+            Some(i) => i,
+            None => {
+                out.push(Criteria {
+                    experiment: r.experiment.clone(),
+                    cell: r.cell.clone(),
+                    method: r.method.clone(),
+                    label: r.label.clone(),
+                    maze: r.maze,
+                    n: 0,
+                    complete: 0,
+                    at_0_50: 0,
+                    at_0_90: 0,
+                    at_0_95: 0,
+                    at_1_00: 0,
+                });
+                out.len() - 1
+            }
+        };
+        let c = &mut out[i];
+        c.n += 1;
+        let solved_at = |x: f32| u64::from(r.complete && r.success_rate >= x);
+        c.complete += u64::from(r.complete);
+        c.at_0_50 += solved_at(THRESHOLDS[0]);
+        c.at_0_90 += solved_at(THRESHOLDS[1]);
+        c.at_0_95 += solved_at(THRESHOLDS[2]);
+        c.at_1_00 += solved_at(THRESHOLDS[3]);
+    }
+    out
+}
+
+/// `results/tables/<experiment>.chains.csv`.
+pub fn chains_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.chains.csv"))
+}
+
+/// `results/tables/<experiment>.criteria.csv`.
+pub fn criteria_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.criteria.csv"))
+}
+
+/// Reads `<experiment>.chains.csv`.
+pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
+    let mut reader = csv::Reader::from_path(path).map_err(|e| crate::Error::csv(path, e))?;
+    reader
+        .deserialize()
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|e| crate::Error::csv(path, e))
+}
