@@ -146,3 +146,33 @@ fn shortest_paths_between_cells() {
         }
     }
 }
+
+/// The shortest path to the target disc lies between the straight line (less the disc) and the
+/// path through the cell centres that the layout's breadth-first search finds (each move 1,
+/// through a 0.9-wide opening, clear of walls), and a maze with more walls in the way never
+/// makes it shorter than the straight line.
+#[test]
+fn shortest_path_lies_between_the_straight_line_and_the_cell_path() {
+    use pbcs::env::Env;
+    for size in [2, 3, 5, 7, 10] {
+        for seed in 0..3 {
+            let maze = Maze::new(&MazeConfig {
+                size,
+                seed,
+                ..MazeConfig::default()
+            })
+            .unwrap();
+            let l = maze.shortest_path().unwrap();
+            let r = maze.config().target_radius;
+            let straight = (maze.target() - maze.start()).norm() - r;
+            let cells = maze.path_cells().unwrap() as f32 - r;
+            assert!(
+                straight - 1e-4 <= l && l <= cells + 1e-4,
+                "maze {size} layout {seed}: {straight} <= {l} <= {cells}"
+            );
+            // A perfect maze bends at least once from (0.5, 0.5) to the far corner: strictly
+            // longer than the straight line (the 2×2 U included).
+            assert!(l > straight + 0.05, "maze {size} layout {seed}");
+        }
+    }
+}
