@@ -26,7 +26,8 @@
 //! `s<s>.csv` (one [`RawRow`], written last, so its presence means the run finished),
 //! `s<s>.toml` (the resolved job: `pbcs run --config` or `pbcs train --config` re-runs it),
 //! `s<s>.timing.toml` (wall clock, not deterministic, hence beside the CSV), `s<s>.evals.csv`
-//! (vanilla: the learning curve) and, for picture seeds, `s<s>.picture.csv` (what the figures
+//! (vanilla: the learning curve), `s<s>.evaluation.csv` (PBCS: each evaluation episode of the
+//! chain, success and steps; rows committed before it existed lack it) and, for picture seeds, `s<s>.picture.csv` (what the figures
 //! draw).
 
 use crate::config::{Check, RunJob, TrainJob};
@@ -850,7 +851,7 @@ fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
 /// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
-/// `s<seed>.evals.csv` (vanilla), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
+/// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
 /// job) and `s<seed>.csv` (the row).
 pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
@@ -863,6 +864,7 @@ pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Re
         }
         Job::Pbcs(j) => {
             let run = PbcsRun::compute(j, |_, _| {})?;
+            crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
             let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)
         }

@@ -439,6 +439,8 @@ pub struct PbcsRun {
     pub tau: Vec<Point<f32>>,
     /// The chain, its step counts and Backplay's trace.
     pub phase2: Phase2Outcome,
+    /// The chain's evaluation episodes (none when phase 2 failed).
+    pub evaluation: Vec<EvalEpisode>,
     /// What `run.png` draws: τ, the first evaluation rollouts, the activation balls.
     pub picture: PictureData,
     /// Wall-clock seconds of the run (not deterministic).
@@ -467,20 +469,20 @@ impl PbcsRun {
             progress,
         )?;
         // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
-        let mut rng_eval = seeds.stream(Stream::Eval);
-        let mut rollouts = Vec::new();
-        let mut wins = 0;
-        if phase2.failure.is_none() && !phase2.chain.skills.is_empty() {
-            for _ in 0..job.phase2.eval_episodes {
-                let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng_eval);
-                let r = phase2.chain.run(&maze, start, job.phase2.eval_max_steps);
-                wins += usize::from(r.success);
-                if rollouts.len() < DRAWN_ROLLOUTS {
-                    rollouts.push(r.states);
-                }
-            }
-        }
+        let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
+        {
+            evaluate_chain(
+                &maze,
+                &phase2.chain,
+                job,
+                job.phase2.eval_episodes,
+                job.seed,
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let seconds = clock.elapsed().as_secs_f64();
+        let wins = evaluation.iter().filter(|e| e.success).count();
         let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
         let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
         let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
@@ -496,6 +498,7 @@ impl PbcsRun {
             found,
             tau,
             phase2,
+            evaluation,
             picture,
             seconds,
         })
@@ -512,6 +515,7 @@ impl PbcsRun {
         write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;
         write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
         crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
+        crate::record::write_records(&out.join("evaluation.csv"), &self.evaluation)?;
         write_csv(
             &out.join("trace.timing.csv"),
             &["seconds".to_string()],
@@ -616,6 +620,44 @@ pub fn run_pbcs(
     Ok((run.record, run.seconds))
 }
 
+/// One evaluation episode of a chain: whether it reached the target, and in how many steps
+/// (`evaluation.csv` of `pbcs run`, `s<seed>.evaluation.csv` of a sweep, `eval-s<seed>.csv` of
+/// `pbcs eval`). The steps of the successful episodes are the chain's path lengths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct EvalEpisode {
+    /// The episode reached the target.
+    pub success: bool,
+    /// Steps taken (at most `phase2.eval_max_steps`).
+    pub steps: usize,
+}
+
+/// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
+/// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
+/// steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
+pub fn evaluate_chain(
+    maze: &Maze,
+    chain: &SkillChain,
+    job: &RunJob,
+    episodes: usize,
+    seed: u64,
+) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
+    let mut rng = Seeds::new(seed).stream(Stream::Eval);
+    let mut rows = Vec::with_capacity(episodes);
+    let mut rollouts = Vec::new();
+    for _ in 0..episodes {
+        let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng);
+        let r = chain.run(maze, start, job.phase2.eval_max_steps);
+        rows.push(EvalEpisode {
+            success: r.success,
+            steps: r.states.len() - 1,
+        });
+        if rollouts.len() < DRAWN_ROLLOUTS {
+            rollouts.push(r.states);
+        }
+    }
+    (rows, rollouts)
+}
+
 /// The file in a saved chain's folder that holds the job that built it.
 pub const CHAIN_JOB: &str = "run.toml";
 
@@ -665,24 +707,10 @@ pub fn eval_chain(chain_dir: &Path, episodes: usize, seed: Option<u64>) -> Resul
     let maze = Maze::new(&job.maze)?;
     let chain = SkillChain::load(chain_dir)?;
     let seed = seed.unwrap_or(job.seed);
-    let mut rng = Seeds::new(seed).stream(Stream::Eval);
-    let mut rows = Vec::with_capacity(episodes);
-    let mut rollouts = Vec::new();
-    for _ in 0..episodes {
-        let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng);
-        let r = chain.run(&maze, start, job.phase2.eval_max_steps);
-        rows.push([r.success.to_string(), (r.states.len() - 1).to_string()]);
-        if rollouts.len() < DRAWN_ROLLOUTS {
-            rollouts.push(r.states);
-        }
-    }
-    let successes = rows.iter().filter(|r| r[0] == "true").count();
-    let interval = crate::stats::wilson(successes as u64, episodes as u64, 1.96);
-    write_csv(
-        &chain_dir.join(format!("eval-s{seed}.csv")),
-        &["success".to_string(), "steps".to_string()],
-        rows,
-    )?;
+    let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
+    let successes = rows.iter().filter(|r| r.success).count();
+    let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::tables::Z95);
+    crate::record::write_records(&chain_dir.join(format!("eval-s{seed}.csv")), &rows)?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let data = PictureData {
         green_paths: rollouts.iter().map(|r| xy(r)).collect(),

@@ -566,7 +566,11 @@ fn experiments_declare_their_figures() {
     };
     assert_eq!(
         names("experiments/table.toml"),
-        ["results_grid", "results_maze", "curves"]
+        ["results_grid", "results_maze", "curves", "table_chains"]
+    );
+    assert_eq!(
+        names("experiments/ablations.toml"),
+        ["ablations", "ablations_chains"]
     );
     assert_eq!(names("experiments/gamma.toml"), ["gamma"]);
     assert_eq!(names("experiments/unseen.toml"), ["unseen", "unseen_bars"]);

@@ -170,6 +170,10 @@ fn shortest_path_lies_between_the_straight_line_and_the_cell_path() {
                 straight - 1e-4 <= l && l <= cells + 1e-4,
                 "maze {size} layout {seed}: {straight} <= {l} <= {cells}"
             );
+            // Steps: a step covers at most 0.1 in the Chebyshev norm, at most 0.1·√2 of the
+            // Euclidean length.
+            let steps = maze.fewest_steps().unwrap() as f32;
+            assert!(steps * 0.1 >= l / 2f32.sqrt() - 1e-3 && steps * 0.1 <= l + 0.1 + 1e-3);
             // A perfect maze bends at least once from (0.5, 0.5) to the far corner: strictly
             // longer than the straight line (the 2×2 U included).
             assert!(l > straight + 0.05, "maze {size} layout {seed}");

@@ -592,6 +592,38 @@ mod end_to_end {
     /// A run is a function from its job to its outcome: `PbcsRun::compute` returns what
     /// `run_pbcs` writes (the same record, and the same bytes once written).
     #[test]
+    fn the_evaluation_episodes_are_written_and_a_saved_chain_gives_them_back() {
+        let mut j = pbcs::config::Preset::Fast.job().unwrap();
+        j.maze.size = 2;
+        let dir = tempfile::tempdir().unwrap();
+        let (record, _) = run_pbcs(&j, dir.path(), |_, _| {}).unwrap();
+        assert!(record.solved, "{record:?}");
+        let read = |path: &std::path::Path| -> Vec<pbcs::runs::EvalEpisode> {
+            csv::Reader::from_path(path)
+                .unwrap()
+                .deserialize()
+                .collect::<Result<_, _>>()
+                .unwrap()
+        };
+        let episodes = read(&dir.path().join("evaluation.csv"));
+        assert_eq!(episodes.len(), j.phase2.eval_episodes);
+        let wins = episodes.iter().filter(|e| e.success).count();
+        assert_eq!(wins as f32 / episodes.len() as f32, record.success_rate);
+        // A successful episode takes at least the shortest path's steps.
+        let maze = pbcs::maze::Maze::new(&j.maze).unwrap();
+        let fewest = maze.fewest_steps().unwrap();
+        assert!(episodes
+            .iter()
+            .filter(|e| e.success)
+            .all(|e| e.steps >= fewest));
+        // `pbcs eval` on the saved chain, with the run's seed, is the same evaluation.
+        let chain = dir.path().join("chain");
+        let again = pbcs::runs::eval_chain(&chain, j.phase2.eval_episodes, None).unwrap();
+        assert_eq!(again.successes, wins);
+        assert_eq!(read(&chain.join(format!("eval-s{}.csv", j.seed))), episodes);
+    }
+
+    #[test]
     fn a_computed_run_is_what_the_written_run_holds() {
         let mut j = job(5);
         j.phase2.max_env_steps = 30_000;

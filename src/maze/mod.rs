@@ -117,16 +117,15 @@ impl Maze {
     }
 
     /// The length of the shortest collision-free path from the start to the target disc, in
-    /// the maze's units: how far an optimal controller must travel (divide by `max_action`
-    /// for a lower bound on its steps).
+    /// the maze's units (Euclidean).
     ///
     /// Computed on the visibility graph: its nodes are the start, the target and every wall
     /// corner pushed out diagonally by 10⁻³ (a path touching a wall is not allowed, so it
     /// bends just outside the corners); two nodes are joined when the straight segment between
     /// them touches no wall ([`Walls::segment_hits`], the step function's own test); Dijkstra
     /// gives the shortest path to the target's centre, whose last leg is straight, and the
-    /// disc's radius is subtracted. The result exceeds the true infimum by at most about
-    /// 1.5·10⁻³ per bend. `None` when the target cannot be reached.
+    /// part of that leg inside the disc is taken off. The result exceeds the true infimum by
+    /// at most about 1.5·10⁻³ per bend. `None` when the target cannot be reached.
     ///
     /// ```
     /// use pbcs::config::MazeConfig;
@@ -139,6 +138,32 @@ impl Maze {
     /// assert!((l - (2.0 * (0.55f32.powi(2) + 0.45f32.powi(2)).sqrt() + 0.1 - 0.2)).abs() < 3e-3);
     /// ```
     pub fn shortest_path(&self) -> Option<f32> {
+        self.shortest(|v| v.norm())
+    }
+
+    /// The fewest steps that can take the start into the target disc: each action component
+    /// is clipped to ±`max_action`, so a step covers at most `max_action` in the Chebyshev
+    /// norm (a diagonal step moves 0.1·√2), and the answer is the shortest collision-free path
+    /// measured in that norm (the visibility graph of [`Maze::shortest_path`] with
+    /// max(|dx|, |dy|) as the length of a leg), divided by `max_action` and rounded up.
+    ///
+    /// ```
+    /// use pbcs::config::MazeConfig;
+    /// use pbcs::maze::Maze;
+    ///
+    /// // The 2×2 U: legs of Chebyshev length 0.55, 0.1 and 0.55 less the disc's part of the
+    /// // last (0.2 · 0.55 / √(0.55² + 0.45²)): 1.058, so 11 steps.
+    /// let maze = Maze::new(&MazeConfig { size: 2, ..MazeConfig::default() }).unwrap();
+    /// assert_eq!(maze.fewest_steps(), Some(11));
+    /// ```
+    pub fn fewest_steps(&self) -> Option<usize> {
+        let l = self.shortest(|v| v.x.abs().max(v.y.abs()))?;
+        Some((l / self.config.max_action - 1e-3).ceil().max(0.0) as usize)
+    }
+
+    /// The shortest collision-free path to the target disc with `length` as the length of a
+    /// straight leg (a norm), on the visibility graph described at [`Maze::shortest_path`].
+    fn shortest(&self, length: impl Fn(Vector<f32>) -> f32) -> Option<f32> {
         const PUSH: f32 = 1e-3;
         let n = self.size() as f32;
         let mut nodes = vec![self.start, self.target];
@@ -156,6 +181,7 @@ impl Maze {
         }
         // Dijkstra on the dense graph, visibility tested as nodes are settled.
         let mut dist = vec![f32::INFINITY; nodes.len()];
+        let mut prev = vec![0; nodes.len()];
         let mut done = vec![false; nodes.len()];
         dist[0] = 0.0;
         loop {
@@ -163,16 +189,20 @@ impl Maze {
                 .filter(|&i| !done[i] && dist[i].is_finite())
                 .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))?;
             if u == 1 {
-                return Some((dist[1] - self.config.target_radius).max(0.0));
+                // The last leg enters the disc: its share inside the disc is not travelled.
+                let leg = nodes[1] - nodes[prev[1]];
+                let inside = (self.config.target_radius / leg.norm().max(1e-9)).min(1.0);
+                return Some((dist[1] - inside * length(leg)).max(0.0));
             }
             done[u] = true;
             for v in 0..nodes.len() {
                 if done[v] {
                     continue;
                 }
-                let d = dist[u] + (nodes[v] - nodes[u]).norm();
+                let d = dist[u] + length(nodes[v] - nodes[u]);
                 if d < dist[v] && !self.walls.segment_hits(&nodes[u], &nodes[v]) {
                     dist[v] = d;
+                    prev[v] = u;
                 }
             }
         }
