@@ -275,6 +275,10 @@ pub enum ClaimTest {
         /// Whether pooled counts decide an inconclusive per-maze verdict.
         #[serde(default)]
         pooled: bool,
+        /// The experiment whose table holds `than`'s cells, when not the claim's own (an
+        /// ablation compared with the results table's cell of the unchanged preset).
+        #[serde(default)]
+        than_experiment: Option<String>,
     },
     /// The median steps of `method`'s solved runs lie below the paper's, on every maze with a
     /// solved run and a paper figure (inconclusive otherwise).
@@ -379,11 +383,43 @@ fn evaluate<'a>(
             Some(claim(ours, verdict))
         }
         ClaimTest::Beats {
+            than,
+            than_experiment: Some(other),
+            ..
+        } => {
+            // `than`'s cells from the other table beside the claim's own cells.
+            let mut both = stats.to_vec();
+            both.extend(table(other).iter().filter(|s| &s.method == than).cloned());
+            let own = ClaimSpec {
+                test: match &spec.test {
+                    ClaimTest::Beats {
+                        method,
+                        label,
+                        than,
+                        than_label,
+                        pooled,
+                        ..
+                    } => ClaimTest::Beats {
+                        method: method.clone(),
+                        label: label.clone(),
+                        than: than.clone(),
+                        than_label: than_label.clone(),
+                        pooled: *pooled,
+                        than_experiment: None,
+                    },
+                    t => t.clone(),
+                },
+                ..spec.clone()
+            };
+            evaluate(&own, &both, table)
+        }
+        ClaimTest::Beats {
             method,
             label,
             than,
             than_label,
             pooled: false,
+            ..
         } => {
             let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
             (!parts.is_empty()).then(|| claim(parts.join("; "), verdict))
@@ -394,11 +430,22 @@ fn evaluate<'a>(
             than,
             than_label,
             pooled: true,
+            ..
         } => {
             // Per maze, and pooled over mazes (more seeds per bar; it decides when no maze
             // does).
             let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
-            let (a, b) = (pooled(stats, method)?, pooled(stats, than)?);
+            // Pooled over the mazes both methods ran.
+            let shared: Vec<CellStats> = stats
+                .iter()
+                .filter(|s| {
+                    (&s.method == method || &s.method == than)
+                        && find(stats, method, s.maze).is_some()
+                        && find(stats, than, s.maze).is_some()
+                })
+                .cloned()
+                .collect();
+            let (a, b) = (pooled(&shared, method)?, pooled(&shared, than)?);
             let verdict = match verdict {
                 Verdict::Inconclusive | Verdict::ExactTestOnly if beats(&a, &b) => Verdict::Agrees,
                 Verdict::Inconclusive if beats(&b, &a) => Verdict::Disagrees,
@@ -491,6 +538,32 @@ mod tests {
             paper_solved: None,
         }
         .with_counts(k, n)
+    }
+
+    #[test]
+    fn pooled_counts_only_the_mazes_both_methods_ran() {
+        let spec = ClaimSpec {
+            id: "x".into(),
+            paper: "p".into(),
+            experiment: "t".into(),
+            test: ClaimTest::Beats {
+                method: "a".into(),
+                label: "A".into(),
+                than: "b".into(),
+                than_label: "B".into(),
+                pooled: true,
+                than_experiment: None,
+            },
+        };
+        // `a` also ran maze 5, which `b` did not: its 0/10 must not dilute the comparison.
+        let stats = vec![
+            cell("a", 2, 9, 10),
+            cell("b", 2, 3, 10),
+            cell("a", 5, 0, 10),
+        ];
+        let c = &claims(&[spec], &[("t".to_string(), stats)])[0];
+        assert!(c.ours.contains("pooled: A 9/10"), "{}", c.ours);
+        assert_eq!(c.verdict, Verdict::ExactTestOnly);
     }
 
     #[test]
@@ -624,6 +697,7 @@ mod tests {
                 than: "b".into(),
                 than_label: "B".into(),
                 pooled,
+                than_experiment: None,
             })
         };
         // 7/10 against 2/10 on two mazes: each overlaps ([0.40, 0.89] and [0.06, 0.51]),
@@ -638,6 +712,20 @@ mod tests {
         let verdict = |s: ClaimSpec| claims(&[s], &tables)[0].verdict;
         assert_eq!(verdict(beats(false)), Verdict::Inconclusive);
         assert_eq!(verdict(beats(true)), Verdict::Agrees);
+        // `than` from another experiment's table: the same comparison.
+        let (own, other): (Vec<_>, Vec<_>) =
+            tables[0].1.iter().cloned().partition(|c| c.method == "a");
+        let split = [("t".to_string(), own), ("u".to_string(), other)];
+        let mut across = beats(true);
+        if let ClaimTest::Beats {
+            than_experiment, ..
+        } = &mut across.test
+        {
+            *than_experiment = Some("u".into());
+        }
+        let c = &claims(&[across], &split)[0];
+        assert_eq!(c.verdict, Verdict::Agrees);
+        assert_eq!(c.ours, claims(&[beats(true)], &tables)[0].ours);
         let shown = claims(
             &[spec(ClaimTest::Pooled {
                 methods: vec![("a".into(), "A".into()), ("b".into(), "B".into())],

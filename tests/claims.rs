@@ -391,7 +391,7 @@ fn at_the_papers_budget_vanilla_baselines_sometimes_solve_maze_2() {
 fn the_claims_file_names_real_experiments_and_methods() {
     use pbcs::claims::{load_claims, ClaimTest};
     let specs = load_claims(Path::new("experiments/claims.toml")).unwrap();
-    assert_eq!(specs.len(), 10);
+    assert_eq!(specs.len(), 15);
     for c in &specs {
         let exp = Experiment::load(
             Path::new(&format!("experiments/{}.toml", c.experiment)),
@@ -402,6 +402,22 @@ fn the_claims_file_names_real_experiments_and_methods() {
             ClaimTest::FailsEverywhere { method, .. }
             | ClaimTest::SolvesEverywhere { method }
             | ClaimTest::StepsBelowPaper { method } => vec![method],
+            ClaimTest::Beats {
+                method,
+                than,
+                than_experiment: Some(other),
+                ..
+            } => {
+                let other = Experiment::load(Path::new(&format!("experiments/{other}.toml")), None)
+                    .unwrap_or_else(|e| panic!("claim {}: {e}", c.id));
+                assert!(
+                    other.methods.iter().any(|(n, _)| n == than),
+                    "claim {}: experiment {} has no method {than}",
+                    c.id,
+                    other.name
+                );
+                vec![method]
+            }
             ClaimTest::Beats { method, than, .. } => vec![method, than],
             ClaimTest::Pooled { methods } => methods.iter().map(|(m, _)| m.as_str()).collect(),
         };
