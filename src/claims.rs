@@ -390,27 +390,13 @@ fn evaluate<'a>(
             // `than`'s cells from the other table beside the claim's own cells.
             let mut both = stats.to_vec();
             both.extend(table(other).iter().filter(|s| &s.method == than).cloned());
-            let own = ClaimSpec {
-                test: match &spec.test {
-                    ClaimTest::Beats {
-                        method,
-                        label,
-                        than,
-                        than_label,
-                        pooled,
-                        ..
-                    } => ClaimTest::Beats {
-                        method: method.clone(),
-                        label: label.clone(),
-                        than: than.clone(),
-                        than_label: than_label.clone(),
-                        pooled: *pooled,
-                        than_experiment: None,
-                    },
-                    t => t.clone(),
-                },
-                ..spec.clone()
-            };
+            let mut own = spec.clone();
+            if let ClaimTest::Beats {
+                than_experiment, ..
+            } = &mut own.test
+            {
+                *than_experiment = None;
+            }
             evaluate(&own, &both, table)
         }
         ClaimTest::Beats {
