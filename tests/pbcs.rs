@@ -1170,6 +1170,22 @@ mod switches {
         assert!(bad.unwrap_err().to_string().contains("pixels"));
     }
 
+    /// A chain verification that runs past the step budget ends the run like any other
+    /// work that does: with `budget`, not solved. (Seed 0's chain of the paper preset on
+    /// maze 2 is complete after 408 621 steps; its first verification needs about 900 more.)
+    #[test]
+    fn a_chain_verification_past_the_budget_is_a_budget_failure() {
+        let mut job = pbcs::config::Preset::Paper.job().unwrap();
+        job.maze.size = 2;
+        job.phase2.max_env_steps = 409_000;
+        job.phase2.chain_verify_episodes = 100;
+        let run = PbcsRun::compute(&job, |_, _| {}).unwrap();
+        assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
+        assert!(!run.record.solved && run.record.total_steps > 409_000);
+        let last = run.phase2.trace.last().unwrap();
+        assert_eq!(last.event, EventKind::ChainVerify);
+    }
+
     /// The paper preset's seed 0 on maze 2 builds a chain that reaches the target from 34 of
     /// 100 evaluation starts (the committed table row). With the chain's verification and
     /// repair, the first verification fails, the skill where the episodes stall is learned

@@ -262,8 +262,9 @@ fn check_chain<E: Env, P: FnMut(usize, Progress)>(
 ///     replace skill i by them (one skill, or several: a split)
 /// ```
 ///
-/// A repair that finds no skill leaves the chain as it was and ends the repairs; one that runs
-/// out of the step budget ends the run with [`Failure::Budget`]. The chain_verify row's
+/// A repair that finds no skill leaves the chain as it was and ends the repairs; a
+/// verification or repair that runs out of the step budget ends the run with
+/// [`Failure::Budget`]. The chain_verify row's
 /// `skill` is the chain position of the skill blamed (the number of skills when the chain
 /// passed), its K and T that skill's (0 and N when it passed); the repair's own tests and
 /// training rounds follow as the rows of a new learning problem.
@@ -311,6 +312,10 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
                 steps,
             },
         );
+        if c.exhausted() {
+            // The verification itself used up the budget: as for any run that reaches it.
+            return Ok(Some(Failure::Budget));
+        }
         let Some(i) = blamed else {
             return Ok(None);
         };
