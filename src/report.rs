@@ -32,6 +32,7 @@ pub fn tex(text: &str) -> String {
             '≤' => out.push_str("$\\le$"),
             '≥' => out.push_str("$\\ge$"),
             '∈' => out.push_str("$\\in$"),
+            '−' => out.push_str("$-$"),
             _ => out.push(c),
         }
     }

@@ -430,6 +430,12 @@ fn the_claims_file_names_real_experiments_and_methods() {
             );
         }
     }
+    // What the report prints of each claim is plain ASCII once escaped (pdflatex knows no
+    // other character unless told).
+    for c in &specs {
+        let text = pbcs::report::tex(&c.paper);
+        assert!(text.is_ascii(), "claim {}: {text}", c.id);
+    }
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("claims.toml");
     for text in [
