@@ -5,7 +5,9 @@
 //! from at least [`crate::runs::SOLVED_AT`] (95 %) of its evaluation episodes from B_ε(s_0).
 //! This module re-counts every PBCS cell at other thresholds, from the raw rows alone (no new
 //! runs): the chain-success rate of each run ([`ChainSuccess`], `<experiment>.chains.csv`) and
-//! the solved counts per criterion ([`Criteria`], `<experiment>.criteria.csv`).
+//! the solved counts per criterion ([`Criteria`], `<experiment>.criteria.csv`). The same
+//! per-run table gives the performance profile ([`profile`]): the fraction of runs solved
+//! within x times the paper's steps.
 //!
 //! ```
 //! use pbcs::criteria::{criteria, ChainSuccess};
@@ -13,6 +15,7 @@
 //! let run = |seed, complete, success_rate| ChainSuccess {
 //!     experiment: "t".into(), cell: "pbcs-maze2".into(), method: "pbcs".into(),
 //!     label: "PBCS".into(), maze: 2, seed, complete, success_rate,
+//!     solved: complete && success_rate >= 0.95, env_steps: 1000, paper_steps: Some(321_000),
 //! };
 //! let c = &criteria(&[run(0, true, 1.0), run(1, true, 0.93), run(2, false, 0.0)])[0];
 //! assert_eq!((c.n, c.complete, c.at_0_50, c.at_0_90, c.at_0_95, c.at_1_00), (3, 2, 2, 2, 1, 1));
@@ -45,6 +48,12 @@ pub struct ChainSuccess {
     pub complete: bool,
     /// Fraction of evaluation episodes that reached the target.
     pub success_rate: f32,
+    /// Whether the run counts as solved in the tables (complete chain, ≥ 95 %).
+    pub solved: bool,
+    /// Environment steps of the run.
+    pub env_steps: u64,
+    /// The paper's PBCS steps on this maze size (its one run), if the paper ran it.
+    pub paper_steps: Option<u64>,
 }
 
 /// One PBCS cell's solved counts under each criterion: a complete chain, and a complete chain
@@ -98,6 +107,9 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
             seed: r.seed,
             complete: r.failure.is_none(),
             success_rate: r.success_rate,
+            solved: r.solved,
+            env_steps: r.env_steps,
+            paper_steps: crate::runs::paper_figures(crate::runs::Variant::Pbcs, r.maze).0,
         })
         .collect()
 }
@@ -158,4 +170,45 @@ pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
         .deserialize()
         .collect::<std::result::Result<Vec<_>, _>>()
         .map_err(|e| crate::Error::csv(path, e))
+}
+
+/// The performance profile of `runs` (one method's runs): for each ratio x of `ratios`, the
+/// fraction of the runs solved within x times the paper's steps for their maze (a run not
+/// solved never counts; runs on a size the paper did not run are left out).
+///
+/// ```
+/// use pbcs::criteria::{profile, ChainSuccess};
+///
+/// let run = |steps, solved| ChainSuccess {
+///     experiment: "t".into(), cell: "c".into(), method: "m".into(), label: "m".into(),
+///     maze: 2, seed: 0, complete: true, success_rate: 1.0, solved, env_steps: steps,
+///     paper_steps: Some(100),
+/// };
+/// let runs = [run(10, true), run(50, true), run(150, true), run(20, false)];
+/// assert_eq!(profile(&runs, &[0.1, 0.5, 1.0, 2.0]), [0.25, 0.5, 0.5, 0.75]);
+/// ```
+pub fn profile(runs: &[ChainSuccess], ratios: &[f64]) -> Vec<f64> {
+    let ratios_of: Vec<Option<f64>> = runs
+        .iter()
+        .map(|r| {
+            let paper = r.paper_steps? as f64;
+            Some(if r.solved {
+                r.env_steps as f64 / paper
+            } else {
+                f64::INFINITY
+            })
+        })
+        .collect();
+    let n = ratios_of.iter().flatten().count();
+    ratios
+        .iter()
+        .map(|&x| {
+            let within = ratios_of.iter().flatten().filter(|&&r| r <= x).count();
+            if n == 0 {
+                0.0
+            } else {
+                within as f64 / n as f64
+            }
+        })
+        .collect()
 }

@@ -223,6 +223,12 @@ pub enum FigureSpec {
         /// File stem.
         name: String,
     },
+    /// The performance profile of each PBCS method: the fraction of its runs solved within
+    /// x times the paper's steps for the maze, x on a log axis (`<experiment>.chains.csv`).
+    Profile {
+        /// File stem.
+        name: String,
+    },
     /// The `methods`' pictures side by side, on the maze where the solved counts of the first
     /// two differ most (the smallest such maze on ties).
     Panels {
@@ -243,6 +249,7 @@ impl FigureSpec {
             | FigureSpec::Bars { name }
             | FigureSpec::Scaling { name }
             | FigureSpec::Chains { name }
+            | FigureSpec::Profile { name }
             | FigureSpec::Panels { name, .. } => name,
         }
     }

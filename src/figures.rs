@@ -387,6 +387,98 @@ impl Figure for SuccessBars {
     }
 }
 
+/// The performance profile of each PBCS method of an experiment
+/// ([`crate::criteria::profile`]): the fraction of its runs solved within x times the paper's
+/// steps, x from 1/100 to 2 on a log axis.
+pub struct Profile {
+    title: String,
+    /// (label, runs counted, fraction at each of `ratios`).
+    series: Vec<(String, usize, Vec<f64>)>,
+    ratios: Vec<f64>,
+}
+
+/// The range of x of the performance profile: 1/100 to twice the paper's steps (the budgets).
+const PROFILE_RANGE: (f64, f64) = (0.01, 2.0);
+
+impl Profile {
+    /// The profile of `exp`'s PBCS `runs`.
+    pub fn new(exp: &Experiment, runs: &[crate::criteria::ChainSuccess]) -> Profile {
+        let (lo, hi) = PROFILE_RANGE;
+        let ratios: Vec<f64> = (0..=400)
+            .map(|i| lo * (hi / lo).powf(i as f64 / 400.0))
+            .collect();
+        let series = exp
+            .methods
+            .iter()
+            .filter_map(|(m, label)| {
+                let own: Vec<_> = runs
+                    .iter()
+                    .filter(|r| &r.method == m && r.paper_steps.is_some())
+                    .cloned()
+                    .collect();
+                (!own.is_empty()).then(|| {
+                    let y = crate::criteria::profile(&own, &ratios);
+                    (label.clone(), own.len(), y)
+                })
+            })
+            .collect();
+        Profile {
+            title: format!(
+                "{}: runs solved within x times the paper's steps",
+                exp.title
+            ),
+            series,
+            ratios,
+        }
+    }
+}
+
+impl Figure for Profile {
+    fn size(&self) -> (u32, u32) {
+        (800, 520)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (lo, hi) = PROFILE_RANGE;
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d((lo..hi).log_scale(), 0.0..1.05)?;
+        chart
+            .configure_mesh()
+            .x_desc("x: environment steps / the paper's PBCS steps for the maze (log)")
+            .y_desc("fraction of runs solved within x")
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(1.0, 0.0), (1.0, 1.05)],
+            BLACK.mix(0.5).stroke_width(1),
+        )))?;
+        for (j, (label, n, y)) in self.series.iter().enumerate() {
+            let colour = PALETTE[j % PALETTE.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    self.ratios.iter().copied().zip(y.iter().copied()),
+                    colour.stroke_width(3),
+                ))?
+                .label(format!("{label} ({n} runs)"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
 /// One run of [`ChainSpread`]: seed, chain complete, chain success.
 type ChainRun = (u64, bool, f32);
 
@@ -876,6 +968,13 @@ pub fn render_experiment(
                 if path.exists() {
                     let chains = ChainSpread::new(exp, &crate::criteria::read_chains(&path)?);
                     files.extend(render_figure(&chains, &stem)?);
+                }
+            }
+            FigureSpec::Profile { .. } => {
+                let path = crate::criteria::chains_path(results, &exp.name);
+                if path.exists() {
+                    let runs = crate::criteria::read_chains(&path)?;
+                    files.extend(render_figure(&Profile::new(exp, &runs), &stem)?);
                 }
             }
             FigureSpec::Scaling { .. } => {

@@ -49,3 +49,29 @@ fn the_table_under_other_criteria() {
     assert_eq!(get("pbcs-maze2").at(), [9, 9, 9, 8]);
     assert_eq!(get("pbcs-maze15").at(), [7, 7, 6, 6]);
 }
+
+/// The performance profile at x = 1 is the table's "solved within the paper's steps", pooled
+/// over the sizes, and at x = 2 (the budget) its solved count.
+#[test]
+fn the_profile_at_one_and_two_is_the_tables_solved_within_and_solved() {
+    let tables = Path::new("results/tables");
+    let runs = read_chains(&tables.join("table.chains.csv")).unwrap();
+    let stats = read_table(&tables.join("table.csv")).unwrap();
+    for method in ["pbcs", "pbcs_fast", "pbcs_no_chaining"] {
+        let own: Vec<_> = runs
+            .iter()
+            .filter(|r| r.method == method)
+            .cloned()
+            .collect();
+        let cells: Vec<_> = stats.iter().filter(|s| s.method == method).collect();
+        let n: u64 = cells.iter().map(|s| s.n).sum();
+        let solved: u64 = cells.iter().map(|s| s.successes).sum();
+        let p = pbcs::criteria::profile(&own, &[2.0]);
+        assert_eq!(p[0], solved as f64 / n as f64, "{method}");
+        if method == "pbcs" {
+            let within: u64 = cells.iter().map(|s| s.solved_within_paper.unwrap()).sum();
+            let p = pbcs::criteria::profile(&own, &[1.0]);
+            assert_eq!(p[0], within as f64 / n as f64);
+        }
+    }
+}

@@ -566,7 +566,13 @@ fn experiments_declare_their_figures() {
     };
     assert_eq!(
         names("experiments/table.toml"),
-        ["results_grid", "results_maze", "curves", "table_chains"]
+        [
+            "results_grid",
+            "results_maze",
+            "curves",
+            "table_chains",
+            "table_profile"
+        ]
     );
     assert_eq!(
         names("experiments/ablations.toml"),
