@@ -29,6 +29,19 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(120, 120, 120),
 ];
 
+/// The x-axis labels of a chart of categories at [i, i + 1): `labels[i]` at the centre of its
+/// slot, nothing at the other ticks (ask for `2 · labels.len() + 1` of them).
+fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
+    move |x: &f64| {
+        let i = x.floor() as usize;
+        if (x - x.floor() - 0.5).abs() < 1e-6 && i < labels.len() {
+            labels[i].clone()
+        } else {
+            String::new()
+        }
+    }
+}
+
 /// `1234567` → `1.23M`, `171000` → `171k`.
 pub fn human_steps(steps: f64) -> String {
     if !steps.is_finite() {
@@ -294,19 +307,13 @@ impl Figure for SuccessBars {
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..groups, 0.0..1.05)?;
-        let mazes = self.mazes.clone();
+        let labels: Vec<String> = self.mazes.iter().map(|n| format!("maze {n}×{n}")).collect();
+        let label = category_label(&labels);
         chart
             .configure_mesh()
             .disable_x_mesh()
-            .x_labels(self.mazes.len() * 2 + 1)
-            .x_label_formatter(&move |x: &f64| {
-                let i = x.floor() as usize;
-                if (x - x.floor() - 0.5).abs() < 1e-6 && i < mazes.len() {
-                    format!("maze {0}×{0}", mazes[i])
-                } else {
-                    String::new()
-                }
-            })
+            .x_labels(labels.len() * 2 + 1)
+            .x_label_formatter(&label)
             .y_desc("success rate (Wilson 95 % interval)")
             .label_style(("sans-serif", 15))
             .draw()?;
@@ -541,18 +548,12 @@ impl Figure for ChainSpread {
             .iter()
             .map(|(_, n, _)| format!("{n}×{n}"))
             .collect();
+        let label = category_label(&labels);
         chart
             .configure_mesh()
             .disable_x_mesh()
-            .x_labels(self.columns.len() * 2 + 1)
-            .x_label_formatter(&move |x: &f64| {
-                let i = x.floor() as usize;
-                if (x - x.floor() - 0.5).abs() < 1e-6 && i < labels.len() {
-                    labels[i].clone()
-                } else {
-                    String::new()
-                }
-            })
+            .x_labels(labels.len() * 2 + 1)
+            .x_label_formatter(&label)
             .y_desc("chain success (evaluation episodes from B_ε(s₀))")
             .label_style(("sans-serif", 14))
             .draw()?;
