@@ -50,18 +50,17 @@ fn matmul_rate(kernel: Kernel) -> f64 {
 }
 
 /// Environment steps per second of the fast preset on maze 10, seed 0, for its first
-/// `steps` steps (phase 1 included), with `kernel` active; also the training and test steps
+/// `steps` steps (phase 1 included), on `kernel`; also the training and test steps
 /// among them (kernels that round differently follow different runs, and test steps do no
 /// update, so the mix is printed beside the rate).
 fn end_to_end(kernel: Kernel, steps: u64) -> (f64, u64, u64) {
-    kernel.set_active().unwrap();
     let mut job = Preset::Fast.job().unwrap();
     job.maze.size = 10;
     job.seed = 0;
     job.phase2.max_env_steps = steps;
     // The run stops at the budget (maze 10 needs ~1M steps), so no evaluation is timed.
     let t = Instant::now();
-    let run = pbcs::runs::PbcsRun::compute(&job, |_, _| {}).unwrap();
+    let run = pbcs::runs::PbcsRun::compute(&job, kernel, |_, _| {}).unwrap();
     let r = &run.record;
     (
         r.total_steps as f64 / t.elapsed().as_secs_f64(),
@@ -226,8 +225,7 @@ fn main() {
                     let scale = if k == Kernel::Portable { 10 } else { 1 };
                     let n = (if h * b >= 256 * 64 { 100 } else { 1000 }) / scale;
                     let mut l =
-                        Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
-                    l.set_kernel(k);
+                        Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0), k).unwrap();
                     for _ in 0..20 {
                         l.update(&batch);
                     }
@@ -297,11 +295,10 @@ fn main() {
             best.name(),
             after / before
         );
-        best.set_active().unwrap();
     }
 
     // Action selection: one state, one forward pass.
-    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(0)).unwrap();
+    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(0), best).unwrap();
     let obs = [1.5f32, 2.5];
     let n = 100_000;
     let s = best_of(3, || {
@@ -341,7 +338,7 @@ fn main() {
         };
         replay.push(&s, &a, r, &[s[0] + a[0], s[1] + a[1]], false);
     }
-    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(2)).unwrap();
+    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(2), best).unwrap();
     let mut batch = Batch::default();
     let mut blocks = Vec::new();
     for _ in 0..10 {

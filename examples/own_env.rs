@@ -128,6 +128,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &job.phase2,
         &seeds,
         found.env_steps,
+        pbcs::nn::kernel::Kernel::detect(),
         |_, _| {},
     )?;
     if let Some(f) = out.failure {

@@ -33,6 +33,7 @@ fn main() -> anyhow::Result<()> {
         &job.phase2,
         &seeds,
         found.env_steps,
+        pbcs::nn::kernel::Kernel::detect(),
         |n, p| {
             println!(
                 "{:7.1}s skill {n} K {:4} T {:4} {:?} {:.2} steps {}/{}",

@@ -25,8 +25,15 @@ fn main() {
         let t = std::time::Instant::now();
         let rates: Vec<f32> = (0..10)
             .map(|seed| {
-                let out =
-                    train_vanilla(&Toy1D, &cfg, &train, &Seeds::new(seed), |_, _| {}).unwrap();
+                let out = train_vanilla(
+                    &Toy1D,
+                    &cfg,
+                    &train,
+                    &Seeds::new(seed),
+                    pbcs::nn::kernel::Kernel::detect(),
+                    |_, _| {},
+                )
+                .unwrap();
                 out.evals.last().unwrap().success
             })
             .collect();

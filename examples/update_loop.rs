@@ -18,7 +18,7 @@ fn main() -> anyhow::Result<()> {
         }
     };
     let (h, b, n) = (arg(1, 64)?, arg(2, 64)?, arg(3, 50_000)?);
-    pbcs::nn::kernel::Kernel::from_env()?.set_active()?;
+    let kernel = pbcs::nn::kernel::Kernel::from_env()?;
     let mut rng = Seeds::new(5).substream(Stream::Replay, 0);
     let mut v =
         |n: usize, s: f32| -> Vec<f32> { (0..n).map(|_| rng.random_range(-s..s)).collect() };
@@ -35,7 +35,7 @@ fn main() -> anyhow::Result<()> {
         batch_size: b,
         ..LearnerConfig::ddpg()
     };
-    let mut l = Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(0))?;
+    let mut l = Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(0), kernel)?;
     let t = std::time::Instant::now();
     for _ in 0..n {
         std::hint::black_box(l.update(&batch));

@@ -6,9 +6,10 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{plan, read_finished, sweep, Event, Experiment, Pending, RawRow};
+use crate::nn::kernel::Kernel;
 use crate::record::Timing;
 use crate::stats::wilson;
-use crate::tables::Z95;
+use crate::stats::Z95;
 use std::path::Path;
 
 /// One seed's comparison.
@@ -109,13 +110,15 @@ impl CellCheck {
 
 /// Re-runs `cell` of `exp` (every seed, or `seed`) into a scratch folder, `jobs` at a time,
 /// and compares with the committed rows under `results`. A missing committed row is an error
-/// naming the folder. `on_event` is called as the sweep goes.
+/// naming the folder. The re-runs' learners run on `kernel`. `on_event` is called as the
+/// sweep goes.
 pub fn check_cell(
     exp: &Experiment,
     results: &Path,
     cell: &str,
     seed: Option<u64>,
     jobs: usize,
+    kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<CellCheck> {
     let runs = plan(exp, Some(cell), seed)?;
@@ -138,7 +141,7 @@ pub fn check_cell(
         }
     }
     let scratch = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-    let fresh = sweep(exp, &runs, scratch.path(), jobs, on_event)?;
+    let fresh = sweep(exp, &runs, scratch.path(), jobs, kernel, on_event)?;
     let fresh_dir = exp.cell_dir(scratch.path(), c);
     let read = |p: &Path| std::fs::read(p).map_err(|e| Error::io(p, e));
     let mut seeds = Vec::new();
@@ -164,7 +167,7 @@ pub fn check_cell(
         cell: cell.to_string(),
         seeds,
         committed_kernels,
-        kernel: crate::nn::kernel::Kernel::active().name().to_string(),
+        kernel: kernel.name().to_string(),
     })
 }
 

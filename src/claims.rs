@@ -9,7 +9,7 @@
 //! is *inconclusive*.
 
 use crate::error::{Error, Result};
-use crate::figures::human_steps;
+use crate::fmt::human_steps;
 use crate::tables::CellStats;
 use serde::Deserialize;
 use std::path::Path;
@@ -304,18 +304,14 @@ struct ClaimsFile {
 /// Reads the claims file (`experiments/claims.toml`), in order; a malformed file or a `pooled`
 /// test with fewer than two methods is an error naming the file.
 pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let file: ClaimsFile = toml::from_str(&text).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+    let file: ClaimsFile = crate::validate::read_toml(path)?;
     for (i, c) in file.claims.iter().enumerate() {
         if let ClaimTest::Pooled { methods } = &c.test {
             if methods.len() < 2 {
-                return Err(Error::Parse {
-                    path: path.to_path_buf(),
-                    message: format!("claim[{i}] ({}): `pooled` needs at least two methods", c.id),
-                });
+                return Err(Error::parse(
+                    path,
+                    format!("claim[{i}] ({}): `pooled` needs at least two methods", c.id),
+                ));
             }
         }
     }

@@ -1,4 +1,5 @@
-//! Typed, validated configurations, read from TOML.
+//! The jobs a run is computed from (`pbcs explore`, `train`, `run`), assembled from each
+//! module's own validated config, and the named presets.
 //!
 //! Each struct rejects unknown keys when parsed and has a `check()` that names the offending
 //! field in its error (`invalid \`maze.size\`: ...`). Every field has a default, so a config
@@ -15,126 +16,17 @@
 //! assert!(bad.check().unwrap_err().to_string().contains("maze.size"));
 //! ```
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
 use crate::train::TrainConfig;
-use serde::de::DeserializeOwned;
+use crate::validate::parse_toml;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Largest maze size accepted. Phase 1 and the wall grid scale with N², so the bound keeps a
-/// typo (`size = 1000`) from turning into hours of work; the paper's largest maze is 15.
-pub const MAX_MAZE_SIZE: usize = 100;
-
-/// A validated configuration.
-pub trait Check {
-    /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.
-    fn check(&self) -> Result<()>;
-}
-
-/// Reads a TOML file into a config and validates it. Unknown keys, syntax errors and
-/// unreadable files are errors that name the file (and the key, for parse errors).
-pub fn load<T: DeserializeOwned + Check>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let config: T = toml::from_str(&text).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    config.check()?;
-    Ok(config)
-}
-
-fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
-    if !(value.is_finite() && value > 0.0 && value <= max) {
-        return Err(Error::invalid(
-            field,
-            format!("must be in (0, {max}], got {value}"),
-        ));
-    }
-    Ok(())
-}
-
-/// The maze environment (appendix "Experimental Setup"): a layout named by its size and its
-/// own maze seed, and the constants of the MDP.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct MazeConfig {
-    /// N: the maze has N×N cells and the state space is [0, N]². 2 ≤ N ≤ 100.
-    pub size: usize,
-    /// Seed of the layout, independent of the run seed, so that one layout can be held fixed
-    /// while runs vary. Ignored for N = 2, whose layout is the fixed U-shape.
-    pub seed: u64,
-    /// Wall thickness (0.1 in the paper).
-    pub wall_thickness: f32,
-    /// Success radius around the target (0.2 in the paper).
-    pub target_radius: f32,
-    /// Largest absolute action component (0.1 in the paper).
-    pub max_action: f32,
-}
-
-impl Default for MazeConfig {
-    fn default() -> Self {
-        MazeConfig {
-            size: 5,
-            seed: 0,
-            wall_thickness: 0.1,
-            target_radius: 0.2,
-            max_action: 0.1,
-        }
-    }
-}
-
-impl Check for MazeConfig {
-    fn check(&self) -> Result<()> {
-        if !(2..=MAX_MAZE_SIZE).contains(&self.size) {
-            return Err(Error::invalid(
-                "maze.size",
-                format!(
-                    "must be between 2 and {MAX_MAZE_SIZE} cells, got {}",
-                    self.size
-                ),
-            ));
-        }
-        positive_finite("maze.wall_thickness", self.wall_thickness, 0.5)?;
-        positive_finite("maze.target_radius", self.target_radius, 0.5)?;
-        positive_finite("maze.max_action", self.max_action, 0.5)?;
-        Ok(())
-    }
-}
-
-/// Phase 1 (appendix algorithm "Exploration algorithm").
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ExploreConfig {
-    /// Side of the square state-space bins of the archive (0.05 in the paper).
-    pub bin_side: f32,
-    /// Budget of environment steps in all; phase 1 fails with an error if the reward is not
-    /// found within it. (The paper runs until the reward is found.) Called `max_steps` before
-    /// (still read, so stored configs compare equal); `phase2.max_steps` is a different thing,
-    /// the length limit of one Backplay episode.
-    #[serde(alias = "max_steps")]
-    pub budget: u64,
-}
-
-impl Default for ExploreConfig {
-    fn default() -> Self {
-        ExploreConfig {
-            bin_side: 0.05,
-            budget: 100_000_000,
-        }
-    }
-}
-
-impl Check for ExploreConfig {
-    fn check(&self) -> Result<()> {
-        positive_finite("explore.bin_side", self.bin_side, 1.0)?;
-        if self.budget == 0 {
-            return Err(Error::invalid("explore.budget", "must be at least 1"));
-        }
-        Ok(())
-    }
-}
+pub use crate::explore::ExploreConfig;
+pub use crate::maze::{MazeConfig, MAX_MAZE_SIZE};
+pub use crate::validate::{load, Check};
 
 /// What `pbcs explore` runs: phase 1 on one maze with one run seed.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -267,10 +159,10 @@ impl Preset {
 
     /// The preset as a validated job (maze 5, seed 0: set them for your run).
     pub fn job(self) -> Result<RunJob> {
-        let job: RunJob = toml::from_str(self.text()).map_err(|e| Error::Parse {
-            path: Path::new("experiments").join(self.file_name()),
-            message: e.to_string(),
-        })?;
+        let job: RunJob = parse_toml(
+            self.text(),
+            &Path::new("experiments").join(self.file_name()),
+        )?;
         job.check()?;
         Ok(job)
     }

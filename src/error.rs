@@ -90,6 +90,14 @@ impl Error {
         }
     }
 
+    /// Shorthand for [`Error::Parse`]: `path` could not be read as what it should hold.
+    pub fn parse(path: impl Into<PathBuf>, message: impl std::fmt::Display) -> Self {
+        Error::Parse {
+            path: path.into(),
+            message: message.to_string(),
+        }
+    }
+
     /// Shorthand for [`Error::Csv`].
     pub fn csv(path: impl Into<PathBuf>, cause: csv::Error) -> Self {
         Error::Csv {

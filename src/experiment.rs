@@ -30,10 +30,12 @@
 //! chain, success and steps; rows committed before it existed lack it) and, for picture seeds, `s<s>.picture.csv` (what the figures
 //! draw).
 
-use crate::config::{Check, RunJob, TrainJob};
+use crate::config::{RunJob, TrainJob};
 use crate::error::{Error, Result};
+use crate::nn::kernel::Kernel;
 use crate::phase2::{Failure, StartMode};
 use crate::runs::{PbcsRun, RunRecord, TrainRun, TrainSummary, Variant};
+use crate::validate::Check;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -471,25 +473,16 @@ fn merge(into: &mut toml::Table, from: &toml::Table) {
     }
 }
 
-fn parse_err(path: &Path, message: impl Into<String>) -> Error {
-    Error::Parse {
-        path: path.to_path_buf(),
-        message: message.into(),
-    }
-}
-
 impl Experiment {
     /// Reads and resolves an experiment file under `profile` (None: the committed grid).
     /// Every cell's job is validated; duplicate method names, an unknown profile, an empty
     /// grid and keys that a job does not have are errors naming the method or field.
     pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let spec: ExperimentSpec =
-            toml::from_str(&text).map_err(|e| parse_err(path, e.to_string()))?;
+        let spec: ExperimentSpec = crate::validate::read_toml(path)?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
-            .ok_or_else(|| parse_err(path, "no file name"))?;
+            .ok_or_else(|| Error::parse(path, "no file name"))?;
         let folder = path.parent().unwrap_or(Path::new("."));
         let prof = match profile {
             None => ProfileSpec::default(),
@@ -569,10 +562,7 @@ impl Experiment {
         let mut resolved = Vec::new();
         for m in all_methods.iter().copied() {
             let base_path = folder.join(&m.base);
-            let base_text =
-                std::fs::read_to_string(&base_path).map_err(|e| Error::io(&base_path, e))?;
-            let mut table: toml::Table =
-                toml::from_str(&base_text).map_err(|e| parse_err(&base_path, e.to_string()))?;
+            let mut table: toml::Table = crate::validate::read_toml(&base_path)?;
             merge(&mut table, &m.set);
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((m.name.clone(), label.clone()));
@@ -593,7 +583,7 @@ impl Experiment {
                     merge(&mut table, t.of(m.kind));
                 }
                 let what = |e: toml::de::Error| {
-                    parse_err(
+                    Error::parse(
                         path,
                         format!("method `{}` ({} job, maze {n}): {e}", m.name, m.kind.name()),
                     )
@@ -859,24 +849,35 @@ fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
 /// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
 /// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
-/// job) and `s<seed>.csv` (the row).
-pub fn run_cell_seed(exp: &Experiment, cell: &Cell, seed: u64, dir: &Path) -> Result<RawRow> {
+/// job) and `s<seed>.csv` (the row). The learners run on `kernel`.
+pub fn run_cell_seed(
+    exp: &Experiment,
+    cell: &Cell,
+    seed: u64,
+    dir: &Path,
+    kernel: Kernel,
+) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
-            let run = TrainRun::compute(j, |_, _| {})?;
+            let run = TrainRun::compute(j, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
             let row = RawRow::vanilla(exp, cell, j, &run.summary);
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
-            let run = PbcsRun::compute(j, |_, _| {})?;
+            let run = PbcsRun::compute(j, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
             let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)
         }
     };
-    crate::runs::write_timing(&run_file(dir, seed, ".timing.toml"), seconds, row.env_steps)?;
+    crate::runs::write_timing(
+        &run_file(dir, seed, ".timing.toml"),
+        seconds,
+        row.env_steps,
+        Some(kernel),
+    )?;
     if exp.picture_seeds.contains(&seed) {
         picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
     }
@@ -900,7 +901,7 @@ pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow
     let config_path = run_file(dir, seed, ".toml");
     let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
     if !cell.job.with_seed(seed).same_as(&stored) {
-        return Err(parse_err(
+        return Err(Error::parse(
             &config_path,
             "this finished run used another config than the experiment now gives (its file, or \
              `pbcs table`'s preset or config); remove the cell's folder to re-run it, restore \
@@ -916,7 +917,7 @@ pub fn read_row(path: &Path) -> Result<RawRow> {
     reader
         .deserialize()
         .next()
-        .ok_or_else(|| parse_err(path, "empty raw row file"))?
+        .ok_or_else(|| Error::parse(path, "empty raw row file"))?
         .map_err(|e| Error::csv(path, e))
 }
 
@@ -959,13 +960,15 @@ pub enum Event {
 
 /// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
 /// (one thread each; each run is single-threaded and deterministic, so the bytes do not
-/// depend on `jobs`). `on_event` is called as each pair finishes. Returns the rows in the
-/// order of `runs`; the first error stops handing out new runs and is returned.
+/// depend on `jobs`), every learner on `kernel`. `on_event` is called as each pair finishes.
+/// Returns the rows in the order of `runs`; the first error stops handing out new runs and is
+/// returned.
 pub fn sweep(
     exp: &Experiment,
     runs: &[Pending],
     results: &Path,
     jobs: usize,
+    kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<Vec<RawRow>> {
     // Finished runs first (cheap), so that a config mismatch is reported before any work.
@@ -990,7 +993,7 @@ pub fn sweep(
                 // Finished by another sweep while this one was planning: read it back.
                 match read_finished(p.cell, p.seed, &dir)? {
                     Some(row) => Ok(row),
-                    None => run_cell_seed(exp, p.cell, p.seed, &dir),
+                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel),
                 }
             })
             .map_err(|e| Error::Run {

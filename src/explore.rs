@@ -16,12 +16,46 @@
 //! Both selections are O(1) whatever the archive's size: [`LeastUsed`] keeps items grouped by
 //! usage count, so "uniform among the least used" is one index into the lowest group.
 
-use crate::config::ExploreConfig;
 use crate::env::{random_action, Env};
 use crate::error::{Error, Result};
 use crate::rng::Rng;
+use crate::validate::{positive_finite, Check};
 use rand::Rng as _;
 use rustc_hash::FxHashMap;
+use serde::{Deserialize, Serialize};
+
+/// Phase 1 (appendix algorithm "Exploration algorithm").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExploreConfig {
+    /// Side of the square state-space bins of the archive (0.05 in the paper).
+    pub bin_side: f32,
+    /// Budget of environment steps in all; phase 1 fails with an error if the reward is not
+    /// found within it. (The paper runs until the reward is found.) Called `max_steps` before
+    /// (still read, so stored configs compare equal); `phase2.max_steps` is a different thing,
+    /// the length limit of one Backplay episode.
+    #[serde(alias = "max_steps")]
+    pub budget: u64,
+}
+
+impl Default for ExploreConfig {
+    fn default() -> Self {
+        ExploreConfig {
+            bin_side: 0.05,
+            budget: 100_000_000,
+        }
+    }
+}
+
+impl Check for ExploreConfig {
+    fn check(&self) -> Result<()> {
+        positive_finite("explore.bin_side", self.bin_side, 1.0)?;
+        if self.budget == 0 {
+            return Err(Error::invalid("explore.budget", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
 
 /// Items `0..len` with usage counters, answering "a uniformly random item among the least
 /// used" in O(1), and incrementing a counter in O(1).

@@ -6,6 +6,7 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, picture_file, Cell, Experiment, FigureSpec, Job};
+use crate::fmt::human_steps;
 use crate::maze::Maze;
 use crate::plot::{draw_maze, render_figure, Figure, PictureData};
 use crate::tables::CellStats;
@@ -39,19 +40,6 @@ fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
         } else {
             String::new()
         }
-    }
-}
-
-/// `1234567` → `1.23M`, `171000` → `171k`.
-pub fn human_steps(steps: f64) -> String {
-    if !steps.is_finite() {
-        "–".into()
-    } else if steps >= 1e6 {
-        format!("{:.2}M", steps / 1e6)
-    } else if steps >= 1e3 {
-        format!("{:.0}k", steps / 1e3)
-    } else {
-        format!("{steps:.0}")
     }
 }
 

@@ -51,6 +51,7 @@ pub mod error;
 pub mod experiment;
 pub mod explore;
 pub mod figures;
+pub mod fmt;
 pub mod launch;
 pub mod learner;
 pub mod maze;
@@ -65,5 +66,6 @@ pub mod stats;
 pub mod tables;
 pub mod toy;
 pub mod train;
+pub mod validate;
 
 pub use error::{Error, Result};

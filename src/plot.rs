@@ -350,10 +350,7 @@ impl PictureData {
     pub fn read_csv(path: &Path) -> Result<PictureData> {
         let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
         let mut data = PictureData::default();
-        let bad = |line: u64, what: &str| Error::Parse {
-            path: path.to_path_buf(),
-            message: format!("line {line}: {what}"),
-        };
+        let bad = |line: u64, what: &str| Error::parse(path, format!("line {line}: {what}"));
         let push = |paths: &mut Vec<Vec<(f32, f32)>>, i: usize, p| {
             if paths.len() <= i {
                 paths.resize(i + 1, Vec::new());

@@ -233,8 +233,9 @@ pub fn write_records<T: serde::Serialize>(path: &Path, records: &[T]) -> Result<
 
 /// A run's `timing.toml`: the wall clock, which is not deterministic and so never goes into a
 /// CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply` gives
-/// the same bytes, so a byte difference between machines can be told apart). Files written
-/// before the kernel was recorded lack it: those rows were computed with `matrixmultiply`.
+/// the same bytes, so a byte difference between machines can be told apart). Files of runs
+/// with networks written before the kernel was recorded lack it: those rows were computed
+/// with `matrixmultiply`; phase-1 runs (no networks) record none.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Timing {
     /// Wall-clock seconds of the run.
@@ -267,22 +268,20 @@ pub fn machine() -> String {
 }
 
 impl Timing {
-    /// The timing of a run that took `seconds` for `env_steps` steps with the active kernel.
-    pub fn now(seconds: f64, env_steps: u64) -> Timing {
+    /// The timing of a run that took `seconds` for `env_steps` steps on the kernel named
+    /// `kernel` (`None` for runs without networks, such as phase 1 alone).
+    pub fn now(seconds: f64, env_steps: u64, kernel: Option<&str>) -> Timing {
         Timing {
             wall_seconds: (seconds * 1e6).round() / 1e6,
             steps_per_second: (env_steps as f64 / seconds.max(1e-9)).round() as u64,
-            kernel: Some(crate::nn::kernel::Kernel::active().name().to_string()),
+            kernel: kernel.map(str::to_string),
             machine: Some(machine()),
         }
     }
 
     /// Writes `path` atomically, with a comment line saying why it is not in the CSVs.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let body = toml::to_string(self).map_err(|e| Error::Parse {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+        let body = crate::validate::to_toml(self, path)?;
         let text = format!(
             "# wall-clock time of the run (not deterministic, hence not in the CSVs)\n{body}"
         );
@@ -292,10 +291,7 @@ impl Timing {
     /// Reads `path`: `Ok(None)` if there is no such file, an error naming it if it is malformed.
     pub fn read(path: &Path) -> Result<Option<Timing>> {
         match std::fs::read_to_string(path) {
-            Ok(text) => toml::from_str(&text).map(Some).map_err(|e| Error::Parse {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            }),
+            Ok(text) => crate::validate::parse_toml(&text, path).map(Some),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(Error::io(path, e)),
         }
@@ -336,7 +332,7 @@ mod timing_tests {
             machine: Some(super::machine()),
         };
         assert!(t.machine.as_deref().unwrap().ends_with(" cores"));
-        assert_eq!(t.machine, Timing::now(1.0, 1).machine);
+        assert_eq!(t.machine, Timing::now(1.0, 1, None).machine);
         t.write(&new).unwrap();
         assert_eq!(Timing::read(&new).unwrap(), Some(t));
         assert!(std::fs::read_to_string(&new)

@@ -2,7 +2,7 @@
 //! report is typed by hand. The claims it shows are evaluated by [`crate::claims`].
 
 use crate::claims::{find, Claim};
-use crate::figures::human_steps;
+use crate::fmt::human_steps;
 use crate::tables::CellStats;
 use std::fmt::Write as _;
 

@@ -8,16 +8,18 @@
 //! Result files are CSV (deterministic: same config, same bytes) written atomically; the
 //! wall-clock time of a job lives beside them in `timing.toml`, never inside a CSV.
 
-use crate::config::{Check, ExploreJob, RunJob, TrainJob};
+use crate::config::{ExploreJob, RunJob, TrainJob};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
+use crate::nn::kernel::Kernel;
 use crate::phase2::{chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode};
 use crate::plot::{render_maze, MazePicture, PictureData};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::train::train_vanilla;
+use crate::validate::Check;
 use parry2d::math::Point;
 use serde::Serialize;
 use std::path::Path;
@@ -98,7 +100,12 @@ impl ExploreRun {
         write_trajectory_csv(maze, found, &out.join("trajectory.csv"))?;
         write_archive_csv(maze, found, &out.join("archive.csv"))?;
         render_exploration(maze, found, job, out)?;
-        write_timing(&out.join("timing.toml"), self.seconds, found.env_steps)
+        write_timing(
+            &out.join("timing.toml"),
+            self.seconds,
+            found.env_steps,
+            None,
+        )
     }
 }
 
@@ -121,16 +128,19 @@ pub fn run_explore(
 /// resolved job as `config.toml` (so that `--config` re-runs exactly this job), refusing a
 /// path that is not a writable folder or a folder of another run.
 fn claim<T: Serialize>(job: &T, out: &Path) -> Result<()> {
-    let text = toml::to_string(job).map_err(|e| Error::Parse {
-        path: out.join("config.toml"),
-        message: e.to_string(),
-    })?;
+    let text = crate::validate::to_toml(job, &out.join("config.toml"))?;
     crate::record::claim_out_dir(out, &text)
 }
 
-/// Writes a run's `timing.toml` at `path` ([`crate::record::Timing`]).
-pub fn write_timing(path: &Path, seconds: f64, env_steps: u64) -> Result<()> {
-    crate::record::Timing::now(seconds, env_steps).write(path)
+/// Writes a run's `timing.toml` at `path` ([`crate::record::Timing`]): its wall clock and the
+/// layer kernel it ran on (`None` for phase 1, which has no networks).
+pub fn write_timing(
+    path: &Path,
+    seconds: f64,
+    env_steps: u64,
+    kernel: Option<Kernel>,
+) -> Result<()> {
+    crate::record::Timing::now(seconds, env_steps, kernel.map(Kernel::name)).write(path)
 }
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
@@ -250,14 +260,20 @@ pub struct TrainRun {
     pub result: crate::train::TrainOutcome,
     /// What `train.png` draws: the visited bins as red squares.
     pub picture: PictureData,
+    /// The layer kernel the learner ran on.
+    pub kernel: Kernel,
     /// Wall-clock seconds of the run (not deterministic).
     pub seconds: f64,
 }
 
 impl TrainRun {
-    /// Trains the vanilla baseline of `job` on the maze's own reward;
-    /// `progress(steps, success)` is called at each evaluation. Writes nothing.
-    pub fn compute(job: &TrainJob, progress: impl FnMut(u64, f32)) -> Result<TrainRun> {
+    /// Trains the vanilla baseline of `job` on the maze's own reward, the learner's layers on
+    /// `kernel`; `progress(steps, success)` is called at each evaluation. Writes nothing.
+    pub fn compute(
+        job: &TrainJob,
+        kernel: Kernel,
+        progress: impl FnMut(u64, f32),
+    ) -> Result<TrainRun> {
         job.check()?;
         let maze = Maze::new(&job.maze)?;
         let clock = Instant::now();
@@ -266,6 +282,7 @@ impl TrainRun {
             &job.learner,
             &job.train,
             &Seeds::new(job.seed),
+            kernel,
             progress,
         )?;
         let seconds = clock.elapsed().as_secs_f64();
@@ -301,6 +318,7 @@ impl TrainRun {
             summary,
             result,
             picture,
+            kernel,
             seconds,
         })
     }
@@ -341,7 +359,12 @@ impl TrainRun {
             &out.join("train.svg"),
             SVG_MAX_POINTS,
         )?;
-        write_timing(&out.join("timing.toml"), self.seconds, job.train.steps)
+        write_timing(
+            &out.join("timing.toml"),
+            self.seconds,
+            job.train.steps,
+            Some(self.kernel),
+        )
     }
 }
 
@@ -349,12 +372,13 @@ impl TrainRun {
 /// `config.toml`) before any work, then [`TrainRun::compute`] and [`TrainRun::write`].
 pub fn run_train(
     job: &TrainJob,
+    kernel: Kernel,
     out: &Path,
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
     job.check()?;
     claim(job, out)?;
-    let run = TrainRun::compute(job, progress)?;
+    let run = TrainRun::compute(job, kernel, progress)?;
     run.write(job, out)?;
     Ok((run.summary, run.seconds))
 }
@@ -443,15 +467,21 @@ pub struct PbcsRun {
     pub evaluation: Vec<EvalEpisode>,
     /// What `run.png` draws: τ, the first evaluation rollouts, the activation balls.
     pub picture: PictureData,
+    /// The layer kernel the learners and the chain ran on.
+    pub kernel: Kernel,
     /// Wall-clock seconds of the run (not deterministic).
     pub seconds: f64,
 }
 
 impl PbcsRun {
     /// Runs PBCS for `job`: phase 1, phase 2 ([`chain_skills`]), then the chain's evaluation
-    /// from starts uniform in B_ε(s_0). `progress(skill, report)` is called during phase 2.
-    /// Writes nothing.
-    pub fn compute(job: &RunJob, progress: impl FnMut(usize, Progress)) -> Result<PbcsRun> {
+    /// from starts uniform in B_ε(s_0), every network on `kernel`. `progress(skill, report)`
+    /// is called during phase 2. Writes nothing.
+    pub fn compute(
+        job: &RunJob,
+        kernel: Kernel,
+        progress: impl FnMut(usize, Progress),
+    ) -> Result<PbcsRun> {
         job.check()?;
         let maze = Maze::new(&job.maze)?;
         let seeds = Seeds::new(job.seed);
@@ -466,6 +496,7 @@ impl PbcsRun {
             &job.phase2,
             &seeds,
             found.env_steps,
+            kernel,
             progress,
         )?;
         // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
@@ -500,6 +531,7 @@ impl PbcsRun {
             phase2,
             evaluation,
             picture,
+            kernel,
             seconds,
         })
     }
@@ -524,10 +556,7 @@ impl PbcsRun {
         phase2.chain.save(&out.join("chain"))?;
         // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
         // manifest, so `pbcs eval --chain DIR` needs nothing else.
-        let job_text = toml::to_string(job).map_err(|e| Error::Parse {
-            path: out.join("chain/run.toml"),
-            message: e.to_string(),
-        })?;
+        let job_text = crate::validate::to_toml(job, &out.join("chain").join(CHAIN_JOB))?;
         write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
             w.write_all(job_text.as_bytes())
         })?;
@@ -550,7 +579,12 @@ impl PbcsRun {
             &out.join("run.svg"),
             SVG_MAX_POINTS,
         )?;
-        write_timing(&out.join("timing.toml"), self.seconds, record.total_steps)
+        write_timing(
+            &out.join("timing.toml"),
+            self.seconds,
+            record.total_steps,
+            Some(self.kernel),
+        )
     }
 }
 
@@ -610,12 +644,13 @@ fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
 /// during phase 2.
 pub fn run_pbcs(
     job: &RunJob,
+    kernel: Kernel,
     out: &Path,
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
     job.check()?;
     claim(job, out)?;
-    let run = PbcsRun::compute(job, progress)?;
+    let run = PbcsRun::compute(job, kernel, progress)?;
     run.write(job, out)?;
     Ok((run.record, run.seconds))
 }
@@ -682,8 +717,13 @@ pub struct ChainEval {
 /// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and `eval-s<seed>.png`/`.svg`
 /// (the first rollouts over the maze) into `chain_dir`. A folder without the chain's job
 /// (`run.toml`, or `../config.toml` for chains saved before it existed), a malformed manifest
-/// or bad weights are errors naming the file.
-pub fn eval_chain(chain_dir: &Path, episodes: usize, seed: Option<u64>) -> Result<ChainEval> {
+/// or bad weights are errors naming the file. The policies run on `kernel`.
+pub fn eval_chain(
+    chain_dir: &Path,
+    episodes: usize,
+    seed: Option<u64>,
+    kernel: Kernel,
+) -> Result<ChainEval> {
     if episodes == 0 {
         return Err(Error::invalid("--episodes", "must be at least 1"));
     }
@@ -703,13 +743,13 @@ pub fn eval_chain(chain_dir: &Path, episodes: usize, seed: Option<u64>) -> Resul
         }
         parent
     };
-    let job: RunJob = crate::config::load(&job_path)?;
+    let job: RunJob = crate::validate::load(&job_path)?;
     let maze = Maze::new(&job.maze)?;
-    let chain = SkillChain::load(chain_dir)?;
+    let chain = SkillChain::load(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
     let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
     let successes = rows.iter().filter(|r| r.success).count();
-    let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::tables::Z95);
+    let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
     crate::record::write_records(&chain_dir.join(format!("eval-s{seed}.csv")), &rows)?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let data = PictureData {

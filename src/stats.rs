@@ -18,6 +18,9 @@ pub fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// z of every 95 % interval in the package (the normal quantile Φ⁻¹(0.975)).
+pub const Z95: f64 = 1.959_963_984_540_054;
+
 /// The Wilson score interval of `k` successes in `n` trials at normal quantile `z` (1.96 for
 /// 95 %): centre (p̂ + z²/2n) / (1 + z²/n), half-width z·√(p̂(1 − p̂)/n + z²/4n²) / (1 + z²/n).
 ///

@@ -8,12 +8,9 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{Cell, Experiment, RawRow};
-use crate::stats::{median, quantile, wilson};
+use crate::stats::{median, quantile, wilson, Z95};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// z of the 95 % Wilson score intervals.
-pub const Z95: f64 = 1.959_963_984_540_054;
 
 /// One cell's statistics over its seeds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -119,9 +116,11 @@ pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
 
 /// Reads a table written by [`write_table`].
 pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        message: format!("{e} (run `make figures` to aggregate the raw results)"),
+    let mut reader = csv::Reader::from_path(path).map_err(|e| {
+        Error::parse(
+            path,
+            format!("{e} (run `make figures` to aggregate the raw results)"),
+        )
     })?;
     reader
         .deserialize()
@@ -132,7 +131,7 @@ pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
 /// The cells as a markdown table: solved k/n, Wilson interval, median and quartile steps, the
 /// paper's figure (S solved, F failed). What `pbcs figures` prints.
 pub fn markdown(stats: &[CellStats]) -> String {
-    use crate::figures::human_steps;
+    use crate::fmt::human_steps;
     let mut s = String::from(
         "| cell | solved | Wilson 95 % | env steps median [q1, q3] | paper |\n\
          | --- | --- | --- | --- | --- |\n",
@@ -169,7 +168,7 @@ pub fn markdown(stats: &[CellStats]) -> String {
 /// ratio of our median to them, median skills and median wall seconds (from `timings`,
 /// `-` where a cell has none).
 pub fn grid_markdown(stats: &[CellStats], timings: &[CellTiming]) -> String {
-    use crate::figures::human_steps;
+    use crate::fmt::human_steps;
     let mut s = String::from(
         "| maze | solved | Wilson 95 % | env steps median [min, max] | paper | median / paper | skills, median | wall s, median |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- |\n",

@@ -2,13 +2,14 @@
 //! baselines): episodes with a step limit, one update per environment step, periodic greedy
 //! evaluation, and the set of visited state bins for the "explored area" picture.
 
-use crate::config::Check;
 use crate::env::{random_action, Env};
 use crate::error::{Error, Result};
 use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
+use crate::nn::kernel::Kernel;
 use crate::rng::{Seeds, Stream};
+use crate::validate::Check;
 use rustc_hash::FxHashSet;
 use serde::{Deserialize, Serialize};
 
@@ -141,13 +142,14 @@ pub fn train_vanilla<E: Env>(
     learner_config: &LearnerConfig,
     train: &TrainConfig,
     seeds: &Seeds,
+    kernel: Kernel,
     mut progress: impl FnMut(u64, f32),
 ) -> Result<TrainOutcome> {
     train.check()?;
     // The learner acts in [−1, 1]ᵈ (Stable-Baselines3's convention); the environment gets
     // a_i · b_i. Exploration noise σ lives in the learner's space.
     let unit = vec![1.0; env.action_dim()];
-    let mut learner = Learner::new(learner_config, env.obs_dim(), &unit, seeds)?;
+    let mut learner = Learner::new(learner_config, env.obs_dim(), &unit, seeds, kernel)?;
     let lc = learner_config;
     let mut replay = Replay::new(lc.replay_size, env.obs_dim(), env.action_dim());
     let mut noise = Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, env.action_dim());

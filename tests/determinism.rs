@@ -82,8 +82,20 @@ fn vanilla_training_is_byte_identical_per_seed() {
     job.train.learning_starts = 1_000;
     job.train.eval_every = 1_000;
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    run_train(&job, a.path(), |_, _| {}).unwrap();
-    run_train(&job, b.path(), |_, _| {}).unwrap();
+    run_train(
+        &job,
+        pbcs::nn::kernel::Kernel::detect(),
+        a.path(),
+        |_, _| {},
+    )
+    .unwrap();
+    run_train(
+        &job,
+        pbcs::nn::kernel::Kernel::detect(),
+        b.path(),
+        |_, _| {},
+    )
+    .unwrap();
     for f in [
         "config.toml",
         "summary.csv",

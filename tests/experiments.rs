@@ -292,8 +292,24 @@ fn smoke_profile_runs_end_to_end_deterministically() {
     for f in files() {
         let exp = Experiment::load(&f, Some("smoke")).unwrap();
         let runs = plan(&exp, None, None).unwrap();
-        let ran_a = sweep(&exp, &runs, a.path(), 1, |_, _| {}).unwrap();
-        let ran_b = sweep(&exp, &runs, b.path(), 2, |_, _| {}).unwrap();
+        let ran_a = sweep(
+            &exp,
+            &runs,
+            a.path(),
+            1,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
+        let ran_b = sweep(
+            &exp,
+            &runs,
+            b.path(),
+            2,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
         assert_eq!(ran_a, ran_b);
         for p in &runs {
             for suffix in ["csv", "toml"] {
@@ -304,11 +320,18 @@ fn smoke_profile_runs_end_to_end_deterministically() {
             }
         }
         let skipped = Mutex::new(0);
-        sweep(&exp, &runs, a.path(), 2, |_, e| {
-            if matches!(e, Event::Skipped(_)) {
-                *skipped.lock().unwrap() += 1;
-            }
-        })
+        sweep(
+            &exp,
+            &runs,
+            a.path(),
+            2,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, e| {
+                if matches!(e, Event::Skipped(_)) {
+                    *skipped.lock().unwrap() += 1;
+                }
+            },
+        )
         .unwrap();
         assert_eq!(
             *skipped.lock().unwrap(),
@@ -362,13 +385,29 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     let dir = tempfile::tempdir().unwrap();
     let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
     let runs = plan(&exp, Some("exact-maze2"), None).unwrap();
-    sweep(&exp, &runs, dir.path(), 1, |_, _| {}).unwrap();
+    sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
     let mut changed = exp.clone();
     if let pbcs::experiment::Job::Pbcs(j) = &mut changed.cells[1].job {
         j.phase2.epsilon = 0.2;
     }
     let runs = plan(&changed, Some("exact-maze2"), None).unwrap();
-    let err = sweep(&changed, &runs, dir.path(), 1, |_, _| {}).unwrap_err();
+    let err = sweep(
+        &changed,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("another config"), "{err}");
 }
 
@@ -382,16 +421,31 @@ fn a_run_another_sweep_holds_is_refused() {
     let runs = plan(&exp, Some("exact-maze2"), Some(0)).unwrap();
     let cell_dir = exp.cell_dir(dir.path(), runs[0].cell);
     let lock = pbcs::record::WorkLock::acquire(&cell_dir.join("s0.lock")).unwrap();
-    let err = sweep(&exp, &runs, dir.path(), 1, |_, _| {})
-        .unwrap_err()
-        .to_string();
+    let err = sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(
         err.contains("s0.lock") && err.contains("another process"),
         "{err}"
     );
     assert!(!cell_dir.join("s0.csv").exists());
     drop(lock);
-    sweep(&exp, &runs, dir.path(), 1, |_, _| {}).unwrap();
+    sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
     assert!(cell_dir.join("s0.csv").exists());
     assert!(!cell_dir.join("s0.lock").exists());
 }

@@ -294,7 +294,14 @@ fn batch(n: usize, seed: u32) -> Batch {
 
 /// Parameters of actor and critics after `updates` updates with `kernel`.
 fn trained(kernel: Kernel, config: &LearnerConfig, updates: u32) -> Vec<f32> {
-    let mut l = Learner::new(config, 2, &[1.0, 1.0], &Seeds::new(7)).unwrap();
+    let mut l = Learner::new(
+        config,
+        2,
+        &[1.0, 1.0],
+        &Seeds::new(7),
+        pbcs::nn::kernel::Kernel::detect(),
+    )
+    .unwrap();
     l.set_kernel(kernel);
     for i in 0..updates {
         l.update(&batch(config.batch_size, i));

@@ -21,7 +21,14 @@ fn batch_of_two(done: [f32; 2]) -> Batch {
 #[test]
 fn terminal_transitions_stop_bootstrapping() {
     for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
-        let mut l = Learner::new(&cfg, 2, &[0.1, 0.1], &Seeds::new(0)).unwrap();
+        let mut l = Learner::new(
+            &cfg,
+            2,
+            &[0.1, 0.1],
+            &Seeds::new(0),
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap();
         let y = l.td_targets(&batch_of_two([1.0, 0.0]));
         assert_eq!(y[0], 1.0, "terminal: y = r exactly");
         assert!(
@@ -47,6 +54,7 @@ fn time_limit_truncation_is_not_terminal() {
         &LearnerConfig::ddpg(),
         &train,
         &Seeds::new(1),
+        pbcs::nn::kernel::Kernel::detect(),
         |_, _| {},
     )
     .unwrap();
@@ -61,8 +69,14 @@ fn target_smoothing_noise_is_clipped() {
     let next_obs: Vec<f32> = (0..200).map(|i| (i % 17) as f32 * 0.1).collect();
     let n = 100;
     let plain = {
-        let mut ddpg =
-            Learner::new(&LearnerConfig::ddpg(), 2, &[0.1, 0.3], &Seeds::new(2)).unwrap();
+        let mut ddpg = Learner::new(
+            &LearnerConfig::ddpg(),
+            2,
+            &[0.1, 0.3],
+            &Seeds::new(2),
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap();
         ddpg.smoothed_target_actions(&next_obs, n).to_vec()
     };
     // Same weights (same seed), TD3 with a huge σ: every sample is clipped to ±c·bound.
@@ -72,7 +86,14 @@ fn target_smoothing_noise_is_clipped() {
         target_noise_clip: Some(0.5),
         ..LearnerConfig::td3()
     };
-    let mut td3 = Learner::new(&cfg, 2, &[0.1, 0.3], &Seeds::new(2)).unwrap();
+    let mut td3 = Learner::new(
+        &cfg,
+        2,
+        &[0.1, 0.3],
+        &Seeds::new(2),
+        pbcs::nn::kernel::Kernel::detect(),
+    )
+    .unwrap();
     let noisy = td3.smoothed_target_actions(&next_obs, n).to_vec();
     let mut moved = 0;
     for (i, (x, p)) in noisy.iter().zip(&plain).enumerate() {
@@ -107,9 +128,15 @@ fn ddpg_and_td3_learn_the_1d_toy() {
         let solved = |steps| {
             (0..10)
                 .filter(|&seed| {
-                    let out =
-                        train_vanilla(&Toy1D, &cfg, &schedule(steps), &Seeds::new(seed), |_, _| {})
-                            .unwrap();
+                    let out = train_vanilla(
+                        &Toy1D,
+                        &cfg,
+                        &schedule(steps),
+                        &Seeds::new(seed),
+                        pbcs::nn::kernel::Kernel::detect(),
+                        |_, _| {},
+                    )
+                    .unwrap();
                     out.evals.last().unwrap().success >= 0.9
                 })
                 .count()
@@ -145,7 +172,15 @@ fn the_argmax_actor_learns_the_1d_toy_too() {
     };
     let solved = (0..5)
         .filter(|&seed| {
-            let out = train_vanilla(&Toy1D, &cfg, &train, &Seeds::new(seed), |_, _| {}).unwrap();
+            let out = train_vanilla(
+                &Toy1D,
+                &cfg,
+                &train,
+                &Seeds::new(seed),
+                pbcs::nn::kernel::Kernel::detect(),
+                |_, _| {},
+            )
+            .unwrap();
             out.evals.last().unwrap().success >= 0.9
         })
         .count();
@@ -168,6 +203,7 @@ fn same_seed_same_weights_and_evaluations() {
             &LearnerConfig::td3(),
             &train,
             &Seeds::new(7),
+            pbcs::nn::kernel::Kernel::detect(),
             |_, _| {},
         )
         .unwrap()
@@ -182,6 +218,7 @@ fn same_seed_same_weights_and_evaluations() {
         &LearnerConfig::td3(),
         &train,
         &Seeds::new(8),
+        pbcs::nn::kernel::Kernel::detect(),
         |_, _| {},
     )
     .unwrap();
@@ -259,7 +296,14 @@ fn invalid_hyper_parameters_are_rejected_with_the_field() {
     for (cfg, field) in cases {
         let msg = cfg.check().unwrap_err().to_string();
         assert!(msg.contains(field), "{field}: {msg}");
-        let err = Learner::new(&cfg, 2, &[0.1, 0.1], &Seeds::new(0)).unwrap_err();
+        let err = Learner::new(
+            &cfg,
+            2,
+            &[0.1, 0.1],
+            &Seeds::new(0),
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap_err();
         assert!(err.to_string().contains(field));
     }
 }

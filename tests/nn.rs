@@ -15,7 +15,7 @@ fn random_vec(n: usize, scale: f32, seed: u32) -> Vec<f32> {
 
 /// L = Σ_ij w_ij · net(x)_ij: a loss whose gradient exercises every output.
 fn weighted_loss(net: &Mlp, x: &[f32], batch: usize, w: &[f32]) -> f64 {
-    let mut ws = Workspace::default();
+    let mut ws = Workspace::with_kernel(pbcs::nn::kernel::Kernel::detect());
     let y = net.forward(x, batch, &mut ws);
     y.iter().zip(w).map(|(y, w)| f64::from(y * w)).sum()
 }
@@ -28,7 +28,7 @@ fn weighted_loss(net: &Mlp, x: &[f32], batch: usize, w: &[f32]) -> f64 {
 fn check_gradients(net: &Mlp, batch: usize, seed: u32, input_scale: f32) {
     let x = random_vec(batch * net.input_dim(), input_scale, seed);
     let w = random_vec(batch * net.output_dim(), 1.0, seed + 1);
-    let mut ws = Workspace::default();
+    let mut ws = Workspace::with_kernel(pbcs::nn::kernel::Kernel::detect());
     net.forward(&x, batch, &mut ws);
     let mut grad = vec![0.0; net.params.len()];
     let mut dx = vec![0.0; x.len()];
@@ -70,7 +70,7 @@ fn actor_gradients_match_finite_differences() {
     let actor = Mlp::new(&[2, 6, 5, 2], Head::Tanh(vec![0.1, 0.3]), &mut rng);
     // Inputs up to ±4 put the tanh head well into its curved region (|tanh| up to ~0.9), so
     // an error in its derivative shows.
-    let mut ws = Workspace::default();
+    let mut ws = Workspace::with_kernel(pbcs::nn::kernel::Kernel::detect());
     let x = random_vec(3 * 2, 4.0, 20);
     let y = actor.forward(&x, 3, &mut ws);
     assert!(
@@ -235,8 +235,12 @@ fn adam_steps_equal_candle_adamw_without_decay() {
         },
     )
     .unwrap();
-    let mut adam = Adam::new(critic.params.len(), 1e-2);
-    let mut ws = Workspace::default();
+    let mut adam = Adam::new(
+        critic.params.len(),
+        1e-2,
+        pbcs::nn::kernel::Kernel::detect(),
+    );
+    let mut ws = Workspace::with_kernel(pbcs::nn::kernel::Kernel::detect());
     let mut g = vec![0.0; critic.params.len()];
     for _ in 0..5 {
         let q = critic.forward(&x, batch, &mut ws).to_vec();
@@ -267,7 +271,7 @@ fn adam_steps_equal_candle_adamw_without_decay() {
 
 #[test]
 fn adam_flushes_subnormal_moments() {
-    let mut adam = Adam::new(1, 1e-3);
+    let mut adam = Adam::new(1, 1e-3, pbcs::nn::kernel::Kernel::detect());
     let mut p = [0.0f32];
     adam.step(&mut p, &[1e-30]);
     for _ in 0..20_000 {

@@ -428,6 +428,7 @@ fn two_skill_chain() -> SkillChain {
             skill([1.0, 0.0], vec![0.0, 0.0], 0),
             skill([1.0, 1.0], vec![1.0, 0.0], 1),
         ],
+        kernel: pbcs::nn::kernel::Kernel::detect(),
     }
 }
 
@@ -456,15 +457,18 @@ fn a_saved_chain_loads_and_runs_the_same() {
     let chain = two_skill_chain();
     let dir = tempfile::tempdir().unwrap();
     chain.save(dir.path()).unwrap();
-    let loaded = SkillChain::load(dir.path()).unwrap();
+    let loaded = SkillChain::load(dir.path(), pbcs::nn::kernel::Kernel::detect()).unwrap();
     assert_eq!(loaded, chain);
     assert_eq!(
         loaded.run(&Plane, [0.0, 0.0], 50),
         chain.run(&Plane, [0.0, 0.0], 50)
     );
-    let err = SkillChain::load(&dir.path().join("missing"))
-        .unwrap_err()
-        .to_string();
+    let err = SkillChain::load(
+        &dir.path().join("missing"),
+        pbcs::nn::kernel::Kernel::detect(),
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("manifest.toml"), "{err}");
 }
 
@@ -489,7 +493,13 @@ mod end_to_end {
             let mut j = job(seed);
             j.phase2.max_env_steps = 1_000_000;
             let dir = tempfile::tempdir().unwrap();
-            let (r, _) = run_pbcs(&j, dir.path(), |_, _| {}).unwrap();
+            let (r, _) = run_pbcs(
+                &j,
+                pbcs::nn::kernel::Kernel::detect(),
+                dir.path(),
+                |_, _| {},
+            )
+            .unwrap();
             report.push(format!(
                 "seed {seed}: solved {} success {} steps {} skills {} failure {:?}",
                 r.solved, r.success_rate, r.total_steps, r.skills, r.failure
@@ -512,13 +522,27 @@ mod end_to_end {
         let dir = tempfile::tempdir().unwrap();
         let exp = Experiment::of_job("small", &j, &[2], 2).unwrap();
         let runs = plan(&exp, None, None).unwrap();
-        let first = sweep(&exp, &runs, dir.path(), 2, |_, _| {}).unwrap();
+        let first = sweep(
+            &exp,
+            &runs,
+            dir.path(),
+            2,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
         assert_eq!(first.iter().map(|r| r.seed).collect::<Vec<_>>(), [0, 1]);
         for (seed, row) in [0, 1].into_iter().zip(&first) {
             let mut single = j.clone();
             single.seed = seed;
             let run_dir = tempfile::tempdir().unwrap();
-            let (r, _) = run_pbcs(&single, run_dir.path(), |_, _| {}).unwrap();
+            let (r, _) = run_pbcs(
+                &single,
+                pbcs::nn::kernel::Kernel::detect(),
+                run_dir.path(),
+                |_, _| {},
+            )
+            .unwrap();
             assert_eq!(
                 pbcs::experiment::RawRow::pbcs(&exp, &exp.cells[0], &single, r),
                 *row,
@@ -526,11 +550,18 @@ mod end_to_end {
             );
         }
         let ran_again = std::sync::atomic::AtomicUsize::new(0);
-        let again = sweep(&exp, &runs, dir.path(), 1, |_, e| {
-            if matches!(e, pbcs::experiment::Event::Ran(..)) {
-                ran_again.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-            }
-        })
+        let again = sweep(
+            &exp,
+            &runs,
+            dir.path(),
+            1,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, e| {
+                if matches!(e, pbcs::experiment::Event::Ran(..)) {
+                    ran_again.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                }
+            },
+        )
         .unwrap();
         assert_eq!(first, again);
         assert_eq!(ran_again.into_inner(), 0);
@@ -541,6 +572,7 @@ mod end_to_end {
             &plan(&other, None, None).unwrap(),
             dir.path(),
             1,
+            pbcs::nn::kernel::Kernel::detect(),
             |_, _| {},
         )
         .unwrap_err();
@@ -554,8 +586,9 @@ mod end_to_end {
         let mut j = job(5);
         j.phase2.max_env_steps = 30_000;
         let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-        let (ra, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
-        run_pbcs(&j, b.path(), |_, _| {}).unwrap();
+        let (ra, _) =
+            run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), a.path(), |_, _| {}).unwrap();
+        run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), b.path(), |_, _| {}).unwrap();
         assert!(ra.total_steps > 0);
         same_files(
             a.path(),
@@ -596,7 +629,13 @@ mod end_to_end {
         let mut j = pbcs::config::Preset::Fast.job().unwrap();
         j.maze.size = 2;
         let dir = tempfile::tempdir().unwrap();
-        let (record, _) = run_pbcs(&j, dir.path(), |_, _| {}).unwrap();
+        let (record, _) = run_pbcs(
+            &j,
+            pbcs::nn::kernel::Kernel::detect(),
+            dir.path(),
+            |_, _| {},
+        )
+        .unwrap();
         assert!(record.solved, "{record:?}");
         let read = |path: &std::path::Path| -> Vec<pbcs::runs::EvalEpisode> {
             csv::Reader::from_path(path)
@@ -618,7 +657,13 @@ mod end_to_end {
             .all(|e| e.steps >= fewest));
         // `pbcs eval` on the saved chain, with the run's seed, is the same evaluation.
         let chain = dir.path().join("chain");
-        let again = pbcs::runs::eval_chain(&chain, j.phase2.eval_episodes, None).unwrap();
+        let again = pbcs::runs::eval_chain(
+            &chain,
+            j.phase2.eval_episodes,
+            None,
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap();
         assert_eq!(again.successes, wins);
         assert_eq!(read(&chain.join(format!("eval-s{}.csv", j.seed))), episodes);
     }
@@ -628,8 +673,10 @@ mod end_to_end {
         let mut j = job(5);
         j.phase2.max_env_steps = 30_000;
         let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-        let (written, _) = run_pbcs(&j, a.path(), |_, _| {}).unwrap();
-        let run = pbcs::runs::PbcsRun::compute(&j, |_, _| {}).unwrap();
+        let (written, _) =
+            run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), a.path(), |_, _| {}).unwrap();
+        let run = pbcs::runs::PbcsRun::compute(&j, pbcs::nn::kernel::Kernel::detect(), |_, _| {})
+            .unwrap();
         assert_eq!(run.record, written);
         // The record's enums are written as the names the CSVs have always held.
         let text = std::fs::read_to_string(a.path().join("record.csv")).unwrap();
@@ -780,6 +827,7 @@ mod algorithm3 {
         };
         let chain = SkillChain {
             skills: vec![skill],
+            kernel: pbcs::nn::kernel::Kernel::detect(),
         };
         // Seen from its origin (1, 0), the policy homes on x = 1, not on x = 0.
         let r = chain.run(&Plane, [0.0, 0.0], 40);
@@ -787,7 +835,7 @@ mod algorithm3 {
         assert!((last[0] - 1.0).abs() <= 0.1, "{last:?}");
         let dir = tempfile::tempdir().unwrap();
         chain.save(dir.path()).unwrap();
-        let loaded = SkillChain::load(dir.path()).unwrap();
+        let loaded = SkillChain::load(dir.path(), pbcs::nn::kernel::Kernel::detect()).unwrap();
         assert_eq!(loaded, chain);
         assert_eq!(loaded.run(&Plane, [0.0, 0.0], 40), r);
     }
@@ -805,6 +853,7 @@ mod algorithm3 {
                 target_index: 1,
                 inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),
             }],
+            kernel: pbcs::nn::kernel::Kernel::detect(),
         };
         let dir = tempfile::tempdir().unwrap();
         chain.save(dir.path()).unwrap();
@@ -827,7 +876,9 @@ mod algorithm3 {
         ] {
             assert!(text.contains(from), "{from} not in {text}");
             std::fs::write(&manifest, text.replace(from, to)).unwrap();
-            let err = SkillChain::load(dir.path()).unwrap_err().to_string();
+            let err = SkillChain::load(dir.path(), pbcs::nn::kernel::Kernel::detect())
+                .unwrap_err()
+                .to_string();
             assert!(
                 err.contains("manifest.toml") && err.contains(&format!("skills[0].{field}")),
                 "{err}"
@@ -961,7 +1012,14 @@ mod skill_task {
         budget: u64,
     ) -> SkillTask<'a, Maze> {
         let seeds = Seeds::new(3);
-        let mut learner = Learner::new(&LearnerConfig::ddpg(), 2, &[1.0, 1.0], &seeds).unwrap();
+        let mut learner = Learner::new(
+            &LearnerConfig::ddpg(),
+            2,
+            &[1.0, 1.0],
+            &seeds,
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap();
         learner.actor = policy;
         let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
         let goal = config.goal(maze, obs, t);
@@ -1179,7 +1237,7 @@ mod switches {
         job.maze.size = 2;
         job.phase2.max_env_steps = 409_000;
         job.phase2.chain_verify_episodes = 100;
-        let run = PbcsRun::compute(&job, |_, _| {}).unwrap();
+        let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
         assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
         assert!(!run.record.solved && run.record.total_steps > 409_000);
         let last = run.phase2.trace.last().unwrap();
@@ -1198,7 +1256,7 @@ mod switches {
         job.phase2.max_env_steps = 642_000;
         job.phase2.chain_verify_episodes = 100;
         job.phase2.chain_repairs = 5;
-        let run = PbcsRun::compute(&job, |_, _| {}).unwrap();
+        let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
         let checks: Vec<_> = run
             .phase2
             .trace

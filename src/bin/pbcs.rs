@@ -11,6 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, MazeConfig, Preset, RunJob, TrainJob};
 use pbcs::learner::{ActorUpdate, Algo};
+use pbcs::nn::kernel::Kernel;
 use serde::de::DeserializeOwned;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -414,16 +415,16 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    // The layer kernel (PBCS_KERNEL, else the best this CPU runs): a bad name is an error here,
-    // before any work.
-    pbcs::nn::kernel::Kernel::from_env()?.set_active()?;
+    // The layer kernel of every run (PBCS_KERNEL, else the best this CPU runs), read once: a
+    // bad name is an error here, before any work.
+    let kernel = Kernel::from_env()?;
     match cli.command {
         Command::Explore { run } => explore(&run),
         Command::Train {
             run,
             learner,
             steps,
-        } => train(&run, &learner, steps),
+        } => train(&run, &learner, steps, kernel),
         Command::Run {
             run,
             preset,
@@ -451,14 +452,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     .map_or("config".into(), |s| s.to_string_lossy().into_owned()),
                 None => preset.name().to_string(),
             };
-            pbcs_run(&run, &job, &label)
+            pbcs_run(&run, &job, &label, kernel)
         }
         Command::Eval {
             chain,
             episodes,
             seed,
         } => {
-            let e = pbcs::runs::eval_chain(&chain, episodes as usize, seed)?;
+            let e = pbcs::runs::eval_chain(&chain, episodes as usize, seed, kernel)?;
             let seed = seed.unwrap_or(e.job.seed);
             println!(
                 "chain {} ({} skills) on maze {} (layout seed {}), start seed {seed}: success \
@@ -483,7 +484,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seeds,
             jobs,
             out,
-        } => table(config.as_deref(), preset, &sizes, seeds, jobs, out),
+        } => table(config.as_deref(), preset, &sizes, seeds, jobs, kernel, out),
         Command::Aggregate { set } => aggregate(&set),
         Command::Figures { set, figures, tex } => make_figures(&set, figures, tex),
         Command::Exp { command } => match command {
@@ -492,7 +493,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 cell,
                 seed,
                 jobs,
-            } => exp_run(&exp, cell.as_deref(), seed, jobs),
+            } => exp_run(&exp, cell.as_deref(), seed, jobs, kernel),
             ExpCommand::List { exp, make, slurm } => exp_list(&exp, make, slurm),
             ExpCommand::Check {
                 exp,
@@ -500,7 +501,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 seed,
                 jobs,
                 exact,
-            } => exp_check(&exp, &cell, seed, jobs, exact),
+            } => exp_check(&exp, &cell, seed, jobs, kernel, exact),
         },
     }
 }
@@ -620,6 +621,7 @@ fn sweep_with_progress(
     runs: &[pbcs::experiment::Pending],
     results: &std::path::Path,
     jobs: usize,
+    kernel: Kernel,
 ) -> anyhow::Result<(Vec<pbcs::experiment::RawRow>, usize)> {
     use pbcs::experiment::{sweep, Event};
     use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -627,7 +629,7 @@ fn sweep_with_progress(
     let steps = AtomicU64::new(0);
     let ran = AtomicUsize::new(0);
     let clock = std::time::Instant::now();
-    let rows = sweep(exp, runs, results, jobs, |_, event| {
+    let rows = sweep(exp, runs, results, jobs, kernel, |_, event| {
         bar.inc(1);
         if let Event::Ran(row, secs) = event {
             ran.fetch_add(1, Ordering::SeqCst);
@@ -655,10 +657,11 @@ fn exp_run(
     cell: Option<&str>,
     seed: Option<u64>,
     jobs: usize,
+    kernel: Kernel,
 ) -> anyhow::Result<()> {
     let (exp, results) = args.load()?;
     let runs = pbcs::experiment::plan(&exp, cell, seed)?;
-    let (rows, ran) = sweep_with_progress(&exp, &runs, &results, jobs)?;
+    let (rows, ran) = sweep_with_progress(&exp, &runs, &results, jobs, kernel)?;
     println!(
         "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
         exp.name,
@@ -708,13 +711,14 @@ fn exp_check(
     cell: &str,
     seed: Option<u64>,
     jobs: usize,
+    kernel: Kernel,
     exact: bool,
 ) -> anyhow::Result<()> {
     use pbcs::check::{check_cell, Verdict};
     let (exp, results) = args.load()?;
     let runs = pbcs::experiment::plan(&exp, Some(cell), seed)?;
     let bar = run_bar(runs.len() as u64);
-    let check = check_cell(&exp, &results, cell, seed, jobs, |_, _| bar.inc(1))?;
+    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, _| bar.inc(1))?;
     bar.finish_and_clear();
     for s in &check.seeds {
         println!(
@@ -776,6 +780,7 @@ fn table(
     sizes: &[usize],
     seeds: u64,
     jobs: usize,
+    kernel: Kernel,
     out: Option<PathBuf>,
 ) -> anyhow::Result<()> {
     let preset = preset.unwrap_or(Preset::Fast);
@@ -796,7 +801,7 @@ fn table(
     let exp = pbcs::experiment::Experiment::of_job(&name, &job, sizes, seeds)?;
     let out = out.unwrap_or_else(|| PathBuf::from("out/table"));
     let runs = pbcs::experiment::plan(&exp, None, None)?;
-    let (rows, ran) = sweep_with_progress(&exp, &runs, &out, jobs)?;
+    let (rows, ran) = sweep_with_progress(&exp, &runs, &out, jobs, kernel)?;
     let stats = pbcs::tables::cell_stats(&exp, &rows);
     let table = pbcs::tables::table_path(&out, &exp.name);
     pbcs::tables::write_table(&table, &stats)?;
@@ -829,7 +834,7 @@ fn kind_name(kind: pbcs::phase2::EventKind) -> &'static str {
     }
 }
 
-fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
+fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
     job.check()?;
     let mut suffix = String::new();
     if !job.phase2.chaining {
@@ -845,7 +850,7 @@ fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str) -> anyhow::Result<()> {
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
     // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
     let lines = !run.quiet && !std::io::stderr().is_terminal();
-    let (record, seconds) = pbcs::runs::run_pbcs(job, &out, |skill, p| {
+    let (record, seconds) = pbcs::runs::run_pbcs(job, kernel, &out, |skill, p| {
         if skill != current_skill {
             finished += current;
             current_skill = skill;
@@ -946,7 +951,12 @@ fn explore(run: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn train(run: &RunArgs, learner: &LearnerArgs, steps: Option<u64>) -> anyhow::Result<()> {
+fn train(
+    run: &RunArgs,
+    learner: &LearnerArgs,
+    steps: Option<u64>,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
     let mut job: TrainJob = run.load(|j: &mut TrainJob| (&mut j.maze, &mut j.seed))?;
     learner.apply(&mut job.learner);
     if let Some(s) = steps {
@@ -962,7 +972,7 @@ fn train(run: &RunArgs, learner: &LearnerArgs, steps: Option<u64>) -> anyhow::Re
         "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}",
         Some(job.train.steps),
     );
-    let (summary, seconds) = pbcs::runs::run_train(&job, &out, |steps, success| {
+    let (summary, seconds) = pbcs::runs::run_train(&job, kernel, &out, |steps, success| {
         bar.set_position(steps);
         bar.set_message(format!("greedy success {success}"));
     })

@@ -10,11 +10,11 @@
 pub mod noise;
 pub mod replay;
 
-use crate::config::Check;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::nn::{Adam, Head, Mlp, Workspace};
 use crate::rng::{Rng, Seeds, Stream};
+use crate::validate::Check;
 use noise::NoiseKind;
 use rand::Rng as _;
 use rand_distr::{Distribution, StandardNormal};
@@ -240,7 +240,7 @@ pub struct Losses {
 }
 
 /// Scratch buffers of the update, kept to allocate nothing per step.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 struct Scratch {
     ws_actor: Workspace,
     ws_actor_target: Workspace,
@@ -256,6 +256,27 @@ struct Scratch {
     grad_critic: Vec<f32>,
     target_a: Vec<f32>,
     pi: Vec<f32>,
+}
+
+impl Scratch {
+    fn new(kernel: Kernel) -> Self {
+        Scratch {
+            ws_actor: Workspace::with_kernel(kernel),
+            ws_actor_target: Workspace::with_kernel(kernel),
+            ws_critic: Workspace::with_kernel(kernel),
+            ws_act: Workspace::with_kernel(kernel),
+            sa: Vec::new(),
+            y: Vec::new(),
+            q_next: Vec::new(),
+            dq: Vec::new(),
+            dsa: Vec::new(),
+            da: Vec::new(),
+            grad_actor: Vec::new(),
+            grad_critic: Vec::new(),
+            target_a: Vec::new(),
+            pi: Vec::new(),
+        }
+    }
 }
 
 /// Actor, critics, their targets and optimisers.
@@ -275,6 +296,8 @@ pub struct Learner {
     rng: Rng,
     updates: u64,
     s: Scratch,
+    /// The kernel of every product, Adam step and soft update.
+    kernel: Kernel,
 }
 
 /// Concatenates row-major `x` (n × dx) and `y` (n × dy) into `out` (n × (dx + dy)).
@@ -286,14 +309,16 @@ fn concat_rows(x: &[f32], dx: usize, y: &[f32], dy: usize, out: &mut Vec<f32>) {
 }
 
 impl Learner {
-    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`.
-    /// All weights come from the [`Stream::Init`] stream of `seeds`; the update's own noise
-    /// from [`Stream::Update`].
+    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`,
+    /// whose layer arithmetic runs on `kernel` (an input of the run like the seed: kernels
+    /// other than AVX2/AVX-512 give other bytes). All weights come from the [`Stream::Init`]
+    /// stream of `seeds`; the update's own noise from [`Stream::Update`].
     pub fn new(
         config: &LearnerConfig,
         obs_dim: usize,
         bounds: &[f32],
         seeds: &Seeds,
+        kernel: Kernel,
     ) -> Result<Self> {
         config.check()?;
         let act_dim = bounds.len();
@@ -313,17 +338,18 @@ impl Learner {
             obs_dim,
             bounds: bounds.to_vec(),
             actor_target: actor.clone(),
-            actor_opt: Adam::new(actor.params.len(), config.actor_lr),
+            actor_opt: Adam::new(actor.params.len(), config.actor_lr, kernel),
             critic_targets: critics.clone(),
             critic_opts: critics
                 .iter()
-                .map(|c| Adam::new(c.params.len(), config.critic_lr))
+                .map(|c| Adam::new(c.params.len(), config.critic_lr, kernel))
                 .collect(),
             actor,
             critics,
             rng: seeds.stream(Stream::Update),
             updates: 0,
-            s: Scratch::default(),
+            s: Scratch::new(kernel),
+            kernel,
         })
     }
 
@@ -480,9 +506,10 @@ impl Learner {
 
         // 4. Targets: θ' ← τ·θ + (1 − τ)·θ'.
         let tau = self.config.tau;
-        self.actor_target.soft_update_from(&self.actor, tau);
+        self.actor_target
+            .soft_update_from(&self.actor, tau, self.kernel);
         for (t, c) in self.critic_targets.iter_mut().zip(&self.critics) {
-            t.soft_update_from(c, tau);
+            t.soft_update_from(c, tau, self.kernel);
         }
         Losses {
             critic: critic_loss,

@@ -34,10 +34,63 @@ mod walls;
 pub use layout::{Layout, Side};
 pub use walls::{Wall, Walls};
 
-use crate::config::{Check, MazeConfig};
 use crate::env::{Env, Step};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::validate::{positive_finite, Check};
 use parry2d::math::{Point, Vector};
+use serde::{Deserialize, Serialize};
+
+/// Largest maze size accepted. Phase 1 and the wall grid scale with N², so the bound keeps a
+/// typo (`size = 1000`) from turning into hours of work; the paper's largest maze is 15.
+pub const MAX_MAZE_SIZE: usize = 100;
+
+/// The maze environment (appendix "Experimental Setup"): a layout named by its size and its
+/// own maze seed, and the constants of the MDP.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MazeConfig {
+    /// N: the maze has N×N cells and the state space is [0, N]². 2 ≤ N ≤ 100.
+    pub size: usize,
+    /// Seed of the layout, independent of the run seed, so that one layout can be held fixed
+    /// while runs vary. Ignored for N = 2, whose layout is the fixed U-shape.
+    pub seed: u64,
+    /// Wall thickness (0.1 in the paper).
+    pub wall_thickness: f32,
+    /// Success radius around the target (0.2 in the paper).
+    pub target_radius: f32,
+    /// Largest absolute action component (0.1 in the paper).
+    pub max_action: f32,
+}
+
+impl Default for MazeConfig {
+    fn default() -> Self {
+        MazeConfig {
+            size: 5,
+            seed: 0,
+            wall_thickness: 0.1,
+            target_radius: 0.2,
+            max_action: 0.1,
+        }
+    }
+}
+
+impl Check for MazeConfig {
+    fn check(&self) -> Result<()> {
+        if !(2..=MAX_MAZE_SIZE).contains(&self.size) {
+            return Err(Error::invalid(
+                "maze.size",
+                format!(
+                    "must be between 2 and {MAX_MAZE_SIZE} cells, got {}",
+                    self.size
+                ),
+            ));
+        }
+        positive_finite("maze.wall_thickness", self.wall_thickness, 0.5)?;
+        positive_finite("maze.target_radius", self.target_radius, 0.5)?;
+        positive_finite("maze.max_action", self.max_action, 0.5)?;
+        Ok(())
+    }
+}
 
 /// A maze environment: layout, wall geometry and the constants of the MDP.
 #[derive(Debug, Clone)]

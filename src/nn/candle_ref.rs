@@ -3,7 +3,7 @@
 //! who want to run a trained policy with candle.
 //!
 //! ```
-//! use pbcs::nn::{candle_ref, Head, Mlp, Workspace};
+//! use pbcs::nn::{candle_ref, kernel::Kernel, Head, Mlp, Workspace};
 //! use pbcs::rng::{Seeds, Stream};
 //!
 //! let mut rng = Seeds::new(1).stream(Stream::Init);
@@ -19,7 +19,7 @@
 //! let x = Tensor::new(&[[0.5f32, 0.5]], &Device::Cpu).unwrap();
 //! let a: Vec<f32> = module.forward(&x).unwrap().flatten_all().unwrap().to_vec1().unwrap();
 //! // ...and it agrees with the fused forward pass.
-//! let fused = actor.forward(&[0.5, 0.5], 1, &mut Workspace::default()).to_vec();
+//! let fused = actor.forward(&[0.5, 0.5], 1, &mut Workspace::with_kernel(Kernel::detect())).to_vec();
 //! assert!(a.iter().zip(&fused).all(|(x, y)| (x - y).abs() < 1e-6));
 //! ```
 
@@ -29,13 +29,6 @@ use candle_core::{DType, Device, Tensor, Var};
 use candle_nn::Module;
 use std::collections::HashMap;
 use std::path::Path;
-
-fn parse_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Parse {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    }
-}
 
 /// The parameters of `mlp` as candle variables: `(W_l, b_l)` per layer, W of shape
 /// (fan-in, fan-out).
@@ -128,7 +121,7 @@ pub fn save(mlp: &Mlp, path: &Path) -> Result<()> {
         );
     }
     crate::record::write_atomic_via_path(path, |tmp| {
-        candle_core::safetensors::save(&map, tmp).map_err(|e| parse_err(path, e))
+        candle_core::safetensors::save(&map, tmp).map_err(|e| Error::parse(path, e))
     })
 }
 
@@ -140,7 +133,7 @@ fn read(path: &Path) -> Result<HashMap<String, Tensor>> {
         ));
     }
     candle_core::safetensors::load(path, &Device::Cpu)
-        .map_err(|e| parse_err(path, format!("not a valid safetensors file: {e}")))
+        .map_err(|e| Error::parse(path, format!("not a valid safetensors file: {e}")))
 }
 
 /// Reads the tensors `names` (with their expected shapes) from a safetensors file into one
@@ -151,9 +144,9 @@ pub fn load_params(path: &Path, names: &[(String, Vec<usize>)]) -> Result<Vec<f3
     for (name, shape) in names {
         let t = map
             .get(name)
-            .ok_or_else(|| parse_err(path, format!("tensor `{name}` is missing")))?;
+            .ok_or_else(|| Error::parse(path, format!("tensor `{name}` is missing")))?;
         if t.dims() != shape.as_slice() || t.dtype() != DType::F32 {
-            return Err(parse_err(
+            return Err(Error::parse(
                 path,
                 format!(
                     "tensor `{name}` is {:?} {:?}, the network expects F32 {:?}",
@@ -166,7 +159,7 @@ pub fn load_params(path: &Path, names: &[(String, Vec<usize>)]) -> Result<Vec<f3
         out.extend(
             t.flatten_all()
                 .and_then(|t| t.to_vec1::<f32>())
-                .map_err(|e| parse_err(path, e))?,
+                .map_err(|e| Error::parse(path, e))?,
         );
     }
     Ok(out)
@@ -183,7 +176,7 @@ pub fn load_module(path: &Path) -> Result<CandleMlp> {
         layers.push((w.clone(), b.clone()));
     }
     if layers.is_empty() {
-        return Err(parse_err(path, "no layer `l0.weight` / `l0.bias` found"));
+        return Err(Error::parse(path, "no layer `l0.weight` / `l0.bias` found"));
     }
     Ok(CandleMlp {
         layers,

@@ -14,12 +14,12 @@
 //! b_l (o).
 //!
 //! ```
-//! use pbcs::nn::{Head, Mlp, Workspace};
+//! use pbcs::nn::{kernel::Kernel, Head, Mlp, Workspace};
 //! use pbcs::rng::{Seeds, Stream};
 //!
 //! let mut rng = Seeds::new(0).stream(Stream::Init);
 //! let actor = Mlp::new(&[2, 16, 16, 2], Head::Tanh(vec![0.1, 0.1]), &mut rng);
-//! let mut ws = Workspace::default();
+//! let mut ws = Workspace::with_kernel(Kernel::detect()); // the kernel is always named
 //! let a = actor.forward(&[0.5, 0.5, 1.5, 2.5], 2, &mut ws); // a batch of two states
 //! assert_eq!(a.len(), 4);
 //! assert!(a.iter().all(|x| x.abs() <= 0.1));
@@ -54,7 +54,7 @@ pub struct Mlp {
 
 /// Activations kept by [`Mlp::forward`] for [`Mlp::backward`], and scratch buffers. One per
 /// network and use, reused across calls so the hot path allocates nothing. It also names the
-/// [`Kernel`] that does the arithmetic ([`Kernel::active`] by default).
+/// [`Kernel`] that does the arithmetic.
 #[derive(Debug, Clone)]
 pub struct Workspace {
     /// `acts[0]` is the input batch, `acts[l]` the output of layer l.
@@ -64,12 +64,6 @@ pub struct Workspace {
     scratch: Vec<f32>,
     batch: usize,
     kernel: Kernel,
-}
-
-impl Default for Workspace {
-    fn default() -> Self {
-        Workspace::with_kernel(Kernel::active())
-    }
 }
 
 impl Workspace {
@@ -267,9 +261,9 @@ impl Mlp {
         }
     }
 
-    /// Polyak averaging of a target network: θ' ← τ·θ + (1 − τ)·θ'.
-    pub fn soft_update_from(&mut self, online: &Mlp, tau: f32) {
-        Kernel::active().polyak(&mut self.params, &online.params, tau);
+    /// Polyak averaging of a target network on `kernel`: θ' ← τ·θ + (1 − τ)·θ'.
+    pub fn soft_update_from(&mut self, online: &Mlp, tau: f32, kernel: Kernel) {
+        kernel.polyak(&mut self.params, &online.params, tau);
     }
 
     /// Tensor names and shapes in the safetensors file: `l{i}.weight` (fan-in × fan-out, as
@@ -299,16 +293,16 @@ impl Mlp {
     pub fn load(&mut self, path: &Path) -> Result<()> {
         let params = candle_ref::load_params(path, &self.tensor_names())?;
         if params.len() != self.params.len() {
-            return Err(Error::Parse {
-                path: path.to_path_buf(),
-                message: "parameter count does not match the network".into(),
-            });
+            return Err(Error::parse(
+                path,
+                "parameter count does not match the network",
+            ));
         }
         if let Some(i) = params.iter().position(|x| !x.is_finite()) {
-            return Err(Error::Parse {
-                path: path.to_path_buf(),
-                message: format!("parameter {i} is not finite ({})", params[i]),
-            });
+            return Err(Error::parse(
+                path,
+                format!("parameter {i} is not finite ({})", params[i]),
+            ));
         }
         self.params = params;
         Ok(())
@@ -340,8 +334,9 @@ pub struct Adam {
 }
 
 impl Adam {
-    /// Adam for `n` parameters with the usual β1 = 0.9, β2 = 0.999, ε = 1e-8.
-    pub fn new(n: usize, lr: f32) -> Self {
+    /// Adam for `n` parameters with the usual β1 = 0.9, β2 = 0.999, ε = 1e-8, its loop
+    /// compiled for `kernel`.
+    pub fn new(n: usize, lr: f32, kernel: Kernel) -> Self {
         Adam {
             lr,
             beta1: 0.9,
@@ -350,7 +345,7 @@ impl Adam {
             m: vec![0.0; n],
             v: vec![0.0; n],
             t: 0,
-            kernel: Kernel::active(),
+            kernel,
         }
     }
 

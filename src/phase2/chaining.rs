@@ -13,11 +13,12 @@ use super::{
     skill_chaining, Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill,
     SkillChain, TraceRow,
 };
-use crate::config::Check;
 use crate::env::Env;
 use crate::error::Result;
 use crate::learner::{Learner, LearnerConfig};
+use crate::nn::kernel::Kernel;
 use crate::rng::{Rng, Seeds, Stream};
+use crate::validate::Check;
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
 
@@ -29,6 +30,7 @@ use std::time::Instant;
 /// starts, noise and replay sampling read substream n (n counts restarts and repairs too, so
 /// it equals the skill's index when nothing restarts); `spent` is the step count already used
 /// (phase 1), charged against `config.max_env_steps`.
+#[allow(clippy::too_many_arguments)]
 pub fn chain_skills<E: Env>(
     env: &E,
     tau: &[E::State],
@@ -36,6 +38,7 @@ pub fn chain_skills<E: Env>(
     config: &Phase2Config,
     seeds: &Seeds,
     spent: u64,
+    kernel: Kernel,
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
@@ -53,6 +56,7 @@ pub fn chain_skills<E: Env>(
         learner,
         config,
         seeds,
+        kernel,
         spent: Cell::new(spent),
         made: Cell::new(0),
         steps: Cell::new(StepCounts::default()),
@@ -61,7 +65,7 @@ pub fn chain_skills<E: Env>(
         progress: RefCell::new(&mut progress),
     };
     let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
-    let mut chain = SkillChain { skills };
+    let mut chain = SkillChain { skills, kernel };
     if failure.is_none() && config.chain_verify_episodes > 0 {
         failure = repair_chain(&chainer, &mut chain)?;
     }
@@ -82,6 +86,8 @@ pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     learner: &'a LearnerConfig,
     config: &'a Phase2Config,
     seeds: &'a Seeds,
+    /// The layer kernel of every learner and of the chain.
+    kernel: Kernel,
     /// Environment steps of the whole run so far (phase 1 included).
     spent: Cell<u64>,
     /// Learning problems made so far (skills, restarts, repairs).
@@ -152,6 +158,7 @@ impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
             env.obs_dim(),
             &config.learner_bounds(env),
             &self.seeds.skill(n32),
+            self.kernel,
         )?;
         let rngs = [
             self.seeds.substream(Stream::Start, n32),

@@ -18,11 +18,12 @@ pub mod shaped;
 
 pub use chaining::chain_skills;
 
-use crate::config::Check;
 use crate::env::Env;
 use crate::error::{Error, Result};
+use crate::nn::kernel::Kernel;
 use crate::nn::Mlp;
 use crate::rng::{Seeds, Stream};
+use crate::validate::Check;
 use goal::{Goal, Inputs};
 use serde::{Deserialize, Serialize};
 use shaped::{dist, StepCounts};
@@ -310,6 +311,8 @@ pub struct Skill {
 pub struct SkillChain {
     /// π_0 … π_n with A_0 … A_n.
     pub skills: Vec<Skill>,
+    /// The layer kernel the policies run on (not saved: [`SkillChain::load`] is told it).
+    pub kernel: Kernel,
 }
 
 /// One execution of a chain.
@@ -369,7 +372,7 @@ impl SkillChain {
         let mut raw = vec![0.0; env.obs_dim()];
         let mut obs = vec![0.0; env.obs_dim()];
         let mut action = vec![0.0; env.action_dim()];
-        let mut ws = crate::nn::Workspace::default();
+        let mut ws = crate::nn::Workspace::with_kernel(self.kernel);
         let mut i = 0;
         let mut s = start;
         let mut out = Rollout {
@@ -436,10 +439,7 @@ impl SkillChain {
                 action_scale: skill.inputs.action_scale.clone(),
             });
         }
-        let text = toml::to_string(&manifest).map_err(|e| Error::Parse {
-            path: dir.join("manifest.toml"),
-            message: e.to_string(),
-        })?;
+        let text = crate::validate::to_toml(&manifest, &dir.join("manifest.toml"))?;
         crate::record::write_atomic(&dir.join("manifest.toml"), |w| w.write_all(text.as_bytes()))?;
         // A chain saved here before may have had more skills: its extra policy files go, so the
         // folder holds exactly what the manifest lists.
@@ -454,19 +454,14 @@ impl SkillChain {
         Ok(())
     }
 
-    /// Loads a chain saved by [`SkillChain::save`].
-    pub fn load(dir: &Path) -> Result<Self> {
+    /// Loads a chain saved by [`SkillChain::save`], its policies to run on `kernel`.
+    pub fn load(dir: &Path, kernel: Kernel) -> Result<Self> {
         let path = dir.join("manifest.toml");
-        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-        let manifest: Manifest = toml::from_str(&text).map_err(|e| Error::Parse {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
+        let manifest: Manifest = crate::validate::read_toml(&path)?;
         let mut skills = Vec::new();
         for (i, m) in manifest.skills.into_iter().enumerate() {
-            let bad = |field: &str, why: String| Error::Parse {
-                path: path.clone(),
-                message: format!("skills[{i}].{field}: {why}"),
+            let bad = |field: &str, why: String| {
+                Error::parse(&path, format!("skills[{i}].{field}: {why}"))
             };
             if m.sizes.len() < 2 || m.sizes.contains(&0) {
                 return Err(bad(
@@ -521,7 +516,7 @@ impl SkillChain {
                 inputs: Inputs::new(m.origin, m.action_scale),
             });
         }
-        Ok(SkillChain { skills })
+        Ok(SkillChain { skills, kernel })
     }
 }
 

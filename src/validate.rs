@@ -1,0 +1,65 @@
+//! Validation and TOML loading: the leaf every configuration builds on.
+//!
+//! Each config struct implements [`Check`], which names the offending field in its error
+//! (`invalid \`maze.size\`: ...`); [`load`] is the one way a TOML file becomes a validated
+//! config, and [`read_toml`]/[`parse_toml`]/[`to_toml`] are the one way any other TOML file
+//! (manifests, timings, experiment and claim files) is read or written, with errors that name
+//! the file.
+//!
+//! ```
+//! use pbcs::validate::{parse_toml, Check};
+//! use pbcs::config::ExploreJob;
+//! use std::path::Path;
+//!
+//! let job: ExploreJob = parse_toml("seed = 3\n[maze]\nsize = 7\n", Path::new("job.toml")).unwrap();
+//! job.check().unwrap();
+//! let err = parse_toml::<ExploreJob>("[maze]\nsiz = 7\n", Path::new("job.toml")).unwrap_err();
+//! assert!(err.to_string().contains("job.toml"));
+//! ```
+
+use crate::error::{Error, Result};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::path::Path;
+
+/// A validated configuration.
+pub trait Check {
+    /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.
+    fn check(&self) -> Result<()>;
+}
+
+/// Parses `text` (the contents of `path`) as TOML; a syntax error or an unknown key is an
+/// [`Error::Parse`] naming `path` and the key.
+pub fn parse_toml<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
+    toml::from_str(text).map_err(|e| Error::parse(path, e))
+}
+
+/// Reads and parses the TOML file `path`, with errors that name it.
+pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_toml(&text, path)
+}
+
+/// Serialises `value` as TOML for the file `path` (named by the error, if any).
+pub fn to_toml<T: Serialize>(value: &T, path: &Path) -> Result<String> {
+    toml::to_string(value).map_err(|e| Error::parse(path, e))
+}
+
+/// Reads a TOML file into a config and validates it. Unknown keys, syntax errors and
+/// unreadable files are errors that name the file (and the key, for parse errors).
+pub fn load<T: DeserializeOwned + Check>(path: &Path) -> Result<T> {
+    let config: T = read_toml(path)?;
+    config.check()?;
+    Ok(config)
+}
+
+/// Ok if `value` is finite and in (0, `max`]; otherwise an error naming `field`.
+pub fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
+    if !(value.is_finite() && value > 0.0 && value <= max) {
+        return Err(Error::invalid(
+            field,
+            format!("must be in (0, {max}], got {value}"),
+        ));
+    }
+    Ok(())
+}
