@@ -165,11 +165,7 @@ pub fn criteria_path(results: &Path, experiment: &str) -> PathBuf {
 
 /// Reads `<experiment>.chains.csv`.
 pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| crate::Error::csv(path, e))?;
-    reader
-        .deserialize()
-        .collect::<std::result::Result<Vec<_>, _>>()
-        .map_err(|e| crate::Error::csv(path, e))
+    crate::record::read_records(path)
 }
 
 /// The performance profile of `runs` (one method's runs): for each ratio x of `ratios`, the

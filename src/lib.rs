@@ -57,6 +57,7 @@ pub mod learner;
 pub mod maze;
 pub mod nn;
 pub mod phase2;
+pub mod pipeline;
 pub mod plot;
 pub mod record;
 pub mod report;

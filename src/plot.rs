@@ -46,6 +46,9 @@ pub struct MazePicture<'a> {
 /// Height of the legend line under the maze.
 const LEGEND_PX: u32 = 18;
 
+/// Most archive points drawn in an SVG maze picture (the PNG draws them all).
+pub const SVG_MAX_POINTS: usize = 20_000;
+
 /// The legend of what `picture` draws (colours named), empty when it draws nothing but the maze.
 pub fn legend(picture: &MazePicture) -> String {
     let mut parts = vec!["blue dot: start", "green disc: target"];

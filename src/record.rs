@@ -231,6 +231,16 @@ pub fn write_records<T: serde::Serialize>(path: &Path, records: &[T]) -> Result<
     })
 }
 
+/// Reads a CSV file of serde records (the inverse of [`write_records`]); an error names the
+/// file and the line.
+pub fn read_records<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
+    reader
+        .deserialize()
+        .collect::<std::result::Result<Vec<T>, _>>()
+        .map_err(|e| Error::csv(path, e))
+}
+
 /// A run's `timing.toml`: the wall clock, which is not deterministic and so never goes into a
 /// CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply` gives
 /// the same bytes, so a byte difference between machines can be told apart). Files of runs

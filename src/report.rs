@@ -99,7 +99,8 @@ fn def_res(s: &mut String, experiment: &str, key: &str, value: &str) {
 pub fn scaling_numbers_tex(
     exp: &crate::experiment::Experiment,
     stats: &[CellStats],
-) -> crate::Result<String> {
+    paths: &[crate::tables::scaling::PathLength],
+) -> String {
     use crate::experiment::FigureSpec;
     let mut s = String::new();
     let def = |s: &mut String, key: &str, v: &str| def_res(s, &exp.name, key, v);
@@ -108,11 +109,16 @@ pub fn scaling_numbers_tex(
             continue;
         };
         if s.is_empty() {
-            for (cell, l) in crate::figures::Scaling::path_lengths(exp)? {
-                def(&mut s, &format!("{cell}:pathlen"), &l.to_string());
+            for p in paths {
+                def(
+                    &mut s,
+                    &format!("{}:pathlen", p.cell),
+                    &p.path_cells.to_string(),
+                );
             }
         }
-        if let Some((c, b)) = crate::figures::Scaling::new(exp, stats)?.power_law() {
+        let data = crate::tables::scaling::ScalingData::new(exp, stats, paths);
+        if let Some((c, b)) = data.power_law() {
             def(&mut s, &format!("{name}:exponent"), &format!("{b:.2}"));
             let factor = if c >= 10.0 {
                 format!("{c:.0}")
@@ -122,7 +128,7 @@ pub fn scaling_numbers_tex(
             def(&mut s, &format!("{name}:factor"), &factor);
         }
     }
-    Ok(s)
+    s
 }
 
 /// The results table: rows = mazes, columns = methods; each entry on three short lines (so
@@ -286,91 +292,6 @@ pub fn claims_tex(claims: &[Claim]) -> String {
     }
     s.push_str("\\end{description}\n");
     s
-}
-
-/// Writes an experiment's table (`<results>/tables/<name>.csv`) and its wall-clock companion
-/// (`<name>.timing.csv`).
-pub fn write_tables(
-    exp: &crate::experiment::Experiment,
-    results: &std::path::Path,
-    stats: &[CellStats],
-    rows: &[crate::experiment::RawRow],
-) -> crate::Result<()> {
-    crate::tables::write_table(&crate::tables::table_path(results, &exp.name), stats)?;
-    let chains = crate::criteria::chain_successes(exp, rows);
-    if !chains.is_empty() {
-        crate::record::write_records(&crate::criteria::chains_path(results, &exp.name), &chains)?;
-        crate::record::write_records(
-            &crate::criteria::criteria_path(results, &exp.name),
-            &crate::criteria::criteria(&chains),
-        )?;
-    }
-    let timing = crate::tables::cell_timings(exp, results, rows);
-    crate::record::write_records(
-        &results
-            .join("tables")
-            .join(format!("{}.timing.csv", exp.name)),
-        &timing,
-    )
-}
-
-/// Renders every figure of every experiment into `figures` and writes the report's generated
-/// LaTeX into `tex`: `numbers.tex`, `<experiment>_cells.tex`, `table.tex` (the results table)
-/// and `claims.tex`. Returns every file written.
-pub fn render_all(
-    experiments: &[(crate::experiment::Experiment, Vec<CellStats>)],
-    claims: &[Claim],
-    results: &std::path::Path,
-    figures: &std::path::Path,
-    tex_dir: &std::path::Path,
-) -> crate::Result<Vec<std::path::PathBuf>> {
-    let mut files = Vec::new();
-    for (exp, stats) in experiments {
-        files.extend(crate::figures::render_experiment(
-            exp, results, stats, figures,
-        )?);
-        let path = tex_dir.join(format!("{}_cells.tex", exp.name));
-        let text = cells_table_tex(stats);
-        crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-        files.push(path);
-        let chains = crate::criteria::chains_path(results, &exp.name);
-        if chains.exists() {
-            let criteria = crate::criteria::criteria(&crate::criteria::read_chains(&chains)?);
-            let path = tex_dir.join(format!("{}_criteria.tex", exp.name));
-            let text = criteria_tex(&criteria);
-            crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-            files.push(path);
-        }
-        let mut extra = Vec::new();
-        if exp.report.results_table {
-            extra.push((
-                "table.tex",
-                results_table_tex(stats, &exp.mazes, &exp.methods),
-            ));
-        }
-        if let Some(settings) = &exp.report.settings {
-            extra.push(("settings.tex", settings_tex(exp, settings)));
-        }
-        for (name, text) in extra {
-            let path = tex_dir.join(name);
-            crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-            files.push(path);
-        }
-    }
-    let tables: Vec<(String, Vec<CellStats>)> = experiments
-        .iter()
-        .map(|(e, s)| (e.name.clone(), s.clone()))
-        .collect();
-    let mut numbers = numbers_tex(&tables);
-    for (exp, stats) in experiments {
-        numbers.push_str(&scaling_numbers_tex(exp, stats)?);
-    }
-    for (name, text) in [("numbers.tex", numbers), ("claims.tex", claims_tex(claims))] {
-        let path = tex_dir.join(name);
-        crate::record::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-        files.push(path);
-    }
-    Ok(files)
 }
 
 /// `settings.tex`: the settings of the `settings.pbcs` and `settings.vanilla` cells of the

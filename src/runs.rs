@@ -15,7 +15,7 @@ use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::phase2::{chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode};
-use crate::plot::{render_maze, MazePicture, PictureData};
+use crate::plot::{render_maze, MazePicture, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::train::train_vanilla;
@@ -47,9 +47,6 @@ pub struct ExploreSummary {
 /// A run counts as solved when its evaluation (greedy episodes of a vanilla policy, or of a
 /// PBCS chain) reaches the target in at least this fraction of episodes.
 pub const SOLVED_AT: f32 = 0.95;
-
-/// Most archive points drawn in the SVG picture (the PNG draws them all).
-const SVG_MAX_POINTS: usize = 20_000;
 
 /// One phase-1 run's outcome ([`ExploreRun::compute`]): the summary row, everything
 /// exploration found and the wall-clock seconds; [`ExploreRun::write`] writes it.

@@ -100,3 +100,40 @@ pub fn fisher_exact(k1: u64, n1: u64, k2: u64, n2: u64) -> f64 {
         .sum();
     p.min(1.0)
 }
+
+/// Least-squares line through the points (x, y): (intercept, slope); None with fewer than two
+/// distinct x.
+pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (points.len() >= 2 && sxx > 1e-12).then(|| (my - sxy / sxx * mx, sxy / sxx))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fitted_line_recovers_a_power_law() {
+        // steps = 500 · L^1.5 exactly: the log–log fit gives back ln 500 and 1.5.
+        let pts: Vec<(f64, f64)> = [3.0f64, 8.0, 20.0, 57.0]
+            .iter()
+            .map(|&l| (l.ln(), (500.0 * l.powf(1.5)).ln()))
+            .collect();
+        let (a, b) = fit_line(&pts).unwrap();
+        assert!(
+            (a - 500f64.ln()).abs() < 1e-9 && (b - 1.5).abs() < 1e-12,
+            "{a} {b}"
+        );
+        // Known small case: (0, 1), (1, 3), (2, 5) → y = 1 + 2x.
+        assert_eq!(
+            fit_line(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]),
+            Some((1.0, 2.0))
+        );
+        assert_eq!(fit_line(&[(1.0, 1.0)]), None);
+        assert_eq!(fit_line(&[(2.0, 1.0), (2.0, 3.0)]), None);
+    }
+}

@@ -63,8 +63,8 @@ impl Check for TrainConfig {
     }
 }
 
-/// One evaluation of the greedy policy.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// One evaluation of the greedy policy (a row of a vanilla run's `evals.csv`).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct EvalRow {
     /// Environment steps of training so far.
     pub steps: u64,

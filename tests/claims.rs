@@ -306,16 +306,14 @@ fn the_fast_preset_solves_unseen_sizes_and_layouts_at_a_cost_near_linear_in_the_
         );
     }
     let b = table("beyond");
-    let (_, exponent) = pbcs::figures::Scaling::new(&exp, &b)
-        .unwrap()
-        .power_law()
-        .unwrap();
+    use pbcs::tables::scaling::{paths_path, read_paths, ScalingData};
+    let paths = read_paths(&paths_path(Path::new("results"), "beyond")).unwrap();
+    let (_, exponent) = ScalingData::new(&exp, &b, &paths).power_law().unwrap();
     assert!(
         exponent > 1.0 && exponent <= 1.2,
         "steps ∝ L^{exponent} — update the report"
     );
-    let paths = pbcs::figures::Scaling::path_lengths(&exp).unwrap();
-    let l = |cell: &str| paths.iter().find(|(c, _)| c == cell).unwrap().1;
+    let l = |cell: &str| paths.iter().find(|p| p.cell == cell).unwrap().path_cells;
     assert_eq!(l("fast-maze9"), l("fast_l2-maze6"));
     let (a, c) = (
         cell(&b, "fast", 9).steps_median,

@@ -342,7 +342,7 @@ fn smoke_profile_runs_end_to_end_deterministically() {
         let rows = read_raw(&exp, a.path()).unwrap();
         let stats = pbcs::tables::cell_stats(&exp, &rows);
         assert_eq!(stats.len(), exp.cells.len());
-        pbcs::report::write_tables(&exp, a.path(), &stats, &rows).unwrap();
+        pbcs::pipeline::write_tables(&exp, a.path(), &stats, &rows).unwrap();
         let back =
             pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), &exp.name)).unwrap();
         assert_eq!(back, stats);
@@ -356,7 +356,7 @@ fn smoke_profile_runs_end_to_end_deterministically() {
         .collect();
     let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
     let claims = pbcs::claims::claims(&specs, &tables);
-    let files = pbcs::report::render_all(&loaded, &claims, a.path(), &figures, &tex).unwrap();
+    let files = pbcs::pipeline::render_all(&loaded, &claims, a.path(), &figures, &tex).unwrap();
     for name in [
         "results_grid.png",
         "results_grid.svg",
@@ -802,7 +802,12 @@ fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
             .cells
             .iter()
             .filter(|c| c.maze == n)
-            .map(|c| pbcs::figures::cell_maze(c).unwrap().layout().clone())
+            .map(|c| {
+                pbcs::tables::scaling::cell_maze(c)
+                    .unwrap()
+                    .layout()
+                    .clone()
+            })
             .collect();
         assert_eq!(layouts.len(), 2, "maze {n}");
         assert_ne!(layouts[0], layouts[1], "maze {n}");
@@ -862,17 +867,17 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
 fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
     use pbcs::tables::{read_table, table_path};
     let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
-    let paths = pbcs::figures::Scaling::path_lengths(&exp).unwrap();
+    let paths = pbcs::tables::scaling::path_lengths(&exp).unwrap();
     assert_eq!(paths.len(), exp.cells.len());
     let mut stats = read_table(&table_path(Path::new("results"), "beyond")).unwrap();
     assert_eq!(stats.len(), exp.cells.len());
     for s in &mut stats {
-        let (_, l) = paths.iter().find(|(c, _)| c == &s.cell).unwrap();
+        let l = &paths.iter().find(|p| p.cell == s.cell).unwrap().path_cells;
         assert!(*l >= 2 * (s.maze - 1), "{}: L = {l}", s.cell);
         s.steps_median = 500.0 * (*l as f64).powf(1.5);
         (s.steps_q1, s.steps_q3) = (s.steps_median, s.steps_median);
     }
-    let tex = pbcs::report::scaling_numbers_tex(&exp, &stats).unwrap();
+    let tex = pbcs::report::scaling_numbers_tex(&exp, &stats, &paths);
     assert!(
         tex.contains("\\csname res:beyond:scaling:exponent\\endcsname{1.50}"),
         "{tex}"
@@ -881,9 +886,9 @@ fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
         tex.contains("\\csname res:beyond:scaling:factor\\endcsname{500}"),
         "{tex}"
     );
-    let (cell, l) = &paths[0];
+    let (cell, l) = (&paths[0].cell, paths[0].path_cells);
     assert!(tex.contains(&format!("res:beyond:{cell}:pathlen\\endcsname{{{l}}}")));
     // An experiment without a scaling figure adds nothing.
     let table = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
-    assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[]).unwrap(), "");
+    assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[], &[]), "");
 }

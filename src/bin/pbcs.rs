@@ -261,25 +261,14 @@ struct SetArgs {
 
 impl SetArgs {
     fn load(&self) -> anyhow::Result<(Vec<pbcs::experiment::Experiment>, PathBuf)> {
-        let mut exps = Vec::new();
-        for f in pbcs::experiment::experiment_files(&self.experiments)? {
-            exps.push(pbcs::experiment::Experiment::load(
-                &f,
-                self.profile.as_deref(),
-            )?);
-        }
-        let results = results_dir(self.results.as_ref(), self.profile.as_deref());
-        Ok((exps, results))
+        let profile = self.profile.as_deref();
+        let exps = pbcs::pipeline::load_experiments(&self.experiments, profile)?;
+        Ok((exps, results_dir(self.results.as_ref(), profile)))
     }
 }
 
-/// The results folder: `--results` if given, else `results` for the committed grid and
-/// `results-<profile>` for a profile (so a smoke run never mixes with the committed rows).
 fn results_dir(results: Option<&PathBuf>, profile: Option<&str>) -> PathBuf {
-    results.cloned().unwrap_or_else(|| match profile {
-        None => PathBuf::from("results"),
-        Some(p) => PathBuf::from(format!("results-{p}")),
-    })
+    pbcs::pipeline::results_dir(results.map(PathBuf::as_path), profile)
 }
 
 /// Which experiment, which profile, where its results live.
@@ -509,27 +498,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 #[cfg(feature = "polars")]
 fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
     let (exps, results) = set.load()?;
-    for exp in &exps {
-        let rows = pbcs::experiment::read_raw(exp, &results)?;
-        if rows.is_empty() {
+    for a in pbcs::pipeline::aggregate(&exps, &results)? {
+        if a.runs == 0 {
             println!(
                 "{}: no raw rows in {}, skipped",
-                exp.name,
+                a.experiment,
                 results.display()
             );
-            continue;
+        } else {
+            println!(
+                "{}: {} of {} runs in {} cells → {} (polars; checked against the plain computation)",
+                a.experiment,
+                a.runs,
+                a.expected,
+                a.cells,
+                a.table.display()
+            );
         }
-        let stats = pbcs::aggregate::aggregate(exp, &rows)?;
-        pbcs::report::write_tables(exp, &results, &stats, &rows)?;
-        let expected = exp.cells.len() as u64 * exp.seed_count;
-        println!(
-            "{}: {} of {} runs in {} cells → {} (polars; checked against the plain computation)",
-            exp.name,
-            rows.len(),
-            expected,
-            stats.len(),
-            pbcs::tables::table_path(&results, &exp.name).display()
-        );
     }
     Ok(())
 }
@@ -548,33 +533,19 @@ fn make_figures(
     tex: Option<PathBuf>,
 ) -> anyhow::Result<()> {
     let (exps, results) = set.load()?;
-    // The claims file first: a bad one stops before any work.
-    let specs = pbcs::claims::load_claims(&set.experiments.join("claims.toml"))?;
     let figures = figures.unwrap_or_else(|| results.join("figures"));
-    let tex = tex.unwrap_or_else(|| match &set.profile {
-        None => PathBuf::from("paper/generated"),
-        Some(_) => results.join("tex"),
-    });
-    let mut loaded = Vec::new();
-    for exp in exps {
-        let path = pbcs::tables::table_path(&results, &exp.name);
-        if !path.exists() {
-            println!("{}: no table at {}, skipped", exp.name, path.display());
-            continue;
-        }
-        let stats = pbcs::tables::read_table(&path)?;
-        println!("\n{} — {}", exp.name, exp.title);
-        print!("{}", pbcs::tables::markdown(&stats));
-        loaded.push((exp, stats));
+    let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
+    let claims_file = set.experiments.join("claims.toml");
+    let done = pbcs::pipeline::render(exps, &claims_file, &results, &figures, &tex)?;
+    for (name, path) in &done.skipped {
+        println!("{name}: no table at {}, skipped", path.display());
     }
-    let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
-        .iter()
-        .map(|(e, s)| (e.name.clone(), s.clone()))
-        .collect();
-    let claims = pbcs::claims::claims(&specs, &tables);
-    let files = pbcs::report::render_all(&loaded, &claims, &results, &figures, &tex)?;
+    for (exp, stats) in &done.tables {
+        println!("\n{} — {}", exp.name, exp.title);
+        print!("{}", pbcs::tables::markdown(stats));
+    }
     println!("\nthe paper's claims against our tables:");
-    for c in &claims {
+    for c in &done.claims {
         println!(
             "- {} — {}: {}",
             c.id,
@@ -584,7 +555,7 @@ fn make_figures(
     }
     println!(
         "\nwrote {} files into {} and {}",
-        files.len(),
+        done.files.len(),
         figures.display(),
         tex.display()
     );

@@ -1,68 +1,19 @@
-//! Experiments as data: one TOML file per paper artifact, a grid of cells (maze × method)
-//! run over a range of seeds, each (cell, seed) an independent deterministic run that writes
-//! its own raw CSV row.
-//!
-//! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
-//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
-//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI, or any a user adds)
-//! that override seeds, mazes and fields. Resolving a cell is
-//! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
-//! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
-//! `by_maze`; then `maze.size` and `seed` are set (a profile overrides everything the file
-//! sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
-//! parsed with unknown keys denied, so a typo in an
-//! experiment file is an error that names the method.
-//!
-//! ```
-//! use pbcs::experiment::Experiment;
-//!
-//! let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), Some("smoke"))
-//!     .unwrap();
-//! assert!(exp.cells.iter().any(|c| c.id == "pbcs-maze2"));
-//! assert_eq!(exp.seeds(), vec![0]);
-//! ```
-//!
-//! Raw results of a run of cell `c` with seed `s` live in `<results>/raw/<experiment>/<c>/`:
-//! `s<s>.csv` (one [`RawRow`], written last, so its presence means the run finished),
-//! `s<s>.toml` (the resolved job: `pbcs run --config` or `pbcs train --config` re-runs it),
-//! `s<s>.timing.toml` (wall clock, not deterministic, hence beside the CSV), `s<s>.evals.csv`
-//! (vanilla: the learning curve), `s<s>.evaluation.csv` (PBCS: each evaluation episode of the
-//! chain, success and steps; rows committed before it existed lack it) and, for picture seeds, `s<s>.picture.csv` (what the figures
-//! draw).
+//! Experiment files: parsing, validation and the deep merge that resolves each cell's job
+//! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
+use super::{Cell, Experiment, Job, Kind};
 use crate::config::{RunJob, TrainJob};
 use crate::error::{Error, Result};
-use crate::nn::kernel::Kernel;
-use crate::phase2::{Failure, StartMode};
-use crate::runs::{PbcsRun, RunRecord, TrainRun, TrainSummary, Variant};
+use crate::runs::Variant;
 use crate::validate::Check;
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-
-/// What a method runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    /// A vanilla baseline on the maze's own reward ([`TrainJob`], `pbcs train`).
-    Vanilla,
-    /// PBCS, phase 1 then phase 2 ([`RunJob`], `pbcs run`).
-    Pbcs,
-}
-
-impl Kind {
-    fn name(self) -> &'static str {
-        match self {
-            Kind::Vanilla => "vanilla",
-            Kind::Pbcs => "pbcs",
-        }
-    }
-}
 
 /// One method (a column of the results table, a bar of the γ study) as written in the file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct MethodSpec {
+pub(crate) struct MethodSpec {
     name: String,
     #[serde(default)]
     label: Option<String>,
@@ -88,7 +39,7 @@ struct MethodSpec {
 /// `pbcs = { … }` the [`RunJob`]s.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct KindTables {
+pub(crate) struct KindTables {
     #[serde(default)]
     vanilla: toml::Table,
     #[serde(default)]
@@ -115,7 +66,7 @@ impl KindTables {
 /// A named profile: a smaller (`smoke`) or otherwise changed version of the same grid.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ProfileSpec {
+pub(crate) struct ProfileSpec {
     #[serde(default)]
     description: String,
     seeds: Option<u64>,
@@ -135,7 +86,7 @@ struct ProfileSpec {
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ExperimentSpec {
+pub(crate) struct ExperimentSpec {
     title: String,
     #[serde(default)]
     description: String,
@@ -266,13 +217,17 @@ impl FigureSpec {
     }
 }
 
-fn default_picture_seeds() -> Vec<u64> {
+pub(crate) fn default_picture_seeds() -> Vec<u64> {
     vec![0]
 }
 
 /// Every declared figure has a file-name-safe, unique name and names only methods of the
 /// experiment.
-fn check_figures(path: &Path, figures: &[FigureSpec], methods: &[(String, String)]) -> Result<()> {
+pub(crate) fn check_figures(
+    path: &Path,
+    figures: &[FigureSpec],
+    methods: &[(String, String)],
+) -> Result<()> {
     let mut names = BTreeSet::new();
     for (i, f) in figures.iter().enumerate() {
         let field = |what: &str| format!("figure[{i}].{what} in {}", path.display());
@@ -314,7 +269,7 @@ fn check_figures(path: &Path, figures: &[FigureSpec], methods: &[(String, String
 }
 
 /// The methods `[report].settings` names exist and are of the kind it says.
-fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> Result<()> {
+pub(crate) fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> Result<()> {
     let Some(settings) = &report.settings else {
         return Ok(());
     };
@@ -335,101 +290,8 @@ fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> Result<()> 
     Ok(())
 }
 
-/// A resolved job of either kind.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Job {
-    /// `pbcs train`.
-    Vanilla(TrainJob),
-    /// `pbcs run`.
-    Pbcs(RunJob),
-}
-
-impl Job {
-    /// The job with run seed `seed`.
-    pub fn with_seed(&self, seed: u64) -> Job {
-        match self {
-            Job::Vanilla(j) => Job::Vanilla(TrainJob { seed, ..j.clone() }),
-            Job::Pbcs(j) => Job::Pbcs(RunJob { seed, ..j.clone() }),
-        }
-    }
-
-    /// The job as TOML (what `--config` reads back).
-    pub fn to_toml(&self) -> String {
-        match self {
-            Job::Vanilla(j) => toml::to_string(j),
-            Job::Pbcs(j) => toml::to_string(j),
-        }
-        .expect("jobs serialise to TOML")
-    }
-
-    /// Whether the stored TOML `text` describes this job (compared by value: fields absent
-    /// from `text` take their defaults; unparseable text is another job).
-    pub fn same_as(&self, text: &str) -> bool {
-        match self {
-            Job::Vanilla(j) => toml::from_str::<TrainJob>(text).is_ok_and(|s| &s == j),
-            Job::Pbcs(j) => toml::from_str::<RunJob>(text).is_ok_and(|s| &s == j),
-        }
-    }
-
-    fn check(&self) -> Result<()> {
-        match self {
-            Job::Vanilla(j) => j.check(),
-            Job::Pbcs(j) => j.check(),
-        }
-    }
-}
-
-/// One cell of the grid: a method on a maze.
-#[derive(Debug, Clone)]
-pub struct Cell {
-    /// `<method>-maze<N>`: the cell's folder name and its name on the command line.
-    pub id: String,
-    /// Method name.
-    pub method: String,
-    /// Method label for figures and tables.
-    pub label: String,
-    /// Maze size N.
-    pub maze: usize,
-    /// The resolved job (run seed 0; [`Job::with_seed`] gives the others).
-    pub job: Job,
-    /// The paper's environment steps for this cell, if it reports them.
-    pub paper_steps: Option<u64>,
-    /// Whether the paper's run solved this cell, if it reports it.
-    pub paper_solved: Option<bool>,
-}
-
-/// A resolved experiment: every cell's job, the seeds, the profile.
-#[derive(Debug, Clone)]
-pub struct Experiment {
-    /// The file stem (`table` for `experiments/table.toml`; for [`Experiment::of_job`], the
-    /// name given): the name of its raw folder.
-    pub name: String,
-    /// Title, for tables and figures.
-    pub title: String,
-    /// What the experiment shows.
-    pub description: String,
-    /// The profile applied, if any.
-    pub profile: Option<String>,
-    /// First run seed.
-    pub first_seed: u64,
-    /// Number of seeds.
-    pub seed_count: u64,
-    /// Seeds whose runs also keep the picture data.
-    pub picture_seeds: Vec<u64>,
-    /// Maze sizes, in order.
-    pub mazes: Vec<usize>,
-    /// Methods (name, label), in order.
-    pub methods: Vec<(String, String)>,
-    /// Cells, maze-major in the file's order of mazes and methods.
-    pub cells: Vec<Cell>,
-    /// The figures it declares, in order.
-    pub figures: Vec<FigureSpec>,
-    /// What the report takes from it besides its table.
-    pub report: ReportSpec,
-}
-
 /// A validation error with where it happened (`where_`) added to its reason.
-fn located(e: Error, where_: &str) -> Error {
+pub(crate) fn located(e: Error, where_: &str) -> Error {
     match e {
         Error::Invalid { field, reason } => Error::Invalid {
             field,
@@ -440,7 +302,7 @@ fn located(e: Error, where_: &str) -> Error {
 }
 
 /// Maze sizes of a grid: at least one, each once.
-fn check_mazes(mazes: &[usize]) -> Result<()> {
+pub(crate) fn check_mazes(mazes: &[usize]) -> Result<()> {
     if mazes.is_empty() {
         return Err(Error::invalid("mazes", "must name at least one maze size"));
     }
@@ -451,7 +313,7 @@ fn check_mazes(mazes: &[usize]) -> Result<()> {
 }
 
 /// A method name is a folder name and part of cell ids: letters, digits and `_` only.
-fn check_method_name(name: &str) -> Result<()> {
+pub(crate) fn check_method_name(name: &str) -> Result<()> {
     if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
         return Err(Error::invalid(
             "method.name",
@@ -462,7 +324,7 @@ fn check_method_name(name: &str) -> Result<()> {
 }
 
 /// Merges `from` into `into`: tables merge key by key, anything else replaces.
-fn merge(into: &mut toml::Table, from: &toml::Table) {
+pub(crate) fn merge(into: &mut toml::Table, from: &toml::Table) {
     for (k, v) in from {
         match (into.get_mut(k), v) {
             (Some(toml::Value::Table(a)), toml::Value::Table(b)) => merge(a, b),
@@ -701,384 +563,6 @@ impl Experiment {
             report: ReportSpec::default(),
         })
     }
-
-    /// The run seeds, in order.
-    pub fn seeds(&self) -> Vec<u64> {
-        (self.first_seed..self.first_seed + self.seed_count).collect()
-    }
-
-    /// The cell called `id`, or an error listing the cells.
-    pub fn cell(&self, id: &str) -> Result<&Cell> {
-        self.cells.iter().find(|c| c.id == id).ok_or_else(|| {
-            Error::invalid(
-                "cell",
-                format!(
-                    "experiment `{}` has no cell `{id}` (it has: {})",
-                    self.name,
-                    self.cells
-                        .iter()
-                        .map(|c| c.id.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )
-        })
-    }
-
-    /// The folder of a cell's raw results under `results`.
-    pub fn cell_dir(&self, results: &Path, cell: &Cell) -> PathBuf {
-        results.join("raw").join(&self.name).join(&cell.id)
-    }
-}
-
-/// One run's raw result: the row every table and figure is computed from. Vanilla and PBCS
-/// runs share the columns; a column that does not apply holds 0 or is empty.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RawRow {
-    /// Experiment name.
-    pub experiment: String,
-    /// Cell id (`<method>-maze<N>`).
-    pub cell: String,
-    /// Method name.
-    pub method: String,
-    /// `vanilla` or `pbcs`.
-    pub kind: Kind,
-    /// Maze size N.
-    pub maze: usize,
-    /// Maze layout seed.
-    pub maze_seed: u64,
-    /// Run seed.
-    pub seed: u64,
-    /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
-    /// argmax actor.
-    pub learner: String,
-    /// γ.
-    pub gamma: f32,
-    /// PBCS: whether skill chaining was on.
-    pub chaining: bool,
-    /// PBCS: `ball` or `exact` starts; empty for vanilla.
-    pub starts: Option<StartMode>,
-    /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
-    /// vanilla, the final greedy evaluation does.
-    pub solved: bool,
-    /// Success rate of that evaluation.
-    pub success_rate: f32,
-    /// Environment steps used (PBCS: phase 1 + training + tests; vanilla: the budget).
-    pub env_steps: u64,
-    /// The step budget of the run (PBCS: `phase2.max_env_steps`; vanilla: `train.steps`).
-    pub budget: u64,
-    /// Vanilla: environment steps at the first successful greedy evaluation, if any.
-    pub first_success_steps: Option<u64>,
-    /// PBCS: steps of phase 1.
-    pub phase1_steps: u64,
-    /// PBCS: steps of phase-2 training episodes.
-    pub train_steps: u64,
-    /// PBCS: steps of Backplay's tests.
-    pub test_steps: u64,
-    /// PBCS: skills in the chain.
-    pub skills: usize,
-    /// PBCS: why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
-    pub failure: Option<Failure>,
-}
-
-impl RawRow {
-    /// The row of a vanilla run of `cell` (`job` with its seed): its summary, under the
-    /// cell's names; the PBCS columns hold 0 or are empty.
-    pub fn vanilla(exp: &Experiment, cell: &Cell, job: &TrainJob, s: &TrainSummary) -> RawRow {
-        RawRow {
-            experiment: exp.name.clone(),
-            cell: cell.id.clone(),
-            method: cell.method.clone(),
-            kind: Kind::Vanilla,
-            maze: s.maze,
-            maze_seed: s.maze_seed,
-            seed: job.seed,
-            learner: job.learner.record_name(),
-            gamma: job.learner.gamma,
-            chaining: false,
-            starts: None,
-            solved: s.final_success >= crate::runs::SOLVED_AT,
-            success_rate: s.final_success,
-            env_steps: s.env_steps,
-            budget: job.train.steps,
-            first_success_steps: s.first_success_steps,
-            phase1_steps: 0,
-            train_steps: 0,
-            test_steps: 0,
-            skills: 0,
-            failure: None,
-        }
-    }
-
-    /// The row of a PBCS run of `cell` (`job` with its seed): its [`RunRecord`] (what `pbcs
-    /// run` writes to `record.csv`) under the cell's names, `env_steps` its `total_steps`;
-    /// the record's τ lengths and ε are left to the job file.
-    pub fn pbcs(exp: &Experiment, cell: &Cell, job: &RunJob, r: RunRecord) -> RawRow {
-        RawRow {
-            experiment: exp.name.clone(),
-            cell: cell.id.clone(),
-            method: cell.method.clone(),
-            kind: Kind::Pbcs,
-            maze: r.maze,
-            maze_seed: r.maze_seed,
-            seed: r.seed,
-            learner: r.learner,
-            gamma: r.gamma,
-            chaining: job.phase2.chaining,
-            starts: Some(r.starts),
-            solved: r.solved,
-            success_rate: r.success_rate,
-            env_steps: r.total_steps,
-            budget: job.phase2.max_env_steps,
-            first_success_steps: None,
-            phase1_steps: r.phase1_steps,
-            train_steps: r.train_steps,
-            test_steps: r.test_steps,
-            skills: r.skills,
-            failure: r.failure,
-        }
-    }
-}
-
-/// Raw file names of one run.
-fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
-    dir.join(format!("s{seed}{suffix}"))
-}
-
-/// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
-/// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
-/// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
-/// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
-/// job) and `s<seed>.csv` (the row). The learners run on `kernel`.
-pub fn run_cell_seed(
-    exp: &Experiment,
-    cell: &Cell,
-    seed: u64,
-    dir: &Path,
-    kernel: Kernel,
-) -> Result<RawRow> {
-    let job = cell.job.with_seed(seed);
-    let (row, seconds, picture) = match &job {
-        Job::Vanilla(j) => {
-            let run = TrainRun::compute(j, kernel, |_, _| {})?;
-            crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
-            let row = RawRow::vanilla(exp, cell, j, &run.summary);
-            (row, run.seconds, run.picture)
-        }
-        Job::Pbcs(j) => {
-            let run = PbcsRun::compute(j, kernel, |_, _| {})?;
-            crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
-            let row = RawRow::pbcs(exp, cell, j, run.record);
-            (row, run.seconds, run.picture)
-        }
-    };
-    crate::runs::write_timing(
-        &run_file(dir, seed, ".timing.toml"),
-        seconds,
-        row.env_steps,
-        Some(kernel),
-    )?;
-    if exp.picture_seeds.contains(&seed) {
-        picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
-    }
-    let config = job.to_toml();
-    crate::record::write_atomic(&run_file(dir, seed, ".toml"), |w| {
-        w.write_all(config.as_bytes())
-    })?;
-    crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
-    Ok(row)
-}
-
-/// The finished raw row of (cell, seed) in `dir`, if there is one. A finished run of another
-/// config is an error: results of two configs are never mixed. Configs are compared by value,
-/// so a setting added later, absent from an older stored config, takes its default (the
-/// behaviour the older run had).
-pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow>> {
-    let path = run_file(dir, seed, ".csv");
-    if !path.exists() {
-        return Ok(None);
-    }
-    let config_path = run_file(dir, seed, ".toml");
-    let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
-    if !cell.job.with_seed(seed).same_as(&stored) {
-        return Err(Error::parse(
-            &config_path,
-            "this finished run used another config than the experiment now gives (its file, or \
-             `pbcs table`'s preset or config); remove the cell's folder to re-run it, restore \
-             the file, or choose another results folder (--results, --out)",
-        ));
-    }
-    read_row(&path).map(Some)
-}
-
-/// Reads one raw row file.
-pub fn read_row(path: &Path) -> Result<RawRow> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
-    reader
-        .deserialize()
-        .next()
-        .ok_or_else(|| Error::parse(path, "empty raw row file"))?
-        .map_err(|e| Error::csv(path, e))
-}
-
-/// Wall seconds of a finished run, from its timing file (None if absent or unreadable).
-pub fn read_wall_seconds(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> Option<f64> {
-    let path = run_file(&exp.cell_dir(results, cell), seed, ".timing.toml");
-    crate::record::Timing::read(&path)
-        .ok()
-        .flatten()
-        .map(|t| t.wall_seconds)
-}
-
-/// Path of the picture data of (cell, seed), if it was kept.
-pub fn picture_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
-    run_file(&exp.cell_dir(results, cell), seed, ".picture.csv")
-}
-
-/// Path of the learning curve of a vanilla (cell, seed).
-pub fn evals_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
-    run_file(&exp.cell_dir(results, cell), seed, ".evals.csv")
-}
-
-/// A (cell, seed) pair of a sweep.
-#[derive(Debug, Clone)]
-pub struct Pending<'a> {
-    /// The cell.
-    pub cell: &'a Cell,
-    /// The run seed.
-    pub seed: u64,
-}
-
-/// What happened to one (cell, seed) of a sweep.
-#[derive(Debug, Clone)]
-pub enum Event {
-    /// It was already finished and was read back.
-    Skipped(RawRow),
-    /// It ran now, in this many wall seconds.
-    Ran(RawRow, f64),
-}
-
-/// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
-/// (one thread each; each run is single-threaded and deterministic, so the bytes do not
-/// depend on `jobs`), every learner on `kernel`. `on_event` is called as each pair finishes.
-/// Returns the rows in the order of `runs`; the first error stops handing out new runs and is
-/// returned.
-pub fn sweep(
-    exp: &Experiment,
-    runs: &[Pending],
-    results: &Path,
-    jobs: usize,
-    kernel: Kernel,
-    on_event: impl Fn(&Pending, &Event) + Sync,
-) -> Result<Vec<RawRow>> {
-    // Finished runs first (cheap), so that a config mismatch is reported before any work.
-    let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());
-    for p in runs {
-        let dir = exp.cell_dir(results, p.cell);
-        let done = read_finished(p.cell, p.seed, &dir)?;
-        if let Some(r) = &done {
-            on_event(p, &Event::Skipped(r.clone()));
-        }
-        rows.push(done);
-    }
-    let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
-    let ran = run_parallel(&todo, jobs, |&i| {
-        let p = &runs[i];
-        let clock = std::time::Instant::now();
-        let dir = exp.cell_dir(results, p.cell);
-        // One process per run: a second sweep into this folder stops here with a message
-        // instead of doing the run again and replacing its row.
-        let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
-            .and_then(|_lock| {
-                // Finished by another sweep while this one was planning: read it back.
-                match read_finished(p.cell, p.seed, &dir)? {
-                    Some(row) => Ok(row),
-                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel),
-                }
-            })
-            .map_err(|e| Error::Run {
-                cell: p.cell.id.clone(),
-                seed: p.seed,
-                cause: Box::new(e),
-            })?;
-        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
-        Ok(row)
-    })?;
-    for (i, row) in todo.into_iter().zip(ran) {
-        rows[i] = Some(row);
-    }
-    Ok(rows.into_iter().flatten().collect())
-}
-
-/// `f` on every item, `jobs` at a time (a pool of `jobs` threads), the results in the items'
-/// order. Items start in their order (each free thread takes the next one), so an interrupted
-/// sweep has finished a prefix of its plan: with the table's plan, whole mazes, smallest first.
-/// After the first error no new item starts, and that error is returned. Every run is
-/// single-threaded and seeded by its own job, so `jobs` changes the wall clock, never a byte.
-pub fn run_parallel<T: Sync, R: Send>(
-    items: &[T],
-    jobs: usize,
-    f: impl Fn(&T) -> Result<R> + Sync,
-) -> Result<Vec<R>> {
-    use rayon::prelude::*;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
-        .build()
-        .map_err(|e| Error::invalid("jobs", e.to_string()))?;
-    let mut done: Vec<(usize, R)> = pool.install(|| {
-        items
-            .iter()
-            .enumerate()
-            .par_bridge()
-            .map(|(i, item)| f(item).map(|r| (i, r)))
-            .collect::<Result<_>>()
-    })?;
-    done.sort_by_key(|(i, _)| *i);
-    Ok(done.into_iter().map(|(_, r)| r).collect())
-}
-
-/// Every (cell, seed) of the experiment, or of one cell, or one seed.
-pub fn plan<'a>(
-    exp: &'a Experiment,
-    cell: Option<&str>,
-    seed: Option<u64>,
-) -> Result<Vec<Pending<'a>>> {
-    let cells: Vec<&Cell> = match cell {
-        Some(id) => vec![exp.cell(id)?],
-        None => exp.cells.iter().collect(),
-    };
-    let seeds = match seed {
-        Some(s) => {
-            if !exp.seeds().contains(&s) {
-                return Err(Error::invalid(
-                    "seed",
-                    format!(
-                        "{s} is outside the experiment's seeds {}..{}",
-                        exp.first_seed,
-                        exp.first_seed + exp.seed_count
-                    ),
-                ));
-            }
-            vec![s]
-        }
-        None => exp.seeds(),
-    };
-    Ok(cells
-        .into_iter()
-        .flat_map(|c| seeds.iter().map(move |&s| Pending { cell: c, seed: s }))
-        .collect())
-}
-
-/// All finished raw rows of the experiment under `results`, in (cell, seed) order; missing
-/// runs are left out (and counted by the caller through `n`).
-pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
-    let mut rows = Vec::new();
-    for p in plan(exp, None, None)? {
-        if let Some(r) = read_finished(p.cell, p.seed, &exp.cell_dir(results, p.cell))? {
-            rows.push(r);
-        }
-    }
-    Ok(rows)
 }
 
 /// The experiment files under `dir` (every `*.toml` with a `[[method]]`), sorted.

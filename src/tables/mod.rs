@@ -6,6 +6,9 @@
 //! computes the same statistics in plain Rust, which the aggregation checks polars against
 //! and `pbcs table` (one method, no polars) writes directly.
 
+pub mod curves;
+pub mod scaling;
+
 use crate::error::{Error, Result};
 use crate::experiment::{Cell, Experiment, RawRow};
 use crate::stats::{median, quantile, wilson, Z95};

@@ -1,0 +1,64 @@
+//! Where a run's raw files live (`<results>/raw/<experiment>/<cell>/s<seed>.*`) and reading
+//! them back.
+
+use super::{plan, read_row, Cell, Experiment, RawRow};
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Raw file names of one run.
+pub(crate) fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
+    dir.join(format!("s{seed}{suffix}"))
+}
+
+/// The finished raw row of (cell, seed) in `dir`, if there is one. A finished run of another
+/// config is an error: results of two configs are never mixed. Configs are compared by value,
+/// so a setting added later, absent from an older stored config, takes its default (the
+/// behaviour the older run had).
+pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow>> {
+    let path = run_file(dir, seed, ".csv");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let config_path = run_file(dir, seed, ".toml");
+    let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
+    if !cell.job.with_seed(seed).same_as(&stored) {
+        return Err(Error::parse(
+            &config_path,
+            "this finished run used another config than the experiment now gives (its file, or \
+             `pbcs table`'s preset or config); remove the cell's folder to re-run it, restore \
+             the file, or choose another results folder (--results, --out)",
+        ));
+    }
+    read_row(&path).map(Some)
+}
+
+/// Wall seconds of a finished run, from its timing file (None if absent or unreadable).
+pub fn read_wall_seconds(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> Option<f64> {
+    let path = run_file(&exp.cell_dir(results, cell), seed, ".timing.toml");
+    crate::record::Timing::read(&path)
+        .ok()
+        .flatten()
+        .map(|t| t.wall_seconds)
+}
+
+/// Path of the picture data of (cell, seed), if it was kept.
+pub fn picture_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    run_file(&exp.cell_dir(results, cell), seed, ".picture.csv")
+}
+
+/// Path of the learning curve of a vanilla (cell, seed).
+pub fn evals_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    run_file(&exp.cell_dir(results, cell), seed, ".evals.csv")
+}
+
+/// All finished raw rows of the experiment under `results`, in (cell, seed) order; missing
+/// runs are left out (and counted by the caller through `n`).
+pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
+    let mut rows = Vec::new();
+    for p in plan(exp, None, None)? {
+        if let Some(r) = read_finished(p.cell, p.seed, &exp.cell_dir(results, p.cell))? {
+            rows.push(r);
+        }
+    }
+    Ok(rows)
+}

@@ -1,0 +1,190 @@
+//! Experiments as data: one TOML file per paper artifact, a grid of cells (maze × method)
+//! run over a range of seeds, each (cell, seed) an independent deterministic run that writes
+//! its own raw CSV row.
+//!
+//! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
+//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
+//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI, or any a user adds)
+//! that override seeds, mazes and fields. Resolving a cell is
+//! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
+//! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
+//! `by_maze`; then `maze.size` and `seed` are set (a profile overrides everything the file
+//! sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
+//! parsed with unknown keys denied, so a typo in an
+//! experiment file is an error that names the method.
+//!
+//! ```
+//! use pbcs::experiment::Experiment;
+//!
+//! let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), Some("smoke"))
+//!     .unwrap();
+//! assert!(exp.cells.iter().any(|c| c.id == "pbcs-maze2"));
+//! assert_eq!(exp.seeds(), vec![0]);
+//! ```
+//!
+//! Raw results of a run of cell `c` with seed `s` live in `<results>/raw/<experiment>/<c>/`:
+//! `s<s>.csv` (one [`RawRow`], written last, so its presence means the run finished),
+//! `s<s>.toml` (the resolved job: `pbcs run --config` or `pbcs train --config` re-runs it),
+//! `s<s>.timing.toml` (wall clock, not deterministic, hence beside the CSV), `s<s>.evals.csv`
+//! (vanilla: the learning curve), `s<s>.evaluation.csv` (PBCS: each evaluation episode of the
+//! chain, success and steps; rows committed before it existed lack it) and, for picture seeds, `s<s>.picture.csv` (what the figures
+//! draw).
+
+mod layout;
+mod row;
+mod spec;
+mod sweep;
+
+use layout::run_file;
+pub use layout::{evals_file, picture_file, read_finished, read_raw, read_wall_seconds};
+pub use row::{read_row, RawRow};
+pub use spec::{experiment_files, FigureSpec, ReportSpec, SettingsSpec};
+pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
+
+use crate::config::{RunJob, TrainJob};
+use crate::error::{Error, Result};
+use crate::validate::Check;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What a method runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// A vanilla baseline on the maze's own reward ([`TrainJob`], `pbcs train`).
+    Vanilla,
+    /// PBCS, phase 1 then phase 2 ([`RunJob`], `pbcs run`).
+    Pbcs,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Vanilla => "vanilla",
+            Kind::Pbcs => "pbcs",
+        }
+    }
+}
+
+/// A resolved job of either kind.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Job {
+    /// `pbcs train`.
+    Vanilla(TrainJob),
+    /// `pbcs run`.
+    Pbcs(RunJob),
+}
+
+impl Job {
+    /// The job with run seed `seed`.
+    pub fn with_seed(&self, seed: u64) -> Job {
+        match self {
+            Job::Vanilla(j) => Job::Vanilla(TrainJob { seed, ..j.clone() }),
+            Job::Pbcs(j) => Job::Pbcs(RunJob { seed, ..j.clone() }),
+        }
+    }
+
+    /// The job as TOML (what `--config` reads back).
+    pub fn to_toml(&self) -> String {
+        match self {
+            Job::Vanilla(j) => toml::to_string(j),
+            Job::Pbcs(j) => toml::to_string(j),
+        }
+        .expect("jobs serialise to TOML")
+    }
+
+    /// Whether the stored TOML `text` describes this job (compared by value: fields absent
+    /// from `text` take their defaults; unparseable text is another job).
+    pub fn same_as(&self, text: &str) -> bool {
+        match self {
+            Job::Vanilla(j) => toml::from_str::<TrainJob>(text).is_ok_and(|s| &s == j),
+            Job::Pbcs(j) => toml::from_str::<RunJob>(text).is_ok_and(|s| &s == j),
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        match self {
+            Job::Vanilla(j) => j.check(),
+            Job::Pbcs(j) => j.check(),
+        }
+    }
+}
+
+/// One cell of the grid: a method on a maze.
+#[derive(Debug, Clone)]
+pub struct Cell {
+    /// `<method>-maze<N>`: the cell's folder name and its name on the command line.
+    pub id: String,
+    /// Method name.
+    pub method: String,
+    /// Method label for figures and tables.
+    pub label: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// The resolved job (run seed 0; [`Job::with_seed`] gives the others).
+    pub job: Job,
+    /// The paper's environment steps for this cell, if it reports them.
+    pub paper_steps: Option<u64>,
+    /// Whether the paper's run solved this cell, if it reports it.
+    pub paper_solved: Option<bool>,
+}
+
+/// A resolved experiment: every cell's job, the seeds, the profile.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// The file stem (`table` for `experiments/table.toml`; for [`Experiment::of_job`], the
+    /// name given): the name of its raw folder.
+    pub name: String,
+    /// Title, for tables and figures.
+    pub title: String,
+    /// What the experiment shows.
+    pub description: String,
+    /// The profile applied, if any.
+    pub profile: Option<String>,
+    /// First run seed.
+    pub first_seed: u64,
+    /// Number of seeds.
+    pub seed_count: u64,
+    /// Seeds whose runs also keep the picture data.
+    pub picture_seeds: Vec<u64>,
+    /// Maze sizes, in order.
+    pub mazes: Vec<usize>,
+    /// Methods (name, label), in order.
+    pub methods: Vec<(String, String)>,
+    /// Cells, maze-major in the file's order of mazes and methods.
+    pub cells: Vec<Cell>,
+    /// The figures it declares, in order.
+    pub figures: Vec<FigureSpec>,
+    /// What the report takes from it besides its table.
+    pub report: ReportSpec,
+}
+
+impl Experiment {
+    /// The run seeds, in order.
+    pub fn seeds(&self) -> Vec<u64> {
+        (self.first_seed..self.first_seed + self.seed_count).collect()
+    }
+
+    /// The cell called `id`, or an error listing the cells.
+    pub fn cell(&self, id: &str) -> Result<&Cell> {
+        self.cells.iter().find(|c| c.id == id).ok_or_else(|| {
+            Error::invalid(
+                "cell",
+                format!(
+                    "experiment `{}` has no cell `{id}` (it has: {})",
+                    self.name,
+                    self.cells
+                        .iter()
+                        .map(|c| c.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })
+    }
+
+    /// The folder of a cell's raw results under `results`.
+    pub fn cell_dir(&self, results: &Path, cell: &Cell) -> PathBuf {
+        results.join("raw").join(&self.name).join(&cell.id)
+    }
+}

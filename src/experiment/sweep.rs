@@ -1,0 +1,181 @@
+//! Running an experiment: one (cell, seed) run, the plan of pending runs, and the sweep that
+//! runs them in parallel, resumably.
+
+use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
+use crate::error::{Error, Result};
+use crate::nn::kernel::Kernel;
+use crate::runs::{PbcsRun, TrainRun};
+use std::path::Path;
+
+/// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
+/// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
+/// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
+/// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
+/// job) and `s<seed>.csv` (the row). The learners run on `kernel`.
+pub fn run_cell_seed(
+    exp: &Experiment,
+    cell: &Cell,
+    seed: u64,
+    dir: &Path,
+    kernel: Kernel,
+) -> Result<RawRow> {
+    let job = cell.job.with_seed(seed);
+    let (row, seconds, picture) = match &job {
+        Job::Vanilla(j) => {
+            let run = TrainRun::compute(j, kernel, |_, _| {})?;
+            crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
+            let row = RawRow::vanilla(exp, cell, j, &run.summary);
+            (row, run.seconds, run.picture)
+        }
+        Job::Pbcs(j) => {
+            let run = PbcsRun::compute(j, kernel, |_, _| {})?;
+            crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
+            let row = RawRow::pbcs(exp, cell, j, run.record);
+            (row, run.seconds, run.picture)
+        }
+    };
+    crate::runs::write_timing(
+        &run_file(dir, seed, ".timing.toml"),
+        seconds,
+        row.env_steps,
+        Some(kernel),
+    )?;
+    if exp.picture_seeds.contains(&seed) {
+        picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
+    }
+    let config = job.to_toml();
+    crate::record::write_atomic(&run_file(dir, seed, ".toml"), |w| {
+        w.write_all(config.as_bytes())
+    })?;
+    crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
+    Ok(row)
+}
+
+/// A (cell, seed) pair of a sweep.
+#[derive(Debug, Clone)]
+pub struct Pending<'a> {
+    /// The cell.
+    pub cell: &'a Cell,
+    /// The run seed.
+    pub seed: u64,
+}
+
+/// What happened to one (cell, seed) of a sweep.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// It was already finished and was read back.
+    Skipped(RawRow),
+    /// It ran now, in this many wall seconds.
+    Ran(RawRow, f64),
+}
+
+/// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
+/// (one thread each; each run is single-threaded and deterministic, so the bytes do not
+/// depend on `jobs`), every learner on `kernel`. `on_event` is called as each pair finishes.
+/// Returns the rows in the order of `runs`; the first error stops handing out new runs and is
+/// returned.
+pub fn sweep(
+    exp: &Experiment,
+    runs: &[Pending],
+    results: &Path,
+    jobs: usize,
+    kernel: Kernel,
+    on_event: impl Fn(&Pending, &Event) + Sync,
+) -> Result<Vec<RawRow>> {
+    // Finished runs first (cheap), so that a config mismatch is reported before any work.
+    let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());
+    for p in runs {
+        let dir = exp.cell_dir(results, p.cell);
+        let done = read_finished(p.cell, p.seed, &dir)?;
+        if let Some(r) = &done {
+            on_event(p, &Event::Skipped(r.clone()));
+        }
+        rows.push(done);
+    }
+    let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
+    let ran = run_parallel(&todo, jobs, |&i| {
+        let p = &runs[i];
+        let clock = std::time::Instant::now();
+        let dir = exp.cell_dir(results, p.cell);
+        // One process per run: a second sweep into this folder stops here with a message
+        // instead of doing the run again and replacing its row.
+        let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
+            .and_then(|_lock| {
+                // Finished by another sweep while this one was planning: read it back.
+                match read_finished(p.cell, p.seed, &dir)? {
+                    Some(row) => Ok(row),
+                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel),
+                }
+            })
+            .map_err(|e| Error::Run {
+                cell: p.cell.id.clone(),
+                seed: p.seed,
+                cause: Box::new(e),
+            })?;
+        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
+        Ok(row)
+    })?;
+    for (i, row) in todo.into_iter().zip(ran) {
+        rows[i] = Some(row);
+    }
+    Ok(rows.into_iter().flatten().collect())
+}
+
+/// `f` on every item, `jobs` at a time (a pool of `jobs` threads), the results in the items'
+/// order. Items start in their order (each free thread takes the next one), so an interrupted
+/// sweep has finished a prefix of its plan: with the table's plan, whole mazes, smallest first.
+/// After the first error no new item starts, and that error is returned. Every run is
+/// single-threaded and seeded by its own job, so `jobs` changes the wall clock, never a byte.
+pub fn run_parallel<T: Sync, R: Send>(
+    items: &[T],
+    jobs: usize,
+    f: impl Fn(&T) -> Result<R> + Sync,
+) -> Result<Vec<R>> {
+    use rayon::prelude::*;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| Error::invalid("jobs", e.to_string()))?;
+    let mut done: Vec<(usize, R)> = pool.install(|| {
+        items
+            .iter()
+            .enumerate()
+            .par_bridge()
+            .map(|(i, item)| f(item).map(|r| (i, r)))
+            .collect::<Result<_>>()
+    })?;
+    done.sort_by_key(|(i, _)| *i);
+    Ok(done.into_iter().map(|(_, r)| r).collect())
+}
+
+/// Every (cell, seed) of the experiment, or of one cell, or one seed.
+pub fn plan<'a>(
+    exp: &'a Experiment,
+    cell: Option<&str>,
+    seed: Option<u64>,
+) -> Result<Vec<Pending<'a>>> {
+    let cells: Vec<&Cell> = match cell {
+        Some(id) => vec![exp.cell(id)?],
+        None => exp.cells.iter().collect(),
+    };
+    let seeds = match seed {
+        Some(s) => {
+            if !exp.seeds().contains(&s) {
+                return Err(Error::invalid(
+                    "seed",
+                    format!(
+                        "{s} is outside the experiment's seeds {}..{}",
+                        exp.first_seed,
+                        exp.first_seed + exp.seed_count
+                    ),
+                ));
+            }
+            vec![s]
+        }
+        None => exp.seeds(),
+    };
+    Ok(cells
+        .into_iter()
+        .flat_map(|c| seeds.iter().map(move |&s| Pending { cell: c, seed: s }))
+        .collect())
+}

@@ -1,0 +1,192 @@
+//! The paper's maze pictures: the results grid (Figure 3's layout, one maze per cell with its
+//! τ, chain rollouts and activation balls) and side-by-side panels of two methods.
+
+use super::{cell_picture, centred_text, stats_of, summary, DrawResult, GREEN_BG, RED_BG};
+use crate::error::Result;
+use crate::experiment::Experiment;
+use crate::maze::Maze;
+use crate::plot::{draw_maze, Figure, PictureData};
+use crate::tables::scaling::cell_maze;
+use crate::tables::CellStats;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// The results table as a grid of pictures: rows = maze sizes, columns = methods; each cell
+/// shows the first picture seed's run and is labelled with its [`summary`] on a green (more
+/// than half the seeds solved) or red background; a legend under the grid says so.
+pub struct ResultsGrid {
+    cells: Vec<Vec<Option<GridCell>>>,
+    rows: Vec<String>,
+    columns: Vec<String>,
+    /// The legend's lines (see [`ResultsGrid::legend`]).
+    legend: Vec<String>,
+}
+
+/// One drawn cell of the grid: its maze, its picture seed's run and its statistics.
+pub(crate) type GridCell = (Maze, PictureData, CellStats);
+
+pub(crate) const GRID_CELL: u32 = 280;
+
+pub(crate) const GRID_LABEL: u32 = 26;
+
+/// Height of one legend line under the grid.
+pub(crate) const GRID_LEGEND_LINE: u32 = 22;
+
+/// Width of the row labels.
+pub(crate) const GRID_LEFT: u32 = 70;
+
+impl ResultsGrid {
+    /// Collects the grid of `exp` from its table and picture data.
+    pub fn new(exp: &Experiment, results: &Path, stats: &[CellStats]) -> Result<ResultsGrid> {
+        let mut cells = Vec::new();
+        for &n in &exp.mazes {
+            let mut row = Vec::new();
+            for (m, _) in &exp.methods {
+                let cell = exp
+                    .cells
+                    .iter()
+                    .find(|c| c.maze == n && &c.method == m)
+                    .expect("every maze × method is a cell");
+                row.push(
+                    match (stats_of(stats, cell), cell_picture(exp, results, cell)?) {
+                        (Some(s), Some(p)) => Some((cell_maze(cell)?, p, s.clone())),
+                        _ => None,
+                    },
+                );
+            }
+            cells.push(row);
+        }
+        let legend = ResultsGrid::legend(exp, &cells);
+        Ok(ResultsGrid {
+            cells,
+            rows: exp.mazes.iter().map(|n| format!("{n}×{n}")).collect(),
+            columns: exp.methods.iter().map(|(_, l)| l.clone()).collect(),
+            legend,
+        })
+    }
+
+    /// What the bands and the pictures show, one line each; the first line follows the two
+    /// colour swatches drawn before it.
+    pub(super) fn legend(exp: &Experiment, cells: &[Vec<Option<GridCell>>]) -> Vec<String> {
+        let mut lines = vec![
+            "more than half the seeds solved / half or fewer (grey: no runs yet)".to_string(),
+            "band: seeds solved / seeds · median environment steps of the solved seeds; \
+             when none solved, the step budget if a run reached it, else all runs' median"
+                .to_string(),
+        ];
+        // Everything any panel draws, each name once, in the order the panels name them.
+        let mut parts: Vec<String> = Vec::new();
+        for (_, data, _) in cells.iter().flatten().flatten() {
+            for part in crate::plot::legend(&data.picture(String::new())).split(" · ") {
+                if !parts.iter().any(|p| p == part) {
+                    parts.push(part.to_string());
+                }
+            }
+        }
+        if let (Some(seed), false) = (exp.picture_seeds.first(), parts.is_empty()) {
+            lines.push(format!(
+                "pictures: seed {seed}'s run — {}",
+                parts.join(" · ")
+            ));
+        }
+        lines
+    }
+}
+
+impl Figure for ResultsGrid {
+    fn size(&self) -> (u32, u32) {
+        (
+            GRID_LEFT + GRID_CELL * self.columns.len() as u32,
+            40 + (GRID_CELL + GRID_LABEL) * self.rows.len() as u32
+                + 8
+                + GRID_LEGEND_LINE * self.legend.len() as u32,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (w, h) = root.dim_in_pixel();
+        let (root, footer) =
+            root.split_vertically(h - 8 - GRID_LEGEND_LINE * self.legend.len() as u32);
+        // The legend: two colour swatches before the first line.
+        for (i, line) in self.legend.iter().enumerate() {
+            let y = 8 + GRID_LEGEND_LINE as i32 * i as i32;
+            let mut x = GRID_LEFT as i32;
+            if i == 0 {
+                for colour in [GREEN_BG, RED_BG] {
+                    footer.draw(&Rectangle::new([(x, y), (x + 28, y + 16)], colour.filled()))?;
+                    x += 34;
+                }
+            }
+            let size = (w as f64 - x as f64 - 10.0) / (0.55 * line.chars().count().max(1) as f64);
+            footer.draw(&Text::new(
+                line.clone(),
+                (x, y),
+                ("sans-serif", size.clamp(8.0, 15.0))
+                    .into_font()
+                    .color(&BLACK),
+            ))?;
+        }
+        let (header, body) = root.split_vertically(40);
+        let (_, header) = header.split_horizontally(GRID_LEFT);
+        for (area, label) in header
+            .split_evenly((1, self.columns.len()))
+            .iter()
+            .zip(&self.columns)
+        {
+            centred_text(area, label, 18, &BLACK)?;
+        }
+        let (left, grid) = body.split_horizontally(GRID_LEFT);
+        for (area, label) in left
+            .split_evenly((self.rows.len(), 1))
+            .iter()
+            .zip(&self.rows)
+        {
+            centred_text(area, label, 18, &BLACK)?;
+        }
+        let areas = grid.split_evenly((self.rows.len(), self.columns.len()));
+        for (area, cell) in areas.iter().zip(self.cells.iter().flatten()) {
+            let (band, picture) = area.split_vertically(GRID_LABEL);
+            match cell {
+                Some((maze, data, s)) => {
+                    let colour = if 2 * s.successes > s.n {
+                        GREEN_BG
+                    } else {
+                        RED_BG
+                    };
+                    band.fill(&colour)?;
+                    centred_text(&band, &summary(s), 15, &WHITE)?;
+                    draw_maze(picture, maze, &data.picture(String::new()))?;
+                }
+                None => {
+                    band.fill(&RGBColor(150, 150, 150))?;
+                    centred_text(&band, "no runs yet", 15, &WHITE)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Maze pictures side by side, each with a title (the unseen-states contrast).
+pub struct Panels {
+    /// (maze, its picture data, panel title), left to right.
+    pub panels: Vec<(Maze, PictureData, String)>,
+}
+
+impl Figure for Panels {
+    fn size(&self) -> (u32, u32) {
+        (520 * self.panels.len() as u32, 560)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        for (area, (maze, data, title)) in root
+            .split_evenly((1, self.panels.len()))
+            .iter()
+            .zip(&self.panels)
+        {
+            draw_maze(area.clone(), maze, &data.picture(title.clone()))?;
+        }
+        Ok(())
+    }
+}

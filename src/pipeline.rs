@@ -1,0 +1,245 @@
+//! The one-way pipeline after the runs: raw rows → [`aggregate`] → `results/tables/*`
+//! ([`write_tables`], the one writer of that folder) → [`render`]: figures and the report's
+//! LaTeX, which read the tables only (and the per-run picture data they draw).
+//!
+//! `pbcs aggregate` and `pbcs figures` (`make figures`) are thin calls of [`aggregate`] and
+//! [`render`]; the default folders live here so that the CLI, the Makefile and a script agree.
+
+use crate::claims::Claim;
+use crate::error::Result;
+use crate::experiment::{experiment_files, Experiment, FigureSpec, RawRow};
+use crate::record::{write_atomic, write_records};
+use crate::report;
+use crate::tables::curves::curves_path;
+use crate::tables::scaling::{paths_path, read_paths};
+use crate::tables::CellStats;
+use std::path::{Path, PathBuf};
+
+/// The results folder: `results` if given, else `results` for the committed grid and
+/// `results-<profile>` for a profile (so a smoke run never mixes with the committed rows).
+pub fn results_dir(results: Option<&Path>, profile: Option<&str>) -> PathBuf {
+    results
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| match profile {
+            None => PathBuf::from("results"),
+            Some(p) => PathBuf::from(format!("results-{p}")),
+        })
+}
+
+/// The folder of the generated LaTeX: `tex` if given, else `paper/generated` for the
+/// committed grid and `<results>/tex` for a profile.
+pub fn tex_dir(tex: Option<&Path>, profile: Option<&str>, results: &Path) -> PathBuf {
+    tex.map(Path::to_path_buf).unwrap_or_else(|| match profile {
+        None => PathBuf::from("paper/generated"),
+        Some(_) => results.join("tex"),
+    })
+}
+
+/// Every experiment file of the folder `dir` ([`experiment_files`]), resolved under `profile`.
+pub fn load_experiments(dir: &Path, profile: Option<&str>) -> Result<Vec<Experiment>> {
+    experiment_files(dir)?
+        .iter()
+        .map(|f| Experiment::load(f, profile))
+        .collect()
+}
+
+/// What [`aggregate`] did for one experiment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Aggregated {
+    /// Experiment name.
+    pub experiment: String,
+    /// Finished runs read (0: none, nothing written).
+    pub runs: usize,
+    /// Runs of the full grid (cells × seeds).
+    pub expected: u64,
+    /// Cells with runs.
+    pub cells: usize,
+    /// The main table written.
+    pub table: PathBuf,
+}
+
+/// Aggregates every experiment's raw rows under `results` with polars
+/// ([`crate::aggregate::aggregate`], checked against the plain computation) and writes its
+/// tables ([`write_tables`]); an experiment without rows is reported and skipped.
+#[cfg(feature = "polars")]
+pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {
+    let mut out = Vec::new();
+    for exp in exps {
+        let rows = crate::experiment::read_raw(exp, results)?;
+        let table = crate::tables::table_path(results, &exp.name);
+        let mut done = Aggregated {
+            experiment: exp.name.clone(),
+            runs: rows.len(),
+            expected: exp.cells.len() as u64 * exp.seed_count,
+            cells: 0,
+            table,
+        };
+        if !rows.is_empty() {
+            let stats = crate::aggregate::aggregate(exp, &rows)?;
+            write_tables(exp, results, &stats, &rows)?;
+            done.cells = stats.len();
+        }
+        out.push(done);
+    }
+    Ok(out)
+}
+
+/// What [`render`] read and wrote.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// Each experiment with a table, and its table.
+    pub tables: Vec<(Experiment, Vec<CellStats>)>,
+    /// Experiments without a table (name, the missing path): skipped.
+    pub skipped: Vec<(String, PathBuf)>,
+    /// The paper's claims judged against the tables.
+    pub claims: Vec<Claim>,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads each experiment's table under `results`, judges the claims of `claims_file` against
+/// them, draws every declared figure into `figures` and writes the report's LaTeX into `tex`.
+/// The claims file is read first: a bad one stops before any work.
+pub fn render(
+    exps: Vec<Experiment>,
+    claims_file: &Path,
+    results: &Path,
+    figures: &Path,
+    tex: &Path,
+) -> Result<Rendered> {
+    let specs = crate::claims::load_claims(claims_file)?;
+    let mut tables = Vec::new();
+    let mut skipped = Vec::new();
+    for exp in exps {
+        let path = crate::tables::table_path(results, &exp.name);
+        if path.exists() {
+            let stats = crate::tables::read_table(&path)?;
+            tables.push((exp, stats));
+        } else {
+            skipped.push((exp.name.clone(), path));
+        }
+    }
+    let named: Vec<(String, Vec<CellStats>)> = tables
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    let claims = crate::claims::claims(&specs, &named);
+    let files = render_all(&tables, &claims, results, figures, tex)?;
+    Ok(Rendered {
+        tables,
+        skipped,
+        claims,
+        files,
+    })
+}
+
+/// Writes every table of an experiment under `<results>/tables/` (the one writer of that
+/// folder): `<name>.csv` (`stats`), `<name>.chains.csv` and `<name>.criteria.csv` (PBCS runs'
+/// chain success and the table under other success criteria), `<name>.curves.csv` (with a
+/// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
+/// each cell's shortest path) and the wall-clock companion `<name>.timing.csv`.
+pub fn write_tables(
+    exp: &Experiment,
+    results: &Path,
+    stats: &[CellStats],
+    rows: &[RawRow],
+) -> Result<()> {
+    crate::tables::write_table(&crate::tables::table_path(results, &exp.name), stats)?;
+    let chains = crate::criteria::chain_successes(exp, rows);
+    if !chains.is_empty() {
+        write_records(&crate::criteria::chains_path(results, &exp.name), &chains)?;
+        write_records(
+            &crate::criteria::criteria_path(results, &exp.name),
+            &crate::criteria::criteria(&chains),
+        )?;
+    }
+    for figure in &exp.figures {
+        match figure {
+            FigureSpec::Curves { .. } => {
+                let points = crate::tables::curves::curve_points(exp, results)?;
+                write_records(&curves_path(results, &exp.name), &points)?;
+            }
+            FigureSpec::Scaling { .. } => {
+                let paths = crate::tables::scaling::path_lengths(exp)?;
+                write_records(&paths_path(results, &exp.name), &paths)?;
+            }
+            _ => {}
+        }
+    }
+    let timing = crate::tables::cell_timings(exp, results, rows);
+    write_records(
+        &results
+            .join("tables")
+            .join(format!("{}.timing.csv", exp.name)),
+        &timing,
+    )
+}
+
+/// Renders every figure of every experiment into `figures` and writes the report's generated
+/// LaTeX into `tex`: `numbers.tex`, `<experiment>_cells.tex`, `table.tex` (the results table)
+/// and `claims.tex`. Returns every file written.
+pub fn render_all(
+    experiments: &[(Experiment, Vec<CellStats>)],
+    claims: &[Claim],
+    results: &Path,
+    figures: &Path,
+    tex_dir: &Path,
+) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for (exp, stats) in experiments {
+        files.extend(crate::figures::render_experiment(
+            exp, results, stats, figures,
+        )?);
+        let path = tex_dir.join(format!("{}_cells.tex", exp.name));
+        let text = report::cells_table_tex(stats);
+        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        files.push(path);
+        let chains = crate::criteria::chains_path(results, &exp.name);
+        if chains.exists() {
+            let criteria = crate::criteria::criteria(&crate::criteria::read_chains(&chains)?);
+            let path = tex_dir.join(format!("{}_criteria.tex", exp.name));
+            let text = report::criteria_tex(&criteria);
+            write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+            files.push(path);
+        }
+        let mut extra = Vec::new();
+        if exp.report.results_table {
+            extra.push((
+                "table.tex",
+                report::results_table_tex(stats, &exp.mazes, &exp.methods),
+            ));
+        }
+        if let Some(settings) = &exp.report.settings {
+            extra.push(("settings.tex", report::settings_tex(exp, settings)));
+        }
+        for (name, text) in extra {
+            let path = tex_dir.join(name);
+            write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+            files.push(path);
+        }
+    }
+    let tables: Vec<(String, Vec<CellStats>)> = experiments
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    let mut numbers = report::numbers_tex(&tables);
+    for (exp, stats) in experiments {
+        let paths = paths_path(results, &exp.name);
+        if paths.exists() {
+            numbers.push_str(&report::scaling_numbers_tex(
+                exp,
+                stats,
+                &read_paths(&paths)?,
+            ));
+        }
+    }
+    for (name, text) in [
+        ("numbers.tex", numbers),
+        ("claims.tex", report::claims_tex(claims)),
+    ] {
+        let path = tex_dir.join(name);
+        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        files.push(path);
+    }
+    Ok(files)
+}
