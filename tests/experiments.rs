@@ -548,7 +548,8 @@ fn stored_configs_compare_by_value() {
 /// too: the chained PBCS's and the unchained one's, by size.
 #[test]
 fn the_papers_step_counts_come_from_the_table_experiment() {
-    use pbcs::runs::{paper_figures, Variant};
+    use pbcs::experiment::paper_figures;
+    use pbcs::phase2::Variant;
     let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
         .iter()
         .map(|&n| paper_figures(Variant::Pbcs, n).0)

@@ -952,7 +952,7 @@ mod skill_task {
     use pbcs::learner::{Learner, LearnerConfig};
     use pbcs::maze::Maze;
     use pbcs::phase2::backplay::Backplayer;
-    use pbcs::phase2::shaped::SkillTask;
+    use pbcs::phase2::task::SkillTask;
     use pbcs::phase2::StartMode;
 
     fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {

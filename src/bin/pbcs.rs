@@ -779,12 +779,7 @@ fn table(
     println!(
         "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
          statistics in {}",
-        if job.phase2.chaining {
-            pbcs::runs::Variant::Pbcs
-        } else {
-            pbcs::runs::Variant::PbcsNoChaining
-        }
-        .name(),
+        job.phase2.variant().name(),
         rows.len() - ran,
         out.join("raw").join(&exp.name).display(),
         table.display()

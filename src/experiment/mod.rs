@@ -38,7 +38,7 @@ mod sweep;
 use layout::run_file;
 pub use layout::{evals_file, picture_file, read_finished, read_raw, read_wall_seconds};
 pub use row::{read_row, RawRow};
-pub use spec::{experiment_files, FigureSpec, ReportSpec, SettingsSpec};
+pub use spec::{experiment_files, paper_figures, FigureSpec, ReportSpec, SettingsSpec};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
 use crate::config::{RunJob, TrainJob};

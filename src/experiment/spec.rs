@@ -4,7 +4,7 @@
 use super::{Cell, Experiment, Job, Kind};
 use crate::config::{RunJob, TrainJob};
 use crate::error::{Error, Result};
-use crate::runs::Variant;
+use crate::phase2::Variant;
 use crate::validate::Check;
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -507,7 +507,7 @@ impl Experiment {
     /// `sizes` with seeds `0..seeds`, built from a job instead of a file: what `pbcs table`
     /// sweeps (into `<results>/raw/<name>/<name>-maze<N>/`, in the order of `sizes`). Each
     /// cell carries the paper's run of the same variant (with or without chaining) on its size
-    /// ([`crate::runs::paper_figures`]); seed 0 keeps its picture.
+    /// ([`paper_figures`]); seed 0 keeps its picture.
     ///
     /// ```
     /// use pbcs::experiment::Experiment;
@@ -529,12 +529,7 @@ impl Experiment {
                 j.maze.size = n;
                 j.seed = 0;
                 j.check().map_err(|e| located(e, &format!("maze {n}")))?;
-                let variant = if job.phase2.chaining {
-                    Variant::Pbcs
-                } else {
-                    Variant::PbcsNoChaining
-                };
-                let (paper_steps, paper_solved) = crate::runs::paper_figures(variant, n);
+                let (paper_steps, paper_solved) = paper_figures(job.phase2.variant(), n);
                 Ok(Cell {
                     id: format!("{name}-maze{n}"),
                     method: name.to_string(),
@@ -579,4 +574,31 @@ pub fn experiment_files(dir: &Path) -> Result<Vec<PathBuf>> {
     }
     files.sort();
     Ok(files)
+}
+
+/// The paper's single run of `variant` on a maze (results table, one seed each): its
+/// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
+/// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at
+/// compile time, so the binary needs no experiments folder). `(None, None)` for a size the
+/// paper did not run.
+///
+/// ```
+/// use pbcs::experiment::paper_figures;
+/// use pbcs::phase2::Variant;
+/// assert_eq!(paper_figures(Variant::Pbcs, 2), (Some(321_000), Some(true)));
+/// assert_eq!(paper_figures(Variant::PbcsNoChaining, 2), (Some(146_000), Some(false)));
+/// assert_eq!(paper_figures(Variant::Pbcs, 3), (None, None));
+/// ```
+pub fn paper_figures(variant: Variant, maze: usize) -> (Option<u64>, Option<bool>) {
+    let path = Path::new("experiments/table.toml");
+    let spec: Option<ExperimentSpec> =
+        crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();
+    let method = spec
+        .as_ref()
+        .and_then(|s| s.methods.iter().find(|m| m.name == variant.name()));
+    let key = maze.to_string();
+    (
+        method.and_then(|m| m.paper_steps.get(&key).copied()),
+        method.and_then(|m| m.paper_solved.get(&key).copied()),
+    )
 }

@@ -2,16 +2,16 @@
 //! repair of the finished chain (`repair_chain`, ours).
 //!
 //! Each skill is one fresh learning problem ([`SkillTask`]: a new DDPG, the shaped reward,
-//! starts in B_ε(τ_K)); [`super::skill_chaining`] walks them backwards from τ_N. With
+//! starts in B_ε(τ_K)); [`skill_chaining`] walks them backwards from τ_N. With
 //! `phase2.chain_verify_episodes` the finished chain is then executed from B_ε(s_0); a skill in
 //! whose section episodes stall is learned again on its section τ_{K_i} … τ_{T_i}, half of the
 //! starts at τ_{K_i} now being the states where the chain really entered its ball, and the
 //! result (one skill, or several when Backplay cannot cover the section at once) replaces it.
 
-use super::shaped::{SkillTask, StepCounts};
+use super::backplay;
+use super::task::{SkillTask, StepCounts};
 use super::{
-    skill_chaining, Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill,
-    SkillChain, TraceRow,
+    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, TraceRow,
 };
 use crate::env::Env;
 use crate::error::Result;
@@ -339,4 +339,103 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
             }
         }
     }
+}
+
+/// Algorithm 1 on any [`backplay::Backplayer`]: skills are found backwards from T = N and
+/// returned in execution order as `(K_i, T_i, π_i)`.
+///
+/// ```text
+/// T = N
+/// while T > 0:
+///     (π_n, T) = Backplay(τ_0 … τ_T);  A_n = B_ε(τ_T);  n += 1
+/// reverse π and A
+/// ```
+///
+/// α, the K walk, early stopping, verification, restarts and chaining come from `config`.
+/// `next(n, T)` makes the n-th fresh learning problem (a new DDPG each time; n counts
+/// restarts too, so it equals the skill's index when nothing restarts);
+/// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
+/// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
+/// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run
+/// with [`Failure::NoChaining`].
+#[allow(clippy::type_complexity)]
+pub fn skill_chaining<B: backplay::Backplayer>(
+    n: usize,
+    config: &Phase2Config,
+    mut next: impl FnMut(usize, usize) -> Result<B>,
+    mut finished: impl FnMut(B),
+) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
+    let mut skills = Vec::new();
+    let mut t = n;
+    let mut failure = None;
+    // Learning problems made so far (skills plus restarts) and restarts of the current skill.
+    let (mut made, mut restarts) = (0, 0);
+    while t > 0 {
+        let mut b = next(made, t)?;
+        made += 1;
+        let walk = backplay::Walk {
+            give_up_when_dead: restarts < config.restarts,
+            ..config.walk()
+        };
+        let candidates = backplay::backplay_candidates(&mut b, t, &walk);
+        let found = verified(&mut b, candidates, config.verify_episodes);
+        let exhausted = b.exhausted();
+        finished(b);
+        match found {
+            _ if exhausted => {
+                failure = Some(Failure::Budget);
+                break;
+            }
+            None if restarts < config.restarts => restarts += 1,
+            None => {
+                failure = Some(Failure::BackplayFailed);
+                break;
+            }
+            Some((k, policy)) => {
+                restarts = 0;
+                skills.push((k, t, policy));
+                if k > 0 && !config.chaining {
+                    failure = Some(Failure::NoChaining);
+                    break;
+                }
+                t = k;
+            }
+        }
+    }
+    skills.reverse();
+    Ok((skills, failure))
+}
+
+/// Most saved (K, π) of one Backplay that a failed verification falls back through.
+pub const MAX_VERIFIED_CANDIDATES: usize = 4;
+
+/// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
+/// Without verification (`episodes` = 0) the last one, as in the paper. With it, the last
+/// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
+/// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
+/// verified success (the farthest-reaching among ties).
+pub fn verified<B: backplay::Backplayer>(
+    b: &mut B,
+    mut candidates: Vec<(usize, B::Policy)>,
+    episodes: usize,
+) -> Option<(usize, B::Policy)> {
+    if episodes == 0 {
+        return candidates.pop();
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
+    for i in (first..candidates.len()).rev() {
+        let (k, policy) = &candidates[i];
+        let p = b.verify(*k, policy, episodes);
+        if p >= 1.0 {
+            return Some(candidates.swap_remove(i));
+        }
+        if best.is_none_or(|(bp, _)| p > bp) {
+            best = Some((p, i));
+        }
+        if b.exhausted() {
+            break;
+        }
+    }
+    best.map(|(_, i)| candidates.swap_remove(i))
 }

@@ -32,7 +32,7 @@
 //! assert_eq!(act, [0.1, -0.05]);
 //! ```
 
-use super::shaped::dist;
+use super::task::dist;
 use crate::env::Env;
 use serde::{Deserialize, Serialize};
 

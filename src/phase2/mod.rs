@@ -1,7 +1,7 @@
 //! Phase 2 of PBCS: Backplay, shaped training and skill chaining (the paper's Algorithms 1–3).
 //!
 //! * [`backplay::backplay`] — Algorithm 2, over the [`backplay::Backplayer`] interface;
-//! * [`shaped::SkillTask`] — Algorithm 3 (training with the shaped reward) and Backplay's
+//! * [`task::SkillTask`] — Algorithm 3 (training with the shaped reward) and Backplay's
 //!   greedy tests, for one skill;
 //! * [`goal::Goal`] — what a skill must reach (reached, terminal, reward and potential from
 //!   one region), and [`goal::Inputs`] — what its networks see (goal-relative observations,
@@ -9,25 +9,24 @@
 //! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
 //!   collecting skills backwards, then reversing them;
 //! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
-//!   executing it uses π_0 until the state enters A_1, then π_1, and so on.
+//!   executing it uses π_0 until the state enters A_1, then π_1, and so on ([`chain`]: type,
+//!   execution, persistence).
 
 pub mod backplay;
+pub mod chain;
 pub mod chaining;
 pub mod goal;
-pub mod shaped;
+pub mod task;
 
-pub use chaining::chain_skills;
+pub use chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;
 use crate::error::{Error, Result};
-use crate::nn::kernel::Kernel;
-use crate::nn::Mlp;
-use crate::rng::{Seeds, Stream};
 use crate::validate::Check;
+pub use chaining::{chain_skills, skill_chaining, verified, MAX_VERIFIED_CANDIDATES};
 use goal::{Goal, Inputs};
 use serde::{Deserialize, Serialize};
-use shaped::{dist, StepCounts};
-use std::path::Path;
+use task::StepCounts;
 
 /// Where Backplay's episodes start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -161,6 +160,38 @@ impl Default for Phase2Config {
     }
 }
 
+impl Phase2Config {
+    /// The PBCS variant these settings run: [`Variant::Pbcs`] with chaining, else
+    /// [`Variant::PbcsNoChaining`] (the one rule; records, cells and messages use it).
+    pub fn variant(&self) -> Variant {
+        if self.chaining {
+            Variant::Pbcs
+        } else {
+            Variant::PbcsNoChaining
+        }
+    }
+}
+
+/// Which PBCS a run is: with or without skill chaining ([`Phase2Config::variant`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Variant {
+    /// PBCS: skill chaining on.
+    Pbcs,
+    /// PBCS without skill chaining (the paper's ablation).
+    PbcsNoChaining,
+}
+
+impl Variant {
+    /// Its name in records and messages (its serde name): `pbcs`, `pbcs_no_chaining`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Pbcs => "pbcs",
+            Variant::PbcsNoChaining => "pbcs_no_chaining",
+        }
+    }
+}
+
 impl Check for Phase2Config {
     fn check(&self) -> Result<()> {
         for (field, v) in [
@@ -275,251 +306,6 @@ pub struct Progress {
     pub steps: StepCounts,
 }
 
-/// A closed ball in observation space.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Ball {
-    /// Centre.
-    pub center: Vec<f32>,
-    /// Radius.
-    pub radius: f32,
-}
-
-impl Ball {
-    /// Whether `obs` is in the ball (d ≤ radius).
-    pub fn contains(&self, obs: &[f32]) -> bool {
-        dist(&self.center, obs) <= self.radius
-    }
-}
-
-/// A skill: a policy and its activation set.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Skill {
-    /// π_i.
-    pub policy: Mlp,
-    /// A_i = B_ε(τ_{K_i}).
-    pub activation: Ball,
-    /// K_i: the index on τ of the ball's centre.
-    pub start_index: usize,
-    /// The index on τ of the skill's target (the next skill's K, or N for the last one).
-    pub target_index: usize,
-    /// What π_i sees and emits (goal-relative observations, actions in [−1, 1]ᵈ).
-    pub inputs: Inputs,
-}
-
-/// A chain of skills in execution order.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct SkillChain {
-    /// π_0 … π_n with A_0 … A_n.
-    pub skills: Vec<Skill>,
-    /// The layer kernel the policies run on (not saved: [`SkillChain::load`] is told it).
-    pub kernel: Kernel,
-}
-
-/// One execution of a chain.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Rollout<S> {
-    /// Visited states, start included.
-    pub states: Vec<S>,
-    /// Index of the skill that chose each action (one per step).
-    pub skill_used: Vec<usize>,
-    /// Whether the environment's reward was reached.
-    pub success: bool,
-}
-
-#[derive(Serialize, Deserialize)]
-struct Manifest {
-    skills: Vec<ManifestSkill>,
-}
-
-#[derive(Serialize, Deserialize)]
-struct ManifestSkill {
-    file: String,
-    center: Vec<f32>,
-    radius: f32,
-    start_index: usize,
-    target_index: usize,
-    sizes: Vec<usize>,
-    /// The policy's tanh scale (1 for actions in [−1, 1]).
-    action_bounds: Vec<f32>,
-    /// [`Inputs::origin`]: subtracted from observations.
-    origin: Vec<f32>,
-    /// [`Inputs::action_scale`]: multiplies the policy's actions.
-    action_scale: Vec<f32>,
-}
-
-impl SkillChain {
-    /// Executes the chain from `start`: π_0 until the state enters A_1, then π_1, and so on,
-    /// until the environment's positive reward or `max_steps` steps. When a state lies in
-    /// several later activation balls, the chain switches to the last of them (a skill that
-    /// overshoots its goal into a later ball hands over there). Each skill sees its own
-    /// [`Inputs`]. An empty chain takes no step.
-    pub fn run<E: Env>(&self, env: &E, start: E::State, max_steps: usize) -> Rollout<E::State> {
-        self.run_limited(env, start, max_steps, None)
-    }
-
-    /// [`SkillChain::run`], and with `per_skill = Some(m)` the episode also ends (a failure)
-    /// when one skill has acted `m` times without handing over, or when a step does not move
-    /// the state (a greedy chain on a pure step is then stuck for good): the limits of a
-    /// skill's own tests, used by the chain's verification.
-    pub fn run_limited<E: Env>(
-        &self,
-        env: &E,
-        start: E::State,
-        max_steps: usize,
-        per_skill: Option<usize>,
-    ) -> Rollout<E::State> {
-        let mut acted = 0;
-        let mut raw = vec![0.0; env.obs_dim()];
-        let mut obs = vec![0.0; env.obs_dim()];
-        let mut action = vec![0.0; env.action_dim()];
-        let mut ws = crate::nn::Workspace::with_kernel(self.kernel);
-        let mut i = 0;
-        let mut s = start;
-        let mut out = Rollout {
-            states: vec![s.clone()],
-            skill_used: Vec::new(),
-            success: false,
-        };
-        if self.skills.is_empty() {
-            return out;
-        }
-        for _ in 0..max_steps {
-            env.observe(&s, &mut raw);
-            if let Some(j) = (i + 1..self.skills.len())
-                .rev()
-                .find(|&j| self.skills[j].activation.contains(&raw))
-            {
-                i = j;
-                acted = 0;
-            }
-            if per_skill.is_some_and(|m| acted >= m) {
-                break;
-            }
-            acted += 1;
-            let skill = &self.skills[i];
-            skill.inputs.observation(&raw, &mut obs);
-            let a = skill.policy.forward(&obs, 1, &mut ws);
-            skill.inputs.env_action(a, &mut action);
-            let step = env.step(&s, &action);
-            out.skill_used.push(i);
-            let stuck = per_skill.is_some() && step.state == s;
-            s = step.state;
-            out.states.push(s.clone());
-            if step.reward > 0.0 && step.terminal {
-                out.success = true;
-                break;
-            }
-            if stuck {
-                break;
-            }
-        }
-        out
-    }
-
-    /// Saves the chain into `dir`: `skill{i}.safetensors` per policy and `manifest.toml`
-    /// (activation balls, trajectory indices, network shapes).
-    pub fn save(&self, dir: &Path) -> Result<()> {
-        let mut manifest = Manifest { skills: Vec::new() };
-        for (i, skill) in self.skills.iter().enumerate() {
-            let file = format!("skill{i}.safetensors");
-            skill.policy.save(&dir.join(&file))?;
-            let bounds = match skill.policy.head() {
-                crate::nn::Head::Tanh(b) => b.clone(),
-                crate::nn::Head::Linear => Vec::new(),
-            };
-            manifest.skills.push(ManifestSkill {
-                file,
-                center: skill.activation.center.clone(),
-                radius: skill.activation.radius,
-                start_index: skill.start_index,
-                target_index: skill.target_index,
-                sizes: skill.policy.sizes().to_vec(),
-                action_bounds: bounds,
-                origin: skill.inputs.origin.clone(),
-                action_scale: skill.inputs.action_scale.clone(),
-            });
-        }
-        let text = crate::validate::to_toml(&manifest, &dir.join("manifest.toml"))?;
-        crate::record::write_atomic(&dir.join("manifest.toml"), |w| w.write_all(text.as_bytes()))?;
-        // A chain saved here before may have had more skills: its extra policy files go, so the
-        // folder holds exactly what the manifest lists.
-        for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-            let path = entry.map_err(|e| Error::io(dir, e))?.path();
-            let name = path.file_name().unwrap_or_default().to_string_lossy();
-            let listed = manifest.skills.iter().any(|s| s.file == name);
-            if name.starts_with("skill") && name.ends_with(".safetensors") && !listed {
-                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Loads a chain saved by [`SkillChain::save`], its policies to run on `kernel`.
-    pub fn load(dir: &Path, kernel: Kernel) -> Result<Self> {
-        let path = dir.join("manifest.toml");
-        let manifest: Manifest = crate::validate::read_toml(&path)?;
-        let mut skills = Vec::new();
-        for (i, m) in manifest.skills.into_iter().enumerate() {
-            let bad = |field: &str, why: String| {
-                Error::parse(&path, format!("skills[{i}].{field}: {why}"))
-            };
-            if m.sizes.len() < 2 || m.sizes.contains(&0) {
-                return Err(bad(
-                    "sizes",
-                    format!(
-                        "needs an input, an output and no empty layer, got {:?}",
-                        m.sizes
-                    ),
-                ));
-            }
-            let (input, output) = (m.sizes[0], *m.sizes.last().unwrap_or(&0));
-            for (field, len, want) in [
-                ("center", m.center.len(), input),
-                ("origin", m.origin.len(), input),
-                ("action_scale", m.action_scale.len(), output),
-            ] {
-                if len != want {
-                    return Err(bad(
-                        field,
-                        format!("has {len} values, the network needs {want}"),
-                    ));
-                }
-            }
-            if !m.action_bounds.is_empty() && m.action_bounds.len() != output {
-                return Err(bad(
-                    "action_bounds",
-                    format!(
-                        "has {} values, the network has {output} outputs",
-                        m.action_bounds.len()
-                    ),
-                ));
-            }
-            if !(m.radius.is_finite() && m.radius > 0.0) {
-                return Err(bad("radius", format!("must be positive, got {}", m.radius)));
-            }
-            let mut rng = Seeds::new(0).stream(Stream::Init);
-            let head = if m.action_bounds.is_empty() {
-                crate::nn::Head::Linear
-            } else {
-                crate::nn::Head::Tanh(m.action_bounds.clone())
-            };
-            let mut policy = Mlp::new(&m.sizes, head, &mut rng);
-            policy.load(&dir.join(&m.file))?;
-            skills.push(Skill {
-                policy,
-                activation: Ball {
-                    center: m.center,
-                    radius: m.radius,
-                },
-                start_index: m.start_index,
-                target_index: m.target_index,
-                inputs: Inputs::new(m.origin, m.action_scale),
-            });
-        }
-        Ok(SkillChain { skills, kernel })
-    }
-}
-
 /// Why phase 2 did not produce a chain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -592,103 +378,4 @@ pub fn phase2_trajectory<E: Env>(
     } else {
         tau.clone()
     }
-}
-
-/// Algorithm 1 on any [`backplay::Backplayer`]: skills are found backwards from T = N and
-/// returned in execution order as `(K_i, T_i, π_i)`.
-///
-/// ```text
-/// T = N
-/// while T > 0:
-///     (π_n, T) = Backplay(τ_0 … τ_T);  A_n = B_ε(τ_T);  n += 1
-/// reverse π and A
-/// ```
-///
-/// α, the K walk, early stopping, verification, restarts and chaining come from `config`.
-/// `next(n, T)` makes the n-th fresh learning problem (a new DDPG each time; n counts
-/// restarts too, so it equals the skill's index when nothing restarts);
-/// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
-/// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
-/// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run
-/// with [`Failure::NoChaining`].
-#[allow(clippy::type_complexity)]
-pub fn skill_chaining<B: backplay::Backplayer>(
-    n: usize,
-    config: &Phase2Config,
-    mut next: impl FnMut(usize, usize) -> Result<B>,
-    mut finished: impl FnMut(B),
-) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
-    let mut skills = Vec::new();
-    let mut t = n;
-    let mut failure = None;
-    // Learning problems made so far (skills plus restarts) and restarts of the current skill.
-    let (mut made, mut restarts) = (0, 0);
-    while t > 0 {
-        let mut b = next(made, t)?;
-        made += 1;
-        let walk = backplay::Walk {
-            give_up_when_dead: restarts < config.restarts,
-            ..config.walk()
-        };
-        let candidates = backplay::backplay_candidates(&mut b, t, &walk);
-        let found = verified(&mut b, candidates, config.verify_episodes);
-        let exhausted = b.exhausted();
-        finished(b);
-        match found {
-            _ if exhausted => {
-                failure = Some(Failure::Budget);
-                break;
-            }
-            None if restarts < config.restarts => restarts += 1,
-            None => {
-                failure = Some(Failure::BackplayFailed);
-                break;
-            }
-            Some((k, policy)) => {
-                restarts = 0;
-                skills.push((k, t, policy));
-                if k > 0 && !config.chaining {
-                    failure = Some(Failure::NoChaining);
-                    break;
-                }
-                t = k;
-            }
-        }
-    }
-    skills.reverse();
-    Ok((skills, failure))
-}
-
-/// Most saved (K, π) of one Backplay that a failed verification falls back through.
-pub const MAX_VERIFIED_CANDIDATES: usize = 4;
-
-/// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
-/// Without verification (`episodes` = 0) the last one, as in the paper. With it, the last
-/// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
-/// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
-/// verified success (the farthest-reaching among ties).
-pub fn verified<B: backplay::Backplayer>(
-    b: &mut B,
-    mut candidates: Vec<(usize, B::Policy)>,
-    episodes: usize,
-) -> Option<(usize, B::Policy)> {
-    if episodes == 0 {
-        return candidates.pop();
-    }
-    let mut best: Option<(f32, usize)> = None;
-    let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
-    for i in (first..candidates.len()).rev() {
-        let (k, policy) = &candidates[i];
-        let p = b.verify(*k, policy, episodes);
-        if p >= 1.0 {
-            return Some(candidates.swap_remove(i));
-        }
-        if best.is_none_or(|(bp, _)| p > bp) {
-            best = Some((p, i));
-        }
-        if b.exhausted() {
-            break;
-        }
-    }
-    best.map(|(_, i)| candidates.swap_remove(i))
 }

@@ -1,0 +1,137 @@
+//! The chain's evaluation from B_ε(s_0), the one used by `pbcs run`, the sweeps and
+//! `pbcs eval` (a saved chain re-run).
+
+use super::{ball_circles, DRAWN_ROLLOUTS};
+use crate::config::RunJob;
+use crate::env::Env;
+use crate::error::{Error, Result};
+use crate::maze::Maze;
+use crate::nn::kernel::Kernel;
+use crate::phase2::SkillChain;
+use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
+use crate::rng::{Seeds, Stream};
+use parry2d::math::Point;
+use serde::Serialize;
+use std::path::Path;
+
+/// One evaluation episode of a chain: whether it reached the target, and in how many steps
+/// (`evaluation.csv` of `pbcs run`, `s<seed>.evaluation.csv` of a sweep, `eval-s<seed>.csv` of
+/// `pbcs eval`). The steps of the successful episodes are the chain's path lengths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct EvalEpisode {
+    /// The episode reached the target.
+    pub success: bool,
+    /// Steps taken (at most `phase2.eval_max_steps`).
+    pub steps: usize,
+}
+
+/// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
+/// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
+/// steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
+pub fn evaluate_chain(
+    maze: &Maze,
+    chain: &SkillChain,
+    job: &RunJob,
+    episodes: usize,
+    seed: u64,
+) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
+    let mut rng = Seeds::new(seed).stream(Stream::Eval);
+    let mut rows = Vec::with_capacity(episodes);
+    let mut rollouts = Vec::new();
+    for _ in 0..episodes {
+        let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng);
+        let r = chain.run(maze, start, job.phase2.eval_max_steps);
+        rows.push(EvalEpisode {
+            success: r.success,
+            steps: r.states.len() - 1,
+        });
+        if rollouts.len() < DRAWN_ROLLOUTS {
+            rollouts.push(r.states);
+        }
+    }
+    (rows, rollouts)
+}
+
+/// The file in a saved chain's folder that holds the job that built it.
+pub const CHAIN_JOB: &str = "run.toml";
+
+/// What `pbcs eval` measured: a saved chain re-run from starts uniform in B_ε(s_0).
+#[derive(Debug, Clone)]
+pub struct ChainEval {
+    /// The job that built the chain (from the chain folder).
+    pub job: RunJob,
+    /// Skills in the chain.
+    pub skills: usize,
+    /// Episodes run.
+    pub episodes: usize,
+    /// Episodes that reached the target.
+    pub successes: usize,
+    /// Wilson 95 % interval of the success rate.
+    pub interval: (f64, f64),
+}
+
+/// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
+/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (the run's own seed
+/// reproduces the run's evaluation exactly), each at most `phase2.eval_max_steps` steps.
+/// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and `eval-s<seed>.png`/`.svg`
+/// (the first rollouts over the maze) into `chain_dir`. A folder without the chain's job
+/// (`run.toml`, or `../config.toml` for chains saved before it existed), a malformed manifest
+/// or bad weights are errors naming the file. The policies run on `kernel`.
+pub fn eval_chain(
+    chain_dir: &Path,
+    episodes: usize,
+    seed: Option<u64>,
+    kernel: Kernel,
+) -> Result<ChainEval> {
+    if episodes == 0 {
+        return Err(Error::invalid("--episodes", "must be at least 1"));
+    }
+    let own = chain_dir.join(CHAIN_JOB);
+    let job_path = if own.exists() {
+        own
+    } else {
+        let parent = chain_dir.join("..").join("config.toml");
+        if !parent.exists() {
+            return Err(Error::io(
+                &own,
+                std::io::Error::other(
+                    "not found: not a chain saved by `pbcs run` (it writes run.toml beside \
+                     manifest.toml)",
+                ),
+            ));
+        }
+        parent
+    };
+    let job: RunJob = crate::validate::load(&job_path)?;
+    let maze = Maze::new(&job.maze)?;
+    let chain = SkillChain::load(chain_dir, kernel)?;
+    let seed = seed.unwrap_or(job.seed);
+    let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
+    let successes = rows.iter().filter(|r| r.success).count();
+    let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
+    crate::record::write_records(&chain_dir.join(format!("eval-s{seed}.csv")), &rows)?;
+    let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+    let data = PictureData {
+        green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+        circles: ball_circles(&chain),
+        ..PictureData::default()
+    };
+    let title = format!(
+        "saved chain, maze {} (layout {}), eval seed {seed}: success {successes}/{episodes}",
+        job.maze.size, job.maze.seed
+    );
+    render_maze(
+        &maze,
+        &data.picture(title),
+        &chain_dir.join(format!("eval-s{seed}.png")),
+        &chain_dir.join(format!("eval-s{seed}.svg")),
+        SVG_MAX_POINTS,
+    )?;
+    Ok(ChainEval {
+        skills: chain.skills.len(),
+        job,
+        episodes,
+        successes,
+        interval,
+    })
+}

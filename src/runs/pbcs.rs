@@ -1,0 +1,288 @@
+//! `pbcs run`: PBCS — phase 1, phase 2, the chain's evaluation — and its record.
+
+use super::{
+    claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
+};
+use crate::config::RunJob;
+use crate::error::Result;
+use crate::explore::{explore, Exploration};
+use crate::maze::Maze;
+use crate::nn::kernel::Kernel;
+use crate::phase2::{
+    chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode, Variant,
+};
+use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
+use crate::record::{write_atomic, write_csv, write_record};
+use crate::rng::{Seeds, Stream};
+use crate::validate::Check;
+use parry2d::math::Point;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// The per-run record of PBCS (`record.csv` of `pbcs run`): its counts, τ's lengths and ε. A
+/// sweep keeps it as a [`crate::experiment::RawRow`] ([`crate::experiment::RawRow::pbcs`]).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct RunRecord {
+    /// Maze size N.
+    pub maze: usize,
+    /// Maze layout seed.
+    pub maze_seed: u64,
+    /// Run seed.
+    pub seed: u64,
+    /// `pbcs` or `pbcs_no_chaining`.
+    pub variant: Variant,
+    /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
+    /// argmax actor.
+    pub learner: String,
+    /// `ball` or `exact` starts.
+    pub starts: StartMode,
+    /// γ of the learner.
+    pub gamma: f32,
+    /// ε.
+    pub epsilon: f32,
+    /// Whether the chain reaches the target in at least [`SOLVED_AT`] of the evaluation episodes.
+    pub solved: bool,
+    /// Fraction of evaluation episodes that reached the target.
+    pub success_rate: f32,
+    /// Why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
+    pub failure: Option<Failure>,
+    /// Environment steps of phase 1.
+    pub phase1_steps: u64,
+    /// Environment steps of phase-2 training episodes.
+    pub train_steps: u64,
+    /// Environment steps of Backplay's tests.
+    pub test_steps: u64,
+    /// phase1 + train + test (evaluation episodes are not counted).
+    pub total_steps: u64,
+    /// Skills in the chain.
+    pub skills: usize,
+    /// States of the phase-1 trajectory τ.
+    pub trajectory_len: usize,
+    /// States of the trajectory phase 2 worked on (τ, or τ shortened).
+    pub phase2_trajectory_len: usize,
+}
+
+/// Chain rollouts drawn in the picture.
+pub(crate) const DRAWN_ROLLOUTS: usize = 10;
+
+/// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
+/// the evaluation's rollouts; [`PbcsRun::write`] writes it.
+#[derive(Debug, Clone)]
+pub struct PbcsRun {
+    /// The maze solved.
+    pub maze: Maze,
+    /// The `record.csv` row.
+    pub record: RunRecord,
+    /// What phase 1 found (τ and the archive).
+    pub found: Exploration<Point<f32>>,
+    /// The trajectory phase 2 worked on (τ, or τ shortened).
+    pub tau: Vec<Point<f32>>,
+    /// The chain, its step counts and Backplay's trace.
+    pub phase2: Phase2Outcome,
+    /// The chain's evaluation episodes (none when phase 2 failed).
+    pub evaluation: Vec<EvalEpisode>,
+    /// What `run.png` draws: τ, the first evaluation rollouts, the activation balls.
+    pub picture: PictureData,
+    /// The layer kernel the learners and the chain ran on.
+    pub kernel: Kernel,
+    /// Wall-clock seconds of the run (not deterministic).
+    pub seconds: f64,
+}
+
+impl PbcsRun {
+    /// Runs PBCS for `job`: phase 1, phase 2 ([`chain_skills`]), then the chain's evaluation
+    /// from starts uniform in B_ε(s_0), every network on `kernel`. `progress(skill, report)`
+    /// is called during phase 2. Writes nothing.
+    pub fn compute(
+        job: &RunJob,
+        kernel: Kernel,
+        progress: impl FnMut(usize, Progress),
+    ) -> Result<PbcsRun> {
+        job.check()?;
+        let maze = Maze::new(&job.maze)?;
+        let seeds = Seeds::new(job.seed);
+        let clock = Instant::now();
+        let mut rng = seeds.stream(Stream::Explore);
+        let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
+        let tau = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+        let phase2 = chain_skills(
+            &maze,
+            &tau,
+            &job.learner,
+            &job.phase2,
+            &seeds,
+            found.env_steps,
+            kernel,
+            progress,
+        )?;
+        // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
+        let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
+        {
+            evaluate_chain(
+                &maze,
+                &phase2.chain,
+                job,
+                job.phase2.eval_episodes,
+                job.seed,
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let seconds = clock.elapsed().as_secs_f64();
+        let wins = evaluation.iter().filter(|e| e.success).count();
+        let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
+        let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
+        let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+        let picture = PictureData {
+            red_paths: vec![xy(&tau)],
+            green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+            circles: ball_circles(&phase2.chain),
+            ..PictureData::default()
+        };
+        Ok(PbcsRun {
+            maze,
+            record,
+            found,
+            tau,
+            phase2,
+            evaluation,
+            picture,
+            kernel,
+            seconds,
+        })
+    }
+
+    /// Writes into `out`: `record.csv`, `skills.csv` (one row per skill: K, T, ball),
+    /// `trace.csv` (every test, training round and verification: skill, K, T, event, success,
+    /// env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the
+    /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `run.png`, `run.svg`,
+    /// `timing.toml`.
+    pub fn write(&self, job: &RunJob, out: &Path) -> Result<()> {
+        let (record, phase2) = (&self.record, &self.phase2);
+        write_record(&out.join("record.csv"), record)?;
+        write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;
+        write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
+        crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
+        crate::record::write_records(&out.join("evaluation.csv"), &self.evaluation)?;
+        write_csv(
+            &out.join("trace.timing.csv"),
+            &["seconds".to_string()],
+            phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
+        )?;
+        phase2.chain.save(&out.join("chain"))?;
+        // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
+        // manifest, so `pbcs eval --chain DIR` needs nothing else.
+        let job_text = crate::validate::to_toml(job, &out.join("chain").join(CHAIN_JOB))?;
+        write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
+            w.write_all(job_text.as_bytes())
+        })?;
+        self.picture.write_csv(&out.join("picture.csv"))?;
+        let title = format!(
+            "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
+            record.variant.name(),
+            record.learner,
+            job.maze.size,
+            job.maze.seed,
+            job.seed,
+            record.total_steps,
+            record.skills,
+            100.0 * record.success_rate
+        );
+        render_maze(
+            &self.maze,
+            &self.picture.picture(title),
+            &out.join("run.png"),
+            &out.join("run.svg"),
+            SVG_MAX_POINTS,
+        )?;
+        write_timing(
+            &out.join("timing.toml"),
+            self.seconds,
+            record.total_steps,
+            Some(self.kernel),
+        )
+    }
+}
+
+impl RunRecord {
+    /// The record of `job` from what its run found.
+    fn new(
+        job: &RunJob,
+        found: &Exploration<Point<f32>>,
+        phase2: &Phase2Outcome,
+        phase2_trajectory_len: usize,
+        success_rate: f32,
+    ) -> RunRecord {
+        let lc = &job.learner;
+        RunRecord {
+            maze: job.maze.size,
+            maze_seed: job.maze.seed,
+            seed: job.seed,
+            variant: job.phase2.variant(),
+            learner: lc.record_name(),
+            starts: job.phase2.start,
+            gamma: lc.gamma,
+            epsilon: job.phase2.epsilon,
+            solved: phase2.failure.is_none() && success_rate >= SOLVED_AT,
+            success_rate,
+            failure: phase2.failure,
+            phase1_steps: found.env_steps,
+            train_steps: phase2.steps.train,
+            test_steps: phase2.steps.test,
+            total_steps: found.env_steps + phase2.steps.train + phase2.steps.test,
+            skills: phase2.chain.skills.len(),
+            trajectory_len: found.trajectory.len(),
+            phase2_trajectory_len,
+        }
+    }
+}
+
+/// The activation balls of `chain` as drawn circles.
+pub(crate) fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
+    chain
+        .skills
+        .iter()
+        .map(|s| {
+            (
+                (s.activation.center[0], s.activation.center[1]),
+                s.activation.radius,
+            )
+        })
+        .collect()
+}
+
+/// Runs PBCS for `job` into `out`: claims the folder (writing `config.toml`) before any work,
+/// then [`PbcsRun::compute`] and [`PbcsRun::write`]. `progress(skill, report)` is called
+/// during phase 2.
+pub fn run_pbcs(
+    job: &RunJob,
+    kernel: Kernel,
+    out: &Path,
+    progress: impl FnMut(usize, Progress),
+) -> Result<(RunRecord, f64)> {
+    job.check()?;
+    claim(job, out)?;
+    let run = PbcsRun::compute(job, kernel, progress)?;
+    run.write(job, out)?;
+    Ok((run.record, run.seconds))
+}
+
+/// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target
+/// index), ball centre and radius.
+pub(crate) fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
+    let header: Vec<String> = ["skill", "start_index", "target_index", "x", "y", "radius"]
+        .map(String::from)
+        .to_vec();
+    let rows = chain.skills.iter().enumerate().map(|(i, s)| {
+        [
+            i.to_string(),
+            s.start_index.to_string(),
+            s.target_index.to_string(),
+            s.activation.center[0].to_string(),
+            s.activation.center[1].to_string(),
+            s.activation.radius.to_string(),
+        ]
+    });
+    write_csv(path, &header, rows)
+}
