@@ -120,8 +120,11 @@ impl Check for RunJob {
 
 /// The named PBCS procedures, each a complete TOML file in `experiments/` (embedded in the
 /// library, so `pbcs run --preset NAME` needs no file).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, strum::IntoStaticStr,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Preset {
     /// The paper's procedure (Algorithms 1–3 as written, K − 1 at a time, α rounds of
     /// training), with our corrections and our choices of the settings it leaves open:
@@ -135,10 +138,7 @@ pub enum Preset {
 impl Preset {
     /// The preset's name on the command line (`fast`, `paper`).
     pub fn name(self) -> &'static str {
-        match self {
-            Preset::Paper => "paper",
-            Preset::Fast => "fast",
-        }
+        self.into()
     }
 
     /// The preset's file name in `experiments/`.

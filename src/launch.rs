@@ -72,6 +72,22 @@ impl<'a> Launch<'a> {
         )
     }
 
+    /// One `pbcs exp run` command per (cell, seed), with `  # done` after those whose raw row
+    /// is in `results` (`pbcs exp list`).
+    pub fn commands(&self, results: &Path) -> crate::Result<String> {
+        let mut out = String::new();
+        for p in self.runs() {
+            let dir = self.exp.cell_dir(results, p.cell);
+            let done = crate::experiment::read_finished(p.cell, p.seed, &dir)?.is_some();
+            out.push_str(&format!(
+                "pbcs {}{}\n",
+                self.args(&p),
+                if done { "  # done" } else { "" }
+            ));
+        }
+        Ok(out)
+    }
+
     /// A makefile with one rule per (cell, seed) whose target is the run's raw row in
     /// `results`: `make -f runs.mk -j N` runs N at a time and skips finished runs.
     pub fn makefile(&self, results: &Path) -> String {

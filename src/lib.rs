@@ -42,7 +42,6 @@
 
 #[cfg(feature = "polars")]
 pub mod aggregate;
-pub mod check;
 pub mod claims;
 pub mod config;
 pub mod criteria;
@@ -61,6 +60,7 @@ pub mod pipeline;
 pub mod plot;
 pub mod record;
 pub mod report;
+pub mod reproduce;
 pub mod rng;
 pub mod runs;
 pub mod stats;

@@ -97,43 +97,37 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
     write_atomic(&config, |w| w.write_all(config_text.as_bytes()))
 }
 
-/// An exclusive claim on one piece of work (a run of a sweep): the file `path` exists while
-/// the guard lives and is removed when it is dropped. A second claim of the same path fails
-/// with a message naming the file, so two sweeps into one results folder never do the same
-/// run twice or replace each other's rows. The file names the holder (`pid`, `host`): a lock
-/// left behind by an interrupted run on this host, whose process is gone, is taken over, so an
-/// interrupted sweep resumes by being started again.
+/// An exclusive claim on one piece of work (a run of a sweep): an OS advisory lock
+/// ([`std::fs::File::try_lock`]: `flock` on Unix, `LockFileEx` on Windows) on the file
+/// `path`, held while the guard lives. A second claim of the same path fails with a message
+/// naming the file and its holder, so two sweeps into one results folder never do the same run
+/// twice or replace each other's rows. The operating system releases the lock when the process
+/// ends, however it ends, so a file left behind by an interrupted run blocks nothing: the
+/// interrupted sweep resumes by being started again. The file names its holder (`pid`,
+/// `host`) for that message and is removed when the guard is dropped.
 #[derive(Debug)]
 pub struct WorkLock {
     path: std::path::PathBuf,
+    /// Holds the lock: closing it releases it.
+    _file: std::fs::File,
 }
 
-/// This host's name (empty where it cannot be read).
-fn host_name() -> String {
-    std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .map(|h| h.trim().to_string())
-        .or_else(|_| std::env::var("HOSTNAME"))
-        .unwrap_or_default()
-}
-
-/// Whether the lock text names a process of this host that no longer runs (known only where
-/// `/proc` lists processes).
-fn holder_is_gone(text: &str) -> bool {
-    let field = |key: &str| {
-        text.lines().find_map(|l| {
-            let (k, v) = l.split_once('=')?;
-            (k.trim() == key).then(|| v.trim().trim_matches('"').to_string())
-        })
-    };
-    let (Some(pid), Some(host)) = (field("pid"), field("host")) else {
-        return false;
-    };
-    let here = host_name();
-    !here.is_empty()
-        && host == here
-        && Path::new("/proc/self").exists()
-        && pid.parse::<u32>().is_ok()
-        && !Path::new("/proc").join(&pid).exists()
+/// Whether the open `file` is the file `path` names now (a holder that finished may have
+/// removed the file after we opened it: a lock on the removed file claims nothing).
+fn names_file(path: &Path, file: &std::fs::File) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(path), file.metadata()) {
+            (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = file;
+        path.exists()
+    }
 }
 
 impl WorkLock {
@@ -142,50 +136,48 @@ impl WorkLock {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
-        let open = || {
-            std::fs::OpenOptions::new()
+        loop {
+            let mut file = std::fs::OpenOptions::new()
+                .read(true)
                 .write(true)
-                .create_new(true)
+                .create(true)
+                .truncate(false)
                 .open(path)
-        };
-        let mut opened = open();
-        if matches!(&opened, Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists)
-            && holder_is_gone(&std::fs::read_to_string(path).unwrap_or_default())
-        {
-            // Left behind by an interrupted run: take it over.
-            std::fs::remove_file(path).map_err(|e| Error::io(path, e))?;
-            opened = open();
-        }
-        match opened {
-            Ok(mut f) => {
-                writeln!(
-                    f,
-                    "pid = {}\nhost = \"{}\"",
-                    std::process::id(),
-                    host_name()
-                )
                 .map_err(|e| Error::io(path, e))?;
-                Ok(WorkLock {
-                    path: path.to_path_buf(),
-                })
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let holder = std::fs::read_to_string(path).unwrap_or_default();
+                    return Err(Error::io(
+                        path,
+                        std::io::Error::other(format!(
+                            "another process is doing this run ({}); wait for it",
+                            holder.trim()
+                        )),
+                    ));
+                }
+                Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(path, e)),
             }
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                let holder = std::fs::read_to_string(path).unwrap_or_default();
-                Err(Error::io(
-                    path,
-                    std::io::Error::other(format!(
-                        "another process is doing this run ({}); wait for it, or delete this \
-                         file if none is (an interrupted run leaves it behind)",
-                        holder.trim()
-                    )),
-                ))
+            if !names_file(path, &file) {
+                continue;
             }
-            Err(e) => Err(Error::io(path, e)),
+            let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+                .map(|h| h.trim().to_string())
+                .or_else(|_| std::env::var("HOSTNAME"))
+                .unwrap_or_default();
+            file.set_len(0)
+                .and_then(|()| writeln!(file, "pid = {}\nhost = \"{host}\"", std::process::id()))
+                .map_err(|e| Error::io(path, e))?;
+            return Ok(WorkLock {
+                path: path.to_path_buf(),
+                _file: file,
+            });
         }
     }
 }
 
 impl Drop for WorkLock {
+    /// Removes the file, then (closing it) releases the lock.
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
     }

@@ -53,6 +53,20 @@ pub fn load<T: DeserializeOwned + Check>(path: &Path) -> Result<T> {
     Ok(config)
 }
 
+/// The top-level keys of `job` (a config as read from `path`) that the file does not set:
+/// their defaults were used. An unreadable file sets nothing.
+pub fn unset_keys<T: Serialize>(path: &Path, job: &T) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let given: toml::Table = toml::from_str(&text).unwrap_or_default();
+    let Ok(toml::Value::Table(all)) = toml::Value::try_from(job) else {
+        return Vec::new();
+    };
+    all.keys()
+        .filter(|k| !given.contains_key(*k))
+        .cloned()
+        .collect()
+}
+
 /// Ok if `value` is finite and in (0, `max`]; otherwise an error naming `field`.
 pub fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
     if !(value.is_finite() && value > 0.0 && value <= max) {

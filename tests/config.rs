@@ -210,3 +210,62 @@ fn epsilon_is_a_radius_in_cells() {
     let err = load::<RunJob>(&path).unwrap_err().to_string();
     assert!(err.contains("phase2.epsilon"), "{err}");
 }
+
+/// Every enum's name (`name()`, from strum's snake_case rule) is its serde name, the one that
+/// configs, CSVs and `timing.toml` use: the two derive from the variant by the same rule, and
+/// this holds them equal.
+#[test]
+fn enum_names_are_their_serde_names() {
+    use pbcs::config::Preset;
+    use pbcs::learner::{ActorUpdate, Algo};
+    use pbcs::phase2::{EventKind, Failure, Variant};
+    fn serde_name<T: serde::Serialize>(v: &T) -> String {
+        #[derive(serde::Serialize)]
+        struct Wrap<'a, T> {
+            v: &'a T,
+        }
+        let text = toml::to_string(&Wrap { v }).unwrap();
+        text.trim()
+            .trim_start_matches("v = ")
+            .trim_matches('"')
+            .to_string()
+    }
+    let mut pairs: Vec<(&str, String)> = Vec::new();
+    for a in [Algo::Ddpg, Algo::Td3] {
+        pairs.push((a.name(), serde_name(&a)));
+    }
+    for a in [ActorUpdate::Gradient, ActorUpdate::Argmax] {
+        pairs.push((a.name(), serde_name(&a)));
+    }
+    for v in [Variant::Pbcs, Variant::PbcsNoChaining] {
+        pairs.push((v.name(), serde_name(&v)));
+    }
+    for f in [
+        Failure::BackplayFailed,
+        Failure::NoChaining,
+        Failure::Budget,
+    ] {
+        pairs.push((f.name(), serde_name(&f)));
+    }
+    for k in [
+        EventKind::Test,
+        EventKind::Train,
+        EventKind::Verify,
+        EventKind::ChainVerify,
+    ] {
+        pairs.push((k.name(), serde_name(&k)));
+    }
+    for p in [Preset::Paper, Preset::Fast] {
+        pairs.push((p.name(), serde_name(&p)));
+    }
+    for (name, serde) in &pairs {
+        assert_eq!(name, serde);
+    }
+    assert!(pairs.iter().any(|(n, _)| *n == "pbcs_no_chaining"));
+    // The kernels have no serde form: their names are the documented PBCS_KERNEL spellings.
+    let kernels: Vec<&str> = pbcs::nn::kernel::Kernel::ALL
+        .iter()
+        .map(|k| k.name())
+        .collect();
+    assert_eq!(kernels, ["portable", "matrixmultiply", "avx2", "avx512"]);
+}

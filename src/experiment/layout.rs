@@ -62,3 +62,19 @@ pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
     }
     Ok(rows)
 }
+
+/// The experiment files under `dir` (every `*.toml` with a `[[method]]`), sorted.
+pub fn experiment_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+            if text.lines().any(|l| l.trim() == "[[method]]") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}

@@ -36,9 +36,11 @@ mod spec;
 mod sweep;
 
 use layout::run_file;
-pub use layout::{evals_file, picture_file, read_finished, read_raw, read_wall_seconds};
+pub use layout::{
+    evals_file, experiment_files, picture_file, read_finished, read_raw, read_wall_seconds,
+};
 pub use row::{read_row, RawRow};
-pub use spec::{experiment_files, paper_figures, FigureSpec, ReportSpec, SettingsSpec};
+pub use spec::{paper_figures, FigureSpec, ReportSpec, SettingsSpec};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
 use crate::config::{RunJob, TrainJob};
@@ -48,8 +50,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// What a method runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Kind {
     /// A vanilla baseline on the maze's own reward ([`TrainJob`], `pbcs train`).
     Vanilla,
@@ -59,10 +62,7 @@ pub enum Kind {
 
 impl Kind {
     fn name(self) -> &'static str {
-        match self {
-            Kind::Vanilla => "vanilla",
-            Kind::Pbcs => "pbcs",
-        }
+        self.into()
     }
 }
 

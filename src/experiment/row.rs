@@ -126,3 +126,23 @@ pub fn read_row(path: &Path) -> Result<RawRow> {
         .ok_or_else(|| Error::parse(path, "empty raw row file"))?
         .map_err(|e| Error::csv(path, e))
 }
+
+/// One line per run, as sweeps print it: `pbcs-maze2 seed 3: solved (success 1.00) in 160484
+/// env steps`, with the failure where phase 2 stopped.
+impl std::fmt::Display for RawRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} seed {}: {} (success {:.2}) in {} env steps",
+            self.cell,
+            self.seed,
+            if self.solved { "solved" } else { "not solved" },
+            self.success_rate,
+            self.env_steps
+        )?;
+        match self.failure {
+            Some(failure) => write!(f, ", {}", failure.name()),
+            None => Ok(()),
+        }
+    }
+}

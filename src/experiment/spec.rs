@@ -560,22 +560,6 @@ impl Experiment {
     }
 }
 
-/// The experiment files under `dir` (every `*.toml` with a `[[method]]`), sorted.
-pub fn experiment_files(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        if path.extension().is_some_and(|e| e == "toml") {
-            let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-            if text.lines().any(|l| l.trim() == "[[method]]") {
-                files.push(path);
-            }
-        }
-    }
-    files.sort();
-    Ok(files)
-}
-
 /// The paper's single run of `variant` on a maze (results table, one seed each): its
 /// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
 /// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at

@@ -22,8 +22,11 @@ use replay::Batch;
 use serde::{Deserialize, Serialize};
 
 /// The base algorithm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Algo {
     /// DDPG (Lillicrap et al. 2015): TD3 with 1 critic, policy delay 1, no target smoothing.
     Ddpg,
@@ -34,16 +37,16 @@ pub enum Algo {
 impl Algo {
     /// The config spelling: `ddpg` or `td3`.
     pub fn name(&self) -> &'static str {
-        match self {
-            Algo::Ddpg => "ddpg",
-            Algo::Td3 => "td3",
-        }
+        (*self).into()
     }
 }
 
 /// How the actor is trained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum ActorUpdate {
     /// Deterministic policy gradient: ascend Q(s, π(s)).
     Gradient,
@@ -54,10 +57,7 @@ pub enum ActorUpdate {
 impl ActorUpdate {
     /// The config spelling: `gradient` or `argmax`.
     pub fn name(&self) -> &'static str {
-        match self {
-            ActorUpdate::Gradient => "gradient",
-            ActorUpdate::Argmax => "argmax",
-        }
+        (*self).into()
     }
 }
 

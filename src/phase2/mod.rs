@@ -173,8 +173,11 @@ impl Phase2Config {
 }
 
 /// Which PBCS a run is: with or without skill chaining ([`Phase2Config::variant`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize, strum::IntoStaticStr,
+)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Variant {
     /// PBCS: skill chaining on.
     Pbcs,
@@ -185,10 +188,7 @@ pub enum Variant {
 impl Variant {
     /// Its name in records and messages (its serde name): `pbcs`, `pbcs_no_chaining`.
     pub fn name(self) -> &'static str {
-        match self {
-            Variant::Pbcs => "pbcs",
-            Variant::PbcsNoChaining => "pbcs_no_chaining",
-        }
+        self.into()
     }
 }
 
@@ -277,8 +277,9 @@ impl Phase2Config {
 }
 
 /// What a progress report is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum EventKind {
     /// A greedy test of β episodes (Backplay's).
     Test,
@@ -289,6 +290,14 @@ pub enum EventKind {
     /// The verification of the finished chain from B_ε(s_0)
     /// (`phase2.chain_verify_episodes` episodes).
     ChainVerify,
+}
+
+impl EventKind {
+    /// Its name in `trace.csv` and in messages (its serde name): `test`, `train`, `verify`,
+    /// `chain_verify`.
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
 }
 
 /// A progress report from inside Backplay.
@@ -306,9 +315,26 @@ pub struct Progress {
     pub steps: StepCounts,
 }
 
+impl Progress {
+    /// A one-line status for a progress bar: `skill` skills found, this report on the next,
+    /// `total_steps` phase-2 environment steps so far at `steps_per_s`.
+    pub fn status(&self, skill: usize, total_steps: u64, steps_per_s: f64) -> String {
+        format!(
+            "{skill} skills found; building skill {}: K {} → T {}, {} {:.0} %, {total_steps} \
+             phase-2 env steps ({steps_per_s:.0} steps/s)",
+            skill + 1,
+            self.k,
+            self.t,
+            self.kind.name(),
+            100.0 * self.success,
+        )
+    }
+}
+
 /// Why phase 2 did not produce a chain.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum Failure {
     /// Backplay solved no K at all for some skill.
     BackplayFailed,
@@ -322,11 +348,7 @@ impl Failure {
     /// Its name in records and messages (its serde name): `backplay_failed`, `no_chaining`,
     /// `budget`.
     pub fn name(self) -> &'static str {
-        match self {
-            Failure::BackplayFailed => "backplay_failed",
-            Failure::NoChaining => "no_chaining",
-            Failure::Budget => "budget",
-        }
+        self.into()
     }
 }
 

@@ -135,3 +135,22 @@ pub fn eval_chain(
         interval,
     })
 }
+
+impl ChainEval {
+    /// What `pbcs eval` prints for the chain in `chain_dir` evaluated from starts of `seed`.
+    pub fn summary(&self, chain_dir: &Path, seed: u64) -> String {
+        format!(
+            "chain {} ({} skills) on maze {} (layout seed {}), start seed {seed}: success \
+             {}/{} = {:.1} % [Wilson 95 % {:.1}, {:.1} %]",
+            chain_dir.display(),
+            self.skills,
+            self.job.maze.size,
+            self.job.maze.seed,
+            self.successes,
+            self.episodes,
+            100.0 * self.successes as f64 / self.episodes as f64,
+            100.0 * self.interval.0,
+            100.0 * self.interval.1
+        )
+    }
+}

@@ -194,3 +194,24 @@ pub(crate) fn render_exploration(
         SVG_MAX_POINTS,
     )
 }
+
+impl ExploreSummary {
+    /// What `pbcs explore` prints, with the wall clock `seconds` and the archive's bin side.
+    pub fn summary(&self, seconds: f64, bin_side: f32) -> String {
+        format!(
+            "maze {} (layout seed {}), run seed {}: target reached after {} env steps \
+             ({:.3} s, {:.2} M steps/s)\ntrajectory τ: {} states; archive: {} states in {} bins \
+             of side {}",
+            self.maze,
+            self.maze_seed,
+            self.seed,
+            self.env_steps,
+            seconds,
+            self.env_steps as f64 / seconds.max(1e-9) / 1e6,
+            self.trajectory_len,
+            self.archive_states,
+            self.archive_bins,
+            bin_side
+        )
+    }
+}

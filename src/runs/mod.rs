@@ -20,10 +20,13 @@ use pbcs::{ball_circles, DRAWN_ROLLOUTS};
 pub use pbcs::{run_pbcs, PbcsRun, RunRecord};
 pub use train::{run_train, TrainRun, TrainSummary};
 
+use crate::config::{MazeConfig, Preset, RunJob, TrainJob};
 use crate::error::Result;
+use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
+use crate::phase2::StartMode;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A run counts as solved when its evaluation (greedy episodes of a vanilla policy, or of a
 /// PBCS chain) reaches the target in at least this fraction of episodes.
@@ -46,4 +49,59 @@ pub fn write_timing(
     kernel: Option<Kernel>,
 ) -> Result<()> {
     crate::record::Timing::now(seconds, env_steps, kernel.map(Kernel::name)).write(path)
+}
+
+/// The default output folder of a run: `out/<command>/maze<N>-m<maze seed>-s<seed><suffix>`
+/// (`pbcs explore`, `train`, `run` without `--out`).
+pub fn default_out(command: &str, maze: &MazeConfig, seed: u64, suffix: &str) -> PathBuf {
+    PathBuf::from(format!(
+        "out/{command}/maze{}-m{}-s{seed}{suffix}",
+        maze.size, maze.seed
+    ))
+}
+
+/// The part of a PBCS run's default folder that names its departures from the preset:
+/// `-nochain` without chaining, `-exact` with exact starts.
+pub fn pbcs_suffix(job: &RunJob) -> String {
+    let mut suffix = String::new();
+    if !job.phase2.chaining {
+        suffix.push_str("-nochain");
+    }
+    if job.phase2.start == StartMode::Exact {
+        suffix.push_str("-exact");
+    }
+    suffix
+}
+
+/// The part of a vanilla run's default folder that names its learner: `-ddpg`, `-td3`, with
+/// `-am` for the argmax actor.
+pub fn train_suffix(job: &TrainJob) -> String {
+    let am = if job.learner.actor_update == ActorUpdate::Argmax {
+        "-am"
+    } else {
+        ""
+    };
+    format!("-{}{am}", job.learner.algo.name())
+}
+
+/// The name of a procedure given as a config file or a preset (`pbcs run`'s folder,
+/// `pbcs table`'s method): the file's stem or the preset's name, with every character but
+/// ASCII letters, digits and `_` replaced by `_`.
+///
+/// ```
+/// use pbcs::config::Preset;
+/// use pbcs::runs::method_name;
+/// use std::path::Path;
+/// assert_eq!(method_name(None, Preset::Paper), "paper");
+/// assert_eq!(method_name(Some(Path::new("exp/my-run.v2.toml")), Preset::Fast), "my_run_v2");
+/// ```
+pub fn method_name(config: Option<&Path>, preset: Preset) -> String {
+    config
+        .and_then(Path::file_stem)
+        .map_or(preset.name().to_string(), |s| {
+            s.to_string_lossy().into_owned()
+        })
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }

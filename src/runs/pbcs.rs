@@ -286,3 +286,32 @@ pub(crate) fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
     });
     write_csv(path, &header, rows)
 }
+
+impl RunRecord {
+    /// What `pbcs run` prints: the outcome (over `eval_episodes` evaluation episodes) and where
+    /// the environment steps went, with the wall clock `seconds`.
+    pub fn summary(&self, eval_episodes: usize, seconds: f64) -> String {
+        format!(
+            "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {:.0} % over \
+             {} episodes, {} skills{}\nenv steps: phase 1 {}, training {}, tests {}, total {}; \
+             |τ| = {}; {:.1} s",
+            self.variant.name(),
+            self.learner,
+            self.maze,
+            self.maze_seed,
+            self.seed,
+            if self.solved { "SOLVED" } else { "not solved" },
+            100.0 * self.success_rate,
+            eval_episodes,
+            self.skills,
+            self.failure
+                .map_or(String::new(), |f| format!(", stopped: {}", f.name())),
+            self.phase1_steps,
+            self.train_steps,
+            self.test_steps,
+            self.total_steps,
+            self.trajectory_len,
+            seconds
+        )
+    }
+}

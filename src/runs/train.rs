@@ -3,6 +3,7 @@
 use super::{claim, write_timing, SOLVED_AT};
 use crate::config::TrainJob;
 use crate::error::Result;
+use crate::learner::{ActorUpdate, Algo};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
@@ -23,10 +24,10 @@ pub struct TrainSummary {
     pub maze_seed: u64,
     /// Run seed.
     pub seed: u64,
-    /// `ddpg` or `td3`.
-    pub algo: String,
-    /// `gradient` or `argmax`.
-    pub actor_update: String,
+    /// DDPG or TD3 (`ddpg`, `td3` in `summary.csv`).
+    pub algo: Algo,
+    /// The actor update (`gradient`, `argmax`).
+    pub actor_update: ActorUpdate,
     /// Environment steps.
     pub env_steps: u64,
     /// Training episodes begun.
@@ -81,8 +82,8 @@ impl TrainRun {
             maze: job.maze.size,
             maze_seed: job.maze.seed,
             seed: job.seed,
-            algo: job.learner.algo.name().to_string(),
-            actor_update: job.learner.actor_update.name().to_string(),
+            algo: job.learner.algo,
+            actor_update: job.learner.actor_update,
             env_steps: job.train.steps,
             episodes: result.episodes,
             final_success: result.evals.last().map_or(0.0, |e| e.success),
@@ -136,7 +137,7 @@ impl TrainRun {
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
             "{} on maze {} (layout {}), seed {}: {} steps, greedy success {:.0} %",
-            summary.algo,
+            summary.algo.name(),
             job.maze.size,
             job.maze.seed,
             job.seed,
@@ -172,4 +173,28 @@ pub fn run_train(
     let run = TrainRun::compute(job, kernel, progress)?;
     run.write(job, out)?;
     Ok((run.summary, run.seconds))
+}
+
+impl TrainSummary {
+    /// What `pbcs train` prints, with the wall clock `seconds` and the visit bins' side.
+    pub fn summary(&self, seconds: f64, visit_bin: f32) -> String {
+        format!(
+            "{} ({} actor) on maze {} (layout seed {}), run seed {}: {} env steps, {} episodes, \
+             {:.1} s ({:.0} steps/s)\ngreedy success: final {}, best {}; visited {} bins of side \
+             {}",
+            self.algo.name(),
+            self.actor_update.name(),
+            self.maze,
+            self.maze_seed,
+            self.seed,
+            self.env_steps,
+            self.episodes,
+            seconds,
+            self.env_steps as f64 / seconds.max(1e-9),
+            self.final_success,
+            self.best_success,
+            self.visited_bins,
+            visit_bin
+        )
+    }
 }

@@ -52,7 +52,8 @@
 use crate::error::{Error, Result};
 
 /// One implementation of the layer arithmetic (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
 pub enum Kernel {
     /// Plain Rust loops (the compiler vectorises what it can for the baseline target).
     Portable,
@@ -111,12 +112,7 @@ impl Kernel {
 
     /// The spelling in `PBCS_KERNEL` and in `timing.toml`.
     pub fn name(self) -> &'static str {
-        match self {
-            Kernel::Portable => "portable",
-            Kernel::Matrixmultiply => "matrixmultiply",
-            Kernel::Avx2 => "avx2",
-            Kernel::Avx512 => "avx512",
-        }
+        self.into()
     }
 
     /// Whether the kernels named `a` and `b` (as in `timing.toml`) compute the same bytes:

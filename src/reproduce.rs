@@ -41,7 +41,7 @@ pub struct CellCheck {
 
 /// The verdict of a [`CellCheck`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Verdict {
+pub enum Reproduced {
     /// Every row reproduced byte for byte.
     Match,
     /// Some bytes differ, but the new success rate lies inside the committed interval.
@@ -77,16 +77,16 @@ impl CellCheck {
     }
 
     /// Match, within the committed interval, or outside it.
-    pub fn verdict(&self) -> Verdict {
+    pub fn reproduced(&self) -> Reproduced {
         if self.identical() == self.n() {
-            return Verdict::Match;
+            return Reproduced::Match;
         }
         let (lo, hi) = self.interval();
         let rate = self.solved_now() as f64 / self.n() as f64;
         if (lo..=hi).contains(&rate) {
-            Verdict::WithinInterval
+            Reproduced::WithinInterval
         } else {
-            Verdict::Outside
+            Reproduced::Outside
         }
     }
 
@@ -108,6 +108,35 @@ impl CellCheck {
     }
 }
 
+impl CellCheck {
+    /// What `pbcs exp check` prints for cell `cell`: one line per seed (identical or not, the
+    /// committed and the fresh row), then the counts and the committed Wilson interval.
+    pub fn report(&self, cell: &str) -> String {
+        let mut s = String::new();
+        for c in &self.seeds {
+            s.push_str(&format!(
+                "seed {}: {} — committed: {}; now: {}\n",
+                c.seed,
+                if c.identical {
+                    "identical bytes"
+                } else {
+                    "DIFFERENT"
+                },
+                c.committed,
+                c.fresh
+            ));
+        }
+        let (n, (lo, hi)) = (self.n(), self.interval());
+        s.push_str(&format!(
+            "cell {cell}: {}/{n} rows identical byte for byte; solved committed {}/{n} \
+             (Wilson 95 % [{lo:.3}, {hi:.3}]), now {}/{n}",
+            self.identical(),
+            self.solved_committed(),
+            self.solved_now()
+        ));
+        s
+    }
+}
 /// Re-runs `cell` of `exp` (every seed, or `seed`) into a scratch folder, `jobs` at a time,
 /// and compares with the committed rows under `results`. A missing committed row is an error
 /// naming the folder. The re-runs' learners run on `kernel`. `on_event` is called as the
@@ -212,8 +241,8 @@ mod tests {
     fn verdicts_follow_bytes_then_the_wilson_interval() {
         let all = |x: (bool, bool, bool)| vec![x; 10];
         assert_eq!(
-            check(&all((true, true, true)), &["avx2"], "avx2").verdict(),
-            Verdict::Match
+            check(&all((true, true, true)), &["avx2"], "avx2").reproduced(),
+            Reproduced::Match
         );
         // 10/10 committed: Wilson 95 % [0.72, 1]; 8/10 now lies inside, 5/10 outside.
         let mut s = all((false, true, true));
@@ -221,13 +250,16 @@ mod tests {
             x.2 = false;
         }
         assert_eq!(
-            check(&s, &["avx2"], "avx2").verdict(),
-            Verdict::WithinInterval
+            check(&s, &["avx2"], "avx2").reproduced(),
+            Reproduced::WithinInterval
         );
         for x in &mut s[..5] {
             x.2 = false;
         }
-        assert_eq!(check(&s, &["avx2"], "avx2").verdict(), Verdict::Outside);
+        assert_eq!(
+            check(&s, &["avx2"], "avx2").reproduced(),
+            Reproduced::Outside
+        );
     }
 
     #[test]

@@ -1,0 +1,332 @@
+//! The command line's arguments: clap declarations, their help texts, and the few rules that
+//! turn flags into a job (a config file or defaults, then the flags over it).
+
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use pbcs::config::{self, Check, MazeConfig, Preset, MAX_MAZE_SIZE};
+use pbcs::experiment::Experiment;
+use pbcs::learner::{ActorUpdate, Algo, LearnerConfig};
+use pbcs::runs;
+use serde::{de::DeserializeOwned, Serialize};
+use std::path::PathBuf;
+
+/// `pbcs <command> [flags]`.
+#[derive(Parser)]
+#[command(
+    name = "pbcs",
+    version,
+    about = "PBCS (Matheron, Perrin, Sigaud 2020) reproduced"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Flags shared by every run.
+#[derive(Args)]
+pub struct RunArgs {
+    /// TOML config; the flags override its fields [default: the built-in defaults (`run`: the
+    /// preset); the run folder's config.toml lists every value used].
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Maze size N (2..=100); overrides `maze.size` [default: the config's, else 5].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_maze_size)]
+    pub maze: Option<usize>,
+    /// Maze layout seed; overrides `maze.seed` [default: the config's, else 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub maze_seed: Option<u64>,
+    /// Run seed; overrides `seed` [default: the config's, else 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: Option<u64>,
+    /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
+    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact]].
+    /// A folder that holds another run (another config.toml) is refused, before any work.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl RunArgs {
+    /// The config file (or `default()` without one) with the maze and seed flags applied.
+    pub fn load<T: DeserializeOwned + Check + Serialize>(
+        &self,
+        default: impl FnOnce() -> pbcs::Result<T>,
+        parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
+    ) -> anyhow::Result<T> {
+        let mut job: T = match &self.config {
+            Some(path) => {
+                let job: T = config::load(path)?;
+                let unset = pbcs::validate::unset_keys(path, &job);
+                if !unset.is_empty() {
+                    eprintln!(
+                        "note: {} does not set {}: the defaults are used (the run folder's \
+                         config.toml lists every value)",
+                        path.display(),
+                        unset.join(", ")
+                    );
+                }
+                job
+            }
+            None => default()?,
+        };
+        let (maze, seed) = parts(&mut job);
+        maze.size = self.maze.unwrap_or(maze.size);
+        maze.seed = self.maze_seed.unwrap_or(maze.seed);
+        *seed = self.seed.unwrap_or(*seed);
+        Ok(job)
+    }
+
+    pub fn out_dir(&self, command: &str, maze: &MazeConfig, seed: u64, suffix: &str) -> PathBuf {
+        let default = || runs::default_out(command, maze, seed, suffix);
+        self.out.clone().unwrap_or_else(default)
+    }
+
+    pub fn bar(&self, template: &str, len: Option<u64>) -> ProgressBar {
+        let bar = match (self.quiet, len) {
+            (true, _) => return ProgressBar::hidden(),
+            (false, Some(n)) => ProgressBar::new(n),
+            (false, None) => ProgressBar::new_spinner(),
+        };
+        bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
+        bar
+    }
+}
+
+/// Learner flags shared by `train` and `run`.
+#[derive(Args)]
+pub struct LearnerArgs {
+    /// Learner preset; overrides `learner.algo` [default: the config's, else ddpg].
+    #[arg(long, value_enum)]
+    pub algo: Option<Algo>,
+    /// Actor update; overrides `learner.actor_update` [default: the config's, else gradient].
+    #[arg(long, value_enum)]
+    pub actor: Option<ActorUpdate>,
+    /// Discount γ in [0, 1); overrides `learner.gamma` [default: the config's, else 0.9 for
+    /// `run`, 0.99 for `train`].
+    #[arg(long)]
+    pub gamma: Option<f32>,
+}
+
+impl LearnerArgs {
+    pub fn apply(&self, l: &mut LearnerConfig) {
+        l.algo = self.algo.unwrap_or(l.algo);
+        l.actor_update = self.actor.unwrap_or(l.actor_update);
+        l.gamma = self.gamma.unwrap_or(l.gamma);
+    }
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Phase 1: explore a maze until the target is reached; write the trajectory, the archive
+    /// and a picture.
+    Explore {
+        #[command(flatten)]
+        run: RunArgs,
+    },
+    /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on the maze's own
+    /// reward; write evaluations, visited states, the actor and a picture.
+    Train {
+        #[command(flatten)]
+        run: RunArgs,
+        #[command(flatten)]
+        learner: LearnerArgs,
+        /// Environment steps; overrides `train.steps` [default: the config's, else 1000000].
+        #[arg(long)]
+        steps: Option<u64>,
+    },
+    /// Re-run a chain saved by `pbcs run` (its `chain/` folder) on its maze: success rate with
+    /// its Wilson interval; writes eval-s<seed>.csv and a picture into the chain folder.
+    Eval {
+        /// The chain folder (`<run folder>/chain`).
+        #[arg(long)]
+        chain: PathBuf,
+        /// Episodes, each from a start uniform in B_ε(s_0).
+        #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
+        episodes: u64,
+        /// Seed of the start states [default: the run's seed, which reproduces its evaluation].
+        #[arg(long)]
+        seed: Option<u64>,
+    },
+    /// PBCS: phase 1, then phase 2 (Backplay, shaped training, skill chaining); evaluate the
+    /// chain; write the record, the chain and a picture.
+    Run {
+        #[command(flatten)]
+        run: RunArgs,
+        /// The procedure, when no --config is given: `fast` (ours, the default) or `paper`
+        /// (the paper's procedure with our corrections): experiments/pbcs_<preset>.toml.
+        #[arg(long, value_enum, conflicts_with = "config")]
+        preset: Option<Preset>,
+        #[command(flatten)]
+        learner: LearnerArgs,
+        /// PBCS without skill chaining (fail when a second skill would be needed).
+        #[arg(long)]
+        no_chaining: bool,
+        /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
+        #[arg(long)]
+        exact_starts: bool,
+    },
+    /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
+    /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts
+    /// and step statistics beside the paper's.
+    Table {
+        /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_paper.toml).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// The procedure, when no --config is given: `fast` (the default) or `paper`.
+        #[arg(long, value_enum, conflicts_with = "config")]
+        preset: Option<Preset>,
+        /// Maze sizes.
+        #[arg(long, value_delimiter = ',', default_value = "2,5,7,10,15")]
+        sizes: Vec<usize>,
+        /// Number of seeds: runs seeds 0..SEEDS (at least 1).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+        seeds: u64,
+        /// Runs at a time (one thread each).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Results folder: rows in <OUT>/raw/<name>/, statistics in <OUT>/tables/<name>.csv,
+        /// where <name> is the config's file stem or the preset's name [default: out/table].
+        #[arg(long, default_value = "out/table")]
+        out: PathBuf,
+    },
+    /// Experiments as data (experiments/*.toml): run a grid of (cell, seed) pairs into
+    /// results/raw/, list its commands, or re-run one cell and compare with the committed rows.
+    Exp {
+        #[command(subcommand)]
+        command: ExpCommand,
+    },
+    /// Aggregate every experiment's raw rows with polars into results/tables/ (needs the
+    /// `polars` cargo feature: `make figures` turns it on).
+    Aggregate {
+        #[command(flatten)]
+        set: SetArgs,
+    },
+    /// Draw every figure and write the report's LaTeX from results/tables/ and the raw picture
+    /// data (trains nothing).
+    Figures {
+        #[command(flatten)]
+        set: SetArgs,
+        /// Figure folder [default: <results>/figures].
+        #[arg(long)]
+        figures: Option<PathBuf>,
+        /// Folder of the generated LaTeX [default: paper/generated, or <results>/tex for a
+        /// profile].
+        #[arg(long)]
+        tex: Option<PathBuf>,
+    },
+}
+
+/// All experiment files of a folder, one profile, one results folder.
+#[derive(Args)]
+pub struct SetArgs {
+    /// Folder of the experiment files.
+    #[arg(long, default_value = "experiments")]
+    pub experiments: PathBuf,
+    /// Profile (e.g. `smoke`); none: the committed grids.
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Results folder [default: results, or results-<profile>].
+    #[arg(long)]
+    pub results: Option<PathBuf>,
+}
+
+impl SetArgs {
+    pub fn load(&self) -> anyhow::Result<(Vec<Experiment>, PathBuf)> {
+        let profile = self.profile.as_deref();
+        let exps = pbcs::pipeline::load_experiments(&self.experiments, profile)?;
+        Ok((
+            exps,
+            pbcs::pipeline::results_dir(self.results.as_deref(), profile),
+        ))
+    }
+}
+
+/// Which experiment, which profile, where its results live.
+#[derive(Args)]
+pub struct ExpArgs {
+    /// The experiment file (experiments/table.toml, gamma.toml, unseen.toml, beyond.toml, ...).
+    pub file: PathBuf,
+    /// A profile of the file (e.g. `smoke`); none: the committed grid.
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Results folder [default: results, or results-<profile> for a profile].
+    #[arg(long)]
+    pub results: Option<PathBuf>,
+}
+
+impl ExpArgs {
+    pub fn load(&self) -> anyhow::Result<(Experiment, PathBuf)> {
+        let profile = self.profile.as_deref();
+        let exp = Experiment::load(&self.file, profile)?;
+        Ok((
+            exp,
+            pbcs::pipeline::results_dir(self.results.as_deref(), profile),
+        ))
+    }
+}
+
+#[derive(Subcommand)]
+pub enum ExpCommand {
+    /// Run every unfinished (cell, seed) pair (or one cell / one seed), `--jobs` at a time.
+    Run {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// Only this cell (`<method>-maze<N>`, see `pbcs exp list`).
+        #[arg(long)]
+        cell: Option<String>,
+        /// Only this seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Runs at a time (one thread each; the bytes written do not depend on it).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+    },
+    /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
+    /// `# done` after finished ones.
+    List {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// Print a makefile instead: one rule per (cell, seed) whose target is the raw row, so
+        /// `make -f runs.mk -j N` runs N at a time and skips finished ones.
+        #[arg(long, conflicts_with = "slurm")]
+        make: bool,
+        /// Print a SLURM batch script instead: one array task per (cell, seed), each writing
+        /// into the same results folder (`pbcs exp list FILE --slurm > runs.sbatch; sbatch
+        /// runs.sbatch`).
+        #[arg(long)]
+        slurm: bool,
+    },
+    /// Re-run one cell (all its seeds, or one) in a scratch folder and compare with the
+    /// committed raw rows: byte for byte, and if they differ, whether the new success rate lies
+    /// inside the committed Wilson 95 % interval. Exits with an error if it does not.
+    Check {
+        #[command(flatten)]
+        exp: ExpArgs,
+        /// The cell (`<method>-maze<N>`).
+        #[arg(long)]
+        cell: String,
+        /// Only this seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Runs at a time.
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Fail unless every row is reproduced byte for byte (what CI asks of the rows the
+        /// current code must reproduce).
+        #[arg(long)]
+        exact: bool,
+    },
+}
+
+/// `--maze`: a whole number from 2 to [`MAX_MAZE_SIZE`], said so for anything else (a
+/// negative number included).
+fn parse_maze_size(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (2..=MAX_MAZE_SIZE).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "maze.size is a whole number from 2 to {MAX_MAZE_SIZE}, got {s:?}"
+        )),
+    }
+}

@@ -1,0 +1,397 @@
+//! The `pbcs` command line, a thin layer over the library: it parses arguments, calls
+//! `pbcs::runs` (`explore`, `train`, `run`, `eval`), `pbcs::experiment` (`table`, `exp`) and
+//! `pbcs::pipeline` (`aggregate`, `figures`), and shows progress.
+
+mod args;
+
+use anyhow::Context;
+use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
+use pbcs::config::{self, Check, ExploreJob, Preset, RunJob, TrainJob};
+use pbcs::experiment::{Experiment, Pending, RawRow};
+use pbcs::nn::kernel::Kernel;
+use pbcs::runs;
+use std::io::IsTerminal;
+use std::path::Path;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    // `pbcs exp list | head`: a closed pipe ends the program quietly, as for other command-line
+    // tools, instead of a panic in println!.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    // One thread per process (use cores for seeds): pin candle's thread pool before any candle
+    // call, unless the user chose otherwise. Our own kernels are single-threaded.
+    for var in ["RAYON_NUM_THREADS", "CANDLE_NUM_THREADS"] {
+        if std::env::var_os(var).is_none() {
+            std::env::set_var(var, "1");
+        }
+    }
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    // The layer kernel of every run (PBCS_KERNEL, else the best this CPU runs), read once: a
+    // bad name is an error here, before any work.
+    let kernel = Kernel::from_env()?;
+    match cli.command {
+        Command::Explore { run } => explore(&run),
+        Command::Train {
+            run,
+            learner,
+            steps,
+        } => train(&run, &learner, steps, kernel),
+        Command::Run {
+            run,
+            preset,
+            learner,
+            no_chaining,
+            exact_starts,
+        } => {
+            let preset = preset.unwrap_or(Preset::Fast);
+            let mut job = run.load(|| preset.job(), |j: &mut RunJob| (&mut j.maze, &mut j.seed))?;
+            learner.apply(&mut job.learner);
+            job.phase2.chaining &= !no_chaining;
+            if exact_starts {
+                job.phase2.start = pbcs::phase2::StartMode::Exact;
+            }
+            // The default folder names the procedure, so runs of two presets or configs never
+            // meet in one folder.
+            let label = runs::method_name(run.config.as_deref(), preset);
+            pbcs_run(&run, &job, &label, kernel)
+        }
+        Command::Eval {
+            chain,
+            episodes,
+            seed,
+        } => {
+            let e = runs::eval_chain(&chain, episodes as usize, seed, kernel)?;
+            let seed = seed.unwrap_or(e.job.seed);
+            println!("{}", e.summary(&chain, seed));
+            println!("wrote {}/eval-s{seed}.{{csv,png,svg}}", chain.display());
+            Ok(())
+        }
+        Command::Table {
+            config,
+            preset,
+            sizes,
+            seeds,
+            jobs,
+            out,
+        } => {
+            let preset = preset.unwrap_or(Preset::Fast);
+            let job: RunJob = match &config {
+                Some(p) => config::load(p)?,
+                None => preset.job()?,
+            };
+            let name = runs::method_name(config.as_deref(), preset);
+            let exp = Experiment::of_job(&name, &job, &sizes, seeds)?;
+            let (rows, ran) = sweep(
+                &exp,
+                &pbcs::experiment::plan(&exp, None, None)?,
+                &out,
+                jobs,
+                kernel,
+            )?;
+            let stats = pbcs::tables::cell_stats(&exp, &rows);
+            let table = pbcs::tables::table_path(&out, &exp.name);
+            pbcs::tables::write_table(&table, &stats)?;
+            println!(
+                "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
+                 statistics in {}",
+                job.phase2.variant().name(),
+                rows.len() - ran,
+                out.join("raw").join(&exp.name).display(),
+                table.display()
+            );
+            let timings = pbcs::tables::cell_timings(&exp, &out, &rows);
+            print!("{}", pbcs::tables::grid_markdown(&stats, &timings));
+            Ok(())
+        }
+        Command::Aggregate { set } => aggregate(&set),
+        Command::Figures { set, figures, tex } => {
+            let (exps, results) = set.load()?;
+            let figures = figures.unwrap_or_else(|| results.join("figures"));
+            let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
+            let claims = set.experiments.join("claims.toml");
+            let done = pbcs::pipeline::render(exps, &claims, &results, &figures, &tex)?;
+            for (name, path) in &done.skipped {
+                println!("{name}: no table at {}, skipped", path.display());
+            }
+            for (exp, stats) in &done.tables {
+                print!(
+                    "\n{} — {}\n{}",
+                    exp.name,
+                    exp.title,
+                    pbcs::tables::markdown(stats)
+                );
+            }
+            println!("\nthe paper's claims against our tables:");
+            for c in &done.claims {
+                println!(
+                    "- {} — {}: {}",
+                    c.id,
+                    c.verdict.word().to_uppercase(),
+                    c.ours
+                );
+            }
+            let (n, f, t) = (done.files.len(), figures.display(), tex.display());
+            println!("\nwrote {n} files into {f} and {t}");
+            Ok(())
+        }
+        Command::Exp { command } => match command {
+            ExpCommand::Run {
+                exp: args,
+                cell,
+                seed,
+                jobs,
+            } => {
+                let (exp, results) = args.load()?;
+                let plan = pbcs::experiment::plan(&exp, cell.as_deref(), seed)?;
+                let (rows, ran) = sweep(&exp, &plan, &results, jobs, kernel)?;
+                println!(
+                    "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
+                    exp.name,
+                    exp.profile.as_deref().unwrap_or("committed grid"),
+                    rows.len(),
+                    rows.len() - ran,
+                    results.join("raw").join(&exp.name).display()
+                );
+                print!(
+                    "{}",
+                    pbcs::tables::markdown(&pbcs::tables::cell_stats(&exp, &rows))
+                );
+                Ok(())
+            }
+            ExpCommand::List {
+                exp: args,
+                make,
+                slurm,
+            } => {
+                let (exp, results) = args.load()?;
+                let profile = args.profile.as_deref();
+                let launch =
+                    pbcs::launch::Launch::new(&exp, &args.file, profile, args.results.as_deref());
+                match (make, slurm) {
+                    (true, _) => print!("{}", launch.makefile(&results)),
+                    (_, true) => print!("{}", launch.slurm(&results)),
+                    _ => print!("{}", launch.commands(&results)?),
+                }
+                Ok(())
+            }
+            ExpCommand::Check {
+                exp: args,
+                cell,
+                seed,
+                jobs,
+                exact,
+            } => exp_check(&args, &cell, seed, jobs, kernel, exact),
+        },
+    }
+}
+
+#[cfg(feature = "polars")]
+fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
+    let (exps, results) = set.load()?;
+    for a in pbcs::pipeline::aggregate(&exps, &results)? {
+        match a.runs {
+            0 => println!(
+                "{}: no raw rows in {}, skipped",
+                a.experiment,
+                results.display()
+            ),
+            n => println!(
+                "{}: {n} of {} runs in {} cells → {} (polars; checked against the plain \
+                 computation)",
+                a.experiment,
+                a.expected,
+                a.cells,
+                a.table.display()
+            ),
+        }
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "polars"))]
+fn aggregate(_: &SetArgs) -> anyhow::Result<()> {
+    anyhow::bail!(
+        "this build has no polars: build with `--features polars` (as `make figures` does), \
+         or use the committed tables in results/tables/"
+    )
+}
+
+fn run_bar(total: u64) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    let style = "{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}";
+    bar.set_style(ProgressStyle::with_template(style).expect("valid template"));
+    bar
+}
+
+/// Runs `runs` with [`pbcs::experiment::sweep`] behind a progress bar (finished runs are read
+/// back): one line per run as it finishes, environment steps per second in the bar. Returns
+/// the rows and how many runs ran now.
+fn sweep(
+    exp: &Experiment,
+    runs: &[Pending],
+    results: &Path,
+    jobs: usize,
+    kernel: Kernel,
+) -> anyhow::Result<(Vec<RawRow>, usize)> {
+    use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+    let bar = run_bar(runs.len() as u64);
+    let (steps, ran) = (AtomicU64::new(0), AtomicUsize::new(0));
+    let clock = std::time::Instant::now();
+    let rows = pbcs::experiment::sweep(exp, runs, results, jobs, kernel, |_, event| {
+        bar.inc(1);
+        if let pbcs::experiment::Event::Ran(row, secs) = event {
+            ran.fetch_add(1, Ordering::SeqCst);
+            let total = steps.fetch_add(row.env_steps, Ordering::SeqCst) + row.env_steps;
+            let line = format!("{row} ({secs:.0} s)");
+            // Without a terminal the bar is hidden and drops its lines: a log (nohup, a
+            // cluster's job output) still gets one line per finished run.
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+            let rate = total as f64 / clock.elapsed().as_secs_f64().max(1e-9);
+            bar.set_message(format!("{rate:.0} env steps/s"));
+        }
+    })?;
+    bar.finish_and_clear();
+    Ok((rows, ran.into_inner()))
+}
+
+fn exp_check(
+    args: &ExpArgs,
+    cell: &str,
+    seed: Option<u64>,
+    jobs: usize,
+    kernel: Kernel,
+    exact: bool,
+) -> anyhow::Result<()> {
+    use pbcs::reproduce::{check_cell, Reproduced};
+    let (exp, results) = args.load()?;
+    let bar = run_bar(pbcs::experiment::plan(&exp, Some(cell), seed)?.len() as u64);
+    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, _| bar.inc(1))?;
+    bar.finish_and_clear();
+    println!("{}", check.report(cell));
+    let reproduced = check.reproduced();
+    if let (false, Some(note)) = (reproduced == Reproduced::Match, check.kernel_note()) {
+        println!("note: {note}");
+    }
+    let (n, differ) = (check.n(), check.n() - check.identical());
+    let ((lo, hi), rate) = (check.interval(), check.solved_now() as f64 / n as f64);
+    match reproduced {
+        Reproduced::Match => println!("MATCH: the committed rows are reproduced exactly"),
+        Reproduced::WithinInterval if exact => {
+            anyhow::bail!("--exact: {differ} of {n} rows differ from the committed bytes")
+        }
+        Reproduced::WithinInterval => println!(
+            "DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed interval"
+        ),
+        Reproduced::Outside => anyhow::bail!(
+            "the new success rate {rate:.2} lies outside the committed interval [{lo:.3}, {hi:.3}]"
+        ),
+    }
+    Ok(())
+}
+
+fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
+    job.check()?;
+    let out = run.out_dir(
+        &format!("run/{label}"),
+        &job.maze,
+        job.seed,
+        &runs::pbcs_suffix(job),
+    );
+    let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
+    let clock = std::time::Instant::now();
+    // Steps of the skills already finished, and the running skill's latest count.
+    let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
+    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
+    let lines = !run.quiet && !std::io::stderr().is_terminal();
+    let (record, seconds) = runs::run_pbcs(job, kernel, &out, |skill, p| {
+        let secs = clock.elapsed().as_secs_f64();
+        if skill != current_skill {
+            (finished, current_skill) = (finished + current, skill);
+            if lines {
+                eprintln!(
+                    "[{secs:.0} s] {skill} skills found, building skill {}; {finished} phase-2 \
+                     env steps so far",
+                    skill + 1
+                );
+            }
+        }
+        current = p.steps.train + p.steps.test;
+        let total = finished + current;
+        bar.set_message(p.status(skill, total, total as f64 / secs.max(1e-9)));
+        bar.tick();
+    })
+    .with_context(|| format!("PBCS on maze {} seed {}", job.maze.size, job.seed))?;
+    bar.finish_and_clear();
+    println!("{}", record.summary(job.phase2.eval_episodes, seconds));
+    let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";
+    println!("wrote {}/{wrote}", out.display());
+    Ok(())
+}
+
+fn explore(run: &RunArgs) -> anyhow::Result<()> {
+    let job = run.load(
+        || Ok(ExploreJob::default()),
+        |j: &mut ExploreJob| (&mut j.maze, &mut j.seed),
+    )?;
+    job.check()?;
+    let out = run.out_dir("explore", &job.maze, job.seed, "");
+    let template = "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]";
+    let bar = run.bar(template, None);
+    let (summary, seconds) = runs::run_explore(&job, &out, |steps, states| {
+        bar.set_position(steps);
+        bar.set_message(format!("{states} archived states"));
+    })
+    .with_context(|| format!("explore maze {} seed {}", job.maze.size, job.seed))?;
+    bar.finish_and_clear();
+    println!("{}", summary.summary(seconds, job.explore.bin_side));
+    let wrote = "{summary,trajectory,archive}.csv, explore.png, explore.svg";
+    println!("wrote {}/{wrote}", out.display());
+    Ok(())
+}
+
+fn train(
+    run: &RunArgs,
+    learner: &LearnerArgs,
+    steps: Option<u64>,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
+    let mut job = run.load(
+        || Ok(TrainJob::default()),
+        |j: &mut TrainJob| (&mut j.maze, &mut j.seed),
+    )?;
+    learner.apply(&mut job.learner);
+    job.train.steps = steps.unwrap_or(job.train.steps);
+    job.check()?;
+    let out = run.out_dir("train", &job.maze, job.seed, &runs::train_suffix(&job));
+    let template = "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}";
+    let bar = run.bar(template, Some(job.train.steps));
+    let (summary, seconds) = runs::run_train(&job, kernel, &out, |steps, success| {
+        bar.set_position(steps);
+        bar.set_message(format!("greedy success {success}"));
+    })
+    .with_context(|| format!("train on maze {} seed {}", job.maze.size, job.seed))?;
+    bar.finish_and_clear();
+    println!("{}", summary.summary(seconds, job.train.visit_bin));
+    let wrote = "{summary,evals,visited}.csv, actor.safetensors, train.png, train.svg";
+    println!("wrote {}/{wrote}", out.display());
+    Ok(())
+}
