@@ -81,7 +81,7 @@ impl Check for TrainJob {
 /// reports the same direction.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct RunJob {
+pub struct PbcsJob {
     /// The run seed.
     pub seed: u64,
     /// The maze.
@@ -94,9 +94,9 @@ pub struct RunJob {
     pub phase2: Phase2Config,
 }
 
-impl Default for RunJob {
+impl Default for PbcsJob {
     fn default() -> Self {
-        RunJob {
+        PbcsJob {
             seed: 0,
             maze: MazeConfig::default(),
             explore: ExploreConfig::default(),
@@ -109,7 +109,7 @@ impl Default for RunJob {
     }
 }
 
-impl Check for RunJob {
+impl Check for PbcsJob {
     fn check(&self) -> Result<()> {
         self.maze.check()?;
         self.explore.check()?;
@@ -158,8 +158,8 @@ impl Preset {
     }
 
     /// The preset as a validated job (maze 5, seed 0: set them for your run).
-    pub fn job(self) -> Result<RunJob> {
-        let job: RunJob = parse_toml(
+    pub fn job(self) -> Result<PbcsJob> {
+        let job: PbcsJob = parse_toml(
             self.text(),
             &Path::new("experiments").join(self.file_name()),
         )?;

@@ -109,7 +109,7 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
             success_rate: r.success_rate,
             solved: r.solved,
             env_steps: r.env_steps,
-            paper_steps: crate::experiment::paper_figures(crate::phase2::Variant::Pbcs, r.maze).0,
+            paper_steps: crate::experiment::paper_run(crate::phase2::Variant::Pbcs, r.maze).0,
         })
         .collect()
 }

@@ -23,7 +23,7 @@
 //! [`experiment`] (grids of cells × seeds, declared in TOML, swept with resume), [`tables`]
 //! and `aggregate` (per-cell statistics), [`figures`], [`claims`] (the paper's claims, as
 //! data) and [`report`] (LaTeX); [`launch`] (make, SLURM) and [`check`] (re-running committed
-//! rows). Words: a *job* is a validated config (`config::RunJob`, …), a *run* executes one
+//! rows). Words: a *job* is a validated config (`config::PbcsJob`, …), a *run* executes one
 //! ([`runs`]), `--jobs N` is how many runs go at once.
 //!
 //! ```

@@ -60,6 +60,19 @@ pub struct Aggregated {
 
 /// Aggregates every experiment's raw rows under `results` with polars
 /// ([`crate::aggregate::aggregate`], checked against the plain computation) and writes its
+/// tables ([`write_tables`]); an experiment without rows is reported and skipped. A build
+/// without the `polars` feature says so.
+#[cfg(not(feature = "polars"))]
+pub fn aggregate(_: &[Experiment], _: &Path) -> Result<Vec<Aggregated>> {
+    Err(crate::Error::invalid(
+        "features",
+        "this build has no polars: build with `--features polars` (as `make figures` does), \
+         or use the committed tables in results/tables/",
+    ))
+}
+
+/// Aggregates every experiment's raw rows under `results` with polars
+/// ([`crate::aggregate::aggregate`], checked against the plain computation) and writes its
 /// tables ([`write_tables`]); an experiment without rows is reported and skipped.
 #[cfg(feature = "polars")]
 pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {

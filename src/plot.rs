@@ -32,13 +32,13 @@ pub struct MazePicture<'a> {
     /// Faint points (archive states, visited states).
     pub points: &'a [(f32, f32)],
     /// Red polylines (phase-1 trajectory).
-    pub red_paths: Vec<&'a [(f32, f32)]>,
+    pub tau_paths: Vec<&'a [(f32, f32)]>,
     /// Red filled squares of the given side, by lower-left corner (the explored area).
     pub red_area: &'a [(f32, f32)],
     /// Side of the `red_area` squares.
     pub red_area_side: f32,
     /// Green polylines (rollouts of a policy or chain).
-    pub green_paths: Vec<Vec<(f32, f32)>>,
+    pub rollout_paths: Vec<Vec<(f32, f32)>>,
     /// Purple circles (centre, radius): activation sets.
     pub circles: Vec<((f32, f32), f32)>,
 }
@@ -58,10 +58,10 @@ pub fn legend(picture: &MazePicture) -> String {
     if !picture.red_area.is_empty() {
         parts.push("red squares: explored area");
     }
-    if !picture.red_paths.is_empty() {
+    if !picture.tau_paths.is_empty() {
         parts.push("red: trajectory τ");
     }
-    if !picture.green_paths.is_empty() {
+    if !picture.rollout_paths.is_empty() {
         parts.push("green: rollouts");
     }
     if !picture.circles.is_empty() {
@@ -147,10 +147,10 @@ pub fn draw_maze<DB: DrawingBackend>(
             .map(move |w| PathElement::new(vec![w[0], w[1]], style))
             .collect::<Vec<_>>()
     };
-    for path in &picture.green_paths {
+    for path in &picture.rollout_paths {
         chart.draw_series(segments(path, RGBColor(0, 170, 0).stroke_width(2)))?;
     }
-    for path in &picture.red_paths {
+    for path in &picture.tau_paths {
         chart.draw_series(segments(path, RED.stroke_width(2)))?;
     }
     let purple = RGBColor(140, 40, 200);
@@ -281,7 +281,7 @@ pub fn render_maze(
 /// use pbcs::plot::PictureData;
 ///
 /// let data = PictureData {
-///     red_paths: vec![vec![(0.5, 0.5), (0.6, 0.5)]],
+///     tau_paths: vec![vec![(0.5, 0.5), (0.6, 0.5)]],
 ///     circles: vec![((1.0, 1.5), 0.1)],
 ///     ..PictureData::default()
 /// };
@@ -295,13 +295,13 @@ pub struct PictureData {
     /// Faint points.
     pub points: Vec<(f32, f32)>,
     /// Red polylines.
-    pub red_paths: Vec<Vec<(f32, f32)>>,
+    pub tau_paths: Vec<Vec<(f32, f32)>>,
     /// Red squares by lower-left corner.
     pub red_area: Vec<(f32, f32)>,
     /// Side of the red squares.
     pub red_area_side: f32,
     /// Green polylines.
-    pub green_paths: Vec<Vec<(f32, f32)>>,
+    pub rollout_paths: Vec<Vec<(f32, f32)>>,
     /// Purple circles.
     pub circles: Vec<((f32, f32), f32)>,
 }
@@ -312,10 +312,10 @@ impl PictureData {
         MazePicture {
             title,
             points: &self.points,
-            red_paths: self.red_paths.iter().map(Vec::as_slice).collect(),
+            tau_paths: self.tau_paths.iter().map(Vec::as_slice).collect(),
             red_area: &self.red_area,
             red_area_side: self.red_area_side,
-            green_paths: self.green_paths.clone(),
+            rollout_paths: self.rollout_paths.clone(),
             circles: self.circles.clone(),
         }
     }
@@ -334,7 +334,7 @@ impl PictureData {
             ]
         };
         rows.extend(self.points.iter().map(|&p| row("point", 0, p, 0.0)));
-        for (i, path) in self.red_paths.iter().enumerate() {
+        for (i, path) in self.tau_paths.iter().enumerate() {
             rows.extend(path.iter().map(|&p| row("red", i, p, 0.0)));
         }
         rows.extend(
@@ -342,7 +342,7 @@ impl PictureData {
                 .iter()
                 .map(|&p| row("area", 0, p, self.red_area_side)),
         );
-        for (i, path) in self.green_paths.iter().enumerate() {
+        for (i, path) in self.rollout_paths.iter().enumerate() {
             rows.extend(path.iter().map(|&p| row("green", i, p, 0.0)));
         }
         rows.extend(self.circles.iter().map(|&(c, r)| row("circle", 0, c, r)));
@@ -375,12 +375,12 @@ impl PictureData {
             let (p, r) = ((num(2)?, num(3)?), num(4)?);
             match rec.get(0) {
                 Some("point") => data.points.push(p),
-                Some("red") => push(&mut data.red_paths, i, p),
+                Some("red") => push(&mut data.tau_paths, i, p),
                 Some("area") => {
                     data.red_area.push(p);
                     data.red_area_side = r;
                 }
-                Some("green") => push(&mut data.green_paths, i, p),
+                Some("green") => push(&mut data.rollout_paths, i, p),
                 Some("circle") => data.circles.push((p, r)),
                 _ => return Err(bad(line, "unknown layer")),
             }

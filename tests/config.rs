@@ -1,6 +1,6 @@
 //! Bad input is rejected with a message that names the field or file, never a panic.
 
-use pbcs::config::{load, ExploreJob, RunJob, TrainJob};
+use pbcs::config::{load, ExploreJob, PbcsJob, TrainJob};
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -140,7 +140,7 @@ fn every_experiment_file_parses_and_checks() {
             load::<ExploreJob>(&path).unwrap_or_else(|e| panic!("{e}"));
             n += 1;
         } else if name.starts_with("pbcs") && name.ends_with(".toml") {
-            load::<RunJob>(&path).unwrap_or_else(|e| panic!("{e}"));
+            load::<PbcsJob>(&path).unwrap_or_else(|e| panic!("{e}"));
             n += 1;
         } else if name.starts_with("baseline") && name.ends_with(".toml") {
             load::<TrainJob>(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -181,11 +181,11 @@ fn presets_are_the_experiment_files_and_paper_is_the_library_default() {
     use pbcs::config::Preset;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
     for preset in [Preset::Paper, Preset::Fast] {
-        let from_file: RunJob = load(&dir.join(preset.file_name())).unwrap();
+        let from_file: PbcsJob = load(&dir.join(preset.file_name())).unwrap();
         assert_eq!(preset.job().unwrap(), from_file, "{preset:?}");
     }
-    // The paper preset is RunJob::default() (what experiment bases start from), for maze 5.
-    let mut default = RunJob::default();
+    // The paper preset is PbcsJob::default() (what experiment bases start from), for maze 5.
+    let mut default = PbcsJob::default();
     default.maze.size = 5;
     assert_eq!(Preset::Paper.job().unwrap(), default);
     // The fast preset differs only in the switches of ours.
@@ -207,7 +207,7 @@ fn presets_are_the_experiment_files_and_paper_is_the_library_default() {
 #[test]
 fn epsilon_is_a_radius_in_cells() {
     let (_dir, path) = write("[phase2]\nepsilon = 50\n");
-    let err = load::<RunJob>(&path).unwrap_err().to_string();
+    let err = load::<PbcsJob>(&path).unwrap_err().to_string();
     assert!(err.contains("phase2.epsilon"), "{err}");
 }
 

@@ -86,7 +86,7 @@ fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
         ("pbcs_fast", "experiments/pbcs_fast.toml"),
         ("pbcs", "experiments/pbcs_paper.toml"),
     ] {
-        let preset: pbcs::config::RunJob =
+        let preset: pbcs::config::PbcsJob =
             toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
         for &n in &exp.mazes {
             let mut want = preset.clone();
@@ -539,11 +539,11 @@ fn stored_configs_compare_by_value() {
 /// too: the chained PBCS's and the unchained one's, by size.
 #[test]
 fn the_papers_step_counts_come_from_the_table_experiment() {
-    use pbcs::experiment::paper_figures;
+    use pbcs::experiment::paper_run;
     use pbcs::phase2::Variant;
     let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
         .iter()
-        .map(|&n| paper_figures(Variant::Pbcs, n).0)
+        .map(|&n| paper_run(Variant::Pbcs, n).0)
         .collect();
     assert_eq!(
         steps,
@@ -556,9 +556,9 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
             None
         ]
     );
-    assert_eq!(paper_figures(Variant::Pbcs, 15).1, Some(true));
+    assert_eq!(paper_run(Variant::Pbcs, 15).1, Some(true));
     assert_eq!(
-        paper_figures(Variant::PbcsNoChaining, 10),
+        paper_run(Variant::PbcsNoChaining, 10),
         (Some(694_000), Some(false))
     );
     let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
@@ -573,7 +573,7 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
             Variant::PbcsNoChaining
         };
         assert_eq!(
-            paper_figures(variant, c.maze),
+            paper_run(variant, c.maze),
             (c.paper_steps, c.paper_solved),
             "{}",
             c.id

@@ -473,11 +473,11 @@ fn a_saved_chain_loads_and_runs_the_same() {
 }
 
 mod end_to_end {
-    use pbcs::config::RunJob;
+    use pbcs::config::PbcsJob;
     use pbcs::runs::run_pbcs;
 
-    fn job(seed: u64) -> RunJob {
-        let mut job = RunJob::default();
+    fn job(seed: u64) -> PbcsJob {
+        let mut job = PbcsJob::default();
         job.maze.size = 2;
         job.seed = seed;
         job
@@ -665,6 +665,10 @@ mod end_to_end {
         )
         .unwrap();
         assert_eq!(again.successes, wins);
+        assert_eq!(again.rows, episodes);
+        // Computing wrote nothing; writing puts the episodes where it is told.
+        assert!(!chain.join(format!("eval-s{}.csv", j.seed)).exists());
+        again.write(&chain).unwrap();
         assert_eq!(read(&chain.join(format!("eval-s{}.csv", j.seed))), episodes);
     }
 
@@ -1174,7 +1178,7 @@ fn a_limited_chain_run_stops_a_stuck_or_slow_skill() {
 }
 
 mod switches {
-    use pbcs::config::{Check, RunJob};
+    use pbcs::config::{Check, PbcsJob};
     use pbcs::env::Env;
     use pbcs::maze::Maze;
     use pbcs::phase2::goal::{Goal, GoalKind};
@@ -1183,7 +1187,7 @@ mod switches {
 
     #[test]
     fn the_paper_as_written_aims_at_the_ball_with_raw_inputs() {
-        let mut job = RunJob::default();
+        let mut job = PbcsJob::default();
         job.maze.size = 2;
         let maze = Maze::new(&job.maze).unwrap();
         let obs = vec![vec![0.5, 0.5], vec![0.6, 0.5], vec![0.5, 1.32]];
@@ -1218,13 +1222,13 @@ mod switches {
 
     #[test]
     fn chain_repairs_need_a_chain_verification() {
-        let mut job = RunJob::default();
+        let mut job = PbcsJob::default();
         job.phase2.chain_repairs = 2;
         let err = job.check().unwrap_err().to_string();
         assert!(err.contains("phase2.chain_repairs"), "{err}");
         job.phase2.chain_verify_episodes = 50;
         job.check().unwrap();
-        let bad: Result<RunJob, _> = toml::from_str("[phase2]\ninputs = \"pixels\"\n");
+        let bad: Result<PbcsJob, _> = toml::from_str("[phase2]\ninputs = \"pixels\"\n");
         assert!(bad.unwrap_err().to_string().contains("pixels"));
     }
 

@@ -3,7 +3,7 @@
 //! its own raw CSV row.
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
-//! baselines, a [`RunJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
+//! baselines, a [`PbcsJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
 //! for one size), the mazes, the seeds, and named profiles (`smoke` for CI, or any a user adds)
 //! that override seeds, mazes and fields. Resolving a cell is
 //! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
@@ -40,10 +40,10 @@ pub use layout::{
     evals_file, experiment_files, picture_file, read_finished, read_raw, read_wall_seconds,
 };
 pub use row::{read_row, RawRow};
-pub use spec::{paper_figures, FigureSpec, ReportSpec, SettingsSpec};
+pub use spec::{paper_run, FigureSpec, ReportSpec, SettingsSpec};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
-use crate::config::{RunJob, TrainJob};
+use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::validate::Check;
 use serde::{Deserialize, Serialize};
@@ -56,7 +56,7 @@ use std::path::{Path, PathBuf};
 pub enum Kind {
     /// A vanilla baseline on the maze's own reward ([`TrainJob`], `pbcs train`).
     Vanilla,
-    /// PBCS, phase 1 then phase 2 ([`RunJob`], `pbcs run`).
+    /// PBCS, phase 1 then phase 2 ([`PbcsJob`], `pbcs run`).
     Pbcs,
 }
 
@@ -72,7 +72,7 @@ pub enum Job {
     /// `pbcs train`.
     Vanilla(TrainJob),
     /// `pbcs run`.
-    Pbcs(RunJob),
+    Pbcs(PbcsJob),
 }
 
 impl Job {
@@ -80,7 +80,7 @@ impl Job {
     pub fn with_seed(&self, seed: u64) -> Job {
         match self {
             Job::Vanilla(j) => Job::Vanilla(TrainJob { seed, ..j.clone() }),
-            Job::Pbcs(j) => Job::Pbcs(RunJob { seed, ..j.clone() }),
+            Job::Pbcs(j) => Job::Pbcs(PbcsJob { seed, ..j.clone() }),
         }
     }
 
@@ -98,7 +98,7 @@ impl Job {
     pub fn same_as(&self, text: &str) -> bool {
         match self {
             Job::Vanilla(j) => toml::from_str::<TrainJob>(text).is_ok_and(|s| &s == j),
-            Job::Pbcs(j) => toml::from_str::<RunJob>(text).is_ok_and(|s| &s == j),
+            Job::Pbcs(j) => toml::from_str::<PbcsJob>(text).is_ok_and(|s| &s == j),
         }
     }
 

@@ -1,7 +1,7 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
 use super::{Cell, Experiment, Kind};
-use crate::config::{RunJob, TrainJob};
+use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
 use crate::runs::{RunRecord, TrainSummary};
@@ -90,7 +90,7 @@ impl RawRow {
     /// The row of a PBCS run of `cell` (`job` with its seed): its [`RunRecord`] (what `pbcs
     /// run` writes to `record.csv`) under the cell's names, `env_steps` its `total_steps`;
     /// the record's τ lengths and ε are left to the job file.
-    pub fn pbcs(exp: &Experiment, cell: &Cell, job: &RunJob, r: RunRecord) -> RawRow {
+    pub fn pbcs(exp: &Experiment, cell: &Cell, job: &PbcsJob, r: RunRecord) -> RawRow {
         RawRow {
             experiment: exp.name.clone(),
             cell: cell.id.clone(),

@@ -2,7 +2,7 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::{Cell, Experiment, Job, Kind};
-use crate::config::{RunJob, TrainJob};
+use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::Variant;
 use crate::validate::Check;
@@ -36,7 +36,7 @@ pub(crate) struct MethodSpec {
 }
 
 /// Fields set on every method of one kind: `vanilla = { … }` changes the [`TrainJob`]s,
-/// `pbcs = { … }` the [`RunJob`]s.
+/// `pbcs = { … }` the [`PbcsJob`]s.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct KindTables {
@@ -458,7 +458,7 @@ impl Experiment {
                         Job::Vanilla(j)
                     }
                     Kind::Pbcs => {
-                        let mut j: RunJob = toml::Value::Table(table).try_into().map_err(what)?;
+                        let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
                         j.maze.size = n;
                         j.seed = 0;
                         Job::Pbcs(j)
@@ -507,16 +507,16 @@ impl Experiment {
     /// `sizes` with seeds `0..seeds`, built from a job instead of a file: what `pbcs table`
     /// sweeps (into `<results>/raw/<name>/<name>-maze<N>/`, in the order of `sizes`). Each
     /// cell carries the paper's run of the same variant (with or without chaining) on its size
-    /// ([`paper_figures`]); seed 0 keeps its picture.
+    /// ([`paper_run`]); seed 0 keeps its picture.
     ///
     /// ```
     /// use pbcs::experiment::Experiment;
-    /// let exp = Experiment::of_job("mine", &pbcs::config::RunJob::default(), &[2, 5], 3).unwrap();
+    /// let exp = Experiment::of_job("mine", &pbcs::config::PbcsJob::default(), &[2, 5], 3).unwrap();
     /// assert_eq!(exp.cells[1].id, "mine-maze5");
     /// assert_eq!(exp.seeds(), vec![0, 1, 2]);
     /// assert!(Experiment::of_job("mine", &Default::default(), &[2, 2], 3).is_err());
     /// ```
-    pub fn of_job(name: &str, job: &RunJob, sizes: &[usize], seeds: u64) -> Result<Experiment> {
+    pub fn of_job(name: &str, job: &PbcsJob, sizes: &[usize], seeds: u64) -> Result<Experiment> {
         check_method_name(name)?;
         check_mazes(sizes)?;
         if seeds == 0 {
@@ -529,7 +529,7 @@ impl Experiment {
                 j.maze.size = n;
                 j.seed = 0;
                 j.check().map_err(|e| located(e, &format!("maze {n}")))?;
-                let (paper_steps, paper_solved) = paper_figures(job.phase2.variant(), n);
+                let (paper_steps, paper_solved) = paper_run(job.phase2.variant(), n);
                 Ok(Cell {
                     id: format!("{name}-maze{n}"),
                     method: name.to_string(),
@@ -567,13 +567,13 @@ impl Experiment {
 /// paper did not run.
 ///
 /// ```
-/// use pbcs::experiment::paper_figures;
+/// use pbcs::experiment::paper_run;
 /// use pbcs::phase2::Variant;
-/// assert_eq!(paper_figures(Variant::Pbcs, 2), (Some(321_000), Some(true)));
-/// assert_eq!(paper_figures(Variant::PbcsNoChaining, 2), (Some(146_000), Some(false)));
-/// assert_eq!(paper_figures(Variant::Pbcs, 3), (None, None));
+/// assert_eq!(paper_run(Variant::Pbcs, 2), (Some(321_000), Some(true)));
+/// assert_eq!(paper_run(Variant::PbcsNoChaining, 2), (Some(146_000), Some(false)));
+/// assert_eq!(paper_run(Variant::Pbcs, 3), (None, None));
 /// ```
-pub fn paper_figures(variant: Variant, maze: usize) -> (Option<u64>, Option<bool>) {
+pub fn paper_run(variant: Variant, maze: usize) -> (Option<u64>, Option<bool>) {
     let path = Path::new("experiments/table.toml");
     let spec: Option<ExperimentSpec> =
         crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();

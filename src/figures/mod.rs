@@ -315,7 +315,7 @@ mod tests {
         )
         .unwrap();
         let data = PictureData {
-            red_paths: vec![vec![(0.5, 0.5), (1.0, 1.0)]],
+            tau_paths: vec![vec![(0.5, 0.5), (1.0, 1.0)]],
             ..PictureData::default()
         };
         let maze = cell_maze(&exp.cells[0]).unwrap();

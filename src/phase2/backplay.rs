@@ -54,20 +54,6 @@ pub struct Walk {
 /// The largest K step of the adaptive walk.
 pub const MAX_ADAPTIVE_STEP: usize = 16;
 
-impl Walk {
-    /// The paper's walk: K − 1 each time, α rounds without improvement end training.
-    pub fn paper(alpha: usize) -> Self {
-        Walk {
-            alpha,
-            k_step: 1,
-            early_stop: false,
-            adaptive: false,
-            stop_at_failure: false,
-            give_up_when_dead: false,
-        }
-    }
-}
-
 /// Runs Algorithm 3 ([`Backplayer::train`]) from τ_k until its success fails to beat its best
 /// `alpha` times in a row ("until performance stabilizes"). Returns (rounds, best).
 ///
@@ -116,7 +102,7 @@ pub fn train_until_stable<B: Backplayer>(
 ///
 /// The paper loops `while K > 0`; then K_s ≥ 1 always and Algorithm 1 (`while T > 0`) would
 /// never end, so we let K reach 0 (the start τ_0). [`Walk`] holds our options (larger or
-/// adaptive K steps, early stopping); [`Walk::paper`] is the pseudo-code above.
+/// adaptive K steps, early stopping); the pseudo-code above is the walk with K − 1 steps (`k_step = 1`) and every switch off.
 pub fn backplay<B: Backplayer>(b: &mut B, t: usize, walk: &Walk) -> Option<(usize, B::Policy)> {
     backplay_candidates(b, t, walk).pop()
 }

@@ -2,7 +2,7 @@
 //! `pbcs eval` (a saved chain re-run).
 
 use super::{ball_circles, DRAWN_ROLLOUTS};
-use crate::config::RunJob;
+use crate::config::PbcsJob;
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::maze::Maze;
@@ -31,7 +31,7 @@ pub struct EvalEpisode {
 pub fn evaluate_chain(
     maze: &Maze,
     chain: &SkillChain,
-    job: &RunJob,
+    job: &PbcsJob,
     episodes: usize,
     seed: u64,
 ) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
@@ -59,24 +59,31 @@ pub const CHAIN_JOB: &str = "run.toml";
 #[derive(Debug, Clone)]
 pub struct ChainEval {
     /// The job that built the chain (from the chain folder).
-    pub job: RunJob,
+    pub job: PbcsJob,
     /// Skills in the chain.
     pub skills: usize,
+    /// The seed of the start states.
+    pub seed: u64,
     /// Episodes run.
     pub episodes: usize,
     /// Episodes that reached the target.
     pub successes: usize,
     /// Wilson 95 % interval of the success rate.
     pub interval: (f64, f64),
+    /// Each episode: success and steps.
+    pub rows: Vec<EvalEpisode>,
+    /// The picture: the first rollouts over the maze, with the activation balls.
+    pub picture: PictureData,
+    maze: Maze,
 }
 
 /// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
-/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (the run's own seed
-/// reproduces the run's evaluation exactly), each at most `phase2.eval_max_steps` steps.
-/// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and `eval-s<seed>.png`/`.svg`
-/// (the first rollouts over the maze) into `chain_dir`. A folder without the chain's job
-/// (`run.toml`, or `../config.toml` for chains saved before it existed), a malformed manifest
-/// or bad weights are errors naming the file. The policies run on `kernel`.
+/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (default: the run's
+/// own seed, which reproduces the run's evaluation exactly), each at most
+/// `phase2.eval_max_steps` steps, the policies on `kernel`. Writes nothing
+/// ([`ChainEval::write`] does). A folder without the chain's job (`run.toml`, or
+/// `../config.toml` for chains saved before it existed), a malformed manifest or bad weights
+/// are errors naming the file.
 pub fn eval_chain(
     chain_dir: &Path,
     episodes: usize,
@@ -102,38 +109,52 @@ pub fn eval_chain(
         }
         parent
     };
-    let job: RunJob = crate::validate::load(&job_path)?;
+    let job: PbcsJob = crate::validate::load(&job_path)?;
     let maze = Maze::new(&job.maze)?;
     let chain = SkillChain::load(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
     let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
-    crate::record::write_records(&chain_dir.join(format!("eval-s{seed}.csv")), &rows)?;
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
-    let data = PictureData {
-        green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+    let picture = PictureData {
+        rollout_paths: rollouts.iter().map(|r| xy(r)).collect(),
         circles: ball_circles(&chain),
         ..PictureData::default()
     };
-    let title = format!(
-        "saved chain, maze {} (layout {}), eval seed {seed}: success {successes}/{episodes}",
-        job.maze.size, job.maze.seed
-    );
-    render_maze(
-        &maze,
-        &data.picture(title),
-        &chain_dir.join(format!("eval-s{seed}.png")),
-        &chain_dir.join(format!("eval-s{seed}.svg")),
-        SVG_MAX_POINTS,
-    )?;
     Ok(ChainEval {
         skills: chain.skills.len(),
         job,
+        seed,
         episodes,
         successes,
         interval,
+        rows,
+        picture,
+        maze,
     })
+}
+
+impl ChainEval {
+    /// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and
+    /// `eval-s<seed>.png`/`.svg` (the first rollouts over the maze) into `out` (`pbcs eval`:
+    /// the chain folder unless `--out` says otherwise).
+    pub fn write(&self, out: &Path) -> Result<()> {
+        let seed = self.seed;
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        crate::record::write_records(&out.join(format!("eval-s{seed}.csv")), &self.rows)?;
+        let title = format!(
+            "saved chain, maze {} (layout {}), eval seed {seed}: success {}/{}",
+            self.job.maze.size, self.job.maze.seed, self.successes, self.episodes
+        );
+        render_maze(
+            &self.maze,
+            &self.picture.picture(title),
+            &out.join(format!("eval-s{seed}.png")),
+            &out.join(format!("eval-s{seed}.svg")),
+            SVG_MAX_POINTS,
+        )
+    }
 }
 
 impl ChainEval {

@@ -183,7 +183,7 @@ pub(crate) fn render_exploration(
             found.trajectory.len()
         ),
         points: &points,
-        red_paths: vec![&path],
+        tau_paths: vec![&path],
         ..MazePicture::default()
     };
     render_maze(

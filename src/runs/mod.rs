@@ -20,7 +20,7 @@ use pbcs::{ball_circles, DRAWN_ROLLOUTS};
 pub use pbcs::{run_pbcs, PbcsRun, RunRecord};
 pub use train::{run_train, TrainRun, TrainSummary};
 
-use crate::config::{MazeConfig, Preset, RunJob, TrainJob};
+use crate::config::{MazeConfig, PbcsJob, Preset, TrainJob};
 use crate::error::Result;
 use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
@@ -62,7 +62,7 @@ pub fn default_out(command: &str, maze: &MazeConfig, seed: u64, suffix: &str) ->
 
 /// The part of a PBCS run's default folder that names its departures from the preset:
 /// `-nochain` without chaining, `-exact` with exact starts.
-pub fn pbcs_suffix(job: &RunJob) -> String {
+pub fn pbcs_suffix(job: &PbcsJob) -> String {
     let mut suffix = String::new();
     if !job.phase2.chaining {
         suffix.push_str("-nochain");

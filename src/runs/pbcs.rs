@@ -3,7 +3,7 @@
 use super::{
     claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
 };
-use crate::config::RunJob;
+use crate::config::PbcsJob;
 use crate::error::Result;
 use crate::explore::{explore, Exploration};
 use crate::maze::Maze;
@@ -95,7 +95,7 @@ impl PbcsRun {
     /// from starts uniform in B_ε(s_0), every network on `kernel`. `progress(skill, report)`
     /// is called during phase 2. Writes nothing.
     pub fn compute(
-        job: &RunJob,
+        job: &PbcsJob,
         kernel: Kernel,
         progress: impl FnMut(usize, Progress),
     ) -> Result<PbcsRun> {
@@ -135,8 +135,8 @@ impl PbcsRun {
         let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
         let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
         let picture = PictureData {
-            red_paths: vec![xy(&tau)],
-            green_paths: rollouts.iter().map(|r| xy(r)).collect(),
+            tau_paths: vec![xy(&tau)],
+            rollout_paths: rollouts.iter().map(|r| xy(r)).collect(),
             circles: ball_circles(&phase2.chain),
             ..PictureData::default()
         };
@@ -158,7 +158,7 @@ impl PbcsRun {
     /// env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the
     /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `run.png`, `run.svg`,
     /// `timing.toml`.
-    pub fn write(&self, job: &RunJob, out: &Path) -> Result<()> {
+    pub fn write(&self, job: &PbcsJob, out: &Path) -> Result<()> {
         let (record, phase2) = (&self.record, &self.phase2);
         write_record(&out.join("record.csv"), record)?;
         write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;
@@ -208,7 +208,7 @@ impl PbcsRun {
 impl RunRecord {
     /// The record of `job` from what its run found.
     fn new(
-        job: &RunJob,
+        job: &PbcsJob,
         found: &Exploration<Point<f32>>,
         phase2: &Phase2Outcome,
         phase2_trajectory_len: usize,
@@ -256,7 +256,7 @@ pub(crate) fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
 /// then [`PbcsRun::compute`] and [`PbcsRun::write`]. `progress(skill, report)` is called
 /// during phase 2.
 pub fn run_pbcs(
-    job: &RunJob,
+    job: &PbcsJob,
     kernel: Kernel,
     out: &Path,
     progress: impl FnMut(usize, Progress),

@@ -292,7 +292,7 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::RunJob;
+    use crate::config::PbcsJob;
 
     fn row(exp: &Experiment, seed: u64, solved: bool, steps: u64, skills: usize) -> RawRow {
         let c = &exp.cells[0];
@@ -323,7 +323,7 @@ mod tests {
 
     #[test]
     fn the_grid_table_gives_median_extremes_and_the_papers_ratio() {
-        let exp = Experiment::of_job("mine", &RunJob::default(), &[2], 3).unwrap();
+        let exp = Experiment::of_job("mine", &PbcsJob::default(), &[2], 3).unwrap();
         let rows = [
             row(&exp, 0, true, 300_000, 2),
             row(&exp, 1, false, 100_000, 3),

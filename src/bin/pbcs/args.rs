@@ -137,7 +137,7 @@ pub enum Command {
         steps: Option<u64>,
     },
     /// Re-run a chain saved by `pbcs run` (its `chain/` folder) on its maze: success rate with
-    /// its Wilson interval; writes eval-s<seed>.csv and a picture into the chain folder.
+    /// its Wilson interval; writes eval-s<seed>.csv and a picture (into the chain folder by default).
     Eval {
         /// The chain folder (`<run folder>/chain`).
         #[arg(long)]
@@ -148,6 +148,9 @@ pub enum Command {
         /// Seed of the start states [default: the run's seed, which reproduces its evaluation].
         #[arg(long)]
         seed: Option<u64>,
+        /// Folder for eval-s<seed>.csv and the picture [default: the chain folder].
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// PBCS: phase 1, then phase 2 (Backplay, shaped training, skill chaining); evaluate the
     /// chain; write the record, the chain and a picture.
@@ -171,7 +174,7 @@ pub enum Command {
     /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts
     /// and step statistics beside the paper's.
     Table {
-        /// TOML config of the runs (a `RunJob`, e.g. experiments/pbcs_paper.toml).
+        /// TOML config of the runs (a `PbcsJob`, e.g. experiments/pbcs_paper.toml).
         #[arg(long)]
         config: Option<PathBuf>,
         /// The procedure, when no --config is given: `fast` (the default) or `paper`.

@@ -8,7 +8,7 @@ use anyhow::Context;
 use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
-use pbcs::config::{self, Check, ExploreJob, Preset, RunJob, TrainJob};
+use pbcs::config::{self, Check, ExploreJob, PbcsJob, Preset, TrainJob};
 use pbcs::experiment::{Experiment, Pending, RawRow};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
@@ -59,7 +59,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             exact_starts,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
-            let mut job = run.load(|| preset.job(), |j: &mut RunJob| (&mut j.maze, &mut j.seed))?;
+            let mut job = run.load(
+                || preset.job(),
+                |j: &mut PbcsJob| (&mut j.maze, &mut j.seed),
+            )?;
             learner.apply(&mut job.learner);
             job.phase2.chaining &= !no_chaining;
             if exact_starts {
@@ -74,11 +77,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             chain,
             episodes,
             seed,
+            out,
         } => {
             let e = runs::eval_chain(&chain, episodes as usize, seed, kernel)?;
-            let seed = seed.unwrap_or(e.job.seed);
-            println!("{}", e.summary(&chain, seed));
-            println!("wrote {}/eval-s{seed}.{{csv,png,svg}}", chain.display());
+            let out = out.unwrap_or_else(|| chain.clone());
+            e.write(&out)?;
+            println!("{}", e.summary(&chain, e.seed));
+            println!("wrote {}/eval-s{}.{{csv,png,svg}}", out.display(), e.seed);
             Ok(())
         }
         Command::Table {
@@ -90,7 +95,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
-            let job: RunJob = match &config {
+            let job: PbcsJob = match &config {
                 Some(p) => config::load(p)?,
                 None => preset.job()?,
             };
@@ -200,7 +205,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
-#[cfg(feature = "polars")]
 fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
     let (exps, results) = set.load()?;
     for a in pbcs::pipeline::aggregate(&exps, &results)? {
@@ -221,14 +225,6 @@ fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-#[cfg(not(feature = "polars"))]
-fn aggregate(_: &SetArgs) -> anyhow::Result<()> {
-    anyhow::bail!(
-        "this build has no polars: build with `--features polars` (as `make figures` does), \
-         or use the committed tables in results/tables/"
-    )
 }
 
 fn run_bar(total: u64) -> ProgressBar {
@@ -308,7 +304,7 @@ fn exp_check(
     Ok(())
 }
 
-fn pbcs_run(run: &RunArgs, job: &RunJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
+fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
     job.check()?;
     let out = run.out_dir(
         &format!("run/{label}"),
