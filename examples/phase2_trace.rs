@@ -1,6 +1,6 @@
 //! Prints every Backplay event of one PBCS run (tests and training rounds), for diagnosis.
 //! `cargo run --release --example phase2_trace -- MAZE SEED [CONFIG.toml]`
-use pbcs::config::{self, RunJob};
+use pbcs::config::{self, PbcsJob};
 use pbcs::env::Env;
 use pbcs::explore::explore;
 use pbcs::maze::Maze;
@@ -9,9 +9,9 @@ use pbcs::rng::{Seeds, Stream};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let mut job: RunJob = match args.get(3) {
+    let mut job: PbcsJob = match args.get(3) {
         Some(p) => config::load(std::path::Path::new(p))?,
-        None => RunJob::default(),
+        None => PbcsJob::default(),
     };
     job.maze.size = args.get(1).map_or(Ok(2), |s| s.parse())?;
     job.seed = args.get(2).map_or(Ok(0), |s| s.parse())?;

@@ -11,6 +11,7 @@ use crate::experiment::{experiment_files, Experiment, FigureSpec, RawRow};
 use crate::record::{write_atomic, write_records};
 use crate::report;
 use crate::tables::curves::curves_path;
+use crate::tables::routes::routes_path;
 use crate::tables::scaling::{paths_path, read_paths};
 use crate::tables::CellStats;
 use std::path::{Path, PathBuf};
@@ -150,7 +151,9 @@ pub fn render(
 /// folder): `<name>.csv` (`stats`), `<name>.chains.csv` and `<name>.criteria.csv` (PBCS runs'
 /// chain success and the table under other success criteria), `<name>.curves.csv` (with a
 /// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
-/// each cell's shortest path) and the wall-clock companion `<name>.timing.csv`.
+/// each cell's shortest path), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
+/// chain's path beside |τ| and the fewest steps) and the wall-clock companion
+/// `<name>.timing.csv`.
 pub fn write_tables(
     exp: &Experiment,
     results: &Path,
@@ -178,6 +181,10 @@ pub fn write_tables(
             }
             _ => {}
         }
+    }
+    let routes = crate::tables::routes::routes(exp, results, rows)?;
+    if !routes.is_empty() {
+        write_records(&routes_path(results, &exp.name), &routes)?;
     }
     let timing = crate::tables::cell_timings(exp, results, rows);
     write_records(
@@ -244,6 +251,11 @@ pub fn render_all(
                 stats,
                 &read_paths(&paths)?,
             ));
+        }
+        let routes = routes_path(results, &exp.name);
+        if routes.exists() {
+            let routes = crate::tables::routes::read_routes(&routes)?;
+            numbers.push_str(&report::routes_numbers_tex(&exp.name, &routes));
         }
     }
     for (name, text) in [

@@ -92,6 +92,56 @@ fn def_res(s: &mut String, experiment: &str, key: &str, value: &str) {
     );
 }
 
+/// For an experiment with a routes table (PBCS runs with evaluation episodes): how the chains'
+/// paths compare with τ and with the fewest steps, as `\res{<experiment>:routes:<key>}`:
+/// `runs` (runs with a successful evaluation episode), `shorter` (of those, runs whose chain's
+/// median successful path is shorter than the τ phase 2 worked on), `fewestlo`/`fewesthi` (the
+/// least and largest, over cells, of the median chain path / fewest steps), `taulo`/`tauhi`
+/// (the same for τ / chain path); empty without routes.
+pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Route]) -> String {
+    let mut s = String::new();
+    let paths: Vec<(&str, f64, f64)> = routes
+        .iter()
+        .filter_map(|r| {
+            let c = r.chain_steps?;
+            Some((
+                r.cell.as_str(),
+                c / r.fewest_steps.max(1) as f64,
+                r.phase2_tau_steps as f64 / c,
+            ))
+        })
+        .collect();
+    if paths.is_empty() {
+        return s;
+    }
+    let shorter = routes
+        .iter()
+        .filter(|r| r.chain_steps.is_some_and(|c| c < r.phase2_tau_steps as f64))
+        .count();
+    let mut cells: Vec<&str> = paths.iter().map(|p| p.0).collect();
+    cells.dedup();
+    let (mut fewest, mut tau) = (Vec::new(), Vec::new());
+    for cell in cells {
+        let mut f: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.1).collect();
+        let mut t: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.2).collect();
+        fewest.push(crate::stats::median(&mut f));
+        tau.push(crate::stats::median(&mut t));
+    }
+    let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    for (key, value) in [
+        ("runs", paths.len().to_string()),
+        ("shorter", shorter.to_string()),
+        ("fewestlo", format!("{:.2}", lo(&fewest))),
+        ("fewesthi", format!("{:.2}", hi(&fewest))),
+        ("taulo", format!("{:.1}", lo(&tau))),
+        ("tauhi", format!("{:.1}", hi(&tau))),
+    ] {
+        def_res(&mut s, experiment, &format!("routes:{key}"), &value);
+    }
+    s
+}
+
 /// For an experiment with a `scaling` figure: each cell's shortest path as
 /// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
 /// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c, whole from 10
@@ -392,4 +442,44 @@ mod tests {
         );
         assert!(tex.contains("\\begin{tabular}{rcc}") && tex.contains("maze & PBCS & Other"));
     }
+
+    /// Known values: two cells; the chains are 1.1 and 1.2 times the fewest steps, τ four and
+    /// five times the chain; one run without a successful episode counts nowhere.
+    #[test]
+    fn the_routes_numbers_give_the_spread_over_cells() {
+        use crate::tables::routes::Route;
+        let route = |cell: &str, chain: Option<f64>, tau: usize, fewest: usize| Route {
+            cell: cell.into(),
+            method: "m".into(),
+            maze: 5,
+            seed: 0,
+            solved: chain.is_some(),
+            tau_steps: tau,
+            phase2_tau_steps: tau,
+            chain_steps: chain,
+            successes: u64::from(chain.is_some()),
+            fewest_steps: fewest,
+        };
+        let tex = routes_numbers_tex(
+            "x",
+            &[
+                route("a", Some(110.0), 440, 100),
+                route("b", Some(120.0), 600, 100),
+                route("b", None, 600, 100),
+            ],
+        );
+        for (key, value) in [
+            ("runs", "2"),
+            ("shorter", "2"),
+            ("fewestlo", "1.10"),
+            ("fewesthi", "1.20"),
+            ("taulo", "4.0"),
+            ("tauhi", "5.0"),
+        ] {
+            let line = format!("\\csname res:x:routes:{key}\\endcsname{{{value}}}");
+            assert!(tex.contains(&line), "{key}: {tex}");
+        }
+        assert_eq!(routes_numbers_tex("x", &[route("a", None, 1, 1)]), "");
+    }
+
 }

@@ -884,3 +884,26 @@ fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
     let table = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
     assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[], &[]), "");
 }
+
+/// The routes table of the committed ablation rows: no chain beats the fewest steps possible
+/// (a successful episode takes at least `Maze::fewest_steps`), each run's successful episodes
+/// are its row's success rate, and phase 1's τ, recomputed from the seed, is never shorter
+/// than the fewest steps either.
+#[test]
+fn routes_respect_the_fewest_steps_and_agree_with_the_rows() {
+    let exp = Experiment::load(Path::new("experiments/ablations.toml"), None).unwrap();
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    let routes = pbcs::tables::routes::routes(&exp, Path::new("results"), &rows).unwrap();
+    assert!(routes.len() >= 20, "only {} routes", routes.len());
+    for r in &routes {
+        let row = rows
+            .iter()
+            .find(|w| w.cell == r.cell && w.seed == r.seed)
+            .unwrap();
+        assert_eq!(r.successes as f32, (row.success_rate * 100.0).round());
+        if let Some(c) = r.chain_steps {
+            assert!(c >= r.fewest_steps as f64, "{} s{}: {c}", r.cell, r.seed);
+        }
+        assert!(r.tau_steps >= r.fewest_steps && r.phase2_tau_steps <= r.tau_steps);
+    }
+}

@@ -46,6 +46,11 @@ pub fn picture_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) ->
     run_file(&exp.cell_dir(results, cell), seed, ".picture.csv")
 }
 
+/// Path of a PBCS (cell, seed)'s evaluation episodes (success, steps of each).
+pub fn evaluation_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    run_file(&exp.cell_dir(results, cell), seed, ".evaluation.csv")
+}
+
 /// Path of the learning curve of a vanilla (cell, seed).
 pub fn evals_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
     run_file(&exp.cell_dir(results, cell), seed, ".evals.csv")

@@ -37,7 +37,8 @@ mod sweep;
 
 use layout::run_file;
 pub use layout::{
-    evals_file, experiment_files, picture_file, read_finished, read_raw, read_wall_seconds,
+    evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
+    read_wall_seconds,
 };
 pub use row::{read_row, RawRow};
 pub use spec::{paper_run, FigureSpec, ReportSpec, SettingsSpec};

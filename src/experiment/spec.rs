@@ -182,6 +182,12 @@ pub enum FigureSpec {
         /// File stem.
         name: String,
     },
+    /// Each PBCS run's path (the chain's, and τ's) divided by the fewest steps from s_0
+    /// (`<experiment>.routes.csv`).
+    Routes {
+        /// File stem.
+        name: String,
+    },
     /// The `methods`' pictures side by side, on the maze where the solved counts of the first
     /// two differ most (the smallest such maze on ties).
     Panels {
@@ -203,6 +209,7 @@ impl FigureSpec {
             | FigureSpec::Scaling { name }
             | FigureSpec::Chains { name }
             | FigureSpec::Profile { name }
+            | FigureSpec::Routes { name }
             | FigureSpec::Panels { name, .. } => name,
         }
     }

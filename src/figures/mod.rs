@@ -7,11 +7,13 @@
 mod bars;
 mod curves;
 mod grid;
+mod routes;
 mod scaling;
 
 pub use bars::{ChainSpread, Profile, SuccessBars};
 pub use curves::Curves;
 pub use grid::{Panels, ResultsGrid};
+pub use routes::Routes;
 pub use scaling::Scaling;
 
 use crate::error::Result;
@@ -189,6 +191,13 @@ pub fn render_experiment(
                 if path.exists() {
                     let runs = crate::criteria::read_chains(&path)?;
                     files.extend(render_figure(&Profile::new(exp, &runs), &stem)?);
+                }
+            }
+            FigureSpec::Routes { .. } => {
+                let path = crate::tables::routes::routes_path(results, &exp.name);
+                if path.exists() {
+                    let routes = crate::tables::routes::read_routes(&path)?;
+                    files.extend(render_figure(&Routes::new(exp, &routes), &stem)?);
                 }
             }
             FigureSpec::Scaling { .. } => {

@@ -1,0 +1,99 @@
+//! The routes table (`results/tables/<experiment>.routes.csv`): for each PBCS run with
+//! evaluation episodes, how long the chain's paths are beside phase 1's trajectory τ and the
+//! fewest steps possible — the paper's claim that PBCS "is able to improve on the trajectory
+//! obtained by the motion planning phase", measured.
+//!
+//! * the chain's path: the median steps of the run's successful evaluation episodes from
+//!   B_ε(s_0) (`s<seed>.evaluation.csv`);
+//! * |τ|: phase 1 is deterministic in the run's seed, so τ is recomputed here (milliseconds)
+//!   instead of stored: its steps N, and those of the trajectory phase 2 worked on (τ
+//!   shortened with clearance ε where the job says `shorten`);
+//! * the fewest steps: the shortest collision-free path from s_0 to the target disc, at the
+//!   largest action per step ([`Maze::fewest_steps`]).
+
+use crate::error::{Error, Result};
+use crate::experiment::{evaluation_file, Experiment, Job, Kind, RawRow};
+use crate::maze::Maze;
+use crate::rng::{Seeds, Stream};
+use crate::runs::EvalEpisode;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One PBCS run's path lengths, in environment steps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Route {
+    /// Cell id.
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// Run seed.
+    pub seed: u64,
+    /// Whether the run counts as solved.
+    pub solved: bool,
+    /// Steps of phase 1's τ (its N).
+    pub tau_steps: usize,
+    /// Steps of the trajectory phase 2 worked on (τ, or τ shortened).
+    pub phase2_tau_steps: usize,
+    /// Median steps of the successful evaluation episodes (empty if none succeeded).
+    pub chain_steps: Option<f64>,
+    /// Successful evaluation episodes.
+    pub successes: u64,
+    /// The fewest steps any controller needs from s_0 ([`Maze::fewest_steps`]).
+    pub fewest_steps: usize,
+}
+
+/// `<results>/tables/<experiment>.routes.csv`.
+pub fn routes_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.routes.csv"))
+}
+
+/// The route of every PBCS row of `exp` under `results` that has its evaluation episodes
+/// (rows committed before `s<seed>.evaluation.csv` existed are left out), in the rows' order.
+pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<Route>> {
+    let mut out = Vec::new();
+    for r in rows.iter().filter(|r| r.kind == Kind::Pbcs) {
+        let cell = exp.cell(&r.cell)?;
+        let path = evaluation_file(exp, results, cell, r.seed);
+        if !path.exists() {
+            continue;
+        }
+        let episodes: Vec<EvalEpisode> = crate::record::read_records(&path)?;
+        let Job::Pbcs(job) = cell.job.with_seed(r.seed) else {
+            continue;
+        };
+        let maze = Maze::new(&job.maze)?;
+        let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
+        let found = crate::explore::explore(&maze, &job.explore, &mut rng, |_, _| {})?;
+        let walked = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2);
+        let mut steps: Vec<f64> = episodes
+            .iter()
+            .filter(|e| e.success)
+            .map(|e| e.steps as f64)
+            .collect();
+        let fewest = maze.fewest_steps().ok_or_else(|| {
+            Error::invalid("maze", format!("{}: the target cannot be reached", r.cell))
+        })?;
+        out.push(Route {
+            cell: r.cell.clone(),
+            method: r.method.clone(),
+            maze: r.maze,
+            seed: r.seed,
+            solved: r.solved,
+            tau_steps: found.trajectory.states.len() - 1,
+            phase2_tau_steps: walked.states.len() - 1,
+            chain_steps: (!steps.is_empty()).then(|| crate::stats::median(&mut steps)),
+            successes: steps.len() as u64,
+            fewest_steps: fewest,
+        });
+    }
+    Ok(out)
+}
+
+/// Reads a routes table written by [`crate::pipeline::write_tables`].
+pub fn read_routes(path: &Path) -> Result<Vec<Route>> {
+    crate::record::read_records(path)
+}
