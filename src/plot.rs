@@ -46,6 +46,25 @@ pub struct MazePicture<'a> {
 /// Height of the legend line under the maze.
 const LEGEND_PX: u32 = 18;
 
+/// The layers of `picture.csv`, by their names in the file (one table: strum derives both
+/// directions; `red` and `green` are the names the committed files use).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString)]
+#[strum(serialize_all = "snake_case")]
+enum Layer {
+    /// Faint points (archive or visited states).
+    Point,
+    /// A phase-1 trajectory τ.
+    #[strum(serialize = "red")]
+    Tau,
+    /// A square of the explored area.
+    Area,
+    /// A rollout of a policy or chain.
+    #[strum(serialize = "green")]
+    Rollout,
+    /// An activation ball.
+    Circle,
+}
+
 /// Most archive points drawn in an SVG maze picture (the PNG draws them all).
 pub const SVG_MAX_POINTS: usize = 20_000;
 
@@ -320,32 +339,36 @@ impl PictureData {
         }
     }
 
-    /// Writes the data as CSV (atomically).
+    /// Writes the data as CSV (atomically): one row per point, `layer, index, x, y, r`.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
         let header: Vec<String> = ["layer", "index", "x", "y", "r"].map(String::from).to_vec();
         let mut rows: Vec<[String; 5]> = Vec::new();
-        let row = |layer: &str, i: usize, (x, y): (f32, f32), r: f32| {
+        let row = |layer: Layer, i: usize, (x, y): (f32, f32), r: f32| {
             [
-                layer.into(),
+                <&str>::from(layer).to_string(),
                 i.to_string(),
                 x.to_string(),
                 y.to_string(),
                 r.to_string(),
             ]
         };
-        rows.extend(self.points.iter().map(|&p| row("point", 0, p, 0.0)));
+        rows.extend(self.points.iter().map(|&p| row(Layer::Point, 0, p, 0.0)));
         for (i, path) in self.tau_paths.iter().enumerate() {
-            rows.extend(path.iter().map(|&p| row("red", i, p, 0.0)));
+            rows.extend(path.iter().map(|&p| row(Layer::Tau, i, p, 0.0)));
         }
         rows.extend(
             self.red_area
                 .iter()
-                .map(|&p| row("area", 0, p, self.red_area_side)),
+                .map(|&p| row(Layer::Area, 0, p, self.red_area_side)),
         );
         for (i, path) in self.rollout_paths.iter().enumerate() {
-            rows.extend(path.iter().map(|&p| row("green", i, p, 0.0)));
+            rows.extend(path.iter().map(|&p| row(Layer::Rollout, i, p, 0.0)));
         }
-        rows.extend(self.circles.iter().map(|&(c, r)| row("circle", 0, c, r)));
+        rows.extend(
+            self.circles
+                .iter()
+                .map(|&(c, r)| row(Layer::Circle, 0, c, r)),
+        );
         crate::record::write_csv(path, &header, rows)
     }
 
@@ -373,16 +396,16 @@ impl PictureData {
                 .and_then(|v| v.parse().ok())
                 .ok_or_else(|| bad(line, "expected an index"))?;
             let (p, r) = ((num(2)?, num(3)?), num(4)?);
-            match rec.get(0) {
-                Some("point") => data.points.push(p),
-                Some("red") => push(&mut data.tau_paths, i, p),
-                Some("area") => {
+            let layer = rec.get(0).and_then(|l| l.parse::<Layer>().ok());
+            match layer.ok_or_else(|| bad(line, "unknown layer"))? {
+                Layer::Point => data.points.push(p),
+                Layer::Tau => push(&mut data.tau_paths, i, p),
+                Layer::Area => {
                     data.red_area.push(p);
                     data.red_area_side = r;
                 }
-                Some("green") => push(&mut data.rollout_paths, i, p),
-                Some("circle") => data.circles.push((p, r)),
-                _ => return Err(bad(line, "unknown layer")),
+                Layer::Rollout => push(&mut data.rollout_paths, i, p),
+                Layer::Circle => data.circles.push((p, r)),
             }
         }
         Ok(data)

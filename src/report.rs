@@ -481,5 +481,4 @@ mod tests {
         }
         assert_eq!(routes_numbers_tex("x", &[route("a", None, 1, 1)]), "");
     }
-
 }

@@ -5,7 +5,7 @@
 //! between machines ([`crate::nn::kernel::Kernel`]).
 
 use crate::error::{Error, Result};
-use crate::experiment::{plan, read_finished, sweep, Event, Experiment, Pending, RawRow};
+use crate::experiment::{plan, read_finished, run_file, sweep, Event, Experiment, Pending, RawRow};
 use crate::nn::kernel::Kernel;
 use crate::record::Timing;
 use crate::stats::wilson;
@@ -176,9 +176,9 @@ pub fn check_cell(
     let mut seeds = Vec::new();
     let mut committed_kernels = Vec::new();
     for (p, (old, new)) in runs.iter().zip(committed.into_iter().zip(fresh)) {
-        let name = format!("s{}.csv", p.seed);
-        let identical = read(&committed_dir.join(&name))? == read(&fresh_dir.join(&name))?;
-        let timing = Timing::read(&committed_dir.join(format!("s{}.timing.toml", p.seed)))
+        let identical = read(&run_file(&committed_dir, p.seed, ".csv"))?
+            == read(&run_file(&fresh_dir, p.seed, ".csv"))?;
+        let timing = Timing::read(&run_file(&committed_dir, p.seed, ".timing.toml"))
             .ok()
             .flatten();
         committed_kernels

@@ -5,8 +5,9 @@ use super::{plan, read_row, Cell, Experiment, RawRow};
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
-/// Raw file names of one run.
-pub(crate) fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
+/// The raw file of run `seed` in the cell folder `dir`: `s<seed><suffix>` (`.csv` the row,
+/// `.toml` the job, `.timing.toml`, `.evals.csv`, `.evaluation.csv`, `.picture.csv`, `.lock`).
+pub fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
     dir.join(format!("s{seed}{suffix}"))
 }
 
@@ -68,14 +69,15 @@ pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
     Ok(rows)
 }
 
-/// The experiment files under `dir` (every `*.toml` with a `[[method]]`), sorted.
+/// The experiment files under `dir` (every `*.toml` with a `[[method]]` array), sorted; a
+/// TOML file that does not parse is an error naming it.
 pub fn experiment_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
         if path.extension().is_some_and(|e| e == "toml") {
-            let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-            if text.lines().any(|l| l.trim() == "[[method]]") {
+            let table: toml::Table = crate::validate::read_toml(&path)?;
+            if table.get("method").is_some_and(toml::Value::is_array) {
                 files.push(path);
             }
         }

@@ -35,7 +35,7 @@ mod row;
 mod spec;
 mod sweep;
 
-use layout::run_file;
+pub use layout::run_file;
 pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
     read_wall_seconds,

@@ -9,11 +9,14 @@ use crate::tables::routes::Route;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+/// One run in the figure: (seed, chain / fewest, τ / fewest).
+type RunRatios = (u64, Option<f64>, f64);
+
 /// The routes figure (`kind = "routes"`).
 pub struct Routes {
     title: String,
-    /// (method index, maze, [(seed, chain / fewest, τ / fewest)]), in drawing order.
-    columns: Vec<(usize, usize, Vec<(u64, Option<f64>, f64)>)>,
+    /// (method index, maze, its runs), in drawing order.
+    columns: Vec<(usize, usize, Vec<RunRatios>)>,
     methods: Vec<(String, String)>,
 }
 
@@ -29,7 +32,7 @@ impl Routes {
         let mut columns = Vec::new();
         for (j, (m, _)) in methods.iter().enumerate() {
             for &n in &exp.mazes {
-                let runs: Vec<(u64, Option<f64>, f64)> = routes
+                let runs: Vec<RunRatios> = routes
                     .iter()
                     .filter(|r| &r.method == m && r.maze == n)
                     .map(|r| {
