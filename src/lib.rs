@@ -17,13 +17,16 @@
 //! | Wilson score intervals (appendix on γ); Fisher's exact test | [`stats`] |
 //! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
-//! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them: [`rng`] derives every random stream from one run seed, [`record`] writes
-//! result files atomically, [`plot`] draws mazes with plotters, and [`runs`] turns a config
-//! into an outcome and writes it (what the `pbcs` command runs). The experiment pipeline:
-//! [`experiment`] (grids of cells × seeds, declared in TOML, swept with resume), [`tables`]
-//! and `aggregate` (per-cell statistics), [`figures`], [`claims`] (the paper's claims, as
-//! data) and [`report`] (LaTeX); [`launch`] (make, SLURM) and [`check`] (re-running committed
-//! rows). Words: a *job* is a validated config (`config::PbcsJob`, …), a *run* executes one
+//! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
+//! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
+//! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws mazes
+//! with plotters, and [`runs`] turns a job into an outcome (`compute`) and writes it (`write`):
+//! what the `pbcs` command runs. The experiment pipeline, one way: [`experiment`] (grids of
+//! cells × seeds, declared in TOML, swept with resume) → `aggregate` and [`tables`] (per-cell
+//! statistics, curves, shortest paths, routes) → [`pipeline`] (writes `results/tables/`, then
+//! renders) → [`figures`], [`claims`] (the paper's claims, as data) and [`report`] (LaTeX), which
+//! read tables only; [`fmt`] formats numbers; [`launch`] (make, SLURM) and [`reproduce`]
+//! (re-running committed rows). Words: a *job* is a validated config (`config::PbcsJob`, …), a *run* executes one
 //! ([`runs`]), `--jobs N` is how many runs go at once.
 //!
 //! ```

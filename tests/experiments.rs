@@ -622,7 +622,7 @@ fn experiments_declare_their_figures() {
     );
     assert_eq!(
         names("experiments/ablations.toml"),
-        ["ablations", "ablations_chains"]
+        ["ablations", "ablations_chains", "ablations_routes"]
     );
     assert_eq!(names("experiments/gamma.toml"), ["gamma"]);
     assert_eq!(names("experiments/unseen.toml"), ["unseen", "unseen_bars"]);

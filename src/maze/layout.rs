@@ -53,7 +53,7 @@ impl Layout {
     /// Other sizes come from a depth-first recursive backtracker started at cell (0, 0) that
     /// draws from the [`Stream::Maze`] stream of `maze_seed`.
     ///
-    /// The size must be at least 2 (validated by [`super::MazeConfig::check`]).
+    /// The size must be at least 2 (validated by [`super::MazeConfig`]'s `check`).
     pub fn generate(size: usize, maze_seed: u64) -> Self {
         assert!(size >= 2, "maze size must be at least 2");
         let mut layout = Layout::closed(size);

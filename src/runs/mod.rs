@@ -16,7 +16,8 @@ mod train;
 pub use eval::{eval_chain, evaluate_chain, ChainEval, EvalEpisode, CHAIN_JOB};
 use explore::write_trajectory_csv;
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
-use pbcs::{ball_circles, DRAWN_ROLLOUTS};
+use pbcs::ball_circles;
+pub use pbcs::DRAWN_ROLLOUTS;
 pub use pbcs::{run_pbcs, PbcsRun, RunRecord};
 pub use train::{run_train, TrainRun, TrainSummary};
 

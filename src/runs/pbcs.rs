@@ -64,7 +64,7 @@ pub struct RunRecord {
 }
 
 /// Chain rollouts drawn in the picture.
-pub(crate) const DRAWN_ROLLOUTS: usize = 10;
+pub const DRAWN_ROLLOUTS: usize = 10;
 
 /// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
 /// the evaluation's rollouts; [`PbcsRun::write`] writes it.

@@ -29,7 +29,7 @@ impl Kernel {
         elementwise!(self, column_sums_body(m, cols, out))
     }
 
-    /// One Adam step over all parameters (see [`super::Adam::step`] for the formula): the same
+    /// One Adam step over all parameters (see [`crate::nn::Adam::step`] for the formula): the same
     /// expressions in every kernel but `matrixmultiply`, which keeps the earlier form
     /// θ −= s·m / (√v / √c2 + ε) so that it reproduces earlier results; the others use Kingma
     /// and Ba's equivalent θ −= (s·√c2)·m / (√v + ε·√c2), one division fewer per parameter.
