@@ -636,7 +636,8 @@ fn experiments_declare_their_figures() {
     assert_eq!(
         Experiment::load(&path, None).unwrap().figures,
         [FigureSpec::Bars {
-            name: "mine".into()
+            name: "mine".into(),
+            baseline: None
         }]
     );
 }

@@ -41,7 +41,7 @@ pub use layout::{
     read_wall_seconds,
 };
 pub use row::{read_row, RawRow};
-pub use spec::{paper_run, FigureSpec, ReportSpec, SettingsSpec};
+pub use spec::{paper_run, Baseline, FigureSpec, ReportSpec, SettingsSpec};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
 use crate::config::{PbcsJob, TrainJob};

@@ -134,6 +134,18 @@ pub struct SettingsSpec {
     pub vanilla: String,
 }
 
+/// A baseline bar: `method` of the experiment `experiment`, drawn as `label`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Baseline {
+    /// The experiment whose table holds it (e.g. `table`).
+    pub experiment: String,
+    /// Its method there (e.g. `pbcs`).
+    pub method: String,
+    /// Its label in the figure.
+    pub label: String,
+}
+
 /// A figure an experiment declares (`[[figure]]` in its file, `kind` naming the variant);
 /// `pbcs figures` draws each into `<name>.png` and `<name>.svg`. An experiment that declares
 /// none gets one [`FigureSpec::Bars`] named after it.
@@ -161,6 +173,11 @@ pub enum FigureSpec {
     Bars {
         /// File stem.
         name: String,
+        /// A method of another experiment drawn first, as the baseline the experiment's
+        /// methods change one thing of (its cells on this experiment's mazes, from that
+        /// experiment's table).
+        #[serde(default)]
+        baseline: Option<Baseline>,
     },
     /// Environment steps (median, quartiles) of each cell against the length of its maze's
     /// shortest path from start to target, on log–log axes, one colour per method, with the
@@ -205,7 +222,7 @@ impl FigureSpec {
             FigureSpec::Grid { name }
             | FigureSpec::Mazes { name, .. }
             | FigureSpec::Curves { name }
-            | FigureSpec::Bars { name }
+            | FigureSpec::Bars { name, .. }
             | FigureSpec::Scaling { name }
             | FigureSpec::Chains { name }
             | FigureSpec::Profile { name }
@@ -499,7 +516,10 @@ impl Experiment {
             picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
             report: spec.report,
             figures: if spec.figures.is_empty() {
-                vec![FigureSpec::Bars { name: name.clone() }]
+                vec![FigureSpec::Bars {
+                    name: name.clone(),
+                    baseline: None,
+                }]
             } else {
                 spec.figures
             },
@@ -561,6 +581,7 @@ impl Experiment {
             cells,
             figures: vec![FigureSpec::Bars {
                 name: name.to_string(),
+                baseline: None,
             }],
             report: ReportSpec::default(),
         })

@@ -2,7 +2,7 @@
 //! success, and the performance profile against the paper's steps.
 
 use super::{category_label, DrawResult, PALETTE};
-use crate::experiment::Experiment;
+use crate::experiment::{Baseline, Experiment};
 use crate::plot::Figure;
 use crate::tables::CellStats;
 use plotters::coord::Shift;
@@ -26,16 +26,55 @@ impl SuccessBars {
             stats: stats.to_vec(),
         }
     }
+
+    /// Draws `baseline`'s cells (from its experiment's table `stats`) first, on this
+    /// figure's mazes.
+    pub fn with_baseline(mut self, baseline: &Baseline, stats: &[CellStats]) -> SuccessBars {
+        let method = format!("{}:{}", baseline.experiment, baseline.method);
+        self.stats.extend(
+            stats
+                .iter()
+                .filter(|s| s.method == baseline.method && self.mazes.contains(&s.maze))
+                .map(|s| CellStats {
+                    method: method.clone(),
+                    ..s.clone()
+                }),
+        );
+        self.methods.insert(0, (method, baseline.label.clone()));
+        self
+    }
 }
+
+/// Width in pixels of the legend beside a bar chart.
+const BAR_LEGEND_WIDTH: u32 = 300;
 
 impl Figure for SuccessBars {
     fn size(&self) -> (u32, u32) {
-        ((260 * self.mazes.len() as u32 + 200).max(700), 520)
+        (
+            (260 * self.mazes.len() as u32 + 200).max(700) + BAR_LEGEND_WIDTH,
+            520,
+        )
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         let groups = self.mazes.len() as f64;
-        let mut chart = ChartBuilder::on(root)
+        // The legend stands beside the chart, never over a bar or an interval.
+        let (w, _) = root.dim_in_pixel();
+        let (root, side) = root.split_horizontally(w - BAR_LEGEND_WIDTH);
+        for (j, (_, label)) in self.methods.iter().enumerate() {
+            let (x, y) = (10, 60 + 26 * j as i32);
+            let colour = PALETTE[j % PALETTE.len()];
+            side.draw(&Rectangle::new(
+                [(x, y - 7), (x + 16, y + 7)],
+                colour.filled(),
+            ))?;
+            side.draw(&Text::new(
+                label.as_str(),
+                (x + 24, y - 8),
+                ("sans-serif", 15).into_font(),
+            ))?;
+        }
+        let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(40)
@@ -64,7 +103,7 @@ impl Figure for SuccessBars {
                     .collect()
             })
             .collect();
-        for (j, (name, label)) in self.methods.iter().enumerate() {
+        for (j, (name, _)) in self.methods.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
             let bars: Vec<(f64, f64, &CellStats)> = self
                 .mazes
@@ -79,17 +118,12 @@ impl Figure for SuccessBars {
                         .map(|s| (g as f64 + 0.1 + rank as f64 * width, width, s))
                 })
                 .collect();
-            chart
-                .draw_series(bars.iter().map(|&(x, width, s)| {
-                    Rectangle::new(
-                        [(x + 0.1 * width, 0.0), (x + 0.9 * width, s.success_rate)],
-                        colour.filled(),
-                    )
-                }))?
-                .label(label.as_str())
-                .legend(move |(x, y)| {
-                    Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled())
-                });
+            chart.draw_series(bars.iter().map(|&(x, width, s)| {
+                Rectangle::new(
+                    [(x + 0.1 * width, 0.0), (x + 0.9 * width, s.success_rate)],
+                    colour.filled(),
+                )
+            }))?;
             for &(x, width, s) in &bars {
                 let c = x + 0.5 * width;
                 let cap = 0.15 * width;
@@ -117,13 +151,6 @@ impl Figure for SuccessBars {
                 )))?;
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 15))
-            .draw()?;
         Ok(())
     }
 }

@@ -35,7 +35,7 @@ const GREEN_BG: RGBColor = RGBColor(46, 160, 67);
 const RED_BG: RGBColor = RGBColor(200, 50, 50);
 
 /// Colours of methods in bar charts and curves (colour-blind-safe Okabe–Ito).
-const PALETTE: [RGBColor; 7] = [
+const PALETTE: [RGBColor; 8] = [
     RGBColor(0, 114, 178),
     RGBColor(230, 159, 0),
     RGBColor(0, 158, 115),
@@ -43,6 +43,7 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(86, 180, 233),
     RGBColor(213, 94, 0),
     RGBColor(120, 120, 120),
+    RGBColor(40, 40, 40),
 ];
 
 /// The x-axis labels of a chart of categories at [i, i + 1): `labels[i]` at the centre of its
@@ -176,8 +177,15 @@ pub fn render_experiment(
                     }
                 }
             }
-            FigureSpec::Bars { .. } => {
-                files.extend(render_figure(&SuccessBars::new(exp, stats), &stem)?);
+            FigureSpec::Bars { baseline, .. } => {
+                let mut bars = SuccessBars::new(exp, stats);
+                if let Some(b) = baseline {
+                    let path = crate::tables::table_path(results, &b.experiment);
+                    if path.exists() {
+                        bars = bars.with_baseline(b, &crate::tables::read_table(&path)?);
+                    }
+                }
+                files.extend(render_figure(&bars, &stem)?);
             }
             FigureSpec::Chains { .. } => {
                 let path = crate::criteria::chains_path(results, &exp.name);
