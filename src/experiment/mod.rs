@@ -30,18 +30,20 @@
 //! chain, success and steps; rows committed before it existed lack it) and, for picture seeds, `s<s>.picture.csv` (what the figures
 //! draw).
 
+mod declared;
 mod layout;
 mod row;
 mod spec;
 mod sweep;
 
+pub use declared::{Baseline, FigureSpec, ReportSpec, SettingsSpec};
 pub use layout::run_file;
 pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
     read_wall_seconds,
 };
 pub use row::{read_row, RawRow};
-pub use spec::{paper_run, Baseline, FigureSpec, ReportSpec, SettingsSpec};
+pub use spec::paper_run;
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
 use crate::config::{PbcsJob, TrainJob};

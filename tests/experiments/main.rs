@@ -1,0 +1,20 @@
+//! Experiment files: every file parses under every profile with unique cells, bad files are
+//! rejected with the field named, and the smoke profile runs end to end to tables and figures,
+//! deterministically and resumably.
+
+use pbcs::experiment::{experiment_files, plan, read_raw, sweep, Event, Experiment};
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::sync::Mutex;
+
+fn files() -> Vec<std::path::PathBuf> {
+    experiment_files(Path::new("experiments")).unwrap()
+}
+
+/// The experiments whose every (cell, seed) is committed. `ablations` is under way: its rows
+/// are committed as they finish (the sweep resumes), each checked here like the others.
+const COMPLETE: [&str; 4] = ["table", "gamma", "unseen", "beyond"];
+
+mod committed;
+mod files;
+mod sweeps;

@@ -1,0 +1,233 @@
+//! Sweeps: the smoke profile end to end, deterministic and resumable; locks; parallel runs.
+
+use super::*;
+
+/// The smoke profile of every experiment, run twice into two folders with 1 and 2 jobs: the
+/// same bytes; a third sweep finds everything finished; then tables, figures and LaTeX.
+#[test]
+fn smoke_profile_runs_end_to_end_deterministically() {
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let mut loaded = Vec::new();
+    for f in files() {
+        let exp = Experiment::load(&f, Some("smoke")).unwrap();
+        let runs = plan(&exp, None, None).unwrap();
+        let ran_a = sweep(
+            &exp,
+            &runs,
+            a.path(),
+            1,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
+        let ran_b = sweep(
+            &exp,
+            &runs,
+            b.path(),
+            2,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(ran_a, ran_b);
+        for p in &runs {
+            for suffix in ["csv", "toml"] {
+                let name = format!("s{}.{suffix}", p.seed);
+                let read =
+                    |root: &Path| std::fs::read(exp.cell_dir(root, p.cell).join(&name)).unwrap();
+                assert_eq!(read(a.path()), read(b.path()), "{} {name}", p.cell.id);
+            }
+        }
+        let skipped = Mutex::new(0);
+        sweep(
+            &exp,
+            &runs,
+            a.path(),
+            2,
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, e| {
+                if matches!(e, Event::Skipped(_)) {
+                    *skipped.lock().unwrap() += 1;
+                }
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            *skipped.lock().unwrap(),
+            runs.len(),
+            "{}: resume re-ran a run",
+            exp.name
+        );
+        let rows = read_raw(&exp, a.path()).unwrap();
+        let stats = pbcs::tables::cell_stats(&exp, &rows);
+        assert_eq!(stats.len(), exp.cells.len());
+        pbcs::pipeline::write_tables(&exp, a.path(), &stats, &rows).unwrap();
+        let back =
+            pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), &exp.name)).unwrap();
+        assert_eq!(back, stats);
+        loaded.push((exp, stats));
+    }
+    let figures = a.path().join("figures");
+    let tex = a.path().join("tex");
+    let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
+        .iter()
+        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .collect();
+    let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
+    let claims = pbcs::claims::claims(&specs, &tables);
+    let files = pbcs::pipeline::render_all(&loaded, &claims, a.path(), &figures, &tex).unwrap();
+    for name in [
+        "results_grid.png",
+        "results_grid.svg",
+        "results_maze2.png",
+        "curves.png",
+        "gamma.png",
+        "unseen.png",
+        "unseen_bars.png",
+    ] {
+        let path = figures.join(name);
+        assert!(files.contains(&path), "{name} not written");
+        assert!(
+            std::fs::metadata(&path).unwrap().len() > 1000,
+            "{name} is empty"
+        );
+    }
+    for name in ["table.tex", "numbers.tex", "claims.tex", "gamma_cells.tex"] {
+        let text = std::fs::read_to_string(tex.join(name)).unwrap();
+        assert!(text.starts_with("% Generated"), "{name}");
+    }
+}
+
+/// A finished run of another config is never mixed with the experiment's: the sweep refuses.
+#[test]
+fn a_changed_experiment_refuses_to_resume_over_old_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
+    let runs = plan(&exp, Some("exact-maze2"), None).unwrap();
+    sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    let mut changed = exp.clone();
+    if let pbcs::experiment::Job::Pbcs(j) = &mut changed.cells[1].job {
+        j.phase2.epsilon = 0.2;
+    }
+    let runs = plan(&changed, Some("exact-maze2"), None).unwrap();
+    let err = sweep(
+        &changed,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("another config"), "{err}");
+}
+
+/// Two sweeps into one results folder: a run that another process holds (its lock file) is
+/// refused with a message naming the lock, and nothing of it is written; once released, the
+/// run goes ahead and leaves no lock behind.
+#[test]
+fn a_run_another_sweep_holds_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
+    let runs = plan(&exp, Some("exact-maze2"), Some(0)).unwrap();
+    let cell_dir = exp.cell_dir(dir.path(), runs[0].cell);
+    let lock = pbcs::record::WorkLock::acquire(&cell_dir.join("s0.lock")).unwrap();
+    let err = sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("s0.lock") && err.contains("another process"),
+        "{err}"
+    );
+    assert!(!cell_dir.join("s0.csv").exists());
+    drop(lock);
+    sweep(
+        &exp,
+        &runs,
+        dir.path(),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    assert!(cell_dir.join("s0.csv").exists());
+    assert!(!cell_dir.join("s0.lock").exists());
+}
+
+/// The sweep's pool starts items in their order (so an interrupted sweep has done a prefix of
+/// its plan: whole mazes, smallest first), returns results in the items' order, and starts
+/// nothing new after an error.
+#[test]
+fn parallel_runs_start_in_order_and_stop_at_an_error() {
+    use pbcs::experiment::run_parallel;
+    let items: Vec<usize> = (0..24).collect();
+    let started = Mutex::new(Vec::new());
+    let out = run_parallel(&items, 3, |&i| {
+        started.lock().unwrap().push(i);
+        std::thread::sleep(std::time::Duration::from_millis(2 + (i % 3) as u64));
+        Ok(i * 10)
+    })
+    .unwrap();
+    assert_eq!(out, items.iter().map(|i| i * 10).collect::<Vec<_>>());
+    let started = started.into_inner().unwrap();
+    for (p, &i) in started.iter().enumerate() {
+        // Three threads take items in turn: an item starts at most two places off its rank.
+        assert!(p.abs_diff(i) <= 2, "item {i} started {p}th: {started:?}");
+    }
+    let ran = Mutex::new(0);
+    let err = run_parallel(&items, 1, |&i| {
+        *ran.lock().unwrap() += 1;
+        if i == 5 {
+            Err(pbcs::Error::invalid("item", "five"))
+        } else {
+            Ok(i)
+        }
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("five"));
+    assert_eq!(*ran.lock().unwrap(), 6, "items after the error ran");
+}
+
+/// A lock file left behind by an interrupted run (whatever it says: a process that has ended,
+/// another host) blocks nothing: no process holds its OS lock, so the resumed sweep takes it
+/// over and names itself in it; while that claim lives, a second one is refused, and once
+/// dropped the file is gone.
+#[test]
+fn an_interrupted_runs_lock_file_blocks_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s0.lock");
+    for stale in ["pid = 999999\nhost = \"elsewhere\"\n", "pid = 1\n", ""] {
+        std::fs::write(&path, stale).unwrap();
+        let lock = pbcs::record::WorkLock::acquire(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.starts_with(&format!("pid = {}\n", std::process::id())),
+            "{stale:?} → {text}"
+        );
+        let err = pbcs::record::WorkLock::acquire(&path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("another process") && err.contains("s0.lock"),
+            "{err}"
+        );
+        drop(lock);
+        assert!(!path.exists());
+    }
+}

@@ -1,0 +1,365 @@
+//! Algorithm 2 (Backplay) and Algorithm 1 (skill chaining) on a scripted learner: the
+//! control flow of the pseudo-code, checked call by call.
+
+use super::*;
+
+/// A learner whose results are dictated: `tests[k]` is the list of successive test results at
+/// K (the last one repeats), `train` the successive training results. The policy is the
+/// number of training rounds run so far, so a returned π_s says when it was saved.
+#[derive(Default)]
+pub struct Scripted {
+    pub tests: HashMap<usize, Vec<f32>>,
+    pub train: Vec<f32>,
+    pub calls: Vec<String>,
+    pub rounds: usize,
+    /// Verification results by (K, policy); 1 when absent.
+    pub verified: HashMap<(usize, usize), f32>,
+}
+
+impl Backplayer for Scripted {
+    type Policy = usize;
+    fn test(&mut self, k: usize) -> f32 {
+        let v = self.tests.get_mut(&k).expect("unexpected test");
+        let p = if v.len() > 1 { v.remove(0) } else { v[0] };
+        self.calls.push(format!("test {k} = {p}"));
+        p
+    }
+    fn train(&mut self, k: usize) -> f32 {
+        let p = self.train.get(self.rounds).copied().unwrap_or(0.0);
+        self.rounds += 1;
+        self.calls.push(format!("train {k} = {p}"));
+        p
+    }
+    fn policy(&self) -> usize {
+        self.rounds
+    }
+    fn verify(&mut self, k: usize, policy: &usize, episodes: usize) -> f32 {
+        let p = self.verified.get(&(k, *policy)).copied().unwrap_or(1.0);
+        self.calls.push(format!(
+            "verify {k} (policy {policy}, {episodes} episodes) = {p}"
+        ));
+        p
+    }
+}
+
+/// Backplay's walk: α, K step, early stop; the paper's fixed step.
+pub fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
+    Walk {
+        alpha,
+        k_step,
+        early_stop,
+        adaptive: false,
+        stop_at_failure: false,
+        give_up_when_dead: false,
+    }
+}
+
+#[test]
+fn always_successful_walks_to_zero_without_training() {
+    let mut b = Scripted {
+        tests: (0..5).map(|k| (k, vec![1.0])).collect(),
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 5, &walk(10, 1, false)), Some((0, 0)));
+    assert_eq!(
+        b.calls,
+        [
+            "test 4 = 1",
+            "test 3 = 1",
+            "test 2 = 1",
+            "test 1 = 1",
+            "test 0 = 1"
+        ]
+    );
+}
+
+#[test]
+fn training_stops_after_alpha_non_improvements() {
+    // α = 3. Training results 0.2 (best), 0.5 (best), 0.5, 0.4, 0.3 (three misses): 5 rounds.
+    let mut b = Scripted {
+        tests: HashMap::from([(2, vec![0.5, 1.0]), (1, vec![1.0]), (0, vec![1.0])]),
+        train: vec![0.2, 0.5, 0.5, 0.4, 0.3, 0.9],
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 3, &walk(3, 1, false)), Some((0, 5)));
+    assert_eq!(
+        b.calls,
+        [
+            "test 2 = 0.5",
+            "train 2 = 0.2",
+            "train 2 = 0.5",
+            "train 2 = 0.5",
+            "train 2 = 0.4",
+            "train 2 = 0.3",
+            "test 2 = 1",
+            "test 1 = 1",
+            "test 0 = 1",
+        ]
+    );
+}
+
+#[test]
+fn never_successful_returns_the_last_kept_skill() {
+    // K = 4 solved without training (π saved after 0 rounds); K = 3 fails even after training:
+    // Backplay returns (4, π saved at K = 4), not the later π.
+    let mut b = Scripted {
+        tests: HashMap::from([(4, vec![1.0]), (3, vec![0.0])]),
+        train: vec![0.1; 10],
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 5, &walk(2, 1, false)), Some((4, 0)));
+    assert_eq!(b.calls.last().unwrap(), "test 3 = 0");
+}
+
+#[test]
+fn sometimes_successful_is_not_kept_and_k_goes_on() {
+    // K = 2: 60 % after training → not kept, K moves on; K = 1: 100 % → kept with the π of
+    // that moment; K = 0: 0 % → return (1, π).
+    let mut b = Scripted {
+        tests: HashMap::from([(2, vec![0.6]), (1, vec![1.0]), (0, vec![0.0])]),
+        train: vec![0.5, 0.5, 0.0, 0.0],
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 3, &walk(2, 1, false)), Some((1, 3)));
+    assert!(b.calls.contains(&"test 2 = 0.6".to_string()));
+}
+
+#[test]
+fn never_successful_without_a_kept_skill_goes_on_and_may_fail() {
+    let mut b = Scripted {
+        tests: (0..3).map(|k| (k, vec![0.0])).collect(),
+        train: vec![0.0; 100],
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 3, &walk(2, 1, false)), None);
+    // Every K was tried, each with α = 2 training rounds (0.0 is a first best, then 2 misses).
+    assert_eq!(b.calls.iter().filter(|c| c.starts_with("test")).count(), 6);
+    assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 9);
+}
+
+#[test]
+fn early_stop_ends_training_at_a_confirmed_100_percent() {
+    // Training hits 100 % at its 2nd round; the test right after confirms it, so training
+    // stops there (without early stop it would run α = 3 more rounds).
+    let script = || Scripted {
+        tests: HashMap::from([(1, vec![0.5, 1.0, 1.0]), (0, vec![1.0])]),
+        train: vec![0.5, 1.0, 1.0, 1.0, 1.0, 1.0],
+        ..Default::default()
+    };
+    let mut b = script();
+    assert_eq!(backplay(&mut b, 2, &walk(3, 1, true)), Some((0, 2)));
+    assert_eq!(
+        b.calls,
+        [
+            "test 1 = 0.5",
+            "train 1 = 0.5",
+            "train 1 = 1",
+            "test 1 = 1",
+            "test 1 = 1",
+            "test 0 = 1"
+        ]
+    );
+    let mut b = script();
+    backplay(&mut b, 2, &walk(3, 1, false));
+    assert_eq!(b.calls.iter().filter(|c| c.starts_with("train")).count(), 5);
+}
+
+#[test]
+fn k_step_walks_back_faster_but_still_ends_at_zero() {
+    let mut b = Scripted {
+        tests: (0..10).map(|k| (k, vec![1.0])).collect(),
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 10, &walk(10, 4, false)), Some((0, 0)));
+    assert_eq!(
+        b.calls,
+        ["test 9 = 1", "test 5 = 1", "test 1 = 1", "test 0 = 1"]
+    );
+}
+
+#[test]
+fn adaptive_walk_doubles_its_step_after_successes() {
+    let mut b = Scripted {
+        tests: (0..40).map(|k| (k, vec![1.0])).collect(),
+        ..Default::default()
+    };
+    let adaptive = Walk {
+        adaptive: true,
+        ..walk(10, 1, false)
+    };
+    assert_eq!(backplay(&mut b, 40, &adaptive), Some((0, 0)));
+    // Steps 2, 4, 8, 16 (MAX_ADAPTIVE_STEP), 16, floored at K = 0.
+    assert_eq!(
+        b.calls,
+        [
+            "test 39 = 1",
+            "test 37 = 1",
+            "test 33 = 1",
+            "test 25 = 1",
+            "test 9 = 1",
+            "test 0 = 1"
+        ]
+    );
+}
+
+#[test]
+fn adaptive_walk_bisects_a_failed_jump_without_training_it() {
+    // K ≥ 30 always succeeds, K < 30 never does, even after training.
+    let mut b = Scripted {
+        tests: (0..40)
+            .map(|k| (k, vec![if k >= 30 { 1.0 } else { 0.0 }]))
+            .collect(),
+        train: vec![0.0; 100],
+        ..Default::default()
+    };
+    let adaptive = Walk {
+        adaptive: true,
+        ..walk(2, 1, false)
+    };
+    // The paper's answer: the last K that holds.
+    assert_eq!(backplay(&mut b, 40, &adaptive), Some((30, 0)));
+    let trained: Vec<&String> = b.calls.iter().filter(|c| c.starts_with("train")).collect();
+    // Only K = 29, reached at step 1, is trained (α = 2: three rounds).
+    assert_eq!(trained, ["train 29 = 0", "train 29 = 0", "train 29 = 0"]);
+    let tested: Vec<&str> = b
+        .calls
+        .iter()
+        .filter_map(|c| c.strip_prefix("test "))
+        .collect();
+    assert_eq!(
+        tested,
+        [
+            "39 = 1", "37 = 1", "33 = 1", // steps 2, 4, 8: the jump to 25 fails
+            "25 = 0", "29 = 0", "31 = 1", // halved to 4 (from 33), then 2: 31 holds
+            "27 = 0", "29 = 0", "30 = 1", // step 4 fails, 2 fails, 1 holds
+            "28 = 0", "29 = 0", // step 2 fails; at step 1, K = 29 is trained
+            "29 = 0"  // and still fails: return the last saved (30, π)
+        ]
+    );
+}
+
+#[test]
+fn candidates_are_every_saved_skill_in_order() {
+    let mut b = Scripted {
+        tests: HashMap::from([
+            (3, vec![1.0]),
+            (2, vec![0.5]),
+            (1, vec![1.0]),
+            (0, vec![0.0]),
+        ]),
+        train: vec![0.1; 100],
+        ..Default::default()
+    };
+    let found: Vec<usize> = backplay_candidates(&mut b, 4, &walk(2, 1, false))
+        .into_iter()
+        .map(|(k, _)| k)
+        .collect();
+    assert_eq!(found, [3, 1]);
+}
+
+#[test]
+fn verification_falls_back_to_a_shorter_reach() {
+    use pbcs::phase2::verified;
+    // Saved (K, π): (3, 0), (2, 0), (1, 3). The farthest (1, π 3) fails its verification,
+    // (2, π 0) passes: it is kept, and its verification used the requested episodes.
+    let mut b = Scripted {
+        verified: HashMap::from([((1, 3), 0.98)]),
+        ..Default::default()
+    };
+    let found = verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 500);
+    assert_eq!(found, Some((2, 0)));
+    assert_eq!(
+        b.calls,
+        [
+            "verify 1 (policy 3, 500 episodes) = 0.98",
+            "verify 2 (policy 0, 500 episodes) = 1"
+        ]
+    );
+    // Without verification: the paper's (K_s, π_s), the last saved, untested.
+    let mut b = Scripted::default();
+    assert_eq!(verified(&mut b, vec![(3, 0), (1, 3)], 0), Some((1, 3)));
+    assert!(b.calls.is_empty());
+    // None passes: the best verified success, the farthest reach among ties.
+    let mut b = Scripted {
+        verified: HashMap::from([((3, 0), 0.9), ((2, 0), 0.99), ((1, 3), 0.99)]),
+        ..Default::default()
+    };
+    assert_eq!(
+        verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 100),
+        Some((1, 3))
+    );
+}
+
+/// A learner that can solve any K within `reach` of T and nothing farther.
+struct Reach {
+    t: usize,
+    reach: usize,
+}
+
+impl Backplayer for Reach {
+    type Policy = (usize, usize);
+    fn test(&mut self, k: usize) -> f32 {
+        if self.t - k <= self.reach {
+            1.0
+        } else {
+            0.0
+        }
+    }
+    fn train(&mut self, _k: usize) -> f32 {
+        0.0
+    }
+    fn policy(&self) -> (usize, usize) {
+        (self.t, self.reach)
+    }
+    fn verify(&mut self, k: usize, _policy: &(usize, usize), _episodes: usize) -> f32 {
+        self.test(k)
+    }
+}
+
+#[test]
+fn skill_chaining_follows_tau_backwards_then_reverses() {
+    let mut made = Vec::new();
+    let config = Phase2Config {
+        alpha: 2,
+        ..Phase2Config::default()
+    };
+    let (skills, failure) = skill_chaining(
+        35,
+        &config,
+        |n, t| {
+            made.push((n, t));
+            Ok(Reach { t, reach: 10 })
+        },
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(failure, None);
+    // Built backwards: T = 35 → K = 25, 25 → 15, 15 → 5, 5 → 0; returned in execution order.
+    assert_eq!(made, [(0, 35), (1, 25), (2, 15), (3, 5)]);
+    let spans: Vec<(usize, usize)> = skills.iter().map(|(k, t, _)| (*k, *t)).collect();
+    assert_eq!(spans, [(0, 5), (5, 15), (15, 25), (25, 35)]);
+    // Each skill's target is the next skill's activation centre.
+    for w in skills.windows(2) {
+        assert_eq!(w[0].1, w[1].0);
+    }
+}
+
+#[test]
+fn without_chaining_a_second_skill_is_a_failure() {
+    let config = Phase2Config {
+        alpha: 2,
+        chaining: false,
+        ..Phase2Config::default()
+    };
+    let (skills, failure) =
+        skill_chaining(35, &config, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
+    assert_eq!(failure, Some(Failure::NoChaining));
+    assert_eq!(skills.len(), 1);
+    let (skills, failure) =
+        skill_chaining(8, &config, |_, t| Ok(Reach { t, reach: 10 }), |_| {}).unwrap();
+    assert_eq!(
+        (skills.len(), failure),
+        (1, None),
+        "one skill covers τ: success"
+    );
+}

@@ -1,0 +1,144 @@
+use super::{constant_policy, Head, Mlp, Phase2Config, Seeds, Stream};
+use parry2d::math::Point;
+use pbcs::config::MazeConfig;
+use pbcs::env::Env;
+use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::maze::Maze;
+use pbcs::phase2::backplay::Backplayer;
+use pbcs::phase2::task::SkillTask;
+use pbcs::phase2::StartMode;
+
+fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {
+    let maze = Maze::new(&MazeConfig {
+        size: 2,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    let mut s = maze.start();
+    let mut states = vec![s];
+    for _ in 0..10 {
+        s = maze.step(&s, &[0.1, 0.0]).state;
+        states.push(s);
+    }
+    let obs = states.iter().map(|p| vec![p.x, p.y]).collect();
+    (maze, states, obs)
+}
+
+/// Always moves in direction `dir` at full speed in the learner's [−1, 1] space.
+fn unit_policy(dir: [f32; 2]) -> Mlp {
+    let m = constant_policy(dir);
+    let mut unit = Mlp::new(
+        m.sizes(),
+        Head::Tanh(vec![1.0, 1.0]),
+        &mut Seeds::new(0).stream(Stream::Init),
+    );
+    unit.params = m.params.clone();
+    unit
+}
+
+/// The task of reaching τ_5 along `states` with a policy moving along +x.
+fn task<'a>(
+    maze: &'a Maze,
+    config: &'a Phase2Config,
+    states: &'a [Point<f32>],
+    obs: &'a [Vec<f32>],
+    budget: u64,
+) -> SkillTask<'a, Maze> {
+    task_with(
+        maze,
+        config,
+        states,
+        obs,
+        unit_policy([1.0, 0.0]),
+        5,
+        budget,
+    )
+}
+
+fn task_with<'a>(
+    maze: &'a Maze,
+    config: &'a Phase2Config,
+    states: &'a [Point<f32>],
+    obs: &'a [Vec<f32>],
+    policy: Mlp,
+    t: usize,
+    budget: u64,
+) -> SkillTask<'a, Maze> {
+    let seeds = Seeds::new(3);
+    let mut learner = Learner::new(
+        &LearnerConfig::ddpg(),
+        2,
+        &[1.0, 1.0],
+        &seeds,
+        pbcs::nn::kernel::Kernel::detect(),
+    )
+    .unwrap();
+    learner.actor = policy;
+    let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
+    let goal = config.goal(maze, obs, t);
+    SkillTask::new(maze, config, states, goal, t, learner, rngs, budget)
+}
+
+#[test]
+fn fast_tests_give_the_same_verdict_for_fewer_steps() {
+    // The policy pushes up into the wall at y = 1 and never reaches τ_10.
+    let (maze, states, obs) = setup();
+    let run = |fast: bool| {
+        let config = Phase2Config {
+            fast_tests: fast,
+            ..Phase2Config::default()
+        };
+        let up = unit_policy([0.0, 1.0]);
+        let mut task = task_with(&maze, &config, &states, &obs, up, 10, 1_000_000);
+        (task.test(0), task.steps.test)
+    };
+    let (slow, fast) = (run(false), run(true));
+    assert_eq!(slow.0, 0.0);
+    assert_eq!(fast.0, slow.0, "same verdict");
+    assert_eq!(slow.1, 50 * 50, "every episode runs its 50 steps");
+    assert!(
+        fast.1 < slow.1 / 4,
+        "stuck episodes end early: {} steps",
+        fast.1
+    );
+}
+
+#[test]
+fn a_policy_that_goes_to_the_goal_passes_and_actions_are_scaled_to_the_bounds() {
+    let (maze, states, obs) = setup();
+    let config = Phase2Config::default();
+    let mut t = task(&maze, &config, &states, &obs, 1_000_000);
+    // From B_ε(τ_0) = B_0.1((0.5, 0.5)), +0.1 per step reaches B_ε(τ_5) within 7 steps:
+    // at +1 unscaled it would jump over walls; scaled, each step is exactly 0.1.
+    assert_eq!(t.test(0), 1.0);
+    assert!(t.steps.test <= 50 * 7, "{}", t.steps.test);
+    assert!(t.steps.test >= 50 * 3, "{}", t.steps.test);
+}
+
+#[test]
+fn exact_starts_are_all_tau_k() {
+    let (maze, states, obs) = setup();
+    let config = Phase2Config {
+        start: StartMode::Exact,
+        ..Phase2Config::default()
+    };
+    let mut t = task(&maze, &config, &states, &obs, 1_000_000);
+    assert_eq!(t.test(0), 1.0);
+    // τ_0 → B_ε(τ_5) at 0.1 per step: the same 4 or 5 steps (d(τ_4, τ_5) is 0.1 give or
+    // take f32 rounding) for each of the β = 50 identical episodes.
+    assert!([50 * 4, 50 * 5].contains(&t.steps.test), "{}", t.steps.test);
+}
+
+#[test]
+fn a_spent_budget_stops_every_test_and_round() {
+    let (maze, states, obs) = setup();
+    let config = Phase2Config::default();
+    let mut t = task(&maze, &config, &states, &obs, 100);
+    assert!(!t.exhausted());
+    t.test(0); // 50 episodes of ≥ 3 steps: over the budget
+    let spent = t.steps;
+    assert!(t.exhausted());
+    assert_eq!((t.test(0), t.train(0)), (0.0, 0.0));
+    assert_eq!(t.steps, spent, "no step after the budget");
+    let _ = maze.start();
+}

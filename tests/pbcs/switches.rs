@@ -1,0 +1,109 @@
+use pbcs::config::{Check, PbcsJob};
+use pbcs::env::Env;
+use pbcs::maze::Maze;
+use pbcs::phase2::goal::{Goal, GoalKind};
+use pbcs::phase2::{EventKind, InputMode, LastGoal};
+use pbcs::runs::PbcsRun;
+
+#[test]
+fn the_paper_as_written_aims_at_the_ball_with_raw_inputs() {
+    let mut job = PbcsJob::default();
+    job.maze.size = 2;
+    let maze = Maze::new(&job.maze).unwrap();
+    let obs = vec![vec![0.5, 0.5], vec![0.6, 0.5], vec![0.5, 1.32]];
+    let p2 = &mut job.phase2;
+    // The corrections (the default): the target disc, goal-relative unit actions.
+    assert_eq!(p2.goal(&maze, &obs, 2).kind, GoalKind::EnvSuccess);
+    let inputs = p2.inputs(&maze, &p2.goal(&maze, &obs, 2));
+    assert_eq!(
+        (inputs.origin, inputs.action_scale),
+        (vec![0.5, 1.5], vec![0.1, 0.1])
+    );
+    assert_eq!(p2.learner_bounds(&maze), vec![1.0, 1.0]);
+    // As written: B_ε(τ_N), raw coordinates, ±0.1 from the learner itself.
+    p2.last_goal = LastGoal::Ball;
+    p2.inputs = InputMode::Raw;
+    assert_eq!(
+        p2.goal(&maze, &obs, 2),
+        Goal::ball(vec![0.5, 1.32], p2.epsilon)
+    );
+    let inputs = p2.inputs(&maze, &p2.goal(&maze, &obs, 2));
+    assert_eq!(
+        (inputs.origin, inputs.action_scale),
+        (vec![0.0, 0.0], vec![1.0, 1.0])
+    );
+    assert_eq!(p2.learner_bounds(&maze), vec![maze.action_bound(0); 2]);
+    // Other skills' goals do not depend on the switch.
+    assert_eq!(
+        p2.goal(&maze, &obs, 1),
+        Goal::ball(vec![0.6, 0.5], p2.epsilon)
+    );
+}
+
+#[test]
+fn chain_repairs_need_a_chain_verification() {
+    let mut job = PbcsJob::default();
+    job.phase2.chain_repairs = 2;
+    let err = job.check().unwrap_err().to_string();
+    assert!(err.contains("phase2.chain_repairs"), "{err}");
+    job.phase2.chain_verify_episodes = 50;
+    job.check().unwrap();
+    let bad: Result<PbcsJob, _> = toml::from_str("[phase2]\ninputs = \"pixels\"\n");
+    assert!(bad.unwrap_err().to_string().contains("pixels"));
+}
+
+/// A chain verification that runs past the step budget ends the run like any other
+/// work that does: with `budget`, not solved. (Seed 0's chain of the paper preset on
+/// maze 2 is complete after 408 621 steps; its first verification needs about 900 more.)
+#[test]
+fn a_chain_verification_past_the_budget_is_a_budget_failure() {
+    let mut job = pbcs::config::Preset::Paper.job().unwrap();
+    job.maze.size = 2;
+    job.phase2.max_env_steps = 409_000;
+    job.phase2.chain_verify_episodes = 100;
+    let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
+    assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
+    assert!(!run.record.solved && run.record.total_steps > 409_000);
+    let last = run.phase2.trace.last().unwrap();
+    assert_eq!(last.event, EventKind::ChainVerify);
+}
+
+/// The paper preset's seed 0 on maze 2 builds a chain that reaches the target from 34 of
+/// 100 evaluation starts (the committed table row). With the chain's verification and
+/// repair, the first verification fails, the skill where the episodes stall is learned
+/// again on its section, and the repaired chain passes its verification and solves the
+/// maze.
+#[test]
+fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
+    let mut job = pbcs::config::Preset::Paper.job().unwrap();
+    job.maze.size = 2;
+    job.phase2.max_env_steps = 642_000;
+    job.phase2.chain_verify_episodes = 100;
+    job.phase2.chain_repairs = 5;
+    let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
+    let checks: Vec<_> = run
+        .phase2
+        .trace
+        .iter()
+        .filter(|r| r.event == EventKind::ChainVerify)
+        .collect();
+    assert!(checks.len() >= 2, "{checks:?}");
+    assert!(checks[0].success < 1.0 && checks.last().unwrap().success == 1.0);
+    // The failed check blames a skill by its position and section; the passing one none.
+    assert!(checks[0].skill < 2 && checks[0].t > checks[0].k);
+    let last = checks.last().unwrap();
+    assert_eq!((last.skill, last.k), (run.record.skills, 0));
+    assert!(run.record.solved, "{:?}", run.record);
+    // Chain positions stay consecutive along τ after the splice.
+    let skills = &run.phase2.chain.skills;
+    assert_eq!(skills[0].start_index, 0);
+    for w in skills.windows(2) {
+        assert_eq!(w[0].target_index, w[1].start_index);
+    }
+    assert_eq!(skills.last().unwrap().target_index, run.tau.len() - 1);
+    // Every step counts: the record's total is the last trace row's.
+    assert_eq!(
+        run.record.total_steps,
+        run.phase2.trace.last().unwrap().env_steps
+    );
+}
