@@ -17,7 +17,7 @@ TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
 .PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
-        commands paper check-paper smoke
+        commands paper check-paper smoke python
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
@@ -32,6 +32,7 @@ help:
 	@echo "make smoke     the whole pipeline on the smoke profile (what CI runs)"
 	@echo "make bench     phase-1 speed, and learner update cost (every kernel, candle, end to end)"
 	@echo "make lint      rustfmt and clippy"
+	@echo "make python    the Python package into \$$VENV (default .venv) and its tests"
 	@echo "make ci        what CI runs (.ci/run)"
 
 build:
@@ -89,6 +90,16 @@ check-paper:
 smoke:
 	$(MAKE) results PROFILE=smoke
 	$(MAKE) figures PROFILE=smoke
+
+# The Python package (python/): a virtual environment with maturin, gymnasium, numpy and
+# pytest from PyPI, the package built into it, then its tests (they compare with the command,
+# so the binary is built first).
+VENV ?= .venv
+python: bin
+	test -x $(VENV)/bin/python || python3 -m venv $(VENV)
+	$(VENV)/bin/pip install -q "maturin>=1.7,<2" "gymnasium>=1.0" numpy pytest
+	PATH=$(abspath $(VENV))/bin:$$PATH pip install -q --no-build-isolation ./python
+	PBCS_BIN=$(abspath $(PBCS)) $(VENV)/bin/python -m pytest -q python/tests
 
 clean:
 	rm -rf out results-*

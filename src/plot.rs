@@ -289,6 +289,30 @@ pub fn render_maze(
     crate::record::write_atomic(svg, |out| out.write_all(text.as_bytes()))
 }
 
+/// Draws `picture` over `maze` into an RGB image of `side × side` pixels (row-major, three
+/// bytes a pixel), without title or legend: what the Python environment's `render()` returns.
+///
+/// ```
+/// use pbcs::maze::{Maze, MazeConfig};
+/// use pbcs::plot::{render_rgb, MazePicture};
+///
+/// let maze = Maze::new(&MazeConfig { size: 2, ..Default::default() }).unwrap();
+/// let rgb = render_rgb(&maze, &MazePicture::default(), 64).unwrap();
+/// assert_eq!(rgb.len(), 64 * 64 * 3);
+/// assert_eq!(&rgb[..3], &[255, 255, 255]); // the white margin
+/// ```
+pub fn render_rgb(maze: &Maze, picture: &MazePicture, side: u32) -> Result<Vec<u8>> {
+    register_font();
+    let mut buf = vec![0u8; side as usize * side as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (side, side)).into_drawing_area();
+        draw_maze(root.clone(), maze, picture)
+            .and_then(|()| root.present())
+            .map_err(|e| plot_err(Path::new("<rgb array>"), e))?;
+    }
+    Ok(buf)
+}
+
 /// The owned content of a [`MazePicture`], as stored in a run's `picture.csv`, so that figures
 /// can be drawn again from committed results without re-running anything.
 ///

@@ -122,10 +122,8 @@ impl SkillChain {
         }
         for _ in 0..max_steps {
             env.observe(&s, &mut raw);
-            if let Some(j) = (i + 1..self.skills.len())
-                .rev()
-                .find(|&j| self.skills[j].activation.contains(&raw))
-            {
+            let j = self.active_skill(i, &raw);
+            if j != i {
                 i = j;
                 acted = 0;
             }
@@ -133,10 +131,7 @@ impl SkillChain {
                 break;
             }
             acted += 1;
-            let skill = &self.skills[i];
-            skill.inputs.observation(&raw, &mut obs);
-            let a = skill.policy.forward(&obs, 1, &mut ws);
-            skill.inputs.env_action(a, &mut action);
+            self.act(i, &raw, &mut obs, &mut action, &mut ws);
             let step = env.step(&s, &action);
             out.skill_used.push(i);
             let stuck = per_skill.is_some() && step.state == s;
@@ -151,6 +146,51 @@ impl SkillChain {
             }
         }
         out
+    }
+
+    /// The skill that acts at observation `raw` when skill `current` acted last: the last
+    /// later skill whose activation ball contains `raw` (a skill that overshoots its goal into
+    /// a later ball hands over there), else `current`. Start an execution with `current = 0`.
+    ///
+    /// ```
+    /// use pbcs::phase2::{Ball, SkillChain};
+    /// # use pbcs::phase2::{goal::Inputs, Skill};
+    /// # use pbcs::nn::{Head, Mlp};
+    /// # use pbcs::rng::{Seeds, Stream};
+    /// # let skill = |c: [f32; 2]| Skill {
+    /// #     policy: Mlp::new(&[2, 2], Head::Linear, &mut Seeds::new(0).stream(Stream::Init)),
+    /// #     activation: Ball { center: c.to_vec(), radius: 0.1 },
+    /// #     start_index: 0, target_index: 1, inputs: Inputs::new(vec![0.0; 2], vec![1.0; 2]),
+    /// # };
+    /// // Three skills whose balls are centred at x = 0, 1 and 2.
+    /// let chain = SkillChain { skills: vec![skill([0.0, 0.0]), skill([1.0, 0.0]), skill([2.0, 0.0])], ..Default::default() };
+    /// assert_eq!(chain.active_skill(0, &[0.5, 0.0]), 0); // in no later ball: π_0 goes on
+    /// assert_eq!(chain.active_skill(0, &[1.05, 0.0]), 1); // enters A_1
+    /// assert_eq!(chain.active_skill(0, &[2.0, 0.0]), 2); // overshoots into A_2
+    /// assert_eq!(chain.active_skill(2, &[1.0, 0.0]), 2); // never back to an earlier skill
+    /// ```
+    pub fn active_skill(&self, current: usize, raw: &[f32]) -> usize {
+        (current + 1..self.skills.len())
+            .rev()
+            .find(|&j| self.skills[j].activation.contains(raw))
+            .unwrap_or(current)
+    }
+
+    /// Skill `i`'s action at observation `raw`, in the environment's units, into `action`
+    /// (`obs` is scratch space of the observation's length): π_i on what it sees
+    /// ([`Inputs::observation`]), scaled back by [`Inputs::env_action`].
+    pub fn act(
+        &self,
+        i: usize,
+        raw: &[f32],
+        obs: &mut [f32],
+        action: &mut [f32],
+        ws: &mut crate::nn::Workspace,
+    ) {
+        let skill = &self.skills[i];
+        skill.inputs.observation(raw, obs);
+        let a = skill.policy.forward(obs, 1, ws);
+        skill.inputs.env_action(a, action);
     }
 
     /// Saves the chain into `dir`: `skill{i}.safetensors` per policy and `manifest.toml`

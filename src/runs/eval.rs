@@ -35,11 +35,9 @@ pub fn evaluate_chain(
     episodes: usize,
     seed: u64,
 ) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
-    let mut rng = Seeds::new(seed).stream(Stream::Eval);
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    for _ in 0..episodes {
-        let start = maze.sample_ball(&maze.start(), job.phase2.epsilon, &mut rng);
+    for start in eval_starts(maze, job.phase2.epsilon, episodes, seed) {
         let r = chain.run(maze, start, job.phase2.eval_max_steps);
         rows.push(EvalEpisode {
             success: r.success,
@@ -50,6 +48,17 @@ pub fn evaluate_chain(
         }
     }
     (rows, rollouts)
+}
+
+/// The start states of a chain's evaluation: `episodes` states uniform in B_ε(s_0) (radius
+/// `epsilon`), drawn in order from the `Eval` stream of `seed`. [`evaluate_chain`] runs the
+/// chain from exactly these, so an evaluation can be re-run step by step elsewhere (the
+/// Python package does).
+pub fn eval_starts(maze: &Maze, epsilon: f32, episodes: usize, seed: u64) -> Vec<Point<f32>> {
+    let mut rng = Seeds::new(seed).stream(Stream::Eval);
+    (0..episodes)
+        .map(|_| maze.sample_ball(&maze.start(), epsilon, &mut rng))
+        .collect()
 }
 
 /// The file in a saved chain's folder that holds the job that built it.
@@ -77,22 +86,11 @@ pub struct ChainEval {
     maze: Maze,
 }
 
-/// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
-/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (default: the run's
-/// own seed, which reproduces the run's evaluation exactly), each at most
-/// `phase2.eval_max_steps` steps, the policies on `kernel`. Writes nothing
-/// ([`ChainEval::write`] does). A folder without the chain's job (`run.toml`, or
-/// `../config.toml` for chains saved before it existed), a malformed manifest or bad weights
-/// are errors naming the file.
-pub fn eval_chain(
-    chain_dir: &Path,
-    episodes: usize,
-    seed: Option<u64>,
-    kernel: Kernel,
-) -> Result<ChainEval> {
-    if episodes == 0 {
-        return Err(Error::invalid("--episodes", "must be at least 1"));
-    }
+/// A chain saved by `pbcs run` with what it needs to run: the job that built it (`run.toml`
+/// beside `manifest.toml`, or `../config.toml` for chains saved before it existed), the maze
+/// of that job, and the chain, its policies on `kernel`. A folder without the job, a
+/// malformed manifest or bad weights are errors naming the file.
+pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Maze, SkillChain)> {
     let own = chain_dir.join(CHAIN_JOB);
     let job_path = if own.exists() {
         own
@@ -112,6 +110,26 @@ pub fn eval_chain(
     let job: PbcsJob = crate::validate::load(&job_path)?;
     let maze = Maze::new(&job.maze)?;
     let chain = SkillChain::load(chain_dir, kernel)?;
+    Ok((job, maze, chain))
+}
+
+/// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
+/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (default: the run's
+/// own seed, which reproduces the run's evaluation exactly), each at most
+/// `phase2.eval_max_steps` steps, the policies on `kernel`. Writes nothing
+/// ([`ChainEval::write`] does). A folder without the chain's job (`run.toml`, or
+/// `../config.toml` for chains saved before it existed), a malformed manifest or bad weights
+/// are errors naming the file.
+pub fn eval_chain(
+    chain_dir: &Path,
+    episodes: usize,
+    seed: Option<u64>,
+    kernel: Kernel,
+) -> Result<ChainEval> {
+    if episodes == 0 {
+        return Err(Error::invalid("--episodes", "must be at least 1"));
+    }
+    let (job, maze, chain) = load_saved_chain(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
     let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
     let successes = rows.iter().filter(|r| r.success).count();

@@ -1,0 +1,67 @@
+"""PBCS (Plan, Backplay, Chain Skills; Matheron, Perrin, Sigaud 2020) from Python.
+
+Everything is computed by the Rust package pbcs-rs (the compiled module ``pbcs._pbcs``):
+
+* :class:`ContinuousMaze` — the paper's continuous maze as a ``gymnasium.Env``, registered as
+  ``pbcs/ContinuousMaze-v0``; :class:`ContinuousMazeVec` steps N mazes in one call.
+* :func:`explore` — phase 1: the trajectory τ from s_0 to the target.
+* :func:`run` — a whole PBCS run with a preset (``fast`` or ``paper``).
+* :func:`load_chain` — a chain of skills saved by ``pbcs run`` as a policy (:class:`Chain`).
+
+Errors of the core are Python exceptions carrying its message: ``ValueError`` for bad
+arguments or malformed files, ``OSError`` for files that cannot be read, ``RuntimeError`` for
+work that failed (phase 1 out of budget).
+
+>>> import pbcs
+>>> env = pbcs.ContinuousMaze(size=2)
+>>> obs, info = env.reset(seed=0)
+>>> obs.tolist()
+[0.5, 0.5]
+"""
+
+from gymnasium.envs.registration import register
+
+from . import _pbcs
+from .chain import Chain, load_chain
+from .envs import ContinuousMaze, ContinuousMazeVec
+
+__all__ = [
+    "ContinuousMaze",
+    "ContinuousMazeVec",
+    "Chain",
+    "explore",
+    "load_chain",
+    "run",
+    "MAX_MAZE_SIZE",
+]
+
+MAX_MAZE_SIZE = _pbcs.MAX_MAZE_SIZE
+
+
+def explore(size, layout=0, seed=0, bin_side=None, budget=None):
+    """Phase 1 on the maze of ``size`` × ``size`` cells and layout seed ``layout``, run seed
+    ``seed``: a dict with ``tau`` (float32 array of shape (len, 2), from s_0 to the first state
+    in the target disc), ``actions`` ((len − 1, 2), the action from each state of τ to the
+    next), ``env_steps`` and ``archive_states``. The same τ as ``pbcs explore``.
+    """
+    return _pbcs.explore(size, layout, seed, bin_side, budget)
+
+
+def run(size, layout=0, seed=0, preset="fast", config=None, out=None, max_env_steps=None):
+    """A whole PBCS run (phase 1, phase 2, the chain's evaluation from B_ε(s_0)) on the maze
+    ``size`` of layout ``layout``, run seed ``seed``, with the preset ``fast`` or ``paper``, or
+    the job in the TOML file ``config``. With ``out`` (a folder), the run's files are written
+    there as ``pbcs run --out`` writes them, the chain in ``out/chain`` (load it with
+    :func:`load_chain`). Returns the run's record as a dict (``solved``, ``success_rate``,
+    ``skills``, step counts, ``tau``, each evaluation episode's success and steps, ``chain``).
+    The same bytes as ``pbcs run`` for the same job and seed.
+    """
+    return _pbcs.run(size, layout, seed, preset, config, out, max_env_steps)
+
+
+register(
+    id="pbcs/ContinuousMaze-v0",
+    entry_point="pbcs.envs:ContinuousMaze",
+    vector_entry_point="pbcs.envs:ContinuousMazeVec",
+    kwargs={"size": 2},
+)

@@ -1,0 +1,110 @@
+"""A chain of skills saved by ``pbcs run``, as a policy for the Python maze."""
+
+import numpy as np
+
+from . import _pbcs
+from .envs import ContinuousMaze
+
+
+def load_chain(path):
+    """The chain of skills saved in the folder ``path`` (``<run>/chain`` of ``pbcs run`` or
+    of :func:`pbcs.run` with ``out``). A folder without ``manifest.toml`` or ``run.toml``, a
+    malformed manifest or bad weights raise ``OSError`` or ``ValueError`` naming the file."""
+    return Chain(_pbcs.ChainCore(str(path)))
+
+
+class Chain:
+    """A chain π_0 … π_n with activation balls A_i = B_ε(τ_{K_i}), executed as the paper says:
+    π_0 until the state enters A_1, then π_1, and so on. :meth:`act` remembers which skill
+    acts, so call :meth:`reset` at the start of every episode."""
+
+    def __init__(self, core):
+        self._core = core
+
+    def __len__(self):
+        return len(self._core)
+
+    @property
+    def balls(self):
+        """The activation balls as ``(x, y, radius)``, in execution order."""
+        return self._core.balls
+
+    @property
+    def maze(self):
+        """``(size, layout)`` of the maze the chain was built for."""
+        return self._core.maze
+
+    @property
+    def active_skill(self):
+        """The skill that chose the last action."""
+        return self._core.active_skill
+
+    def reset(self):
+        """Starts a new episode: π_0 acts next."""
+        self._core.reset()
+
+    def act(self, obs):
+        """The action (float32, the environment's units) at observation ``obs``."""
+        return self._core.act(obs)
+
+    def make_env(self, **kwargs):
+        """A :class:`ContinuousMaze` of the chain's maze (``kwargs`` go to its constructor)."""
+        size, layout = self._core.maze
+        kwargs.setdefault("max_episode_steps", self._core.eval_max_steps)
+        return ContinuousMaze(size=size, layout=layout, **kwargs)
+
+    def rollout(self, start=None, env=None, max_steps=None):
+        """One episode through the Gymnasium environment ``env`` (default: a new one of the
+        chain's maze) from ``start`` (default s_0): a dict with the ``states`` visited (start
+        included), ``success`` (the target was reached) and ``steps``."""
+        env = env or self.make_env()
+        limit = max_steps or self._core.eval_max_steps
+        options = None if start is None else {"state": start}
+        obs, _ = env.reset(options=options)
+        self.reset()
+        states, success = [obs], False
+        for _ in range(limit):
+            obs, reward, terminated, truncated, _ = env.step(self.act(obs))
+            states.append(obs)
+            if terminated:
+                success = reward > 0
+                break
+            if truncated:
+                break
+        return {"states": np.stack(states), "success": success, "steps": len(states) - 1}
+
+    def eval_starts(self, episodes=100, seed=None):
+        """The start states of ``pbcs eval --episodes episodes --seed seed`` (default seed:
+        the run's), uniform in B_ε(s_0): shape (episodes, 2)."""
+        return self._core.eval_starts(episodes, seed)
+
+    def evaluate(self, episodes=100, seed=None):
+        """``pbcs eval``'s protocol, stepped in Python: :meth:`rollout` from each of
+        :meth:`eval_starts`. Returns ``successes``, ``episodes`` and each episode's ``success``
+        and ``steps``; equal to :meth:`evaluate_in_core` for the same arguments."""
+        env = self.make_env()
+        runs = [self.rollout(tuple(s), env=env) for s in self.eval_starts(episodes, seed)]
+        success = np.array([r["success"] for r in runs])
+        return {
+            "successes": int(success.sum()),
+            "episodes": episodes,
+            "success": success,
+            "steps": np.array([r["steps"] for r in runs]),
+        }
+
+    def evaluate_in_core(self, episodes=100, seed=None):
+        """``pbcs eval``'s evaluation computed by the Rust core (the same function as the
+        command): ``successes``, ``episodes``, the Wilson 95 % ``interval``, each episode's
+        ``success`` and ``steps``."""
+        return self._core.evaluate(episodes, seed)
+
+    def core_rollout(self, start=None, max_steps=None):
+        """One execution computed by the core: ``states``, ``success``, ``steps`` and the
+        ``skill_used`` for each action."""
+        return self._core.rollout(start, max_steps)
+
+    def render(self, paths=None, size=256):
+        """An RGB image of the chain's maze with its activation balls and ``paths`` (arrays of
+        shape (len, 2)) in green."""
+        paths = None if paths is None else [np.asarray(p, dtype=np.float32) for p in paths]
+        return self._core.render(paths, size)

@@ -1,0 +1,63 @@
+"""A chain saved by `pbcs run`, loaded in Python: stepped through the Gymnasium environment it
+succeeds exactly where `pbcs eval` does."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import pbcs
+
+
+@pytest.fixture(scope="module")
+def chain_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    record = pbcs.run(2, seed=0, out=str(out))
+    assert record["solved"] and record["chain"] is not None
+    return out
+
+
+def test_run_returns_the_record_and_saves_the_chain(chain_dir):
+    assert (chain_dir / "chain" / "manifest.toml").exists()
+    assert (chain_dir / "record.csv").exists()
+
+
+def test_python_rollouts_equal_pbcs_eval(chain_dir, tmp_path, pbcs_bin):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    ours = chain.evaluate(episodes=40, seed=7)
+    core = chain.evaluate_in_core(episodes=40, seed=7)
+    assert ours["success"].tolist() == core["success"].tolist()
+    assert ours["steps"].tolist() == core["steps"].tolist()
+    subprocess.run(
+        [pbcs_bin, "eval", "--chain", str(chain_dir / "chain"), "--episodes", "40", "--seed", "7",
+         "--out", str(tmp_path)],
+        check=True, capture_output=True,
+    )
+    lines = (tmp_path / "eval-s7.csv").read_text().split()
+    assert lines[0] == "success,steps"
+    rows = [line.split(",") for line in lines[1:]]
+    assert [s == "true" for s, _ in rows] == ours["success"].tolist()
+    assert [int(n) for _, n in rows] == ours["steps"].tolist()
+
+
+def test_act_switches_skills_like_the_core(chain_dir):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    core = chain.core_rollout()
+    env = chain.make_env()
+    obs, _ = env.reset()
+    chain.reset()
+    used = []
+    for _ in range(core["steps"]):
+        a = chain.act(obs)
+        used.append(chain.active_skill)
+        obs, *_ = env.step(a)
+    assert used == core["skill_used"].tolist()
+    assert obs.tobytes() == core["states"][-1].tobytes()
+    assert len(chain) == len(chain.balls) >= 1
+
+
+def test_render_draws_the_chain(chain_dir):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    r = chain.rollout()
+    img = chain.render([r["states"]], size=96)
+    assert img.shape == (96, 96, 3)
