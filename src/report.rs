@@ -97,10 +97,12 @@ fn def_res(s: &mut String, experiment: &str, key: &str, value: &str) {
 /// `runs` (runs with a successful evaluation episode), `shorter` (of those, runs whose chain's
 /// median successful path is shorter than the τ phase 2 worked on), `fewestlo`/`fewesthi` (the
 /// least and largest, over cells, of the median chain path / fewest steps), `taulo`/`tauhi`
-/// (the same for τ / chain path); empty without routes.
+/// (the same for the τ phase 2 worked on / chain path) and `phase1lo`/`phase1hi` (for phase 1's
+/// τ / chain path: what the abstract's "improve on the trajectory obtained by the motion
+/// planning phase" compares; the two τ differ where `shorten` is on); empty without routes.
 pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Route]) -> String {
     let mut s = String::new();
-    let paths: Vec<(&str, f64, f64)> = routes
+    let paths: Vec<(&str, f64, f64, f64)> = routes
         .iter()
         .filter_map(|r| {
             let c = r.chain_steps?;
@@ -108,6 +110,7 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
                 r.cell.as_str(),
                 c / r.fewest_steps.max(1) as f64,
                 r.phase2_tau_steps as f64 / c,
+                r.tau_steps as f64 / c,
             ))
         })
         .collect();
@@ -120,12 +123,14 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
         .count();
     let mut cells: Vec<&str> = paths.iter().map(|p| p.0).collect();
     cells.dedup();
-    let (mut fewest, mut tau) = (Vec::new(), Vec::new());
+    let (mut fewest, mut tau, mut phase1) = (Vec::new(), Vec::new(), Vec::new());
     for cell in cells {
         let mut f: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.1).collect();
         let mut t: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.2).collect();
+        let mut t1: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.3).collect();
         fewest.push(crate::stats::median(&mut f));
         tau.push(crate::stats::median(&mut t));
+        phase1.push(crate::stats::median(&mut t1));
     }
     let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -136,6 +141,8 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
         ("fewesthi", format!("{:.2}", hi(&fewest))),
         ("taulo", format!("{:.1}", lo(&tau))),
         ("tauhi", format!("{:.1}", hi(&tau))),
+        ("phase1lo", format!("{:.1}", lo(&phase1))),
+        ("phase1hi", format!("{:.1}", hi(&phase1))),
     ] {
         def_res(&mut s, experiment, &format!("routes:{key}"), &value);
     }
@@ -475,10 +482,20 @@ mod tests {
             ("fewesthi", "1.20"),
             ("taulo", "4.0"),
             ("tauhi", "5.0"),
+            ("phase1lo", "4.0"),
+            ("phase1hi", "5.0"),
         ] {
             let line = format!("\\csname res:x:routes:{key}\\endcsname{{{value}}}");
             assert!(tex.contains(&line), "{key}: {tex}");
         }
         assert_eq!(routes_numbers_tex("x", &[route("a", None, 1, 1)]), "");
+        // A shortened τ: phase 2 worked on 440 steps, phase 1's τ had 880.
+        let shortened = crate::tables::routes::Route {
+            tau_steps: 880,
+            ..route("a", Some(110.0), 440, 100)
+        };
+        let tex = routes_numbers_tex("x", &[shortened]);
+        assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");
+        assert!(tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"), "{tex}");
     }
 }
