@@ -5,7 +5,7 @@ JOBS ?= 2
 # A profile of the experiment files (`smoke`); empty: the committed grids.
 PROFILE ?=
 # The committed grids (the table's DDPG and TD3 cells give the 1M-step learning curves).
-EXPERIMENTS ?= table gamma unseen beyond ablations
+EXPERIMENTS ?= table gamma unseen beyond ablations protocol
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)
@@ -50,7 +50,7 @@ bench:
 
 lint:
 	$(CARGO) fmt --all -- --check
-	$(CARGO) clippy --release --locked --all-targets -- -D warnings
+	$(CARGO) clippy --release --locked --workspace --all-targets -- -D warnings
 
 ci:
 	bash .ci/run

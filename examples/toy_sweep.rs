@@ -17,6 +17,7 @@ fn main() {
         eval_every: steps,
         eval_episodes: 100,
         visit_bin: 0.05,
+        ..Default::default()
     };
     for (name, cfg) in [
         ("ddpg", LearnerConfig::ddpg()),

@@ -6,6 +6,7 @@
 //! this trait for your own environment to run phase 1 and phase 2 on it.
 
 use rand::Rng;
+use serde::{Deserialize, Serialize};
 
 /// The outcome of one environment step.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,4 +111,33 @@ pub fn random_action<E: Env + ?Sized>(env: &E, rng: &mut impl Rng, out: &mut [f3
         let b = env.action_bound(i);
         *a = rng.random_range(-b..=b);
     }
+}
+
+/// One evaluation episode: whether it reached a positive terminal reward (the target), and in
+/// how many steps. A PBCS run's chain (`evaluation.csv` of `pbcs run`, `s<seed>.evaluation.csv`
+/// of a sweep, `eval-s<seed>.csv` of `pbcs eval`) and, when asked, a vanilla run's final greedy
+/// policy are judged on these. The steps of the successful episodes are the path lengths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EvalEpisode {
+    /// The episode reached the target.
+    pub success: bool,
+    /// Steps taken.
+    pub steps: usize,
+}
+
+/// The start states of the evaluation protocol PBCS's chains are judged by: `episodes` states
+/// uniform in B_ε(s_0) (radius `epsilon` around [`Env::start`]), drawn in order from the
+/// [`crate::rng::Stream::Eval`] stream of `seeds`. The same seed gives every policy the same
+/// starts, so a chain and a vanilla policy of one run seed are judged from the same states.
+pub fn evaluation_starts<E: Env + ?Sized>(
+    env: &E,
+    epsilon: f32,
+    episodes: usize,
+    seeds: &crate::rng::Seeds,
+) -> Vec<E::State> {
+    let mut rng = seeds.stream(crate::rng::Stream::Eval);
+    let start = env.start();
+    (0..episodes)
+        .map(|_| env.sample_ball(&start, epsilon, &mut rng))
+        .collect()
 }

@@ -496,6 +496,9 @@ mod tests {
         };
         let tex = routes_numbers_tex("x", &[shortened]);
         assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");
-        assert!(tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"), "{tex}");
+        assert!(
+            tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"),
+            "{tex}"
+        );
     }
 }

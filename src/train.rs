@@ -1,8 +1,9 @@
 //! Vanilla off-policy training on an environment's own reward (the paper's DDPG and TD3
 //! baselines): episodes with a step limit, one update per environment step, periodic greedy
-//! evaluation, and the set of visited state bins for the "explored area" picture.
+//! evaluation, the set of visited state bins for the "explored area" picture, and optionally
+//! PBCS's evaluation protocol after training.
 
-use crate::env::{random_action, Env};
+use crate::env::{evaluation_starts, random_action, Env, EvalEpisode};
 use crate::error::{Error, Result};
 use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
@@ -29,6 +30,15 @@ pub struct TrainConfig {
     pub eval_episodes: usize,
     /// Side of the bins in which visited states are recorded.
     pub visit_bin: f32,
+    /// PBCS's protocol, when at least 1: after training, the greedy policy runs this many
+    /// episodes from the starts PBCS's chains are evaluated from (uniform in B_ε(s_0),
+    /// [`crate::env::evaluation_starts`]), and the run is judged on them instead of on its last
+    /// periodic evaluation. 0 (the default, and the paper's baselines): off.
+    pub final_eval_episodes: usize,
+    /// ε of that protocol: the radius of the start ball around s_0 (PBCS's ε).
+    pub final_eval_epsilon: f32,
+    /// Step limit of each of those episodes (PBCS's `phase2.eval_max_steps`).
+    pub final_eval_max_steps: usize,
 }
 
 impl Default for TrainConfig {
@@ -40,6 +50,9 @@ impl Default for TrainConfig {
             eval_every: 10_000,
             eval_episodes: 1,
             visit_bin: 0.05,
+            final_eval_episodes: 0,
+            final_eval_epsilon: 0.1,
+            final_eval_max_steps: 5000,
         }
     }
 }
@@ -51,6 +64,10 @@ impl Check for TrainConfig {
             ("train.max_episode_steps", self.max_episode_steps as u64),
             ("train.eval_every", self.eval_every),
             ("train.eval_episodes", self.eval_episodes as u64),
+            (
+                "train.final_eval_max_steps",
+                self.final_eval_max_steps as u64,
+            ),
         ] {
             if v == 0 {
                 return Err(Error::invalid(field, "must be at least 1"));
@@ -58,6 +75,12 @@ impl Check for TrainConfig {
         }
         if !(self.visit_bin.is_finite() && self.visit_bin > 0.0) {
             return Err(Error::invalid("train.visit_bin", "must be positive"));
+        }
+        if !(self.final_eval_epsilon.is_finite() && self.final_eval_epsilon > 0.0) {
+            return Err(Error::invalid(
+                "train.final_eval_epsilon",
+                format!("must be positive, got {}", self.final_eval_epsilon),
+            ));
         }
         Ok(())
     }
@@ -93,6 +116,8 @@ pub struct TrainOutcome {
     pub truncated_episodes: u64,
     /// The trained learner.
     pub learner: Learner,
+    /// PBCS's protocol after training (`train.final_eval_episodes` episodes; empty when off).
+    pub final_eval: Vec<EvalEpisode>,
 }
 
 /// Scales a learner action in [−1, 1]ᵈ to the environment's bounds.
@@ -133,6 +158,39 @@ pub fn evaluate<E: Env>(
     }
     let e = episodes as f32;
     (wins as f32 / e, ret / e, len as f32 / e)
+}
+
+/// The greedy policy of `learner` from each of `starts`, each episode at most `max_steps`
+/// steps: whether it reached a positive terminal reward, and in how many steps.
+pub fn greedy_episodes<E: Env>(
+    env: &E,
+    learner: &mut Learner,
+    starts: Vec<E::State>,
+    max_steps: usize,
+) -> Vec<EvalEpisode> {
+    let mut obs = vec![0.0; env.obs_dim()];
+    let mut action = vec![0.0; env.action_dim()];
+    starts
+        .into_iter()
+        .map(|mut s| {
+            let mut episode = EvalEpisode {
+                success: false,
+                steps: 0,
+            };
+            while episode.steps < max_steps {
+                env.observe(&s, &mut obs);
+                to_env_action(env, learner.act(&obs, 1), &mut action);
+                let step = env.step(&s, &action);
+                episode.steps += 1;
+                s = step.state;
+                if step.terminal {
+                    episode.success = step.reward > 0.0;
+                    break;
+                }
+            }
+            episode
+        })
+        .collect()
 }
 
 /// Trains a fresh learner on `env`'s own reward for `train.steps` environment steps.
@@ -235,7 +293,21 @@ pub fn train_vanilla<E: Env>(
     }
     let mut visited: Vec<Vec<i32>> = visited.into_iter().collect();
     visited.sort();
+    // PBCS's protocol, after training: it reads only the Eval stream, so it changes nothing
+    // above (a run with it and one without train the same bytes).
+    let final_eval = if train.final_eval_episodes > 0 {
+        let starts = evaluation_starts(
+            env,
+            train.final_eval_epsilon,
+            train.final_eval_episodes,
+            seeds,
+        );
+        greedy_episodes(env, &mut learner, starts, train.final_eval_max_steps)
+    } else {
+        Vec::new()
+    };
     Ok(TrainOutcome {
+        final_eval,
         evals,
         visited,
         episodes,

@@ -123,6 +123,7 @@ fn ddpg_and_td3_learn_the_1d_toy() {
         eval_every: steps,
         eval_episodes: 100,
         visit_bin: 0.05,
+        ..Default::default()
     };
     for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
         let solved = |steps| {
@@ -169,6 +170,7 @@ fn the_argmax_actor_learns_the_1d_toy_too() {
         eval_every: 3_000,
         eval_episodes: 100,
         visit_bin: 0.05,
+        ..Default::default()
     };
     let solved = (0..5)
         .filter(|&seed| {
@@ -196,6 +198,7 @@ fn same_seed_same_weights_and_evaluations() {
         eval_every: 500,
         eval_episodes: 10,
         visit_bin: 0.05,
+        ..Default::default()
     };
     let run = || {
         train_vanilla(
@@ -345,5 +348,60 @@ fn replay_samples_whole_transitions_from_the_newest() {
             b.done[k],
             f32::from(u8::from((f as usize).is_multiple_of(3)))
         );
+    }
+}
+
+/// PBCS's protocol after training (`train.final_eval_episodes`) reads only the Eval stream:
+/// the run trains the same bytes as without it, then runs the greedy policy from exactly the
+/// start states a chain of the same seed is evaluated from.
+#[test]
+fn the_final_protocol_evaluation_changes_no_training_byte() {
+    use pbcs::env::{evaluation_starts, Env as _};
+    use pbcs::maze::{Maze, MazeConfig};
+    let maze = Maze::new(&MazeConfig {
+        size: 2,
+        ..Default::default()
+    })
+    .unwrap();
+    let plain = TrainConfig {
+        steps: 2_000,
+        learning_starts: 500,
+        eval_every: 1_000,
+        ..TrainConfig::default()
+    };
+    let protocol = TrainConfig {
+        final_eval_episodes: 20,
+        final_eval_max_steps: 30,
+        ..plain.clone()
+    };
+    let run = |train: &TrainConfig| {
+        train_vanilla(
+            &maze,
+            &LearnerConfig::ddpg(),
+            train,
+            &Seeds::new(3),
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let (mut a, b) = (run(&plain), run(&protocol));
+    assert!(a.final_eval.is_empty());
+    assert_eq!(a.evals, b.evals);
+    assert_eq!(a.visited, b.visited);
+    assert_eq!(a.learner.actor.params, b.learner.actor.params);
+    assert_eq!(b.final_eval.len(), 20);
+    // The same episodes, replayed by hand from the protocol's starts.
+    let starts = evaluation_starts(&maze, 0.1, 20, &Seeds::new(3));
+    assert!(starts
+        .iter()
+        .all(|s| (s - maze.start()).norm() <= 0.1 + 1e-6));
+    let again = pbcs::train::greedy_episodes(&maze, &mut a.learner, starts, 30);
+    assert_eq!(again, b.final_eval);
+    for e in &b.final_eval {
+        assert!(e.steps >= 1 && e.steps <= 30);
+        // 11 steps is the fewest from B_ε(s_0) on 2×2 for starts at s_0; a success never
+        // comes sooner than the straight-line bound from the ball.
+        assert!(!e.success || e.steps >= 9, "{e:?}");
     }
 }

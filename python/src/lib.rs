@@ -136,6 +136,9 @@ fn rgb<'py>(
     Ok(a.into_pyarray(py))
 }
 
+/// What `MazeEnv::step` returns: observation, reward, terminated, truncated, hit a wall.
+type EnvStep<'py> = (Bound<'py, PyArray1<f32>>, f32, bool, bool, bool);
+
 /// One maze episode: the core of `pbcs.ContinuousMaze`. The state is a 2-D point; `step`
 /// applies the paper's step function (clip the action to ±max_action, stay put if the segment
 /// crosses a wall; reward +1 inside the target disc, which ends the episode, −1 for a wall)
@@ -195,11 +198,7 @@ impl MazeEnv {
     }
 
     /// One step: `(observation, reward, terminated, truncated, hit_wall)`.
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        action: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyArray1<f32>>, f32, bool, bool, bool)> {
+    fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<EnvStep<'py>> {
         let a = action_of(action)?;
         let step = self.maze.step(&self.state, &a);
         self.state = step.state;
@@ -688,7 +687,12 @@ impl ChainCore {
             .map(|s| count("seed", s))
             .transpose()?
             .unwrap_or(self.job.seed);
-        let starts = pbcs::runs::eval_starts(&self.maze, self.job.phase2.epsilon, n, seed);
+        let starts = pbcs::env::evaluation_starts(
+            &self.maze,
+            self.job.phase2.epsilon,
+            n,
+            &pbcs::rng::Seeds::new(seed),
+        );
         let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
         Ok(Array2::from_shape_vec((n, 2), flat)
             .expect("two coordinates per state")

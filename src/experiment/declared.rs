@@ -71,11 +71,11 @@ pub enum FigureSpec {
     Bars {
         /// File stem.
         name: String,
-        /// A method of another experiment drawn first, as the baseline the experiment's
-        /// methods change one thing of (its cells on this experiment's mazes, from that
-        /// experiment's table).
+        /// Methods of other experiments drawn first, in this order: the baselines the
+        /// experiment's methods change one thing of (their cells on this experiment's mazes,
+        /// from those experiments' tables).
         #[serde(default)]
-        baseline: Option<Baseline>,
+        baselines: Vec<Baseline>,
     },
     /// Environment steps (median, quartiles) of each cell against the length of its maze's
     /// shortest path from start to target, on log–log axes, one colour per method, with the

@@ -36,7 +36,8 @@ pub struct RawRow {
     /// PBCS: `ball` or `exact` starts; empty for vanilla.
     pub starts: Option<StartMode>,
     /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
-    /// vanilla, the final greedy evaluation does.
+    /// vanilla, the final greedy evaluation does (or, with `train.final_eval_episodes`, ≥ 95 %
+    /// of PBCS's evaluation episodes).
     pub solved: bool,
     /// Success rate of that evaluation.
     pub success_rate: f32,
@@ -60,8 +61,21 @@ pub struct RawRow {
 
 impl RawRow {
     /// The row of a vanilla run of `cell` (`job` with its seed): its summary, under the
-    /// cell's names; the PBCS columns hold 0 or are empty.
-    pub fn vanilla(exp: &Experiment, cell: &Cell, job: &TrainJob, s: &TrainSummary) -> RawRow {
+    /// cell's names; the PBCS columns hold 0 or are empty. With `final_eval` (PBCS's protocol,
+    /// `train.final_eval_episodes`), the run is judged on those episodes as a PBCS run is;
+    /// else on its last greedy evaluation.
+    pub fn vanilla(
+        exp: &Experiment,
+        cell: &Cell,
+        job: &TrainJob,
+        s: &TrainSummary,
+        final_eval: &[crate::env::EvalEpisode],
+    ) -> RawRow {
+        let success_rate = if final_eval.is_empty() {
+            s.final_success
+        } else {
+            final_eval.iter().filter(|e| e.success).count() as f32 / final_eval.len() as f32
+        };
         RawRow {
             experiment: exp.name.clone(),
             cell: cell.id.clone(),
@@ -74,8 +88,8 @@ impl RawRow {
             gamma: job.learner.gamma,
             chaining: false,
             starts: None,
-            solved: s.final_success >= crate::runs::SOLVED_AT,
-            success_rate: s.final_success,
+            solved: success_rate >= crate::runs::SOLVED_AT,
+            success_rate,
             env_steps: s.env_steps,
             budget: job.train.steps,
             first_success_steps: s.first_success_steps,

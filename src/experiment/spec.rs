@@ -319,7 +319,7 @@ impl Experiment {
             figures: if spec.figures.is_empty() {
                 vec![FigureSpec::Bars {
                     name: name.clone(),
-                    baseline: None,
+                    baselines: Vec::new(),
                 }]
             } else {
                 spec.figures
@@ -382,7 +382,7 @@ impl Experiment {
             cells,
             figures: vec![FigureSpec::Bars {
                 name: name.to_string(),
-                baseline: None,
+                baselines: Vec::new(),
             }],
             report: ReportSpec::default(),
         })

@@ -10,7 +10,8 @@ use std::path::Path;
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
 /// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
-/// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
+/// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS, and vanilla runs judged by
+/// PBCS's protocol), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
 /// job) and `s<seed>.csv` (the row). The learners run on `kernel`.
 pub fn run_cell_seed(
     exp: &Experiment,
@@ -24,7 +25,11 @@ pub fn run_cell_seed(
         Job::Vanilla(j) => {
             let run = TrainRun::compute(j, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
-            let row = RawRow::vanilla(exp, cell, j, &run.summary);
+            let final_eval = &run.result.final_eval;
+            if !final_eval.is_empty() {
+                crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), final_eval)?;
+            }
+            let row = RawRow::vanilla(exp, cell, j, &run.summary, final_eval);
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {

@@ -177,9 +177,10 @@ pub fn render_experiment(
                     }
                 }
             }
-            FigureSpec::Bars { baseline, .. } => {
+            FigureSpec::Bars { baselines, .. } => {
                 let mut bars = SuccessBars::new(exp, stats);
-                if let Some(b) = baseline {
+                // Each is put first: the last listed goes in first, so they end in their order.
+                for b in baselines.iter().rev() {
                     let path = crate::tables::table_path(results, &b.experiment);
                     if path.exists() {
                         bars = bars.with_baseline(b, &crate::tables::read_table(&path)?);

@@ -3,27 +3,17 @@
 
 use super::{ball_circles, DRAWN_ROLLOUTS};
 use crate::config::PbcsJob;
-use crate::env::Env;
+use crate::env::evaluation_starts;
 use crate::error::{Error, Result};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::phase2::SkillChain;
 use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
-use crate::rng::{Seeds, Stream};
+use crate::rng::Seeds;
 use parry2d::math::Point;
-use serde::Serialize;
 use std::path::Path;
 
-/// One evaluation episode of a chain: whether it reached the target, and in how many steps
-/// (`evaluation.csv` of `pbcs run`, `s<seed>.evaluation.csv` of a sweep, `eval-s<seed>.csv` of
-/// `pbcs eval`). The steps of the successful episodes are the chain's path lengths.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
-pub struct EvalEpisode {
-    /// The episode reached the target.
-    pub success: bool,
-    /// Steps taken (at most `phase2.eval_max_steps`).
-    pub steps: usize,
-}
+pub use crate::env::EvalEpisode;
 
 /// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
 /// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
@@ -37,7 +27,8 @@ pub fn evaluate_chain(
 ) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    for start in eval_starts(maze, job.phase2.epsilon, episodes, seed) {
+    let starts = evaluation_starts(maze, job.phase2.epsilon, episodes, &Seeds::new(seed));
+    for start in starts {
         let r = chain.run(maze, start, job.phase2.eval_max_steps);
         rows.push(EvalEpisode {
             success: r.success,
@@ -48,17 +39,6 @@ pub fn evaluate_chain(
         }
     }
     (rows, rollouts)
-}
-
-/// The start states of a chain's evaluation: `episodes` states uniform in B_ε(s_0) (radius
-/// `epsilon`), drawn in order from the `Eval` stream of `seed`. [`evaluate_chain`] runs the
-/// chain from exactly these, so an evaluation can be re-run step by step elsewhere (the
-/// Python package does).
-pub fn eval_starts(maze: &Maze, epsilon: f32, episodes: usize, seed: u64) -> Vec<Point<f32>> {
-    let mut rng = Seeds::new(seed).stream(Stream::Eval);
-    (0..episodes)
-        .map(|_| maze.sample_ball(&maze.start(), epsilon, &mut rng))
-        .collect()
 }
 
 /// The file in a saved chain's folder that holds the job that built it.

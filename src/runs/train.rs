@@ -115,13 +115,18 @@ impl TrainRun {
         })
     }
 
-    /// Writes into `out`: `summary.csv`, `evals.csv` (one row per evaluation), `visited.csv`
+    /// Writes into `out`: `summary.csv`, `evals.csv` (one row per evaluation),
+    /// `evaluation.csv` (PBCS's protocol after training, when `train.final_eval_episodes` asks
+    /// for it: success and steps of each episode), `visited.csv`
     /// (lower-left corners of visited bins), `actor.safetensors`, `picture.csv`, `train.png`,
     /// `train.svg`, `timing.toml`.
     pub fn write(&self, job: &TrainJob, out: &Path) -> Result<()> {
         let summary = &self.summary;
         write_record(&out.join("summary.csv"), summary)?;
         crate::record::write_records(&out.join("evals.csv"), &self.result.evals)?;
+        if !self.result.final_eval.is_empty() {
+            crate::record::write_records(&out.join("evaluation.csv"), &self.result.final_eval)?;
+        }
         write_csv(
             &out.join("visited.csv"),
             &["x".to_string(), "y".to_string()],

@@ -399,7 +399,7 @@ fn experiments_declare_their_figures() {
         Experiment::load(&path, None).unwrap().figures,
         [FigureSpec::Bars {
             name: "mine".into(),
-            baseline: None
+            baselines: Vec::new()
         }]
     );
 }
