@@ -29,6 +29,7 @@ __all__ = [
     "ContinuousMaze",
     "ContinuousMazeVec",
     "Chain",
+    "evaluation_starts",
     "explore",
     "load_chain",
     "run",
@@ -57,6 +58,14 @@ def run(size, layout=0, seed=0, preset="fast", config=None, out=None, max_env_st
     The same bytes as ``pbcs run`` for the same job and seed.
     """
     return _pbcs.run(size, layout, seed, preset, config, out, max_env_steps)
+
+
+def evaluation_starts(size, layout=0, seed=0, episodes=100, epsilon=0.1):
+    """The start states of PBCS's evaluation protocol: ``episodes`` states uniform in
+    B_ε(s_0), drawn from run seed ``seed``'s evaluation stream (float32, shape (episodes, 2)).
+    A chain of that seed is evaluated from exactly these (``Chain.eval_starts``), and so is a
+    vanilla run with ``train.final_eval_episodes``; judge any other policy from them too."""
+    return _pbcs.evaluation_starts(size, layout, seed, episodes, epsilon)
 
 
 register(

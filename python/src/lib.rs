@@ -478,6 +478,35 @@ fn explore<'py>(
     Ok(d)
 }
 
+/// The start states of PBCS's evaluation protocol on the maze `size` of layout `layout`:
+/// `episodes` states uniform in B_ε(s_0) (radius `epsilon`), drawn from the Eval stream of run
+/// seed `seed`; the same states a chain of that seed is evaluated from. Shape (episodes, 2).
+#[pyfunction]
+#[pyo3(signature = (size, layout = 0, seed = 0, episodes = 100, epsilon = 0.1))]
+fn evaluation_starts<'py>(
+    py: Python<'py>,
+    size: i64,
+    layout: i64,
+    seed: i64,
+    episodes: i64,
+    epsilon: f32,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let maze = maze_of(size, layout, 0.1, 0.2, 0.1)?;
+    let n = count("episodes", episodes)? as usize;
+    if !(epsilon.is_finite() && epsilon > 0.0) {
+        return Err(invalid(
+            "epsilon",
+            format!("must be positive, got {epsilon}"),
+        ));
+    }
+    let seeds = pbcs::rng::Seeds::new(count("seed", seed)?);
+    let starts = pbcs::env::evaluation_starts(&maze, epsilon, n, &seeds);
+    let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
+    Ok(Array2::from_shape_vec((n, 2), flat)
+        .expect("two coordinates per state")
+        .into_pyarray(py))
+}
+
 /// A whole PBCS run (phase 1, phase 2, the chain's evaluation) of a preset (`fast` or `paper`)
 /// or of a config file; with `out`, its files (record, trace, chain/, picture) are written
 /// there, as `pbcs run --out` does. Returns the run's record as a dict, τ as an array, and
@@ -812,6 +841,7 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ChainCore>()?;
     m.add_function(wrap_pyfunction!(explore, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluation_starts, m)?)?;
     m.add("MAX_MAZE_SIZE", pbcs::maze::MAX_MAZE_SIZE)?;
     Ok(())
 }

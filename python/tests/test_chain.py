@@ -61,3 +61,10 @@ def test_render_draws_the_chain(chain_dir):
     r = chain.rollout()
     img = chain.render([r["states"]], size=96)
     assert img.shape == (96, 96, 3)
+
+
+def test_the_protocols_starts_are_the_chains(chain_dir):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    starts = pbcs.evaluation_starts(2, seed=5, episodes=30, epsilon=chain._core.epsilon)
+    assert starts.tobytes() == chain.eval_starts(30, seed=5).tobytes()
+    assert (np.linalg.norm(starts - np.array([0.5, 0.5]), axis=1) <= chain._core.epsilon + 1e-6).all()
