@@ -1,0 +1,262 @@
+//! A saved chain of skills as a policy.
+
+use crate::{action_of, count, invalid, py_err, rgb, state_of};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
+use pbcs::config::PbcsJob;
+use pbcs::env::Env;
+use pbcs::maze::Maze;
+use pbcs::nn::kernel::Kernel;
+use pbcs::nn::Workspace;
+use pbcs::phase2::SkillChain;
+use pbcs::plot::MazePicture;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+
+/// A chain of skills saved by `pbcs run` (or `pbcs.run(out=...)`): the core of `pbcs.Chain`.
+/// `act` executes it step by step (π_0 until the state enters A_1, then π_1, ...): it keeps
+/// which skill acts, so `reset` starts a new episode.
+#[pyclass(module = "pbcs._pbcs")]
+pub(crate) struct ChainCore {
+    chain: SkillChain,
+    job: PbcsJob,
+    maze: Maze,
+    dir: PathBuf,
+    active: usize,
+    ws: Workspace,
+}
+
+#[pymethods]
+impl ChainCore {
+    #[new]
+    fn new(dir: PathBuf) -> PyResult<Self> {
+        let kernel = Kernel::from_env().map_err(py_err)?;
+        let (job, maze, chain) = pbcs::runs::load_saved_chain(&dir, kernel).map_err(py_err)?;
+        if chain.skills.is_empty() {
+            return Err(PyValueError::new_err(format!(
+                "{}: the chain has no skill",
+                dir.join("manifest.toml").display()
+            )));
+        }
+        for (i, s) in chain.skills.iter().enumerate() {
+            if s.policy.sizes()[0] != 2 || s.policy.sizes().last() != Some(&2) {
+                return Err(PyValueError::new_err(format!(
+                    "{}: skill {i} is not a maze policy (2 inputs, 2 outputs)",
+                    dir.join("manifest.toml").display()
+                )));
+            }
+        }
+        Ok(ChainCore {
+            chain,
+            job,
+            maze,
+            dir,
+            active: 0,
+            ws: Workspace::with_kernel(kernel),
+        })
+    }
+
+    /// Starts a new execution: π_0 acts next.
+    fn reset(&mut self) {
+        self.active = 0;
+    }
+
+    /// The action at observation `obs` (switching to a later skill first if `obs` lies in
+    /// its activation ball), in the environment's units.
+    fn act<'py>(
+        &mut self,
+        py: Python<'py>,
+        obs: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let raw = action_of(obs).map_err(|_| {
+            invalid(
+                "obs",
+                "must be a sequence of two numbers (the x and y coordinates)",
+            )
+        })?;
+        self.active = self.chain.active_skill(self.active, &raw);
+        let (mut o, mut a) = ([0.0f32; 2], [0.0f32; 2]);
+        self.chain
+            .act(self.active, &raw, &mut o, &mut a, &mut self.ws);
+        Ok(PyArray1::from_slice(py, &a))
+    }
+
+    /// The skill that chose the last action.
+    #[getter]
+    fn active_skill(&self) -> usize {
+        self.active
+    }
+
+    /// The skills' activation balls: `(centre x, centre y, radius)`.
+    #[getter]
+    fn balls(&self) -> Vec<(f32, f32, f32)> {
+        self.chain
+            .skills
+            .iter()
+            .map(|s| {
+                (
+                    s.activation.center[0],
+                    s.activation.center[1],
+                    s.activation.radius,
+                )
+            })
+            .collect()
+    }
+
+    /// The maze the chain was built for: `(size, layout)`.
+    #[getter]
+    fn maze(&self) -> (usize, u64) {
+        (self.maze.size(), self.maze.config().seed)
+    }
+
+    /// The run seed of the job that built the chain.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.job.seed
+    }
+
+    /// ε of the job that built the chain (the radius of B_ε(s_0) the evaluation starts in).
+    #[getter]
+    fn epsilon(&self) -> f32 {
+        self.job.phase2.epsilon
+    }
+
+    /// The step limit of the job's evaluation episodes.
+    #[getter]
+    fn eval_max_steps(&self) -> usize {
+        self.job.phase2.eval_max_steps
+    }
+
+    /// The start states of `pbcs eval`'s episodes for `seed` (default: the run's seed), in
+    /// order: shape (episodes, 2).
+    #[pyo3(signature = (episodes = 100, seed = None))]
+    fn eval_starts<'py>(
+        &self,
+        py: Python<'py>,
+        episodes: i64,
+        seed: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let n = count("episodes", episodes)? as usize;
+        let seed = seed
+            .map(|s| count("seed", s))
+            .transpose()?
+            .unwrap_or(self.job.seed);
+        let starts = pbcs::env::evaluation_starts(
+            &self.maze,
+            self.job.phase2.epsilon,
+            n,
+            &pbcs::rng::Seeds::new(seed),
+        );
+        let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
+        Ok(Array2::from_shape_vec((n, 2), flat)
+            .expect("two coordinates per state")
+            .into_pyarray(py))
+    }
+
+    /// One execution in the core from `start` (default s_0): the states visited, whether it
+    /// reached the target, and the skill that chose each action.
+    #[pyo3(signature = (start = None, max_steps = None))]
+    fn rollout<'py>(
+        &self,
+        py: Python<'py>,
+        start: Option<(f32, f32)>,
+        max_steps: Option<i64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let s = match start {
+            Some((x, y)) => state_of(&self.maze, "start", x, y)?,
+            None => self.maze.start(),
+        };
+        let m = match max_steps {
+            Some(m) => count("max_steps", m)? as usize,
+            None => self.job.phase2.eval_max_steps,
+        };
+        let r = self.chain.run(&self.maze, s, m);
+        let flat: Vec<f32> = r.states.iter().flat_map(|p| [p.x, p.y]).collect();
+        let d = PyDict::new(py);
+        d.set_item(
+            "states",
+            Array2::from_shape_vec((r.states.len(), 2), flat)
+                .expect("two coordinates per state")
+                .into_pyarray(py),
+        )?;
+        d.set_item("success", r.success)?;
+        d.set_item("steps", r.states.len() - 1)?;
+        d.set_item("skill_used", r.skill_used.into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// `pbcs eval`'s evaluation, computed by the core: successes, episodes, the Wilson 95 %
+    /// interval and each episode's steps.
+    #[pyo3(signature = (episodes = 100, seed = None))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        episodes: i64,
+        seed: Option<i64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let n = count("episodes", episodes)? as usize;
+        let seed = seed.map(|s| count("seed", s)).transpose()?;
+        let kernel = self.chain.kernel;
+        let dir = self.dir.clone();
+        let e = py
+            .detach(|| pbcs::runs::eval_chain(&dir, n, seed, kernel))
+            .map_err(py_err)?;
+        let d = PyDict::new(py);
+        d.set_item("successes", e.successes)?;
+        d.set_item("episodes", e.episodes)?;
+        d.set_item("interval", e.interval)?;
+        d.set_item("seed", e.seed)?;
+        let steps: Vec<usize> = e.rows.iter().map(|r| r.steps).collect();
+        let wins: Vec<bool> = e.rows.iter().map(|r| r.success).collect();
+        d.set_item("success", wins.into_pyarray(py))?;
+        d.set_item("steps", steps.into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// An RGB image of the chain's maze with its activation balls and `paths` (a list of
+    /// (len, 2) arrays) in green.
+    #[pyo3(signature = (paths = None, size = 256))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        paths: Option<&Bound<'py, PyList>>,
+        size: i64,
+    ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        let mut rollout_paths = Vec::new();
+        for p in paths.into_iter().flatten() {
+            let a: PyReadonlyArray2<f32> = p.extract().map_err(|_| {
+                invalid(
+                    "paths",
+                    "must be a list of float32 arrays of shape (len, 2)",
+                )
+            })?;
+            let a = a.as_array();
+            if a.ncols() != 2 {
+                return Err(invalid("paths", "each path must have shape (len, 2)"));
+            }
+            rollout_paths.push(a.outer_iter().map(|r| (r[0], r[1])).collect());
+        }
+        let picture = MazePicture {
+            rollout_paths,
+            circles: self
+                .chain
+                .skills
+                .iter()
+                .map(|s| {
+                    (
+                        (s.activation.center[0], s.activation.center[1]),
+                        s.activation.radius,
+                    )
+                })
+                .collect(),
+            ..MazePicture::default()
+        };
+        rgb(py, &self.maze, &picture, size)
+    }
+
+    fn __len__(&self) -> usize {
+        self.chain.skills.len()
+    }
+}
