@@ -58,6 +58,7 @@ pub mod launch;
 pub mod learner;
 pub mod maze;
 pub mod nn;
+pub mod pendulum;
 pub mod phase2;
 pub mod pipeline;
 pub mod plot;

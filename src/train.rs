@@ -39,6 +39,20 @@ pub struct TrainConfig {
     pub final_eval_epsilon: f32,
     /// Step limit of each of those episodes (PBCS's `phase2.eval_max_steps`).
     pub final_eval_max_steps: usize,
+    /// When the learner updates (after `learning_starts`).
+    pub updates: Updates,
+}
+
+/// When a vanilla learner updates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Updates {
+    /// One update after every environment step (the paper's baselines, ours).
+    #[default]
+    Step,
+    /// After each episode, as many updates as it had steps (RL-Zoo's `train_freq = [1,
+    /// "episode"], gradient_steps = -1`, for the Pendulum check).
+    Episode,
 }
 
 impl Default for TrainConfig {
@@ -53,6 +67,7 @@ impl Default for TrainConfig {
             final_eval_episodes: 0,
             final_eval_epsilon: 0.1,
             final_eval_max_steps: 5000,
+            updates: Updates::Step,
         }
     }
 }
@@ -253,13 +268,22 @@ pub fn train_vanilla<E: Env>(
         // Only true terminal states stop bootstrapping; the time limit below does not.
         replay.push(&obs, &action, step.reward, &next_obs, step.terminal);
         terminal_transitions += u64::from(step.terminal);
-        if step_i > train.learning_starts && replay.len() >= lc.batch_size {
+        let learning = step_i > train.learning_starts;
+        if learning && train.updates == Updates::Step && replay.len() >= lc.batch_size {
             replay.sample(lc.batch_size, &mut rng_replay, &mut batch);
             learner.update(&batch);
         }
         t_episode += 1;
         let truncated = t_episode >= train.max_episode_steps;
         if step.terminal || truncated {
+            if learning && train.updates == Updates::Episode {
+                for _ in 0..t_episode {
+                    if replay.len() >= lc.batch_size {
+                        replay.sample(lc.batch_size, &mut rng_replay, &mut batch);
+                        learner.update(&batch);
+                    }
+                }
+            }
             truncated_episodes += u64::from(truncated && !step.terminal);
             state = env.sample_start(&mut rng_start);
             t_episode = 0;

@@ -405,3 +405,39 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
         assert!(!e.success || e.steps >= 9, "{e:?}");
     }
 }
+
+/// `train.updates = "episode"` (RL-Zoo's schedule for the Pendulum check): no update inside an
+/// episode, then as many as the episode had steps; the same total as one per step over the
+/// episodes that ended after the warm-up.
+#[test]
+fn episode_updates_come_at_episode_ends_as_many_as_steps() {
+    use pbcs::train::Updates;
+    let schedule = |updates| TrainConfig {
+        steps: 1_000,
+        max_episode_steps: 100,
+        learning_starts: 300,
+        eval_every: 1_000,
+        updates,
+        ..TrainConfig::default()
+    };
+    let run = |updates| {
+        train_vanilla(
+            &pbcs::pendulum::Pendulum,
+            &LearnerConfig {
+                batch_size: 32,
+                ..LearnerConfig::td3()
+            },
+            &schedule(updates),
+            &Seeds::new(1),
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let (step, episode) = (run(Updates::Step), run(Updates::Episode));
+    // Pendulum never terminates: 10 episodes of 100 steps; one update per step after step 300.
+    assert_eq!(step.learner.updates(), 700);
+    // Episodes ending at steps 400, 500, …, 1000 are past the warm-up: 7 × 100 updates.
+    assert_eq!(episode.learner.updates(), 700);
+    assert_ne!(step.learner.actor.params, episode.learner.actor.params);
+}

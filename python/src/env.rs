@@ -301,3 +301,19 @@ impl MazeVecEnv {
         self.maze.config().max_action
     }
 }
+
+/// One step of the Rust port of gymnasium's Pendulum-v1 (`pbcs::pendulum`) from (θ, θ̇) with
+/// torque `torque`: the next (θ, θ̇), the reward and the observation (cos θ, sin θ, θ̇). For the
+/// test that the port's steps are gymnasium's.
+#[pyfunction]
+pub(crate) fn pendulum_step(
+    theta: f64,
+    theta_dot: f64,
+    torque: f32,
+) -> ((f64, f64), f32, [f32; 3]) {
+    let p = pbcs::pendulum::Pendulum;
+    let step = p.step(&[theta, theta_dot], &[torque]);
+    let mut obs = [0.0f32; 3];
+    p.observe(&step.state, &mut obs);
+    ((step.state[0], step.state[1]), step.reward, obs)
+}

@@ -140,6 +140,7 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pipeline::explore, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::run, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::evaluation_starts, m)?)?;
+    m.add_function(wrap_pyfunction!(env::pendulum_step, m)?)?;
     m.add("MAX_MAZE_SIZE", pbcs::maze::MAX_MAZE_SIZE)?;
     Ok(())
 }

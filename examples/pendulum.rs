@@ -1,0 +1,85 @@
+//! Our TD3 on Pendulum-v1 (ported step for step: `pbcs::pendulum`) with RL-Zoo's tuned TD3
+//! settings for Pendulum-v1: 20 000 steps, γ = 0.98, replay 200 000, 10 000 random warm-up
+//! steps, learning rate 1e-3, networks [400, 300], Gaussian noise σ = 0.1, batch 256 (SB3's
+//! TD3 default), τ = 0.005, and after each 200-step episode as many updates as its steps
+//! (`train_freq = [1, "episode"], gradient_steps = -1`). Each seed's final greedy policy is
+//! judged on its mean return over 10 episodes from random starts (RL-Zoo's published TD3
+//! agent: −195.99 ± 119.03). Writes one row per seed into `results/raw/pendulum/ours/`
+//! (a finished seed is skipped), its wall clock beside it.
+//!
+//! `cargo run --release --example pendulum -- [FIRST_SEED LAST_SEED]` (default 0 9); the SB3
+//! side is `python/benches/sb3_pendulum.py`.
+
+use pbcs::learner::{Algo, LearnerConfig};
+use pbcs::pendulum::{Pendulum, EPISODE_STEPS};
+use pbcs::rng::Seeds;
+use pbcs::train::{train_vanilla, TrainConfig, Updates};
+use std::path::Path;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<u64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse())
+        .collect::<Result<_, _>>()?;
+    let (first, last) = match args[..] {
+        [] => (0, 9),
+        [a, b] if a <= b => (a, b),
+        _ => anyhow::bail!("usage: pendulum [FIRST_SEED LAST_SEED]"),
+    };
+    let learner = LearnerConfig {
+        algo: Algo::Td3,
+        hidden: vec![400, 300],
+        actor_lr: 1e-3,
+        critic_lr: 1e-3,
+        gamma: 0.98,
+        tau: 0.005,
+        batch_size: 256,
+        replay_size: 200_000,
+        noise_sigma: 0.1,
+        ..LearnerConfig::td3()
+    };
+    let train = TrainConfig {
+        steps: 20_000,
+        max_episode_steps: EPISODE_STEPS,
+        learning_starts: 10_000,
+        eval_every: 20_000,
+        eval_episodes: 10,
+        updates: Updates::Episode,
+        ..TrainConfig::default()
+    };
+    let dir = Path::new("results/raw/pendulum/ours");
+    std::fs::create_dir_all(dir)?;
+    let kernel = pbcs::nn::kernel::Kernel::from_env()?;
+    for seed in first..=last {
+        let row = dir.join(format!("s{seed}.csv"));
+        if row.exists() {
+            print!("{}", std::fs::read_to_string(&row)?);
+            continue;
+        }
+        let clock = std::time::Instant::now();
+        let out = train_vanilla(
+            &Pendulum,
+            &learner,
+            &train,
+            &Seeds::new(seed),
+            kernel,
+            |_, _| {},
+        )?;
+        let seconds = clock.elapsed().as_secs_f64();
+        let eval = out.evals.last().expect("one evaluation at the end");
+        let text = format!(
+            "library,algo,seed,steps,eval_episodes,mean_return\npbcs,td3,{seed},{},{},{}\n",
+            eval.steps, train.eval_episodes, eval.mean_return
+        );
+        pbcs::record::write_atomic(&row.with_extension("timing.toml"), |w| {
+            write!(
+                w,
+                "# wall clock (not deterministic)\nwall_seconds = {seconds:.3}\nkernel = \"{}\"\n",
+                kernel.name()
+            )
+        })?;
+        pbcs::record::write_atomic(&row, |w| w.write_all(text.as_bytes()))?;
+        print!("{text}");
+    }
+    Ok(())
+}
