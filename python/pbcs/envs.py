@@ -40,7 +40,7 @@ class ContinuousMaze(gym.Env):
     ``render_mode="rgb_array"``) returns the maze with the episode's path as an RGB array.
 
     >>> env = ContinuousMaze(size=2)
-    >>> obs, _ = env.reset(options={"state": (0.5, 1.2)})
+    >>> obs, _ = env.reset(options={"state": (0.5, 1.25)})
     >>> obs, reward, terminated, truncated, info = env.step([0.0, 0.1])
     >>> reward, terminated
     (1.0, True)

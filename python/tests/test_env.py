@@ -124,3 +124,14 @@ def test_the_agent_never_leaves_the_maze_or_crosses_a_wall():
         assert (0 <= obs).all() and (obs <= 5).all()
         inside = (walls[:, 0] < obs[0]) & (obs[0] < walls[:, 2]) & (walls[:, 1] < obs[1]) & (obs[1] < walls[:, 3])
         assert not inside.any(), f"{obs} inside a wall"
+
+
+def test_the_docstring_examples_hold():
+    import doctest
+
+    import pbcs.chain
+    import pbcs.envs
+
+    for module in (pbcs, pbcs.envs, pbcs.chain):
+        failed, _ = doctest.testmod(module)
+        assert failed == 0, module.__name__
