@@ -4,7 +4,7 @@
 //! TD3 default), τ = 0.005, and after each 200-step episode as many updates as its steps
 //! (`train_freq = [1, "episode"], gradient_steps = -1`). Each seed's final greedy policy is
 //! judged on its mean return over 10 episodes from random starts (RL-Zoo's published TD3
-//! agent: −195.99 ± 119.03). Writes one row per seed into `results/raw/pendulum/ours/`
+//! agent: −195.99 ± 119.03). Writes one row per seed into `results/outside/pendulum/ours/`
 //! (a finished seed is skipped), its wall clock beside it.
 //!
 //! `cargo run --release --example pendulum -- [FIRST_SEED LAST_SEED]` (default 0 9); the SB3
@@ -47,7 +47,7 @@ fn main() -> anyhow::Result<()> {
         updates: Updates::Episode,
         ..TrainConfig::default()
     };
-    let dir = Path::new("results/raw/pendulum/ours");
+    let dir = Path::new("results/outside/pendulum/ours");
     std::fs::create_dir_all(dir)?;
     let kernel = pbcs::nn::kernel::Kernel::from_env()?;
     for seed in first..=last {

@@ -14,7 +14,7 @@ episode from s_0 (success = the target reached within 1000 steps); and, beside i
 protocol (100 greedy episodes from the start states of `pbcs.evaluation_starts` for the run
 seed, solved at >= 95 %). One torch thread per run (ours are single-threaded too).
 
-    python python/benches/sb3_maze.py --algo ddpg --seeds 0-9 --steps 300000 --out results/raw/sb3
+    python python/benches/sb3_maze.py --algo ddpg --seeds 0-9 --steps 300000 --out results/outside/sb3
     python python/benches/sb3_maze.py --timing        # update cost per step: SB3 and ours
 
 Needs stable-baselines3 (and torch) beside this package; not part of CI. Each run writes
@@ -158,7 +158,7 @@ def main():
     p.add_argument("--algo", choices=["ddpg", "td3"], default="ddpg")
     p.add_argument("--seeds", default="0-9", help="a seed or a range, e.g. 0-9")
     p.add_argument("--steps", type=int, default=300_000)
-    p.add_argument("--out", type=Path, default=Path("results/raw/sb3"))
+    p.add_argument("--out", type=Path, default=Path("results/outside/sb3"))
     p.add_argument("--timing", action="store_true", help="measure the update cost per step only")
     p.add_argument("--timing-steps", type=int, default=5_000)
     p.add_argument("--pbcs", default="target/release/pbcs", help="the pbcs command (for --timing)")

@@ -8,7 +8,7 @@ gradient_steps −1 (SB3's defaults otherwise: batch 256, τ = 0.005, policy del
 smoothing 0.2 / 0.5). Each seed's final deterministic policy: mean return over 10 episodes
 (RL-Zoo's published TD3 agent: −195.99 ± 119.03). One torch thread per run.
 
-    python python/benches/sb3_pendulum.py --seeds 0-9 --out results/raw/pendulum/sb3
+    python python/benches/sb3_pendulum.py --seeds 0-9 --out results/outside/pendulum/sb3
 
 Needs stable-baselines3 (not part of CI). A finished seed's row is skipped on re-run.
 """
@@ -79,7 +79,7 @@ def run(seed, out):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seeds", default="0-9", help="a seed or a range, e.g. 0-9")
-    p.add_argument("--out", type=Path, default=Path("results/raw/pendulum/sb3"))
+    p.add_argument("--out", type=Path, default=Path("results/outside/pendulum/sb3"))
     args = p.parse_args()
     a, _, b = args.seeds.partition("-")
     for seed in range(int(a), int(b or a) + 1):
