@@ -73,6 +73,12 @@ impl MazeEnv {
     /// One step: `(observation, reward, terminated, truncated, hit_wall)`.
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<EnvStep<'py>> {
         let a = action_of(action)?;
+        // The step's own wall test (its reward cannot tell: a step from inside the target
+        // disc into a wall is paid 1 − 1 = 0).
+        let hit = {
+            let next = self.state + self.maze.clip_action(&a);
+            self.maze.walls().segment_hits(&self.state, &next)
+        };
         let step = self.maze.step(&self.state, &a);
         self.state = step.state;
         self.elapsed += 1;
@@ -81,13 +87,7 @@ impl MazeEnv {
         }
         let truncated = !step.terminal && self.elapsed >= self.max_episode_steps;
         let obs = PyArray1::from_slice(py, &[self.state.x, self.state.y]);
-        Ok((
-            obs,
-            step.reward,
-            step.terminal,
-            truncated,
-            step.reward < 0.0,
-        ))
+        Ok((obs, step.reward, step.terminal, truncated, hit))
     }
 
     /// The pure step function: `(x', y', reward, terminal)` from `(x, y)` and `(ax, ay)`,

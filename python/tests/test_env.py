@@ -135,3 +135,17 @@ def test_the_docstring_examples_hold():
     for module in (pbcs, pbcs.envs, pbcs.chain):
         failed, _ = doctest.testmod(module)
         assert failed == 0, module.__name__
+
+
+def test_hit_wall_is_the_steps_own_wall_test():
+    # A target disc wide enough (0.45) to reach the wall between cells (0,0) and (0,1)
+    # (y = 1 ± 0.05): from inside it, a step down into the wall is paid 1 − 1 = 0, and is
+    # still reported as a wall.
+    env = pbcs.ContinuousMaze(size=2, target_radius=0.45)
+    env.reset(options={"state": (0.5, 1.1)})
+    obs, reward, terminated, _, info = env.step([0.0, -0.1])
+    assert info["hit_wall"] and reward == 0.0 and terminated
+    assert obs.tobytes() == np.array([0.5, 1.1], dtype=np.float32).tobytes()
+    env.reset()
+    obs, reward, terminated, _, info = env.step([0.1, 0.0])
+    assert not info["hit_wall"] and reward == 0.0
