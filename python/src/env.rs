@@ -9,6 +9,14 @@ use pbcs::maze::Maze;
 use pbcs::plot::MazePicture;
 use pyo3::prelude::*;
 
+/// `max_episode_steps` of both environments: 1 to 2³² − 1.
+fn episode_limit(v: i64) -> PyResult<u32> {
+    u32::try_from(count("max_episode_steps", v)?)
+        .ok()
+        .filter(|&m| m > 0)
+        .ok_or_else(|| invalid("max_episode_steps", "must be between 1 and 2^32 - 1"))
+}
+
 /// What `MazeEnv::step` returns: observation, reward, terminated, truncated, hit a wall.
 type EnvStep<'py> = (Bound<'py, PyArray1<f32>>, f32, bool, bool, bool);
 
@@ -39,10 +47,7 @@ impl MazeEnv {
         max_action: f32,
     ) -> PyResult<Self> {
         let maze = maze_of(size, layout, wall_thickness, target_radius, max_action)?;
-        let max_episode_steps = count("max_episode_steps", max_episode_steps)? as usize;
-        if max_episode_steps == 0 {
-            return Err(invalid("max_episode_steps", "must be at least 1"));
-        }
+        let max_episode_steps = episode_limit(max_episode_steps)? as usize;
         let state = maze.start();
         Ok(MazeEnv {
             maze,
@@ -205,10 +210,7 @@ impl MazeVecEnv {
         if n == 0 {
             return Err(invalid("num_envs", "must be at least 1"));
         }
-        let max_episode_steps = u32::try_from(count("max_episode_steps", max_episode_steps)?)
-            .ok()
-            .filter(|&m| m > 0)
-            .ok_or_else(|| invalid("max_episode_steps", "must be between 1 and 2^32 - 1"))?;
+        let max_episode_steps = episode_limit(max_episode_steps)?;
         Ok(MazeVecEnv {
             states: vec![maze.start(); n],
             maze,
