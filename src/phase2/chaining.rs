@@ -26,7 +26,8 @@ use std::time::Instant;
 /// reward, starts in B_ε(τ_K)) per skill, then, with `phase2.chain_verify_episodes`, the
 /// chain's verification and repair (`repair_chain`, in this module).
 ///
-/// Learning problem n's learner is initialised from the run's seeds for sub-run n, and its
+/// Learning problem n's learner is initialised from the run's seeds for sub-run n (or, with
+/// `phase2.warm_start`, taken over from the skill before it), and its
 /// starts, noise and replay sampling read substream n (n counts restarts and repairs too, so
 /// it equals the skill's index when nothing restarts); `spent` is the step count already used
 /// (phase 1), charged against `config.max_env_steps`.
@@ -42,28 +43,7 @@ pub fn chain_skills<E: Env>(
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
-    let chainer = Chainer {
-        env,
-        tau,
-        obs: tau
-            .iter()
-            .map(|s| {
-                let mut o = vec![0.0; env.obs_dim()];
-                env.observe(s, &mut o);
-                o
-            })
-            .collect(),
-        learner,
-        config,
-        seeds,
-        kernel,
-        spent: Cell::new(spent),
-        made: Cell::new(0),
-        steps: Cell::new(StepCounts::default()),
-        trace: RefCell::new(Vec::new()),
-        clock: Instant::now(),
-        progress: RefCell::new(&mut progress),
-    };
+    let chainer = Chainer::new(env, tau, learner, config, seeds, spent, kernel, &mut progress);
     let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
     let mut chain = SkillChain { skills, kernel };
     if failure.is_none() && config.chain_verify_episodes > 0 {
@@ -92,13 +72,51 @@ pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     spent: Cell<u64>,
     /// Learning problems made so far (skills, restarts, repairs).
     made: Cell<usize>,
+    /// The last learning problem's learner and its target's index on τ (warm start).
+    last: RefCell<Option<(usize, Learner)>>,
     steps: Cell<StepCounts>,
     trace: RefCell<Vec<TraceRow>>,
     clock: Instant,
     progress: RefCell<&'a mut P>,
 }
 
-impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
+impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        env: &'a E,
+        tau: &'a [E::State],
+        learner: &'a LearnerConfig,
+        config: &'a Phase2Config,
+        seeds: &'a Seeds,
+        spent: u64,
+        kernel: Kernel,
+        progress: &'a mut P,
+    ) -> Self {
+        Chainer {
+            env,
+            tau,
+            obs: tau
+                .iter()
+                .map(|s| {
+                    let mut o = vec![0.0; env.obs_dim()];
+                    env.observe(s, &mut o);
+                    o
+                })
+                .collect(),
+            learner,
+            config,
+            seeds,
+            kernel,
+            spent: Cell::new(spent),
+            made: Cell::new(0),
+            last: RefCell::new(None),
+            steps: Cell::new(StepCounts::default()),
+            trace: RefCell::new(Vec::new()),
+            clock: Instant::now(),
+            progress: RefCell::new(progress),
+        }
+    }
+
     /// Algorithm 1 on the section τ_lo … τ_hi with the goal of τ_hi
     /// ([`Phase2Config::goal`]): the skills in execution order, with indices on the whole τ.
     /// `entries` (chain repair) are start states at τ_lo drawn for half of the starts there.
@@ -120,6 +138,9 @@ impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
                 self.steps.set(steps);
                 self.spent
                     .set(self.spent.get() + task.steps.train + task.steps.test);
+                if self.config.warm_start {
+                    *self.last.borrow_mut() = Some((lo + task.target(), task.learner));
+                }
             },
         )?;
         let skills = found
@@ -153,13 +174,23 @@ impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
         self.made.set(n + 1);
         let n32 = n as u32;
         let (env, config) = (self.env, self.config);
-        let learner = Learner::new(
-            self.learner,
-            env.obs_dim(),
-            &config.learner_bounds(env),
-            &self.seeds.skill(n32),
-            self.kernel,
-        )?;
+        // Warm start: a problem whose target lies before the last one's (the next skill of
+        // the chain) takes over the last learner; a restart or a repair (same or later
+        // target) starts fresh.
+        let warm = match self.last.borrow_mut().take() {
+            Some((last_t, learner)) if config.warm_start && last_t > lo + t => Some(learner),
+            _ => None,
+        };
+        let learner = match warm {
+            Some(learner) => learner,
+            None => Learner::new(
+                self.learner,
+                env.obs_dim(),
+                &config.learner_bounds(env),
+                &self.seeds.skill(n32),
+                self.kernel,
+            )?,
+        };
         let rngs = [
             self.seeds.substream(Stream::Start, n32),
             self.seeds.substream(Stream::Noise, n32),
@@ -438,4 +469,59 @@ pub fn verified<B: backplay::Backplayer>(
         }
     }
     best.map(|(_, i)| candidates.swap_remove(i))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toy::Toy1D;
+
+    /// With `warm_start`, the problem after a saved skill (an earlier target on τ) takes over
+    /// the last learner; a restart (same target) or a repair (a later one) starts from the
+    /// seeds, as every problem does without the switch.
+    #[test]
+    fn warm_start_takes_over_the_last_learner_only_for_the_next_skill() {
+        let tau: Vec<f32> = (0..=10).map(|i| 0.9 - 0.08 * i as f32).collect();
+        let lc = LearnerConfig::ddpg();
+        let seeds = Seeds::new(5);
+        let kernel = Kernel::detect();
+        let fresh = |n: u32| {
+            Learner::new(&lc, 1, &[1.0], &seeds.skill(n), kernel)
+                .unwrap()
+                .actor
+                .params
+        };
+        // A learner unlike any fresh one: the weights of sub-run 99.
+        let trained = Learner::new(&lc, 1, &[1.0], &seeds.skill(99), kernel).unwrap();
+        for warm in [false, true] {
+            let config = Phase2Config {
+                warm_start: warm,
+                ..Phase2Config::default()
+            };
+            let mut progress = |_: usize, _: Progress| {};
+            let c = Chainer::new(&Toy1D, &tau, &lc, &config, &seeds, 0, kernel, &mut progress);
+            // (last target, new target, expected: warm?)
+            for (n, (last_t, t, takes_over)) in
+                [(6, 3, true), (6, 6, false), (6, 8, false)].into_iter().enumerate()
+            {
+                *c.last.borrow_mut() = Some((last_t, trained.clone()));
+                let task = c.task(&tau, 0, t, &[]).unwrap();
+                let expected = if warm && takes_over {
+                    trained.actor.params.clone()
+                } else {
+                    fresh(n as u32)
+                };
+                let got = &task.learner.actor.params;
+                assert!(
+                    got == &expected,
+                    "warm {warm}, T {last_t} → {t}: {} params, first {:?}; expected {} params, \
+                     first {:?}",
+                    got.len(),
+                    &got[..3],
+                    expected.len(),
+                    &expected[..3]
+                );
+            }
+        }
+    }
 }

@@ -109,6 +109,19 @@ pub struct Phase2Config {
     /// in its place. A skill that passes n of n episodes fails at most 3/n of the time (95 %
     /// confidence, the rule of three): β = 50 bounds it by 6 %, 500 episodes by 0.6 %.
     pub verify_episodes: usize,
+    /// Warm start (ours; off in the paper's procedure, where each skill is "a new DDPG"):
+    /// the learning problem of the skill after a saved one starts from the learner that
+    /// saved it (actor, critic, their targets and optimiser state; the replay starts empty,
+    /// its rewards being the previous goal's). The networks see goal-relative inputs, so
+    /// "reach the goal from just behind τ_T" is the problem the previous skill solved from
+    /// B_ε(τ_T). Restarts and repairs start fresh.
+    pub warm_start: bool,
+    /// Path-scaled episode limits (ours; 0 = off, the paper's procedure: every training and
+    /// test episode may take `max_steps` steps): an episode from B_ε(τ_K) towards the goal of
+    /// τ_T may take at most `path_limit × (L + 2ε) / a` steps (and never more than
+    /// `max_steps`), L being τ's length from τ_K to τ_T and a the smallest action bound: a
+    /// start near its goal does not spend `max_steps` steps to show that it fails.
+    pub path_limit: f32,
     /// Verification of the finished chain (ours; 0 = off, the paper's procedure): the chain
     /// runs greedily from `chain_verify_episodes` starts uniform in B_ε(s_0) (stream
     /// `ChainVerify`), each skill allowed `max_steps` steps to hand over, as in its tests. When
@@ -149,6 +162,8 @@ impl Default for Phase2Config {
             restarts: 0,
             fast_tests: false,
             verify_episodes: 0,
+            warm_start: false,
+            path_limit: 0.0,
             chain_verify_episodes: 0,
             chain_repairs: 0,
             last_goal: LastGoal::SuccessRegion,
@@ -220,6 +235,12 @@ impl Check for Phase2Config {
                      at most 1, got {}",
                     self.epsilon
                 ),
+            ));
+        }
+        if !(self.path_limit.is_finite() && self.path_limit >= 0.0) {
+            return Err(Error::invalid(
+                "phase2.path_limit",
+                format!("must be 0 (off) or positive, got {}", self.path_limit),
             ));
         }
         if self.max_env_steps == 0 {

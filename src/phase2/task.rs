@@ -32,6 +32,37 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
+/// The step limit of an episode from each of `states` = τ_0 … τ_T towards the goal of τ_T:
+/// `max_steps`, or with [`Phase2Config::path_limit`] p at most ⌈p (L_k + 2ε) / a⌉, L_k being
+/// τ's length from τ_k to τ_T and a the smallest action bound.
+fn episode_limits<E: Env>(env: &E, config: &Phase2Config, states: &[E::State]) -> Vec<usize> {
+    let n = states.len();
+    if config.path_limit <= 0.0 {
+        return vec![config.max_steps; n];
+    }
+    let a = (0..env.action_dim())
+        .map(|i| env.action_bound(i))
+        .fold(f32::INFINITY, f32::min);
+    let obs: Vec<Vec<f32>> = states
+        .iter()
+        .map(|s| {
+            let mut o = vec![0.0; env.obs_dim()];
+            env.observe(s, &mut o);
+            o
+        })
+        .collect();
+    let mut limits = vec![config.max_steps; n];
+    let mut length = 0.0;
+    for k in (0..n).rev() {
+        if k + 1 < n {
+            length += dist(&obs[k], &obs[k + 1]);
+        }
+        let steps = (config.path_limit * (length + 2.0 * config.epsilon) / a).ceil();
+        limits[k] = (steps as usize).clamp(1, config.max_steps);
+    }
+    limits
+}
+
 /// One skill's learning problem on a trajectory section τ_0 … τ_T.
 pub struct SkillTask<'a, E: Env> {
     env: &'a E,
@@ -61,6 +92,9 @@ pub struct SkillTask<'a, E: Env> {
     /// States where an executed chain entered this skill's section (chain repair): half of
     /// the starts at K = 0 are drawn from them, half uniformly in B_ε(τ_0). Empty otherwise.
     entries: Vec<E::State>,
+    /// The step limit of an episode from each τ_k (`max_steps`, or less with
+    /// [`Phase2Config::path_limit`]).
+    limits: Vec<usize>,
     /// Called after each test and training round.
     pub on_event: Option<Box<dyn FnMut(super::Progress) + 'a>>,
 }
@@ -106,6 +140,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
             budget,
             bounds: config.learner_bounds(env),
             entries: Vec::new(),
+            limits: episode_limits(env, config, &states[..=t]),
             on_event: None,
         }
     }
@@ -115,6 +150,11 @@ impl<'a, E: Env> SkillTask<'a, E> {
     pub fn with_entries(mut self, entries: Vec<E::State>) -> Self {
         self.entries = entries;
         self
+    }
+
+    /// The index of the goal's state in this task's section (τ_T).
+    pub fn target(&self) -> usize {
+        self.t
     }
 
     fn spent_budget(&self) -> bool {
@@ -162,7 +202,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 noise.reset();
             }
         }
-        for _ in 0..self.config.max_steps {
+        for _ in 0..self.limits[k] {
             if running.is_empty() {
                 break;
             }

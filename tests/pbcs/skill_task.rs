@@ -103,6 +103,33 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
     );
 }
 
+/// `path_limit` = 1.5 on τ spaced 0.1 apart towards τ_5: an episode from τ_0 may take
+/// ⌈1.5 (0.5 + 2ε) / 0.1⌉ = 11 steps, one from τ_4 ⌈1.5 (0.1 + 2ε) / 0.1⌉ = 5 (not 50); a
+/// policy that goes to the goal still passes.
+#[test]
+fn path_limits_shorten_episodes_near_the_goal() {
+    let (maze, states, obs) = setup();
+    let config = Phase2Config {
+        path_limit: 1.5,
+        ..Phase2Config::default()
+    };
+    // Moving along −x, away from τ_5 (slow tests: no episode ends before its limit).
+    let away = unit_policy([-1.0, 0.0]);
+    let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
+    assert_eq!(t.test(0), 0.0);
+    assert_eq!(t.steps.test, 50 * 11);
+    assert_eq!(t.test(4), 0.0);
+    assert_eq!(t.steps.test, 50 * 11 + 50 * 5);
+    let mut t = task(&maze, &config, &states, &obs, 1_000_000);
+    assert_eq!(t.test(0), 1.0);
+    let bad = Phase2Config {
+        path_limit: -1.0,
+        ..Phase2Config::default()
+    };
+    let err = pbcs::validate::Check::check(&bad).unwrap_err().to_string();
+    assert!(err.contains("phase2.path_limit"), "{err}");
+}
+
 #[test]
 fn a_policy_that_goes_to_the_goal_passes_and_actions_are_scaled_to_the_bounds() {
     let (maze, states, obs) = setup();
