@@ -34,6 +34,8 @@ pub trait Backplayer {
 pub struct Walk {
     /// α: consecutive non-improvements of the training success that end training at one K.
     pub alpha: usize,
+    /// At most this many training rounds at one K (ours; 0: no cap, the paper).
+    pub max_rounds: usize,
     /// How far K moves back after each K (1: the paper).
     pub k_step: usize,
     /// End training at K once a 100 % round is confirmed by a 100 % test (ours).
@@ -55,22 +57,19 @@ pub struct Walk {
 pub const MAX_ADAPTIVE_STEP: usize = 16;
 
 /// Runs Algorithm 3 ([`Backplayer::train`]) from τ_k until its success fails to beat its best
-/// `alpha` times in a row ("until performance stabilizes"). Returns (rounds, best).
+/// `walk.alpha` times in a row ("until performance stabilizes"). Returns (rounds, best).
 ///
-/// With `early_stop` (an option of ours, off in the paper's procedure), a round at 100 % is
-/// followed by a greedy test, and a 100 % test ends training at once: DDPG trained on past
-/// success tends to drift away from it during the α further rounds.
-pub fn train_until_stable<B: Backplayer>(
-    b: &mut B,
-    k: usize,
-    alpha: usize,
-    early_stop: bool,
-) -> (usize, f32) {
+/// With `walk.early_stop` (an option of ours, off in the paper's procedure), a round at 100 %
+/// is followed by a greedy test, and a 100 % test ends training at once: DDPG trained on past
+/// success tends to drift away from it during the α further rounds. With `walk.max_rounds`
+/// (ours), training also ends after that many rounds: a K that needs more is rarely solved at
+/// all, and the rounds spent there before α misses are most of a skill's training.
+pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (usize, f32) {
     let (mut best, mut misses, mut rounds) = (f32::NEG_INFINITY, 0, 0);
-    while misses < alpha {
+    while misses < walk.alpha && (walk.max_rounds == 0 || rounds < walk.max_rounds) {
         let p = b.train(k);
         rounds += 1;
-        if early_stop && p >= 1.0 && b.test(k) >= 1.0 {
+        if walk.early_stop && p >= 1.0 && b.test(k) >= 1.0 {
             return (rounds, p);
         }
         if p > best {
@@ -136,7 +135,7 @@ pub fn backplay_candidates<B: Backplayer>(
         }
         let mut dead = false;
         if !solved {
-            train_until_stable(b, k, walk.alpha, walk.early_stop);
+            train_until_stable(b, k, walk);
             let success = b.test(k);
             solved = success >= 1.0;
             dead = success <= 0.0 || (!solved && walk.stop_at_failure && b.ball_is_clear(k));

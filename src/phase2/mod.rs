@@ -68,6 +68,9 @@ pub enum InputMode {
 pub struct Phase2Config {
     /// α: consecutive non-improvements of the training success that end training at one K.
     pub alpha: usize,
+    /// At most this many training rounds at one K (ours; 0 = no cap, the paper's "until
+    /// performance stabilizes" alone): [`backplay::Walk::max_rounds`].
+    pub max_rounds: usize,
     /// β: episodes per test and per training round.
     pub beta: usize,
     /// ε: radius of the start balls, target balls and activation balls.
@@ -149,6 +152,7 @@ impl Default for Phase2Config {
     fn default() -> Self {
         Phase2Config {
             alpha: 10,
+            max_rounds: 0,
             beta: 50,
             epsilon: 0.1,
             max_steps: 50,
@@ -288,6 +292,7 @@ impl Phase2Config {
     pub fn walk(&self) -> backplay::Walk {
         backplay::Walk {
             alpha: self.alpha,
+            max_rounds: self.max_rounds,
             k_step: self.k_step,
             early_stop: self.early_stop,
             adaptive: self.adaptive_k,

@@ -46,6 +46,7 @@ impl Backplayer for Scripted {
 pub fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
     Walk {
         alpha,
+        max_rounds: 0,
         k_step,
         early_stop,
         adaptive: false,
@@ -69,6 +70,33 @@ fn always_successful_walks_to_zero_without_training() {
             "test 2 = 1",
             "test 1 = 1",
             "test 0 = 1"
+        ]
+    );
+}
+
+/// `max_rounds` = 2 ends the training of the test below (α = 3) after its second round,
+/// still improving; K = 2's test then decides as usual.
+#[test]
+fn training_stops_after_max_rounds_even_while_improving() {
+    let mut b = Scripted {
+        tests: HashMap::from([(2, vec![0.5]), (1, vec![1.0]), (0, vec![1.0])]),
+        train: vec![0.2, 0.5, 0.5, 0.4, 0.3, 0.9],
+        ..Default::default()
+    };
+    let capped = Walk {
+        max_rounds: 2,
+        ..walk(3, 1, false)
+    };
+    assert_eq!(backplay(&mut b, 3, &capped), Some((0, 2)));
+    assert_eq!(
+        b.calls,
+        [
+            "test 2 = 0.5",
+            "train 2 = 0.2",
+            "train 2 = 0.5",
+            "test 2 = 0.5",
+            "test 1 = 1",
+            "test 0 = 1",
         ]
     );
 }
