@@ -175,8 +175,8 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let n32 = n as u32;
         let (env, config) = (self.env, self.config);
         // Warm start: a problem whose target lies before the last one's (the next skill of
-        // the chain) takes over the last learner; a restart or a repair (same or later
-        // target) starts fresh.
+        // the chain) takes over the last learner; a restart (same target) or a repair of a
+        // later section starts fresh.
         let warm = match self.last.borrow_mut().take() {
             Some((last_t, learner)) if config.warm_start && last_t > lo + t => Some(learner),
             _ => None,
@@ -477,8 +477,8 @@ mod tests {
     use crate::toy::Toy1D;
 
     /// With `warm_start`, the problem after a saved skill (an earlier target on τ) takes over
-    /// the last learner; a restart (same target) or a repair (a later one) starts from the
-    /// seeds, as every problem does without the switch.
+    /// the last learner; a restart (same target) or a repair of a later section starts from
+    /// the seeds, as every problem does without the switch.
     #[test]
     fn warm_start_takes_over_the_last_learner_only_for_the_next_skill() {
         let tau: Vec<f32> = (0..=10).map(|i| 0.9 - 0.08 * i as f32).collect();

@@ -112,12 +112,14 @@ pub struct Phase2Config {
     /// in its place. A skill that passes n of n episodes fails at most 3/n of the time (95 %
     /// confidence, the rule of three): β = 50 bounds it by 6 %, 500 episodes by 0.6 %.
     pub verify_episodes: usize,
-    /// Warm start (ours; off in the paper's procedure, where each skill is "a new DDPG"):
-    /// the learning problem of the skill after a saved one starts from the learner that
-    /// saved it (actor, critic, their targets and optimiser state; the replay starts empty,
-    /// its rewards being the previous goal's). The networks see goal-relative inputs, so
-    /// "reach the goal from just behind τ_T" is the problem the previous skill solved from
-    /// B_ε(τ_T). Restarts and repairs start fresh.
+    /// Warm start (ours; off in the paper's procedure, where each skill is "a new DDPG"): a
+    /// learning problem whose target lies before the last problem's on τ — in Algorithm 1,
+    /// the skill after a saved one — starts from the last problem's learner (actor, critic,
+    /// their targets and optimiser state; the replay starts empty, its rewards being the
+    /// previous goal's). The networks see goal-relative inputs, so "reach the goal from just
+    /// behind τ_T" is the problem the previous skill solved from B_ε(τ_T). A restart (same
+    /// target) starts fresh, and so does a chain repair whose section ends after the last
+    /// problem's target (always the first repair: the last problem was skill 0's).
     pub warm_start: bool,
     /// Path-scaled episode limits (ours; 0 = off, the paper's procedure: every training and
     /// test episode may take `max_steps` steps): an episode from B_ε(τ_K) towards the goal of
