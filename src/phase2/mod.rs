@@ -127,6 +127,10 @@ pub struct Phase2Config {
     /// `max_steps`), L being τ's length from τ_K to τ_T and a the smallest action bound: a
     /// start near its goal does not spend `max_steps` steps to show that it fails.
     pub path_limit: f32,
+    /// The same limit for greedy episodes only (ours; 0 = off): tests and verifications of
+    /// a skill; training episodes keep `max_steps` (or `path_limit`'s, the smaller applying
+    /// to greedy episodes when both are set).
+    pub test_path_limit: f32,
     /// Verification of the finished chain (ours; 0 = off, the paper's procedure): the chain
     /// runs greedily from `chain_verify_episodes` starts uniform in B_ε(s_0) (stream
     /// `ChainVerify`), each skill allowed `max_steps` steps to hand over, as in its tests. When
@@ -170,6 +174,7 @@ impl Default for Phase2Config {
             verify_episodes: 0,
             warm_start: false,
             path_limit: 0.0,
+            test_path_limit: 0.0,
             chain_verify_episodes: 0,
             chain_repairs: 0,
             last_goal: LastGoal::SuccessRegion,
@@ -243,11 +248,16 @@ impl Check for Phase2Config {
                 ),
             ));
         }
-        if !(self.path_limit.is_finite() && self.path_limit >= 0.0) {
-            return Err(Error::invalid(
-                "phase2.path_limit",
-                format!("must be 0 (off) or positive, got {}", self.path_limit),
-            ));
+        for (field, p) in [
+            ("phase2.path_limit", self.path_limit),
+            ("phase2.test_path_limit", self.test_path_limit),
+        ] {
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(Error::invalid(
+                    field,
+                    format!("must be 0 (off) or positive, got {p}"),
+                ));
+            }
         }
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));

@@ -33,11 +33,17 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
 }
 
 /// The step limit of an episode from each of `states` = τ_0 … τ_T towards the goal of τ_T:
-/// `max_steps`, or with [`Phase2Config::path_limit`] p at most ⌈p (L_k + 2ε) / a⌉, L_k being
-/// τ's length from τ_k to τ_T and a the smallest action bound.
-fn episode_limits<E: Env>(env: &E, config: &Phase2Config, states: &[E::State]) -> Vec<usize> {
+/// `max_steps`, or with a path limit p > 0 ([`Phase2Config::path_limit`],
+/// [`Phase2Config::test_path_limit`]) at most ⌈p (L_k + 2ε) / a⌉, L_k being τ's length from
+/// τ_k to τ_T and a the smallest action bound.
+fn episode_limits<E: Env>(
+    env: &E,
+    config: &Phase2Config,
+    p: f32,
+    states: &[E::State],
+) -> Vec<usize> {
     let n = states.len();
-    if config.path_limit <= 0.0 {
+    if p <= 0.0 {
         return vec![config.max_steps; n];
     }
     let a = (0..env.action_dim())
@@ -57,7 +63,7 @@ fn episode_limits<E: Env>(env: &E, config: &Phase2Config, states: &[E::State]) -
         if k + 1 < n {
             length += dist(&obs[k], &obs[k + 1]);
         }
-        let steps = (config.path_limit * (length + 2.0 * config.epsilon) / a).ceil();
+        let steps = (p * (length + 2.0 * config.epsilon) / a).ceil();
         limits[k] = (steps as usize).clamp(1, config.max_steps);
     }
     limits
@@ -92,9 +98,11 @@ pub struct SkillTask<'a, E: Env> {
     /// States where an executed chain entered this skill's section (chain repair): half of
     /// the starts at K = 0 are drawn from them, half uniformly in B_ε(τ_0). Empty otherwise.
     entries: Vec<E::State>,
-    /// The step limit of an episode from each τ_k (`max_steps`, or less with
-    /// [`Phase2Config::path_limit`]).
+    /// The step limit of a training episode from each τ_k (`max_steps`, or less with
+    /// [`Phase2Config::path_limit`]), and of a greedy one (tests, verification; less also
+    /// with [`Phase2Config::test_path_limit`]).
     limits: Vec<usize>,
+    test_limits: Vec<usize>,
     /// Called after each test and training round.
     pub on_event: Option<Box<dyn FnMut(super::Progress) + 'a>>,
 }
@@ -140,7 +148,14 @@ impl<'a, E: Env> SkillTask<'a, E> {
             budget,
             bounds: config.learner_bounds(env),
             entries: Vec::new(),
-            limits: episode_limits(env, config, &states[..=t]),
+            limits: episode_limits(env, config, config.path_limit, &states[..=t]),
+            test_limits: {
+                let p = match (config.path_limit, config.test_path_limit) {
+                    (a, b) if a > 0.0 && b > 0.0 => a.min(b),
+                    (a, b) => a.max(b),
+                };
+                episode_limits(env, config, p, &states[..=t])
+            },
             on_event: None,
         }
     }
@@ -202,7 +217,12 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 noise.reset();
             }
         }
-        for _ in 0..self.limits[k] {
+        let limit = if learn {
+            self.limits[k]
+        } else {
+            self.test_limits[k]
+        };
+        for _ in 0..limit {
             if running.is_empty() {
                 break;
             }

@@ -105,7 +105,8 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
 
 /// `path_limit` = 1.5 on τ spaced 0.1 apart towards τ_5: an episode from τ_0 may take
 /// ⌈1.5 (0.5 + 2ε) / 0.1⌉ = 11 steps, one from τ_4 ⌈1.5 (0.1 + 2ε) / 0.1⌉ = 5 (not 50); a
-/// policy that goes to the goal still passes.
+/// policy that goes to the goal still passes. `test_path_limit` does the same for greedy
+/// episodes alone.
 #[test]
 fn path_limits_shorten_episodes_near_the_goal() {
     let (maze, states, obs) = setup();
@@ -122,6 +123,24 @@ fn path_limits_shorten_episodes_near_the_goal() {
     assert_eq!(t.steps.test, 50 * 11 + 50 * 5);
     let mut t = task(&maze, &config, &states, &obs, 1_000_000);
     assert_eq!(t.test(0), 1.0);
+    // `test_path_limit` limits greedy episodes the same way; with both set, the smaller.
+    for (path, test) in [(0.0, 1.5), (3.0, 1.5), (1.5, 3.0)] {
+        let config = Phase2Config {
+            path_limit: path,
+            test_path_limit: test,
+            ..Phase2Config::default()
+        };
+        let away = unit_policy([-1.0, 0.0]);
+        let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
+        assert_eq!(t.test(0), 0.0);
+        assert_eq!(t.steps.test, 50 * 11, "path_limit {path}, test_path_limit {test}");
+    }
+    let bad = Phase2Config {
+        test_path_limit: f32::NAN,
+        ..Phase2Config::default()
+    };
+    let err = pbcs::validate::Check::check(&bad).unwrap_err().to_string();
+    assert!(err.contains("phase2.test_path_limit"), "{err}");
     let bad = Phase2Config {
         path_limit: -1.0,
         ..Phase2Config::default()
