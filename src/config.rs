@@ -131,7 +131,8 @@ pub enum Preset {
     /// `experiments/pbcs_paper.toml`.
     Paper,
     /// Everything of ours that measured better (shortened τ, early stop, adaptive K steps,
-    /// verified skills): `experiments/pbcs_fast.toml`.
+    /// capped training rounds, warm-started skills, path-limited tests, verified skills and
+    /// a verified, repaired chain): `experiments/pbcs_fast.toml`.
     Fast,
 }
 
