@@ -181,7 +181,10 @@ fn the_fast_preset_solves_every_size_in_a_tenth_of_the_papers_steps() {
     for n in [2, 5, 7, 10, 15] {
         let (f, paper) = (cell(&t, "pbcs_fast", n), cell(&t, "pbcs", n));
         assert!(solves(f), "maze {n}: {}/{}", f.successes, f.n);
-        let (median, paper) = (f.solved_steps_median.unwrap(), paper.paper_steps.unwrap() as f64);
+        let (median, paper) = (
+            f.solved_steps_median.unwrap(),
+            paper.paper_steps.unwrap() as f64,
+        );
         assert!(median <= paper / 10.0, "maze {n}: {median} > {paper} / 10");
     }
 }

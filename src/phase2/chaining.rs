@@ -43,7 +43,16 @@ pub fn chain_skills<E: Env>(
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
-    let chainer = Chainer::new(env, tau, learner, config, seeds, spent, kernel, &mut progress);
+    let chainer = Chainer::new(
+        env,
+        tau,
+        learner,
+        config,
+        seeds,
+        spent,
+        kernel,
+        &mut progress,
+    );
     let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
     let mut chain = SkillChain { skills, kernel };
     if failure.is_none() && config.chain_verify_episodes > 0 {
@@ -501,8 +510,9 @@ mod tests {
             let mut progress = |_: usize, _: Progress| {};
             let c = Chainer::new(&Toy1D, &tau, &lc, &config, &seeds, 0, kernel, &mut progress);
             // (last target, new target, expected: warm?)
-            for (n, (last_t, t, takes_over)) in
-                [(6, 3, true), (6, 6, false), (6, 8, false)].into_iter().enumerate()
+            for (n, (last_t, t, takes_over)) in [(6, 3, true), (6, 6, false), (6, 8, false)]
+                .into_iter()
+                .enumerate()
             {
                 *c.last.borrow_mut() = Some((last_t, trained.clone()));
                 let task = c.task(&tau, 0, t, &[]).unwrap();

@@ -133,7 +133,11 @@ fn path_limits_shorten_episodes_near_the_goal() {
         let away = unit_policy([-1.0, 0.0]);
         let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
         assert_eq!(t.test(0), 0.0);
-        assert_eq!(t.steps.test, 50 * 11, "path_limit {path}, test_path_limit {test}");
+        assert_eq!(
+            t.steps.test,
+            50 * 11,
+            "path_limit {path}, test_path_limit {test}"
+        );
     }
     let bad = Phase2Config {
         test_path_limit: f32::NAN,
