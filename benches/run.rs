@@ -35,12 +35,15 @@ fn env_or<T: std::str::FromStr>(name: &str, default: &str) -> Vec<T> {
 
 fn main() {
     let sizes: Vec<usize> = env_or("PBCS_BENCH_SIZES", "15");
-    let seeds: Vec<u64> = env_or("PBCS_BENCH_SEEDS", "10");
+    let seeds: u64 = match env_or::<u64>("PBCS_BENCH_SEEDS", "10")[..] {
+        [n] => n,
+        _ => panic!("PBCS_BENCH_SEEDS: one number, the count of seeds (0..N)"),
+    };
     let kernel = Kernel::detect();
     println!("kernel {kernel:?}; fast preset; one thread");
     for size in sizes {
         let (mut walls, mut steps) = (Vec::new(), Vec::new());
-        for seed in 0..seeds[0] {
+        for seed in 0..seeds {
             let mut job = Preset::Fast.job().expect("the fast preset is valid");
             job.maze.size = size;
             job.seed = seed;
@@ -62,7 +65,7 @@ fn main() {
             "maze {size}: median wall {:.1} s [{lo:.1}, {hi:.1}], median env steps {:.0}, over {} seeds",
             median(walls),
             median(steps),
-            seeds[0]
+            seeds
         );
     }
 }

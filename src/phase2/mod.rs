@@ -118,8 +118,9 @@ pub struct Phase2Config {
     /// their targets and optimiser state; the replay starts empty, its rewards being the
     /// previous goal's). The networks see goal-relative inputs, so "reach the goal from just
     /// behind τ_T" is the problem the previous skill solved from B_ε(τ_T). A restart (same
-    /// target) starts fresh, and so does a chain repair whose section ends after the last
-    /// problem's target (always the first repair: the last problem was skill 0's).
+    /// target) starts fresh, and so does a chain repair whose section does not end before the
+    /// last problem's target (always the first repair: the last problem was skill 0's). The
+    /// learner's own update noise stream and update count carry over with it.
     pub warm_start: bool,
     /// Path-scaled episode limits (ours; 0 = off, the paper's procedure: every training and
     /// test episode may take `max_steps` steps): an episode from B_ε(τ_K) towards the goal of
@@ -133,7 +134,7 @@ pub struct Phase2Config {
     pub test_path_limit: f32,
     /// Verification of the finished chain (ours; 0 = off, the paper's procedure): the chain
     /// runs greedily from `chain_verify_episodes` starts uniform in B_ε(s_0) (stream
-    /// `ChainVerify`), each skill allowed `max_steps` steps to hand over, as in its tests. When
+    /// `ChainVerify`), each skill allowed `max_steps` steps to hand over. When
     /// an episode fails, the skill in use when it stopped is repaired ([`chaining`]), and
     /// the chain is verified again, at most `chain_repairs` times.
     pub chain_verify_episodes: usize,

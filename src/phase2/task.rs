@@ -195,7 +195,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
             .collect()
     }
 
-    /// `n` episodes in lockstep from starts around τ_k, at most `max_steps` steps each; each
+    /// `n` episodes in lockstep from starts around τ_k, at most `max_steps` steps each (fewer
+    /// with [`Phase2Config::path_limit`], and for greedy ones `test_path_limit`); each
     /// step the actions of all running episodes come from one batched forward pass. With
     /// `learn`, noise is added, transitions are stored with the shaped reward and every step
     /// makes one learner update (Algorithm 3); without, the policy is greedy (a test).
