@@ -186,13 +186,9 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         // Warm start: a problem whose target lies before the last one's (the next skill of
         // the chain) takes over the last learner; a restart (same target) or a repair of a
         // later section starts fresh.
-        let warm = match self.last.borrow_mut().take() {
-            Some((last_t, learner)) if config.warm_start && last_t > lo + t => Some(learner),
-            _ => None,
-        };
-        let learner = match warm {
-            Some(learner) => learner,
-            None => Learner::new(
+        let learner = match self.last.borrow_mut().take() {
+            Some((last_t, learner)) if config.warm_start && last_t > lo + t => learner,
+            _ => Learner::new(
                 self.learner,
                 env.obs_dim(),
                 &config.learner_bounds(env),

@@ -284,6 +284,15 @@ impl Phase2Config {
         }
     }
 
+    /// The path limit of greedy episodes: the smaller of `path_limit` and `test_path_limit`
+    /// where both are set, else the one set (0: none).
+    pub fn greedy_path_limit(&self) -> f32 {
+        match (self.path_limit, self.test_path_limit) {
+            (a, b) if a > 0.0 && b > 0.0 => a.min(b),
+            (a, b) => a.max(b),
+        }
+    }
+
     /// What the networks of a skill aiming at `goal` see and emit ([`InputMode`]).
     pub fn inputs<E: Env>(&self, env: &E, goal: &Goal) -> Inputs {
         match self.inputs {

@@ -32,23 +32,8 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
-/// The step limit of an episode from each of `states` = τ_0 … τ_T towards the goal of τ_T:
-/// `max_steps`, or with a path limit p > 0 ([`Phase2Config::path_limit`],
-/// [`Phase2Config::test_path_limit`]) at most ⌈p (L_k + 2ε) / a⌉, L_k being τ's length from
-/// τ_k to τ_T and a the smallest action bound.
-fn episode_limits<E: Env>(
-    env: &E,
-    config: &Phase2Config,
-    p: f32,
-    states: &[E::State],
-) -> Vec<usize> {
-    let n = states.len();
-    if p <= 0.0 {
-        return vec![config.max_steps; n];
-    }
-    let a = (0..env.action_dim())
-        .map(|i| env.action_bound(i))
-        .fold(f32::INFINITY, f32::min);
+/// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in observations).
+fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
     let obs: Vec<Vec<f32>> = states
         .iter()
         .map(|s| {
@@ -57,16 +42,31 @@ fn episode_limits<E: Env>(
             o
         })
         .collect();
-    let mut limits = vec![config.max_steps; n];
-    let mut length = 0.0;
-    for k in (0..n).rev() {
-        if k + 1 < n {
-            length += dist(&obs[k], &obs[k + 1]);
-        }
-        let steps = (p * (length + 2.0 * config.epsilon) / a).ceil();
-        limits[k] = (steps as usize).clamp(1, config.max_steps);
+    let mut lengths = vec![0.0; obs.len()];
+    for k in (0..obs.len().saturating_sub(1)).rev() {
+        lengths[k] = lengths[k + 1] + dist(&obs[k], &obs[k + 1]);
     }
-    limits
+    lengths
+}
+
+/// The step limit of an episode from each τ_k towards the goal of τ_T, given L_k
+/// ([`lengths_to_goal`]): `max_steps`, or with a path limit p > 0
+/// ([`Phase2Config::path_limit`], [`Phase2Config::greedy_path_limit`]) at most
+/// ⌈p (L_k + 2ε) / a⌉, a being the smallest action bound.
+fn episode_limits<E: Env>(env: &E, config: &Phase2Config, p: f32, lengths: &[f32]) -> Vec<usize> {
+    if p <= 0.0 {
+        return vec![config.max_steps; lengths.len()];
+    }
+    let a = (0..env.action_dim())
+        .map(|i| env.action_bound(i))
+        .fold(f32::INFINITY, f32::min);
+    lengths
+        .iter()
+        .map(|l| {
+            let steps = (p * (l + 2.0 * config.epsilon) / a).ceil();
+            (steps as usize).clamp(1, config.max_steps)
+        })
+        .collect()
 }
 
 /// One skill's learning problem on a trajectory section τ_0 … τ_T.
@@ -125,6 +125,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
+        let lengths = lengths_to_goal(env, &states[..=t]);
         SkillTask {
             env,
             config,
@@ -148,14 +149,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
             budget,
             bounds: config.learner_bounds(env),
             entries: Vec::new(),
-            limits: episode_limits(env, config, config.path_limit, &states[..=t]),
-            test_limits: {
-                let p = match (config.path_limit, config.test_path_limit) {
-                    (a, b) if a > 0.0 && b > 0.0 => a.min(b),
-                    (a, b) => a.max(b),
-                };
-                episode_limits(env, config, p, &states[..=t])
-            },
+            limits: episode_limits(env, config, config.path_limit, &lengths),
+            test_limits: episode_limits(env, config, config.greedy_path_limit(), &lengths),
             on_event: None,
         }
     }
