@@ -258,6 +258,7 @@ pub fn render_all(
             numbers.push_str(&report::routes_numbers_tex(&exp.name, &routes));
         }
     }
+    numbers.push_str(&render_outside(results, tex_dir, &mut files)?);
     for (name, text) in [
         ("numbers.tex", numbers),
         ("claims.tex", report::claims_tex(claims)),
@@ -267,4 +268,52 @@ pub fn render_all(
         files.push(path);
     }
     Ok(files)
+}
+
+/// The report's LaTeX of the outside checks from `<results>/tables/outside.*.csv` (each only
+/// where its table exists): `outside_maze.tex` and `outside_pendulum.tex` into `tex_dir` (added
+/// to `files`), and their numbers for `numbers.tex` (returned).
+fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> Result<String> {
+    use crate::record::read_records;
+    use crate::tables::outside::outside_table;
+    let mut numbers = String::new();
+    let mut put = |name: &str, (table, n): (String, String)| -> Result<()> {
+        let path = tex_dir.join(name);
+        write_atomic(&path, |w| w.write_all(table.as_bytes()))?;
+        files.push(path);
+        numbers.push_str(&n);
+        Ok(())
+    };
+    let maze = outside_table(results, "maze");
+    if maze.exists() {
+        put(
+            "outside_maze.tex",
+            report::outside_maze_tex(&read_records(&maze)?),
+        )?;
+    }
+    let pendulum = outside_table(results, "pendulum");
+    if pendulum.exists() {
+        put(
+            "outside_pendulum.tex",
+            report::outside_pendulum_tex(&read_records(&pendulum)?),
+        )?;
+    }
+    let cost = outside_table(results, "timing");
+    if cost.exists() {
+        numbers.push_str(&report::outside_cost_numbers(&read_records(&cost)?));
+    }
+    Ok(numbers)
+}
+
+/// Writes the outside checks' tables (`results/tables/outside.*.csv`,
+/// [`crate::tables::outside::write_outside_tables`]) from the rows under `<results>/outside/`,
+/// our maze side read from the experiment of the results table (`report.results_table`).
+/// Returns the files written: none without that experiment or without outside rows.
+pub fn aggregate_outside(exps: &[Experiment], results: &Path) -> Result<Vec<PathBuf>> {
+    match exps.iter().find(|e| e.report.results_table) {
+        Some(table) if crate::tables::outside::outside_dir(results).is_dir() => {
+            crate::tables::outside::write_outside_tables(table, results)
+        }
+        _ => Ok(Vec::new()),
+    }
 }

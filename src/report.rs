@@ -33,6 +33,7 @@ pub fn tex(text: &str) -> String {
             '≥' => out.push_str("$\\ge$"),
             '∈' => out.push_str("$\\in$"),
             '−' => out.push_str("$-$"),
+            'µ' => out.push_str("\\textmu{}"),
             _ => out.push(c),
         }
     }
@@ -331,6 +332,194 @@ pub fn cells_table_tex(rows: &[CellStats]) -> String {
     }
     s.push_str("\\bottomrule\n\\end{tabular}\n");
     s
+}
+
+/// `outside_maze.tex` (the table of ours against Stable-Baselines3 on the maze) and the numbers
+/// `\res{outside:maze:<algo>:<field>}`: `steps`, `oursn`, `ourssolved`, `ourslo`, `ourshi`,
+/// `oursseeds`, `sbn`, `sbsolved`, `sblo`, `sbhi`, `sbseeds`, `sbprotocol`, `fisherp`, `sbversion`.
+pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (String, String) {
+    let mut table = String::from(GENERATED);
+    table.push_str("\\begin{tabular}{lrcrcrl}\n\\toprule\n");
+    table.push_str(
+        "learner & \\multicolumn{2}{c}{ours: solved, Wilson 95\\,\\%} & \
+         \\multicolumn{2}{c}{SB3: solved, Wilson 95\\,\\%} & SB3, PBCS's protocol & Fisher $p$ \\\\\n\\midrule\n",
+    );
+    let mut numbers = String::new();
+    for r in rows {
+        let name = match r.algo.as_str() {
+            "pooled" => "both, pooled".to_string(),
+            a => a.to_uppercase(),
+        };
+        let _ = writeln!(
+            table,
+            "{} & {}/{} & [{:.2}, {:.2}] & {}/{} & [{:.2}, {:.2}] & {}/{} & {} \\\\",
+            tex(&name),
+            r.ours_solved,
+            r.ours_n,
+            r.ours_lo,
+            r.ours_hi,
+            r.sb3_solved,
+            r.sb3_n,
+            r.sb3_lo,
+            r.sb3_hi,
+            r.sb3_protocol_solved,
+            r.sb3_n,
+            p_value(r.fisher_p),
+        );
+        let key = format!("maze:{}", r.algo);
+        let mut fields = vec![
+            ("steps", human_steps(r.steps as f64)),
+            ("oursn", r.ours_n.to_string()),
+            ("ourssolved", r.ours_solved.to_string()),
+            ("ourslo", format!("{:.2}", r.ours_lo)),
+            ("ourshi", format!("{:.2}", r.ours_hi)),
+            ("oursseeds", seeds_list(&r.ours_seeds)),
+            ("sbn", r.sb3_n.to_string()),
+            ("sbsolved", r.sb3_solved.to_string()),
+            ("sblo", format!("{:.2}", r.sb3_lo)),
+            ("sbhi", format!("{:.2}", r.sb3_hi)),
+            ("sbseeds", seeds_list(&r.sb3_seeds)),
+            ("sbprotocol", r.sb3_protocol_solved.to_string()),
+            ("fisherp", p_value(r.fisher_p)),
+            (
+                "sbversion",
+                r.sb3_library.trim_start_matches("sb3-").to_string(),
+            ),
+        ];
+        // The pooled line has no seeds of its own.
+        if r.algo == "pooled" {
+            fields.retain(|(f, _)| !f.ends_with("seeds"));
+        }
+        for (f, v) in fields {
+            def_res(&mut numbers, "outside", &format!("{key}:{f}"), &v);
+        }
+    }
+    table.push_str("\\bottomrule\n\\end{tabular}\n");
+    (table, numbers)
+}
+
+/// `outside_pendulum.tex` (final mean returns on Pendulum-v1) and the numbers
+/// `\res{outside:pendulum:<source>:<field>}`: `n`, `steps`, `mean`, `sd`, `min`, `max`, `cilo`,
+/// `cihi`, and for a source tested against ours `diff`, `t`, `df`, `p`.
+pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (String, String) {
+    let mut table = String::from(GENERATED);
+    table.push_str("\\begin{tabular}{lrrrrrcl}\n\\toprule\n");
+    table.push_str(
+        "source & runs & mean & sd & min & max & $t$ 95\\,\\% of the mean & Welch vs ours \\\\\n\\midrule\n",
+    );
+    // One decimal, with a true minus sign (`tex` sets it in math).
+    let one = |x: f64| format!("{x:.1}").replace('-', "−");
+    let mut numbers = String::new();
+    for r in rows {
+        let name = match r.source.as_str() {
+            "ours" => "ours (Rust port of Pendulum-v1)".to_string(),
+            "sb3" => format!(
+                "Stable-Baselines3 {} (gymnasium)",
+                r.library.trim_start_matches("sb3-")
+            ),
+            _ => "RL-Zoo's benchmark (one agent; sd over episodes)".to_string(),
+        };
+        let opt = |x: Option<f64>| x.map_or("--".to_string(), one);
+        let ci = match (r.ci_lo, r.ci_hi) {
+            (Some(a), Some(b)) => format!("[{}, {}]", one(a), one(b)),
+            _ => "--".into(),
+        };
+        let test = match (r.welch_t, r.welch_p) {
+            (Some(t), Some(p)) => format!(
+                "t = {}, p = {}",
+                format!("{t:.2}").replace('-', "−"),
+                p_value(p)
+            ),
+            _ => "--".into(),
+        };
+        let _ = writeln!(
+            table,
+            "{} & {} & {} & {} & {} & {} & {} & {} \\\\",
+            tex(&name),
+            r.n,
+            tex(&one(r.mean)),
+            tex(&one(r.sd)),
+            tex(&opt(r.min)),
+            tex(&opt(r.max)),
+            tex(&ci),
+            tex(&test)
+        );
+        let key = format!("pendulum:{}", r.source);
+        for (f, v) in [
+            ("n", r.n.to_string()),
+            ("steps", human_steps(r.steps as f64)),
+            ("mean", one(r.mean)),
+            ("sd", one(r.sd)),
+            ("min", opt(r.min)),
+            ("max", opt(r.max)),
+            ("cilo", opt(r.ci_lo)),
+            ("cihi", opt(r.ci_hi)),
+            ("diff", opt(r.diff_vs_ours)),
+            (
+                "t",
+                r.welch_t
+                    .map_or("--".into(), |t| format!("{t:.2}").replace('-', "−")),
+            ),
+            ("df", opt(r.welch_df)),
+            ("p", r.welch_p.map_or("--".into(), p_value)),
+        ] {
+            def_res(&mut numbers, "outside", &format!("{key}:{f}"), &v);
+        }
+    }
+    table.push_str("\\bottomrule\n\\end{tabular}\n");
+    (table, numbers)
+}
+
+/// The numbers `\res{outside:cost:<algo>:<library>}` (µs per environment step, `sb3` for any
+/// SB3 version) and `\res{outside:cost:<algo>:ratio}` (SB3's over ours).
+pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> String {
+    let mut s = String::new();
+    let who = |l: &str| if l.starts_with("sb3") { "sb3" } else { "ours" };
+    for r in rows {
+        let v = if r.us_per_step >= 1000.0 {
+            format!("{:.1} ms", r.us_per_step / 1000.0)
+        } else {
+            format!("{:.0} µs", r.us_per_step)
+        };
+        def_res(
+            &mut s,
+            "outside",
+            &format!("cost:{}:{}", r.algo, who(&r.library)),
+            &v,
+        );
+    }
+    let algos: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.algo.as_str()).collect();
+    for a in algos {
+        let find = |w: &str| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
+        if let (Some(sb3), Some(ours)) = (find("sb3"), find("ours")) {
+            let ratio = format!("{:.0}", sb3.us_per_step / ours.us_per_step);
+            def_res(&mut s, "outside", &format!("cost:{a}:ratio"), &ratio);
+        }
+    }
+    s
+}
+
+/// A p-value as the report prints it: two significant digits, `< 0.001` below.
+fn p_value(p: f64) -> String {
+    if !p.is_finite() {
+        "--".into()
+    } else if p >= 0.995 {
+        "1".into()
+    } else if p < 0.001 {
+        "< 0.001".into()
+    } else if p >= 0.1 {
+        format!("{p:.2}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+/// Space-separated seeds as a comma-separated list (`none` if empty).
+fn seeds_list(seeds: &str) -> String {
+    match seeds.split_whitespace().collect::<Vec<_>>() {
+        v if v.is_empty() => "none".into(),
+        v => v.join(", "),
+    }
 }
 
 /// The claims, one row each: the paper's statement, our numbers, the verdict.

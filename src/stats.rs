@@ -1,4 +1,5 @@
-//! Small statistics: quantiles and Wilson score intervals.
+//! Small statistics: quantiles, Wilson score intervals, Fisher's exact test, and for samples of
+//! real numbers (the outside checks' returns) the mean, Student's t interval and Welch's test.
 
 /// The median of `v` (sorted in place; mean of the two middle values for an even count;
 /// NaN for an empty slice).
@@ -99,6 +100,69 @@ pub fn fisher_exact(k1: u64, n1: u64, k2: u64, n2: u64) -> f64 {
         .map(f64::exp)
         .sum();
     p.min(1.0)
+}
+
+/// Mean and sample standard deviation (n − 1 in the denominator) of `v`; `None` with fewer
+/// than two values.
+///
+/// ```
+/// let (m, sd) = pbcs::stats::mean_sd(&[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
+/// assert_eq!(m, 3.0);
+/// assert!((sd - 2.5f64.sqrt()).abs() < 1e-15);
+/// assert_eq!(pbcs::stats::mean_sd(&[1.0]), None);
+/// ```
+pub fn mean_sd(v: &[f64]) -> Option<(f64, f64)> {
+    let n = v.len() as f64;
+    (v.len() >= 2).then(|| {
+        let m = v.iter().sum::<f64>() / n;
+        let ss: f64 = v.iter().map(|x| (x - m).powi(2)).sum();
+        (m, (ss / (n - 1.0)).sqrt())
+    })
+}
+
+/// Student's t 95 % interval of the mean of `v`: m ± t₀.₉₇₅(n − 1)·sd/√n; `None` with fewer
+/// than two values.
+///
+/// ```
+/// // n = 10 values 0..9: mean 4.5, sd 3.0277, t₀.₉₇₅(9) = 2.262157 (SciPy).
+/// let v: Vec<f64> = (0..10).map(f64::from).collect();
+/// let (lo, hi) = pbcs::stats::t_interval(&v).unwrap();
+/// let half = 2.262_157_162_798_205 * 3.027_650_354_097_491_7 / 10f64.sqrt();
+/// assert!((lo - (4.5 - half)).abs() < 1e-9 && (hi - (4.5 + half)).abs() < 1e-9);
+/// ```
+pub fn t_interval(v: &[f64]) -> Option<(f64, f64)> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let (m, sd) = mean_sd(v)?;
+    let n = v.len() as f64;
+    let t = StudentsT::new(0.0, 1.0, n - 1.0).ok()?.inverse_cdf(0.975);
+    let half = t * sd / n.sqrt();
+    Some((m - half, m + half))
+}
+
+/// Welch's two-sample t-test of equal means (unequal variances): (t, Welch–Satterthwaite
+/// degrees of freedom, two-sided p-value), t of mean(a) − mean(b); `None` with fewer than two
+/// values in a sample or both samples constant.
+///
+/// ```
+/// // SciPy: ttest_ind([1..5], [2, 4, .., 10], equal_var=False) → t = −1.897367,
+/// // df = 5.882353, p = 0.107531.
+/// let (t, df, p) = pbcs::stats::welch(&[1.0, 2.0, 3.0, 4.0, 5.0], &[2.0, 4.0, 6.0, 8.0, 10.0]).unwrap();
+/// assert!((t + 1.897_366_596).abs() < 1e-8);
+/// assert!((df - 5.882_352_941).abs() < 1e-8);
+/// assert!((p - 0.107_531_194_9).abs() < 1e-8);
+/// ```
+pub fn welch(a: &[f64], b: &[f64]) -> Option<(f64, f64, f64)> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let ((ma, sa), (mb, sb)) = (mean_sd(a)?, mean_sd(b)?);
+    let (va, vb) = (sa * sa / a.len() as f64, sb * sb / b.len() as f64);
+    if va + vb <= 0.0 {
+        return None;
+    }
+    let t = (ma - mb) / (va + vb).sqrt();
+    let df =
+        (va + vb).powi(2) / (va * va / (a.len() as f64 - 1.0) + vb * vb / (b.len() as f64 - 1.0));
+    let p = 2.0 * StudentsT::new(0.0, 1.0, df).ok()?.sf(t.abs());
+    Some((t, df, p.min(1.0)))
 }
 
 /// Least-squares line through the points (x, y): (intercept, slope); None with fewer than two

@@ -15,7 +15,8 @@ protocol (100 greedy episodes from the start states of `pbcs.evaluation_starts` 
 seed, solved at >= 95 %). One torch thread per run (ours are single-threaded too).
 
     python python/benches/sb3_maze.py --algo ddpg --seeds 0-9 --steps 300000 --out results/outside/sb3
-    python python/benches/sb3_maze.py --timing        # update cost per step: SB3 and ours
+    python python/benches/sb3_maze.py --timing        # update cost per step: SB3 and ours,
+                                                      # into results/outside/update_cost.csv
 
 Needs stable-baselines3 (and torch) beside this package; not part of CI. Each run writes
 `<out>/<algo>-maze2/s<seed>.csv` (atomically: a finished run is skipped on re-run) and its
@@ -24,6 +25,7 @@ wall clock beside it in `s<seed>.timing.toml`.
 
 import argparse
 import os
+import platform
 import subprocess
 import tempfile
 import time
@@ -123,9 +125,26 @@ def run(algo, seed, steps, out):
     return text
 
 
-def timing(steps, pbcs_bin):
+def machine():
+    """This machine in words, as the Rust core's `record::machine` writes it."""
+    model = platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores"
+
+
+def timing(steps, pbcs_bin, out):
     """Update cost per environment step after warm-up: SB3 (this process) and ours (`pbcs
-    train`), the same steps on the same machine."""
+    train`: a run of 10 000 + `steps` steps less a run of the 10 000 warm-up steps), the same
+    steps on the same machine. Writes `<out>/update_cost.csv` (wall clock)."""
+    import stable_baselines3
+
+    lines = ["algo,library,us_per_step,steps,machine"]
     for algo in ("ddpg", "td3"):
         model = make_model(algo, 0)
         model.learn(total_timesteps=10_000)  # warm-up: random actions, no update
@@ -146,6 +165,9 @@ def timing(steps, pbcs_bin):
                     ours = (time.perf_counter() - clock - base) / steps
         print(f"{algo}: SB3 {sb3 * 1e6:.0f} us per step (one update each), ours {ours * 1e6:.0f} us "
               f"per step: {sb3 / ours:.1f}x")
+        lines.append(f'{algo},sb3-{stable_baselines3.__version__},{sb3 * 1e6:.1f},{steps},"{machine()}"')
+        lines.append(f'{algo},pbcs,{ours * 1e6:.1f},{steps},"{machine()}"')
+    write_atomic(out / "update_cost.csv", "\n".join(lines) + "\n")
 
 
 def seeds_of(text):
@@ -164,7 +186,7 @@ def main():
     p.add_argument("--pbcs", default="target/release/pbcs", help="the pbcs command (for --timing)")
     args = p.parse_args()
     if args.timing:
-        timing(args.timing_steps, args.pbcs)
+        timing(args.timing_steps, args.pbcs, args.out.parent)
         return
     for seed in seeds_of(args.seeds):
         print(run(args.algo, seed, args.steps, args.out).splitlines()[1], flush=True)

@@ -224,6 +224,9 @@ fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
             ),
         }
     }
+    for file in pbcs::pipeline::aggregate_outside(&exps, &results)? {
+        println!("outside checks → {}", file.display());
+    }
     Ok(())
 }
 

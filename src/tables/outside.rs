@@ -1,0 +1,643 @@
+//! The outside checks of our learners as tables (`results/tables/outside.*.csv`): the runs of
+//! Stable-Baselines3 and of our learners committed under `results/outside/` (written by the
+//! scripts its README names, never by an experiment sweep) set beside each other with the
+//! package's statistics, so that the report quotes generated numbers only.
+//!
+//! - **Maze** ([`maze_comparisons`]): SB3's DDPG and TD3 on our maze through the Python package
+//!   (`results/outside/sb3/<algo>-maze<N>/s<seed>.csv`) against our DDPG and TD3 at the same
+//!   step count: the results table's vanilla runs (`experiment` `table`, cell `<algo>-maze<N>`)
+//!   judged by their greedy evaluation at that step (`s<seed>.evals.csv`; their training up to
+//!   that step is a run of that length). Solved with Wilson 95 % intervals and Fisher's exact
+//!   test, per learner and pooled.
+//! - **Pendulum** ([`pendulum_rows`]): the final mean return of our TD3 on the Rust port of
+//!   Pendulum-v1 (`pendulum/ours/`) and of SB3's TD3 on gymnasium's (`pendulum/sb3/`): mean,
+//!   standard deviation, range, Student's t interval and Welch's test; beside them the
+//!   published figure of `pendulum/published.toml` (RL-Zoo's benchmark).
+//! - **Update cost** (`update_cost.csv`, wall clock, copied as `outside.timing.csv`): the time
+//!   per environment step of SB3's and our updates measured in the same run on one machine.
+
+use crate::error::{Error, Result};
+use crate::experiment::{evals_file, Experiment};
+use crate::stats::{fisher_exact, mean_sd, t_interval, welch, wilson, Z95};
+use crate::train::EvalRow;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// `<results>/outside`: the committed rows of the outside checks.
+pub fn outside_dir(results: &Path) -> PathBuf {
+    results.join("outside")
+}
+
+/// `<results>/tables/outside.<what>.csv`.
+pub fn outside_table(results: &Path, what: &str) -> PathBuf {
+    results.join("tables").join(format!("outside.{what}.csv"))
+}
+
+/// One Stable-Baselines3 run on the maze (`python/benches/sb3_maze.py`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MazeRun {
+    /// `sb3-<version>`.
+    pub library: String,
+    /// `ddpg` or `td3`.
+    pub algo: String,
+    /// The run's seed.
+    pub seed: u64,
+    /// Environment steps of training.
+    pub steps: u64,
+    /// One greedy episode from s_0 reached the target (the table's vanilla judge).
+    pub solved_s0: bool,
+    /// Of PBCS's protocol (greedy episodes from the evaluation starts in B_ε(s_0)), the
+    /// episodes that reached the target.
+    pub protocol_successes: u64,
+    /// Episodes of that protocol.
+    pub protocol_episodes: u64,
+}
+
+/// One Pendulum-v1 run (`cargo run --example pendulum`, `python/benches/sb3_pendulum.py`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PendulumRun {
+    /// `pbcs` or `sb3-<version>`.
+    pub library: String,
+    /// The learner (`td3`).
+    pub algo: String,
+    /// The run's seed.
+    pub seed: u64,
+    /// Environment steps of training.
+    pub steps: u64,
+    /// Greedy episodes of the final evaluation.
+    pub eval_episodes: u64,
+    /// Their mean return.
+    pub mean_return: f64,
+}
+
+/// A published figure to set beside the runs (`results/outside/pendulum/published.toml`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Published {
+    /// Where it is published (a file and commit a reader can open).
+    pub source: String,
+    /// The learner.
+    pub algo: String,
+    /// Environment steps of training.
+    pub steps: u64,
+    /// Episodes its evaluation averaged.
+    pub eval_episodes: u64,
+    /// Mean return.
+    pub mean: f64,
+    /// Standard deviation of the return over those episodes (one trained agent).
+    pub std: f64,
+}
+
+/// One line of `outside.maze.csv`: ours against SB3 for one learner (or `pooled`), at one step
+/// count, judged by one greedy episode from s_0.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MazeComparison {
+    /// `ddpg`, `td3` or `pooled` (both learners' runs together).
+    pub algo: String,
+    /// Maze size N.
+    pub maze: usize,
+    /// Environment steps of training at the judged evaluation.
+    pub steps: u64,
+    /// Our runs judged.
+    pub ours_n: u64,
+    /// Of them, solved.
+    pub ours_solved: u64,
+    /// Wilson 95 % interval, lower end.
+    pub ours_lo: f64,
+    /// Upper end.
+    pub ours_hi: f64,
+    /// The solved seeds, space-separated (empty for `pooled`).
+    pub ours_seeds: String,
+    /// SB3's version (`sb3-<version>`).
+    pub sb3_library: String,
+    /// SB3 runs judged.
+    pub sb3_n: u64,
+    /// Of them, solved.
+    pub sb3_solved: u64,
+    /// Wilson 95 % interval, lower end.
+    pub sb3_lo: f64,
+    /// Upper end.
+    pub sb3_hi: f64,
+    /// The solved seeds (empty for `pooled`).
+    pub sb3_seeds: String,
+    /// SB3 runs solved by PBCS's protocol (≥ 95 % of its episodes).
+    pub sb3_protocol_solved: u64,
+    /// Two-sided p-value of Fisher's exact test, ours against SB3.
+    pub fisher_p: f64,
+}
+
+/// One line of `outside.pendulum.csv`: one source of final mean returns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PendulumRow {
+    /// `ours`, `sb3` or `published`.
+    pub source: String,
+    /// The library (or the publication for `published`).
+    pub library: String,
+    /// Runs (seeds); 1 for a published agent.
+    pub n: u64,
+    /// Environment steps of training.
+    pub steps: u64,
+    /// Mean over runs of the final mean return (the published mean for `published`).
+    pub mean: f64,
+    /// Standard deviation over runs (over the published evaluation's episodes for
+    /// `published`).
+    pub sd: f64,
+    /// The worst run's return (empty for `published`).
+    pub min: Option<f64>,
+    /// The best run's return.
+    pub max: Option<f64>,
+    /// Student's t 95 % interval of the mean, lower end.
+    pub ci_lo: Option<f64>,
+    /// Upper end.
+    pub ci_hi: Option<f64>,
+    /// Welch's test of ours against this source: mean(ours) − mean(this).
+    pub diff_vs_ours: Option<f64>,
+    /// Its t.
+    pub welch_t: Option<f64>,
+    /// Its degrees of freedom.
+    pub welch_df: Option<f64>,
+    /// Its two-sided p-value.
+    pub welch_p: Option<f64>,
+}
+
+/// One line of `update_cost.csv` and `outside.timing.csv` (wall clock, not deterministic).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UpdateCost {
+    /// `ddpg` or `td3`.
+    pub algo: String,
+    /// `pbcs` or `sb3-<version>`.
+    pub library: String,
+    /// Microseconds per environment step after the warm-up (one update each).
+    pub us_per_step: f64,
+    /// Steps timed.
+    pub steps: u64,
+    /// The machine.
+    pub machine: String,
+}
+
+/// The rows `s<seed>.csv` of `dir`, in seed order (each file one row; a file with another
+/// name is ignored).
+fn seed_rows<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<Vec<(u64, T)>> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let Some(seed) = name
+            .strip_prefix('s')
+            .and_then(|n| n.strip_suffix(".csv"))
+            .and_then(|n| n.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        let mut rows: Vec<T> = crate::record::read_records(&path)?;
+        match (rows.pop(), rows.is_empty()) {
+            (Some(row), true) => out.push((seed, row)),
+            _ => {
+                return Err(Error::parse(
+                    &path,
+                    "an outside run's file holds exactly one row",
+                ))
+            }
+        }
+    }
+    out.sort_by_key(|(s, _)| *s);
+    Ok(out)
+}
+
+fn check_seed(path: &Path, file_seed: u64, row_seed: u64) -> Result<()> {
+    if file_seed == row_seed {
+        Ok(())
+    } else {
+        Err(Error::parse(
+            path.join(format!("s{file_seed}.csv")),
+            format!("the row's seed is {row_seed}, the file's name says {file_seed}"),
+        ))
+    }
+}
+
+fn seeds_text(seeds: impl IntoIterator<Item = u64>) -> String {
+    seeds
+        .into_iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Our side of one maze comparison: for each seed of `table`'s cell `<algo>-maze<maze>` with
+/// an evaluation at `steps`, whether its greedy episode reached the target
+/// ([`crate::runs::SOLVED_AT`]); a seed whose evaluations stop before `steps` is an error.
+fn ours_at(
+    table: &Experiment,
+    results: &Path,
+    algo: &str,
+    maze: usize,
+    steps: u64,
+) -> Result<Vec<(u64, bool)>> {
+    let id = format!("{algo}-maze{maze}");
+    let cell = table.cells.iter().find(|c| c.id == id).ok_or_else(|| {
+        Error::invalid(
+            "outside",
+            format!("experiment {} has no cell {id}", table.name),
+        )
+    })?;
+    let mut out = Vec::new();
+    for seed in table.seeds() {
+        let path = evals_file(table, results, cell, seed);
+        if !path.exists() {
+            continue;
+        }
+        let evals: Vec<EvalRow> = crate::record::read_records(&path)?;
+        let at = evals
+            .iter()
+            .find(|e| e.steps == steps)
+            .ok_or_else(|| Error::parse(&path, format!("no greedy evaluation at step {steps}")))?;
+        out.push((seed, at.success >= crate::runs::SOLVED_AT));
+    }
+    Ok(out)
+}
+
+/// The maze comparisons of every `<results>/outside/sb3/<algo>-maze<N>/` folder against
+/// `table` (the results table's experiment), one line per learner then one `pooled` line per
+/// maze; empty without SB3 rows. Every SB3 run of a folder must have the same steps.
+pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeComparison>> {
+    let root = outside_dir(results).join("sb3");
+    if !root.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut folders: Vec<(usize, String, PathBuf)> = Vec::new();
+    for entry in std::fs::read_dir(&root).map_err(|e| Error::io(&root, e))? {
+        let path = entry.map_err(|e| Error::io(&root, e))?.path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("")
+            .to_string();
+        let parsed = name
+            .split_once("-maze")
+            .and_then(|(a, m)| m.parse::<usize>().ok().map(|m| (m, a.to_string())));
+        match parsed {
+            Some((maze, algo)) if path.is_dir() => folders.push((maze, algo, path)),
+            _ => {}
+        }
+    }
+    folders.sort();
+    let mut out: Vec<MazeComparison> = Vec::new();
+    for (maze, algo, dir) in &folders {
+        let runs: Vec<(u64, MazeRun)> = seed_rows(dir)?;
+        let Some((_, first)) = runs.first() else {
+            continue;
+        };
+        let (steps, library) = (first.steps, first.library.clone());
+        for (seed, r) in &runs {
+            check_seed(dir, *seed, r.seed)?;
+            if r.steps != steps || r.algo != *algo || r.library != library {
+                return Err(Error::parse(
+                    dir.join(format!("s{seed}.csv")),
+                    format!("every run of the folder must be {library} {algo} at {steps} steps"),
+                ));
+            }
+        }
+        let ours = ours_at(table, results, algo, *maze, steps)?;
+        let solved = |v: &[(u64, bool)]| {
+            v.iter()
+                .filter(|(_, s)| *s)
+                .map(|(seed, _)| *seed)
+                .collect::<Vec<u64>>()
+        };
+        let sb3: Vec<(u64, bool)> = runs.iter().map(|(s, r)| (*s, r.solved_s0)).collect();
+        let protocol = runs
+            .iter()
+            .filter(|(_, r)| r.protocol_successes * 100 >= 95 * r.protocol_episodes)
+            .count() as u64;
+        let (ours_seeds, sb3_seeds) = (solved(&ours), solved(&sb3));
+        let mut line = comparison(
+            algo,
+            *maze,
+            steps,
+            &library,
+            [ours.len() as u64, ours_seeds.len() as u64],
+            [sb3.len() as u64, sb3_seeds.len() as u64],
+            protocol,
+        );
+        line.ours_seeds = seeds_text(ours_seeds);
+        line.sb3_seeds = seeds_text(sb3_seeds);
+        out.push(line);
+    }
+    // One pooled line per maze with more than one learner.
+    let mazes: std::collections::BTreeSet<usize> = out.iter().map(|c| c.maze).collect();
+    for maze in mazes {
+        let lines: Vec<&MazeComparison> = out.iter().filter(|c| c.maze == maze).collect();
+        if lines.len() < 2 {
+            continue;
+        }
+        let sum = |f: fn(&MazeComparison) -> u64| lines.iter().map(|c| f(c)).sum::<u64>();
+        let pooled = comparison(
+            "pooled",
+            maze,
+            lines[0].steps,
+            &lines[0].sb3_library.clone(),
+            [sum(|c| c.ours_n), sum(|c| c.ours_solved)],
+            [sum(|c| c.sb3_n), sum(|c| c.sb3_solved)],
+            sum(|c| c.sb3_protocol_solved),
+        );
+        out.push(pooled);
+    }
+    Ok(out)
+}
+
+/// One comparison line from the counts `[n, solved]` of each side (solved seeds left empty).
+fn comparison(
+    algo: &str,
+    maze: usize,
+    steps: u64,
+    library: &str,
+    [on, ok]: [u64; 2],
+    [sn, sk]: [u64; 2],
+    sb3_protocol_solved: u64,
+) -> MazeComparison {
+    let interval = |k: u64, n: u64| {
+        if n == 0 {
+            (f64::NAN, f64::NAN)
+        } else {
+            wilson(k, n, Z95)
+        }
+    };
+    let ((olo, ohi), (slo, shi)) = (interval(ok, on), interval(sk, sn));
+    MazeComparison {
+        algo: algo.to_string(),
+        maze,
+        steps,
+        ours_n: on,
+        ours_solved: ok,
+        ours_lo: olo,
+        ours_hi: ohi,
+        ours_seeds: String::new(),
+        sb3_library: library.to_string(),
+        sb3_n: sn,
+        sb3_solved: sk,
+        sb3_lo: slo,
+        sb3_hi: shi,
+        sb3_seeds: String::new(),
+        sb3_protocol_solved,
+        fisher_p: if on > 0 && sn > 0 {
+            fisher_exact(ok, on, sk, sn)
+        } else {
+            f64::NAN
+        },
+    }
+}
+
+/// The Pendulum lines: `ours` (`pendulum/ours/`), `sb3` (`pendulum/sb3/`, with Welch's test of
+/// ours against it) and `published` (`pendulum/published.toml`, if present); empty without
+/// the folder.
+pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
+    let root = outside_dir(results).join("pendulum");
+    if !root.is_dir() {
+        return Ok(Vec::new());
+    }
+    let read = |who: &str| -> Result<Vec<PendulumRun>> {
+        let dir = root.join(who);
+        let runs: Vec<(u64, PendulumRun)> = seed_rows(&dir)?;
+        for (seed, r) in &runs {
+            check_seed(&dir, *seed, r.seed)?;
+        }
+        Ok(runs.into_iter().map(|(_, r)| r).collect())
+    };
+    let (ours, sb3) = (read("ours")?, read("sb3")?);
+    let returns = |v: &[PendulumRun]| v.iter().map(|r| r.mean_return).collect::<Vec<f64>>();
+    let ours_returns = returns(&ours);
+    let line = |source: &str, runs: &[PendulumRun], test: bool| -> Result<PendulumRow> {
+        let r = returns(runs);
+        let (mean, sd) = mean_sd(&r).ok_or_else(|| {
+            Error::invalid("outside", format!("pendulum/{source}: fewer than two runs"))
+        })?;
+        let (ci_lo, ci_hi) = t_interval(&r).map_or((None, None), |(a, b)| (Some(a), Some(b)));
+        let w = if test { welch(&ours_returns, &r) } else { None };
+        Ok(PendulumRow {
+            source: source.to_string(),
+            library: runs[0].library.clone(),
+            n: runs.len() as u64,
+            steps: runs[0].steps,
+            mean,
+            sd,
+            min: r.iter().copied().reduce(f64::min),
+            max: r.iter().copied().reduce(f64::max),
+            ci_lo,
+            ci_hi,
+            diff_vs_ours: w.map(|_| mean_sd(&ours_returns).map_or(f64::NAN, |m| m.0) - mean),
+            welch_t: w.map(|w| w.0),
+            welch_df: w.map(|w| w.1),
+            welch_p: w.map(|w| w.2),
+        })
+    };
+    let mut out = vec![line("ours", &ours, false)?, line("sb3", &sb3, true)?];
+    let published = root.join("published.toml");
+    if published.exists() {
+        let text = std::fs::read_to_string(&published).map_err(|e| Error::io(&published, e))?;
+        let p: Published = toml::from_str(&text).map_err(|e| Error::parse(&published, e))?;
+        out.push(PendulumRow {
+            source: "published".into(),
+            library: p.source,
+            n: 1,
+            steps: p.steps,
+            mean: p.mean,
+            sd: p.std,
+            min: None,
+            max: None,
+            ci_lo: None,
+            ci_hi: None,
+            diff_vs_ours: None,
+            welch_t: None,
+            welch_df: None,
+            welch_p: None,
+        });
+    }
+    Ok(out)
+}
+
+/// The update-cost lines of `<results>/outside/update_cost.csv` (empty without it).
+pub fn update_costs(results: &Path) -> Result<Vec<UpdateCost>> {
+    let path = outside_dir(results).join("update_cost.csv");
+    if path.exists() {
+        crate::record::read_records(&path)
+    } else {
+        Ok(Vec::new())
+    }
+}
+
+/// Writes `outside.maze.csv`, `outside.pendulum.csv` and `outside.timing.csv` under
+/// `<results>/tables/` from the rows under `<results>/outside/` (each only where it has rows);
+/// `table` is the experiment of our maze side. Returns the files written.
+pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let maze = maze_comparisons(table, results)?;
+    if !maze.is_empty() {
+        let path = outside_table(results, "maze");
+        crate::record::write_records(&path, &maze)?;
+        files.push(path);
+    }
+    let pendulum = pendulum_rows(results)?;
+    if !pendulum.is_empty() {
+        let path = outside_table(results, "pendulum");
+        crate::record::write_records(&path, &pendulum)?;
+        files.push(path);
+    }
+    let cost = update_costs(results)?;
+    if !cost.is_empty() {
+        let path = outside_table(results, "timing");
+        crate::record::write_records(&path, &cost)?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table() -> Experiment {
+        Experiment::load(Path::new("experiments/table.toml"), None).unwrap()
+    }
+
+    fn write(path: &Path, text: &str) {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+
+    /// Our side: `raw/table/<algo>-maze2/s<seed>.evals.csv` with the greedy success at 300k.
+    fn ours(results: &Path, algo: &str, solved: &[bool]) {
+        for (seed, &s) in solved.iter().enumerate() {
+            let success = if s { "1.0" } else { "0.0" };
+            write(
+                &results.join(format!("raw/table/{algo}-maze2/s{seed}.evals.csv")),
+                &format!(
+                    "steps,episodes,success,mean_return,mean_length\n\
+                     290000,10,1.0,1.0,14.0\n300000,11,{success},0.0,1000.0\n"
+                ),
+            );
+        }
+    }
+
+    fn sb3(results: &Path, algo: &str, solved: &[bool]) {
+        for (seed, &s) in solved.iter().enumerate() {
+            write(
+                &results.join(format!("outside/sb3/{algo}-maze2/s{seed}.csv")),
+                &format!(
+                    "library,algo,seed,steps,solved_s0,protocol_successes,protocol_episodes\n\
+                     sb3-9.9,{algo},{seed},300000,{s},{},100\n",
+                    if s { 96 } else { 3 }
+                ),
+            );
+        }
+    }
+
+    #[test]
+    fn the_maze_comparison_counts_both_sides_at_the_same_step() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = dir.path();
+        // Ours 4 of 5 (the 290k evaluation, solved everywhere, must not count); SB3 1 of 4.
+        ours(r, "ddpg", &[true, true, false, true, true]);
+        sb3(r, "ddpg", &[false, false, true, false]);
+        ours(r, "td3", &[false, true, false]);
+        sb3(r, "td3", &[true, true, false]);
+        let lines = maze_comparisons(&table(), r).unwrap();
+        assert_eq!(lines.len(), 3, "{lines:?}");
+        let d = &lines[0];
+        assert_eq!((d.algo.as_str(), d.maze, d.steps), ("ddpg", 2, 300_000));
+        assert_eq!(
+            (d.ours_n, d.ours_solved, d.sb3_n, d.sb3_solved),
+            (5, 4, 4, 1)
+        );
+        assert_eq!(
+            (d.ours_seeds.as_str(), d.sb3_seeds.as_str()),
+            ("0 1 3 4", "2")
+        );
+        assert_eq!(d.sb3_protocol_solved, 1);
+        assert_eq!(d.fisher_p, fisher_exact(4, 5, 1, 4));
+        assert_eq!((d.ours_lo, d.ours_hi), wilson(4, 5, Z95));
+        let p = &lines[2];
+        assert_eq!(p.algo, "pooled");
+        assert_eq!(
+            (p.ours_n, p.ours_solved, p.sb3_n, p.sb3_solved),
+            (8, 5, 7, 3)
+        );
+        assert_eq!(p.fisher_p, fisher_exact(5, 8, 3, 7));
+        assert_eq!((p.ours_seeds.as_str(), p.sb3_seeds.as_str()), ("", ""));
+    }
+
+    #[test]
+    fn inconsistent_outside_rows_are_errors_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = dir.path();
+        ours(r, "ddpg", &[true, false]);
+        sb3(r, "ddpg", &[true, false]);
+        // A row whose seed is not its file's.
+        let s1 = r.join("outside/sb3/ddpg-maze2/s1.csv");
+        let text = std::fs::read_to_string(&s1).unwrap();
+        write(&s1, &text.replace(",ddpg,1,", ",ddpg,7,"));
+        let e = maze_comparisons(&table(), r).unwrap_err().to_string();
+        assert!(e.contains("s1.csv") && e.contains("seed"), "{e}");
+        // Another step count than the folder's first run.
+        write(&s1, &text.replace("300000", "200000"));
+        let e = maze_comparisons(&table(), r).unwrap_err().to_string();
+        assert!(e.contains("s1.csv") && e.contains("300000 steps"), "{e}");
+        // Our evaluations stop before the SB3 runs' steps.
+        write(&s1, &text);
+        let ours0 = r.join("raw/table/ddpg-maze2/s0.evals.csv");
+        write(
+            &ours0,
+            "steps,episodes,success,mean_return,mean_length\n10000,1,0.0,0.0,1000.0\n",
+        );
+        let e = maze_comparisons(&table(), r).unwrap_err().to_string();
+        assert!(e.contains("s0.evals.csv") && e.contains("300000"), "{e}");
+        // Two rows in one run's file.
+        write(
+            &ours0,
+            "steps,episodes,success,mean_return,mean_length\n300000,1,0.0,0.0,1000.0\n",
+        );
+        write(&s1, &format!("{text}{}", text.lines().nth(1).unwrap()));
+        let e = maze_comparisons(&table(), r).unwrap_err().to_string();
+        assert!(e.contains("s1.csv") && e.contains("one row"), "{e}");
+    }
+
+    #[test]
+    fn pendulum_lines_give_the_mean_the_interval_and_welchs_test() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = dir.path();
+        let runs = |who: &str, lib: &str, returns: &[f64]| {
+            for (seed, x) in returns.iter().enumerate() {
+                write(
+                    &r.join(format!("outside/pendulum/{who}/s{seed}.csv")),
+                    &format!(
+                        "library,algo,seed,steps,eval_episodes,mean_return\n\
+                         {lib},td3,{seed},20000,10,{x}\n"
+                    ),
+                );
+            }
+        };
+        let (a, b) = ([1.0, 2.0, 3.0, 4.0, 5.0], [2.0, 4.0, 6.0, 8.0, 10.0]);
+        runs("ours", "pbcs", &a);
+        runs("sb3", "sb3-9.9", &b);
+        write(
+            &r.join("outside/pendulum/published.toml"),
+            "source = \"x\"\nalgo = \"td3\"\nsteps = 20000\neval_episodes = 750\nmean = -150.0\nstd = 90.0\n",
+        );
+        let rows = pendulum_rows(r).unwrap();
+        assert_eq!(rows.len(), 3);
+        let (o, s, p) = (&rows[0], &rows[1], &rows[2]);
+        assert_eq!((o.n, o.mean, o.min, o.max), (5, 3.0, Some(1.0), Some(5.0)));
+        assert_eq!(o.welch_p, None);
+        // SciPy: ttest_ind(a, b, equal_var=False) → t = −1.897367, p = 0.107531.
+        assert!((s.welch_t.unwrap() + 1.897_366_596).abs() < 1e-8);
+        assert!((s.welch_p.unwrap() - 0.107_531_194_9).abs() < 1e-8);
+        assert_eq!(s.diff_vs_ours, Some(-3.0));
+        assert_eq!(
+            (p.source.as_str(), p.mean, p.sd, p.ci_lo),
+            ("published", -150.0, 90.0, None)
+        );
+        // A misspelt field of the published figure is an error naming the file.
+        write(&r.join("outside/pendulum/published.toml"), "mean = 1.0\n");
+        let e = pendulum_rows(r).unwrap_err().to_string();
+        assert!(e.contains("published.toml"), "{e}");
+    }
+}
