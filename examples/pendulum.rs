@@ -3,9 +3,10 @@
 //! steps, learning rate 1e-3, networks [400, 300], Gaussian noise σ = 0.1, batch 256 (SB3's
 //! TD3 default), τ = 0.005, and after each 200-step episode as many updates as its steps
 //! (`train_freq = [1, "episode"], gradient_steps = -1`). Each seed's final greedy policy is
-//! judged on its mean return over 10 episodes from random starts (RL-Zoo's published TD3
-//! agent: −195.99 ± 119.03). Writes one row per seed into `results/outside/pendulum/ours/`
-//! (a finished seed is skipped), its wall clock beside it.
+//! judged on its mean return over 10 episodes from random starts (RL-Zoo's benchmark: one
+//! agent over 750 episodes, −151.9 ± 90.2: `results/outside/pendulum/published.toml`). Writes
+//! one row per seed into `results/outside/pendulum/ours/` (a finished seed is skipped), its
+//! wall clock beside it.
 //!
 //! `cargo run --release --example pendulum -- [FIRST_SEED LAST_SEED]` (default 0 9); the SB3
 //! side is `python/benches/sb3_pendulum.py`.

@@ -400,7 +400,9 @@ pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (Str
 
 /// `outside_pendulum.tex` (final mean returns on Pendulum-v1) and the numbers
 /// `\res{outside:pendulum:<source>:<field>}`: `n`, `steps`, `mean`, `sd`, `min`, `max`, `cilo`,
-/// `cihi`, and for a source tested against ours `diff`, `t`, `df`, `p`.
+/// `cihi`, `episodes` (each run's evaluation episodes), `withinpublished` (runs within one
+/// standard deviation of the published mean), and for a source tested against ours `diff`
+/// (mean of ours − mean of this), `t`, `df`, `p`.
 pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (String, String) {
     let mut table = String::from(GENERATED);
     table.push_str("\\begin{tabular}{lrrrrrcl}\n\\toprule\n");
@@ -462,6 +464,11 @@ pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (St
             ),
             ("df", opt(r.welch_df)),
             ("p", r.welch_p.map_or("--".into(), p_value)),
+            ("episodes", r.eval_episodes.to_string()),
+            (
+                "withinpublished",
+                r.within_published.map_or("--".into(), |k| k.to_string()),
+            ),
         ] {
             def_res(&mut numbers, "outside", &format!("{key}:{f}"), &v);
         }
@@ -470,8 +477,9 @@ pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (St
     (table, numbers)
 }
 
-/// The numbers `\res{outside:cost:<algo>:<library>}` (µs per environment step, `sb3` for any
-/// SB3 version) and `\res{outside:cost:<algo>:ratio}` (SB3's over ours).
+/// The numbers `\res{outside:cost:<algo>:sb3}` and `\res{outside:cost:<algo>:ours}` (the time
+/// per environment step of a library whose name starts with `sb3`, and of any other: ours) and
+/// `\res{outside:cost:<algo>:ratio}` (SB3's over ours, where both are finite and positive).
 pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> String {
     let mut s = String::new();
     let who = |l: &str| if l.starts_with("sb3") { "sb3" } else { "ours" };
@@ -492,14 +500,22 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
     for a in algos {
         let find = |w: &str| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
         if let (Some(sb3), Some(ours)) = (find("sb3"), find("ours")) {
-            let ratio = format!("{:.0}", sb3.us_per_step / ours.us_per_step);
-            def_res(&mut s, "outside", &format!("cost:{a}:ratio"), &ratio);
+            let ratio = sb3.us_per_step / ours.us_per_step;
+            if ratio.is_finite() && ratio > 0.0 {
+                let ratio = if ratio >= 10.0 {
+                    format!("{ratio:.0}")
+                } else {
+                    format!("{ratio:.1}")
+                };
+                def_res(&mut s, "outside", &format!("cost:{a}:ratio"), &ratio);
+            }
         }
     }
     s
 }
 
-/// A p-value as the report prints it: two significant digits, `< 0.001` below.
+/// A p-value as the report prints it: two decimals from 0.1, three below, `< 0.001` below
+/// that, `1` from 0.995.
 fn p_value(p: f64) -> String {
     if !p.is_finite() {
         "--".into()

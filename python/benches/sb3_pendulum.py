@@ -6,7 +6,8 @@ RL-Zoo's TD3 for Pendulum-v1: 20 000 steps, γ = 0.98, replay 200 000, 10 000 wa
 learning rate 1e-3, networks [400, 300], Gaussian noise σ = 0.1, train_freq [1, "episode"],
 gradient_steps −1 (SB3's defaults otherwise: batch 256, τ = 0.005, policy delay 2, target
 smoothing 0.2 / 0.5). Each seed's final deterministic policy: mean return over 10 episodes
-(RL-Zoo's published TD3 agent: −195.99 ± 119.03). One torch thread per run.
+(RL-Zoo's benchmark, one agent over 750 episodes: −151.9 ± 90.2,
+results/outside/pendulum/published.toml). One torch thread per run.
 
     python python/benches/sb3_pendulum.py --seeds 0-9 --out results/outside/pendulum/sb3
 

@@ -137,6 +137,9 @@ pub struct PendulumRow {
     pub n: u64,
     /// Environment steps of training.
     pub steps: u64,
+    /// Greedy episodes each run's return averages (the published evaluation's episodes for
+    /// `published`).
+    pub eval_episodes: u64,
     /// Mean over runs of the final mean return (the published mean for `published`).
     pub mean: f64,
     /// Standard deviation over runs (over the published evaluation's episodes for
@@ -158,6 +161,9 @@ pub struct PendulumRow {
     pub welch_df: Option<f64>,
     /// Its two-sided p-value.
     pub welch_p: Option<f64>,
+    /// Runs whose return lies within one standard deviation of the published mean (empty
+    /// without a published figure, and for `published`).
+    pub within_published: Option<u64>,
 }
 
 /// One line of `update_cost.csv` and `outside.timing.csv` (wall clock, not deterministic).
@@ -182,10 +188,12 @@ fn seed_rows<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<Vec<(u64, T)>
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        // Only the canonical `s<seed>.csv` (not `s01.csv`: one seed, one file).
         let Some(seed) = name
             .strip_prefix('s')
             .and_then(|n| n.strip_suffix(".csv"))
             .and_then(|n| n.parse::<u64>().ok())
+            .filter(|seed| name == format!("s{seed}.csv"))
         else {
             continue;
         };
@@ -253,6 +261,12 @@ fn ours_at(
             .ok_or_else(|| Error::parse(&path, format!("no greedy evaluation at step {steps}")))?;
         out.push((seed, at.success >= crate::runs::SOLVED_AT));
     }
+    if out.is_empty() {
+        return Err(Error::parse(
+            table.cell_dir(results, cell),
+            "no run of ours to compare with (no s<seed>.evals.csv)",
+        ));
+    }
     Ok(out)
 }
 
@@ -290,6 +304,16 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
         let (steps, library) = (first.steps, first.library.clone());
         for (seed, r) in &runs {
             check_seed(dir, *seed, r.seed)?;
+            if r.protocol_episodes == 0 || r.protocol_successes > r.protocol_episodes {
+                return Err(Error::parse(
+                    dir.join(format!("s{seed}.csv")),
+                    format!(
+                        "protocol_successes {} of protocol_episodes {}: need 0 <= successes \
+                         <= episodes, episodes > 0",
+                        r.protocol_successes, r.protocol_episodes
+                    ),
+                ));
+            }
             if r.steps != steps || r.algo != *algo || r.library != library {
                 return Err(Error::parse(
                     dir.join(format!("s{seed}.csv")),
@@ -329,6 +353,18 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
         let lines: Vec<&MazeComparison> = out.iter().filter(|c| c.maze == maze).collect();
         if lines.len() < 2 {
             continue;
+        }
+        if lines
+            .iter()
+            .any(|c| c.steps != lines[0].steps || c.sb3_library != lines[0].sb3_library)
+        {
+            return Err(Error::invalid(
+                "outside",
+                format!(
+                    "results/outside/sb3/*-maze{maze}: the learners' runs differ in steps or \
+                     library, so they cannot be pooled"
+                ),
+            ));
         }
         let sum = |f: fn(&MazeComparison) -> u64| lines.iter().map(|c| f(c)).sum::<u64>();
         let pooled = comparison(
@@ -398,19 +434,63 @@ pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
     let read = |who: &str| -> Result<Vec<PendulumRun>> {
         let dir = root.join(who);
         let runs: Vec<(u64, PendulumRun)> = seed_rows(&dir)?;
+        let first = runs
+            .first()
+            .map(|(_, r)| (r.library.clone(), r.algo.clone(), r.steps, r.eval_episodes));
         for (seed, r) in &runs {
             check_seed(&dir, *seed, r.seed)?;
+            let same = first.as_ref().is_some_and(|f| {
+                (&f.0, &f.1, f.2, f.3) == (&r.library, &r.algo, r.steps, r.eval_episodes)
+            });
+            if !same || !r.mean_return.is_finite() {
+                return Err(Error::parse(
+                    dir.join(format!("s{seed}.csv")),
+                    "every run of the folder has the first run's library, algo, steps and \
+                     eval_episodes, and a finite mean_return",
+                ));
+            }
+        }
+        if runs.len() < 2 {
+            return Err(Error::parse(&dir, "fewer than two runs (s<seed>.csv)"));
         }
         Ok(runs.into_iter().map(|(_, r)| r).collect())
     };
     let (ours, sb3) = (read("ours")?, read("sb3")?);
+    if (&ours[0].algo, ours[0].steps, ours[0].eval_episodes)
+        != (&sb3[0].algo, sb3[0].steps, sb3[0].eval_episodes)
+    {
+        return Err(Error::parse(
+            root.join("sb3"),
+            "SB3's runs differ from ours in algo, steps or eval_episodes",
+        ));
+    }
+    let published = root.join("published.toml");
+    let published: Option<Published> = if published.exists() {
+        let text = std::fs::read_to_string(&published).map_err(|e| Error::io(&published, e))?;
+        let p: Published = toml::from_str(&text).map_err(|e| Error::parse(&published, e))?;
+        if p.algo != ours[0].algo
+            || p.steps != ours[0].steps
+            || !(p.mean.is_finite() && p.std >= 0.0)
+        {
+            return Err(Error::parse(
+                &published,
+                format!(
+                    "the published figure must be of {} at {} steps, with a finite mean and std >= 0",
+                    ours[0].algo, ours[0].steps
+                ),
+            ));
+        }
+        Some(p)
+    } else {
+        None
+    };
+    let band = published.as_ref().map(|p| (p.mean - p.std, p.mean + p.std));
     let returns = |v: &[PendulumRun]| v.iter().map(|r| r.mean_return).collect::<Vec<f64>>();
     let ours_returns = returns(&ours);
     let line = |source: &str, runs: &[PendulumRun], test: bool| -> Result<PendulumRow> {
         let r = returns(runs);
-        let (mean, sd) = mean_sd(&r).ok_or_else(|| {
-            Error::invalid("outside", format!("pendulum/{source}: fewer than two runs"))
-        })?;
+        let (mean, sd) = mean_sd(&r)
+            .ok_or_else(|| Error::parse(root.join(source), "fewer than two runs (s<seed>.csv)"))?;
         let (ci_lo, ci_hi) = t_interval(&r).map_or((None, None), |(a, b)| (Some(a), Some(b)));
         let w = if test { welch(&ours_returns, &r) } else { None };
         Ok(PendulumRow {
@@ -418,6 +498,7 @@ pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
             library: runs[0].library.clone(),
             n: runs.len() as u64,
             steps: runs[0].steps,
+            eval_episodes: runs[0].eval_episodes,
             mean,
             sd,
             min: r.iter().copied().reduce(f64::min),
@@ -428,18 +509,18 @@ pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
             welch_t: w.map(|w| w.0),
             welch_df: w.map(|w| w.1),
             welch_p: w.map(|w| w.2),
+            within_published: band
+                .map(|(lo, hi)| r.iter().filter(|&&x| (lo..=hi).contains(&x)).count() as u64),
         })
     };
     let mut out = vec![line("ours", &ours, false)?, line("sb3", &sb3, true)?];
-    let published = root.join("published.toml");
-    if published.exists() {
-        let text = std::fs::read_to_string(&published).map_err(|e| Error::io(&published, e))?;
-        let p: Published = toml::from_str(&text).map_err(|e| Error::parse(&published, e))?;
+    if let Some(p) = published {
         out.push(PendulumRow {
             source: "published".into(),
             library: p.source,
             n: 1,
             steps: p.steps,
+            eval_episodes: p.eval_episodes,
             mean: p.mean,
             sd: p.std,
             min: None,
@@ -450,6 +531,7 @@ pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
             welch_t: None,
             welch_df: None,
             welch_p: None,
+            within_published: None,
         });
     }
     Ok(out)
@@ -465,29 +547,32 @@ pub fn update_costs(results: &Path) -> Result<Vec<UpdateCost>> {
     }
 }
 
+/// Writes `records` to `path` (added to `files`), or removes a table left from earlier rows
+/// when there are none.
+fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathBuf>) -> Result<()> {
+    if records.is_empty() {
+        if path.exists() {
+            std::fs::remove_file(path).map_err(|e| Error::io(path, e))?;
+        }
+        return Ok(());
+    }
+    crate::record::write_records(path, records)?;
+    files.push(path.to_path_buf());
+    Ok(())
+}
+
 /// Writes `outside.maze.csv`, `outside.pendulum.csv` and `outside.timing.csv` under
-/// `<results>/tables/` from the rows under `<results>/outside/` (each only where it has rows);
-/// `table` is the experiment of our maze side. Returns the files written.
+/// `<results>/tables/` from the rows under `<results>/outside/` (each only where it has rows;
+/// a table without rows any more is removed); `table` is the experiment of our maze side.
+/// Returns the files written.
 pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     let maze = maze_comparisons(table, results)?;
-    if !maze.is_empty() {
-        let path = outside_table(results, "maze");
-        crate::record::write_records(&path, &maze)?;
-        files.push(path);
-    }
+    put_or_remove(&outside_table(results, "maze"), &maze, &mut files)?;
     let pendulum = pendulum_rows(results)?;
-    if !pendulum.is_empty() {
-        let path = outside_table(results, "pendulum");
-        crate::record::write_records(&path, &pendulum)?;
-        files.push(path);
-    }
+    put_or_remove(&outside_table(results, "pendulum"), &pendulum, &mut files)?;
     let cost = update_costs(results)?;
-    if !cost.is_empty() {
-        let path = outside_table(results, "timing");
-        crate::record::write_records(&path, &cost)?;
-        files.push(path);
-    }
+    put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
     Ok(files)
 }
 
@@ -590,6 +675,14 @@ mod tests {
         );
         let e = maze_comparisons(&table(), r).unwrap_err().to_string();
         assert!(e.contains("s0.evals.csv") && e.contains("300000"), "{e}");
+        // A protocol of no episodes.
+        write(&s1, &text.replace(",3,100", ",0,0"));
+        let e = maze_comparisons(&table(), r).unwrap_err().to_string();
+        assert!(
+            e.contains("s1.csv") && e.contains("protocol_episodes"),
+            "{e}"
+        );
+        write(&s1, &text);
         // Two rows in one run's file.
         write(
             &ours0,
@@ -620,7 +713,7 @@ mod tests {
         runs("sb3", "sb3-9.9", &b);
         write(
             &r.join("outside/pendulum/published.toml"),
-            "source = \"x\"\nalgo = \"td3\"\nsteps = 20000\neval_episodes = 750\nmean = -150.0\nstd = 90.0\n",
+            "source = \"x\"\nalgo = \"td3\"\nsteps = 20000\neval_episodes = 750\nmean = 3.0\nstd = 1.5\n",
         );
         let rows = pendulum_rows(r).unwrap();
         assert_eq!(rows.len(), 3);
@@ -633,8 +726,31 @@ mod tests {
         assert_eq!(s.diff_vs_ours, Some(-3.0));
         assert_eq!(
             (p.source.as_str(), p.mean, p.sd, p.ci_lo),
-            ("published", -150.0, 90.0, None)
+            ("published", 3.0, 1.5, None)
         );
+        // Within [1.5, 4.5]: ours 2, 3, 4; SB3's 2, 4.
+        assert_eq!((o.within_published, s.within_published), (Some(3), Some(2)));
+        // A published figure of another training length is an error naming the file.
+        write(
+            &r.join("outside/pendulum/published.toml"),
+            "source = \"x\"\nalgo = \"td3\"\nsteps = 1000\neval_episodes = 750\nmean = 3.0\nstd = 1.5\n",
+        );
+        let e = pendulum_rows(r).unwrap_err().to_string();
+        assert!(
+            e.contains("published.toml") && e.contains("20000 steps"),
+            "{e}"
+        );
+        // A run that is not a number, or of another length than the folder's first, is an error
+        // naming its file.
+        let s2 = r.join("outside/pendulum/sb3/s2.csv");
+        let text = std::fs::read_to_string(&s2).unwrap();
+        write(&s2, &text.replace(",6\n", ",NaN\n"));
+        let e = pendulum_rows(r).unwrap_err().to_string();
+        assert!(e.contains("s2.csv") && e.contains("finite"), "{e}");
+        write(&s2, &text.replace(",20000,", ",30000,"));
+        let e = pendulum_rows(r).unwrap_err().to_string();
+        assert!(e.contains("s2.csv") && e.contains("steps"), "{e}");
+        write(&s2, &text);
         // A misspelt field of the published figure is an error naming the file.
         write(&r.join("outside/pendulum/published.toml"), "mean = 1.0\n");
         let e = pendulum_rows(r).unwrap_err().to_string();
