@@ -1,6 +1,6 @@
-"""A plain numpy implementation of the maze, written from the paper's description and the
-documented rules of `pbcs.ContinuousMaze`, not from its code: the reference the compiled maze
-is tested against (`test_reference.py`) and the step bench compares speeds with."""
+"""A second implementation of the maze's rules in plain numpy (its own slab test against every
+wall, no grid and no parry2d): the reference the compiled maze is tested against
+(`test_reference.py`) and the step bench compares speeds with."""
 
 import numpy as np
 
