@@ -336,7 +336,8 @@ pub fn cells_table_tex(rows: &[CellStats]) -> String {
 
 /// `outside_maze.tex` (the table of ours against Stable-Baselines3 on the maze) and the numbers
 /// `\res{outside:maze:<algo>:<field>}`: `steps`, `oursn`, `ourssolved`, `ourslo`, `ourshi`,
-/// `oursseeds`, `sbn`, `sbsolved`, `sblo`, `sbhi`, `sbseeds`, `sbprotocol`, `fisherp`, `sbversion`.
+/// `oursseeds`, `sbn`, `sbsolved`, `sblo`, `sbhi`, `sbseeds`, `sbprotocol`, `fisherp`, `sbversion`
+/// and `verdict` ([`maze_verdict`]).
 pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (String, String) {
     let mut table = String::from(GENERATED);
     table.push_str("\\begin{tabular}{lrcrcrl}\n\\toprule\n");
@@ -381,6 +382,7 @@ pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (Str
             ("sbseeds", seeds_list(&r.sb3_seeds)),
             ("sbprotocol", r.sb3_protocol_solved.to_string()),
             ("fisherp", p_value(r.fisher_p)),
+            ("verdict", maze_verdict(r).to_string()),
             (
                 "sbversion",
                 r.sb3_library.trim_start_matches("sb3-").to_string(),
@@ -514,6 +516,19 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
     s
 }
 
+/// The verdict of one maze comparison at the 5 % level of Fisher's exact test: "no significant
+/// difference", or which side solves more.
+pub fn maze_verdict(r: &crate::tables::outside::MazeComparison) -> &'static str {
+    let rate = |k: u64, n: u64| k as f64 / n as f64;
+    if !(r.fisher_p < 0.05) {
+        "no significant difference"
+    } else if rate(r.ours_solved, r.ours_n) > rate(r.sb3_solved, r.sb3_n) {
+        "ours solves significantly more"
+    } else {
+        "ours solves significantly fewer"
+    }
+}
+
 /// A p-value as the report prints it: two decimals from 0.1, three below, `< 0.001` below
 /// that, `1` from 0.995.
 fn p_value(p: f64) -> String {
@@ -623,6 +638,41 @@ pub fn settings_tex(
 mod tests {
     use super::*;
     use crate::experiment::Experiment;
+
+    /// The outside table's verdict follows Fisher's test at 5 %, in the direction of the rates.
+    #[test]
+    fn the_outside_verdict_follows_the_exact_test() {
+        let line = |ok: u64, sk: u64| {
+            let p = crate::stats::fisher_exact(ok, 10, sk, 10);
+            crate::tables::outside::MazeComparison {
+                algo: "ddpg".into(),
+                maze: 2,
+                steps: 300_000,
+                ours_n: 10,
+                ours_solved: ok,
+                ours_lo: 0.0,
+                ours_hi: 1.0,
+                ours_seeds: String::new(),
+                sb3_library: "sb3-x".into(),
+                sb3_n: 10,
+                sb3_solved: sk,
+                sb3_lo: 0.0,
+                sb3_hi: 1.0,
+                sb3_seeds: String::new(),
+                sb3_protocol_solved: 0,
+                fisher_p: p,
+            }
+        };
+        // 4/10 vs 1/10: p = 0.30; 9/10 vs 3/10: p = 0.0198.
+        assert_eq!(maze_verdict(&line(4, 1)), "no significant difference");
+        assert_eq!(maze_verdict(&line(9, 3)), "ours solves significantly more");
+        assert_eq!(maze_verdict(&line(3, 9)), "ours solves significantly fewer");
+        assert_eq!(p_value(0.30343), "0.30");
+        assert_eq!(p_value(0.019_766), "0.020");
+        assert_eq!(p_value(0.0004), "< 0.001");
+        assert_eq!(p_value(1.0), "1");
+        assert_eq!(p_value(f64::NAN), "--");
+    }
 
     /// Three short lines per maze: "k/n (j), median", the interval, the paper's figure; a
     /// method without the cell gets dashes.
