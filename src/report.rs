@@ -409,19 +409,16 @@ pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (St
     let mut table = String::from(GENERATED);
     table.push_str("\\begin{tabular}{lrrrrrcl}\n\\toprule\n");
     table.push_str(
-        "source & runs & mean & sd & min & max & $t$ 95\\,\\% of the mean & Welch vs ours \\\\\n\\midrule\n",
+        "source & runs & mean & sd & min & max & mean, $t$ 95\\,\\% & Welch vs ours \\\\\n\\midrule\n",
     );
     // One decimal, with a true minus sign (`tex` sets it in math).
     let one = |x: f64| format!("{x:.1}").replace('-', "−");
     let mut numbers = String::new();
     for r in rows {
         let name = match r.source.as_str() {
-            "ours" => "ours (Rust port of Pendulum-v1)".to_string(),
-            "sb3" => format!(
-                "Stable-Baselines3 {} (gymnasium)",
-                r.library.trim_start_matches("sb3-")
-            ),
-            _ => "RL-Zoo's benchmark (one agent; sd over episodes)".to_string(),
+            "ours" => "ours (Rust port)".to_string(),
+            "sb3" => format!("SB3 {} (gymnasium)", r.library.trim_start_matches("sb3-")),
+            _ => "RL-Zoo (one agent)".to_string(),
         };
         let opt = |x: Option<f64>| x.map_or("--".to_string(), one);
         let ci = match (r.ci_lo, r.ci_hi) {
