@@ -288,19 +288,21 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
     if maze.exists() {
         put(
             "outside_maze.tex",
-            report::outside_maze_tex(&read_records(&maze)?),
+            report::outside::outside_maze_tex(&read_records(&maze)?),
         )?;
     }
     let pendulum = outside_table(results, "pendulum");
     if pendulum.exists() {
         put(
             "outside_pendulum.tex",
-            report::outside_pendulum_tex(&read_records(&pendulum)?),
+            report::outside::outside_pendulum_tex(&read_records(&pendulum)?),
         )?;
     }
     let cost = outside_table(results, "timing");
     if cost.exists() {
-        numbers.push_str(&report::outside_cost_numbers(&read_records(&cost)?));
+        numbers.push_str(&report::outside::outside_cost_numbers(&read_records(
+            &cost,
+        )?));
     }
     Ok(numbers)
 }

@@ -1,0 +1,262 @@
+//! The report's LaTeX of the outside checks (`outside_maze.tex`, `outside_pendulum.tex` and
+//! their numbers in `numbers.tex`), from `results/tables/outside.*.csv`.
+
+use super::{def_res, tex, GENERATED};
+use crate::fmt::human_steps;
+use std::fmt::Write as _;
+
+/// `outside_maze.tex` (the table of ours against Stable-Baselines3 on the maze) and the numbers
+/// `\res{outside:maze:<algo>:<field>}`: `steps`, `oursn`, `ourssolved`, `ourslo`, `ourshi`,
+/// `oursseeds`, `sbn`, `sbsolved`, `sblo`, `sbhi`, `sbseeds`, `sbprotocol`, `fisherp`, `sbversion`
+/// and `verdict` ([`maze_verdict`]).
+pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (String, String) {
+    let mut table = String::from(GENERATED);
+    table.push_str("\\begin{tabular}{lrcrcrl}\n\\toprule\n");
+    table.push_str(
+        "learner & \\multicolumn{2}{c}{ours: solved, Wilson 95\\,\\%} & \
+         \\multicolumn{2}{c}{SB3: solved, Wilson 95\\,\\%} & SB3, PBCS's protocol & Fisher $p$ \\\\\n\\midrule\n",
+    );
+    let mut numbers = String::new();
+    for r in rows {
+        let name = match r.algo.as_str() {
+            "pooled" => "both, pooled".to_string(),
+            a => a.to_uppercase(),
+        };
+        let _ = writeln!(
+            table,
+            "{} & {}/{} & [{:.2}, {:.2}] & {}/{} & [{:.2}, {:.2}] & {}/{} & {} \\\\",
+            tex(&name),
+            r.ours_solved,
+            r.ours_n,
+            r.ours_lo,
+            r.ours_hi,
+            r.sb3_solved,
+            r.sb3_n,
+            r.sb3_lo,
+            r.sb3_hi,
+            r.sb3_protocol_solved,
+            r.sb3_n,
+            p_value(r.fisher_p),
+        );
+        let key = format!("maze:{}", r.algo);
+        let mut fields = vec![
+            ("steps", human_steps(r.steps as f64)),
+            ("oursn", r.ours_n.to_string()),
+            ("ourssolved", r.ours_solved.to_string()),
+            ("ourslo", format!("{:.2}", r.ours_lo)),
+            ("ourshi", format!("{:.2}", r.ours_hi)),
+            ("oursseeds", seeds_list(&r.ours_seeds)),
+            ("sbn", r.sb3_n.to_string()),
+            ("sbsolved", r.sb3_solved.to_string()),
+            ("sblo", format!("{:.2}", r.sb3_lo)),
+            ("sbhi", format!("{:.2}", r.sb3_hi)),
+            ("sbseeds", seeds_list(&r.sb3_seeds)),
+            ("sbprotocol", r.sb3_protocol_solved.to_string()),
+            ("fisherp", p_value(r.fisher_p)),
+            ("verdict", maze_verdict(r).to_string()),
+            (
+                "sbversion",
+                r.sb3_library.trim_start_matches("sb3-").to_string(),
+            ),
+        ];
+        // The pooled line has no seeds of its own.
+        if r.algo == "pooled" {
+            fields.retain(|(f, _)| !f.ends_with("seeds"));
+        }
+        for (f, v) in fields {
+            def_res(&mut numbers, "outside", &format!("{key}:{f}"), &v);
+        }
+    }
+    table.push_str("\\bottomrule\n\\end{tabular}\n");
+    (table, numbers)
+}
+
+/// `outside_pendulum.tex` (final mean returns on Pendulum-v1) and the numbers
+/// `\res{outside:pendulum:<source>:<field>}`: `n`, `steps`, `mean`, `sd`, `min`, `max`, `cilo`,
+/// `cihi`, `episodes` (each run's evaluation episodes), `withinpublished` (runs within one
+/// standard deviation of the published mean), and for a source tested against ours `diff`
+/// (mean of ours − mean of this), `t`, `df`, `p`.
+pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (String, String) {
+    let mut table = String::from(GENERATED);
+    table.push_str("\\begin{tabular}{lrrrrrcl}\n\\toprule\n");
+    table.push_str(
+        "source & runs & mean & sd & min & max & mean, $t$ 95\\,\\% & Welch vs ours \\\\\n\\midrule\n",
+    );
+    // One decimal, with a true minus sign (`tex` sets it in math).
+    let one = |x: f64| format!("{x:.1}").replace('-', "−");
+    let mut numbers = String::new();
+    for r in rows {
+        let name = match r.source.as_str() {
+            "ours" => "ours (Rust port)".to_string(),
+            "sb3" => format!("SB3 {} (gymnasium)", r.library.trim_start_matches("sb3-")),
+            _ => "RL-Zoo (one agent)".to_string(),
+        };
+        let opt = |x: Option<f64>| x.map_or("--".to_string(), one);
+        let ci = match (r.ci_lo, r.ci_hi) {
+            (Some(a), Some(b)) => format!("[{}, {}]", one(a), one(b)),
+            _ => "--".into(),
+        };
+        let test = match (r.welch_t, r.welch_p) {
+            (Some(t), Some(p)) => format!(
+                "t = {}, p = {}",
+                format!("{t:.2}").replace('-', "−"),
+                p_value(p)
+            ),
+            _ => "--".into(),
+        };
+        let _ = writeln!(
+            table,
+            "{} & {} & {} & {} & {} & {} & {} & {} \\\\",
+            tex(&name),
+            r.n,
+            tex(&one(r.mean)),
+            tex(&one(r.sd)),
+            tex(&opt(r.min)),
+            tex(&opt(r.max)),
+            tex(&ci),
+            tex(&test)
+        );
+        let key = format!("pendulum:{}", r.source);
+        for (f, v) in [
+            ("n", r.n.to_string()),
+            ("steps", human_steps(r.steps as f64)),
+            ("mean", one(r.mean)),
+            ("sd", one(r.sd)),
+            ("min", opt(r.min)),
+            ("max", opt(r.max)),
+            ("cilo", opt(r.ci_lo)),
+            ("cihi", opt(r.ci_hi)),
+            ("diff", opt(r.diff_vs_ours)),
+            (
+                "t",
+                r.welch_t
+                    .map_or("--".into(), |t| format!("{t:.2}").replace('-', "−")),
+            ),
+            ("df", opt(r.welch_df)),
+            ("p", r.welch_p.map_or("--".into(), p_value)),
+            ("episodes", r.eval_episodes.to_string()),
+            (
+                "withinpublished",
+                r.within_published.map_or("--".into(), |k| k.to_string()),
+            ),
+        ] {
+            def_res(&mut numbers, "outside", &format!("{key}:{f}"), &v);
+        }
+    }
+    table.push_str("\\bottomrule\n\\end{tabular}\n");
+    (table, numbers)
+}
+
+/// The numbers `\res{outside:cost:<algo>:sb3}` and `\res{outside:cost:<algo>:ours}` (the time
+/// per environment step of a library whose name starts with `sb3`, and of any other: ours) and
+/// `\res{outside:cost:<algo>:ratio}` (SB3's over ours, where both are finite and positive).
+pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> String {
+    let mut s = String::new();
+    let who = |l: &str| if l.starts_with("sb3") { "sb3" } else { "ours" };
+    for r in rows {
+        let v = if r.us_per_step >= 1000.0 {
+            format!("{:.1} ms", r.us_per_step / 1000.0)
+        } else {
+            format!("{:.0} µs", r.us_per_step)
+        };
+        def_res(
+            &mut s,
+            "outside",
+            &format!("cost:{}:{}", r.algo, who(&r.library)),
+            &v,
+        );
+    }
+    let algos: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.algo.as_str()).collect();
+    for a in algos {
+        let find = |w: &str| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
+        if let (Some(sb3), Some(ours)) = (find("sb3"), find("ours")) {
+            let ratio = sb3.us_per_step / ours.us_per_step;
+            if ratio.is_finite() && ratio > 0.0 {
+                let ratio = if ratio >= 10.0 {
+                    format!("{ratio:.0}")
+                } else {
+                    format!("{ratio:.1}")
+                };
+                def_res(&mut s, "outside", &format!("cost:{a}:ratio"), &ratio);
+            }
+        }
+    }
+    s
+}
+
+/// The verdict of one maze comparison at the 5 % level of Fisher's exact test: "no significant
+/// difference", or which side solves more.
+pub fn maze_verdict(r: &crate::tables::outside::MazeComparison) -> &'static str {
+    let rate = |k: u64, n: u64| k as f64 / n as f64;
+    if r.fisher_p.is_nan() || r.fisher_p >= 0.05 {
+        "no significant difference"
+    } else if rate(r.ours_solved, r.ours_n) > rate(r.sb3_solved, r.sb3_n) {
+        "ours solves significantly more"
+    } else {
+        "ours solves significantly fewer"
+    }
+}
+
+/// A p-value as the report prints it: two decimals from 0.1, three below, `< 0.001` below
+/// that, `1` from 0.995.
+fn p_value(p: f64) -> String {
+    if !p.is_finite() {
+        "--".into()
+    } else if p >= 0.995 {
+        "1".into()
+    } else if p < 0.001 {
+        "< 0.001".into()
+    } else if p >= 0.1 {
+        format!("{p:.2}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+/// Space-separated seeds as a comma-separated list (`none` if empty).
+fn seeds_list(seeds: &str) -> String {
+    match seeds.split_whitespace().collect::<Vec<_>>() {
+        v if v.is_empty() => "none".into(),
+        v => v.join(", "),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The outside table's verdict follows Fisher's test at 5 %, in the direction of the rates.
+    #[test]
+    fn the_outside_verdict_follows_the_exact_test() {
+        let line = |ok: u64, sk: u64| {
+            let p = crate::stats::fisher_exact(ok, 10, sk, 10);
+            crate::tables::outside::MazeComparison {
+                algo: "ddpg".into(),
+                maze: 2,
+                steps: 300_000,
+                ours_n: 10,
+                ours_solved: ok,
+                ours_lo: 0.0,
+                ours_hi: 1.0,
+                ours_seeds: String::new(),
+                sb3_library: "sb3-x".into(),
+                sb3_n: 10,
+                sb3_solved: sk,
+                sb3_lo: 0.0,
+                sb3_hi: 1.0,
+                sb3_seeds: String::new(),
+                sb3_protocol_solved: 0,
+                fisher_p: p,
+            }
+        };
+        // 4/10 vs 1/10: p = 0.30; 9/10 vs 3/10: p = 0.0198.
+        assert_eq!(maze_verdict(&line(4, 1)), "no significant difference");
+        assert_eq!(maze_verdict(&line(9, 3)), "ours solves significantly more");
+        assert_eq!(maze_verdict(&line(3, 9)), "ours solves significantly fewer");
+        assert_eq!(p_value(0.30343), "0.30");
+        assert_eq!(p_value(0.019_766), "0.020");
+        assert_eq!(p_value(0.0004), "< 0.001");
+        assert_eq!(p_value(1.0), "1");
+        assert_eq!(p_value(f64::NAN), "--");
+    }
+}
