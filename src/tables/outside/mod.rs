@@ -17,7 +17,7 @@
 //!   per environment step of SB3's and our updates measured in the same run on one machine.
 
 use crate::error::{Error, Result};
-use crate::experiment::{evals_file, Experiment};
+use crate::experiment::{evals_file, run_file, Experiment};
 use crate::stats::{fisher_exact, mean_sd, t_interval, welch, wilson, Z95};
 use crate::train::EvalRow;
 use serde::{Deserialize, Serialize};
@@ -181,46 +181,45 @@ pub struct UpdateCost {
     pub machine: String,
 }
 
-/// The rows `s<seed>.csv` of `dir`, in seed order (each file one row; a file with another
-/// name is ignored).
-fn seed_rows<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<Vec<(u64, T)>> {
+/// The rows `s<seed>.csv` of `dir` with their files, in seed order: each file one row whose
+/// seed (`seed_of`) is the file's (a file of another name, such as `s01.csv`, is ignored).
+fn seed_rows<T: serde::de::DeserializeOwned>(
+    dir: &Path,
+    seed_of: impl Fn(&T) -> u64,
+) -> Result<Vec<(PathBuf, T)>> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        // Only the canonical `s<seed>.csv` (not `s01.csv`: one seed, one file).
         let Some(seed) = name
             .strip_prefix('s')
             .and_then(|n| n.strip_suffix(".csv"))
             .and_then(|n| n.parse::<u64>().ok())
-            .filter(|seed| name == format!("s{seed}.csv"))
+            .filter(|&seed| path == run_file(dir, seed, ".csv"))
         else {
             continue;
         };
         let mut rows: Vec<T> = crate::record::read_records(&path)?;
-        match (rows.pop(), rows.is_empty()) {
-            (Some(row), true) => out.push((seed, row)),
+        let row = match (rows.pop(), rows.is_empty()) {
+            (Some(row), true) => row,
             _ => {
                 return Err(Error::parse(
                     &path,
                     "an outside run's file holds exactly one row",
                 ))
             }
+        };
+        if seed_of(&row) != seed {
+            let message = format!(
+                "the row's seed is {}, the file's name says {seed}",
+                seed_of(&row)
+            );
+            return Err(Error::parse(&path, message));
         }
+        out.push((seed, path, row));
     }
-    out.sort_by_key(|(s, _)| *s);
-    Ok(out)
-}
-
-fn check_seed(path: &Path, file_seed: u64, row_seed: u64) -> Result<()> {
-    if file_seed == row_seed {
-        Ok(())
-    } else {
-        Err(Error::parse(
-            path.join(format!("s{file_seed}.csv")),
-            format!("the row's seed is {row_seed}, the file's name says {file_seed}"),
-        ))
-    }
+    out.sort_by_key(|(seed, _, _)| *seed);
+    Ok(out.into_iter().map(|(_, path, row)| (path, row)).collect())
 }
 
 fn seeds_text(seeds: impl IntoIterator<Item = u64>) -> String {
@@ -297,16 +296,15 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
     folders.sort();
     let mut out: Vec<MazeComparison> = Vec::new();
     for (maze, algo, dir) in &folders {
-        let runs: Vec<(u64, MazeRun)> = seed_rows(dir)?;
+        let runs: Vec<(PathBuf, MazeRun)> = seed_rows(dir, |r: &MazeRun| r.seed)?;
         let Some((_, first)) = runs.first() else {
             continue;
         };
         let (steps, library) = (first.steps, first.library.clone());
-        for (seed, r) in &runs {
-            check_seed(dir, *seed, r.seed)?;
+        for (path, r) in &runs {
             if r.protocol_episodes == 0 || r.protocol_successes > r.protocol_episodes {
                 return Err(Error::parse(
-                    dir.join(format!("s{seed}.csv")),
+                    path,
                     format!(
                         "protocol_successes {} of protocol_episodes {}: need 0 <= successes \
                          <= episodes, episodes > 0",
@@ -316,7 +314,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
             }
             if r.steps != steps || r.algo != *algo || r.library != library {
                 return Err(Error::parse(
-                    dir.join(format!("s{seed}.csv")),
+                    path,
                     format!("every run of the folder must be {library} {algo} at {steps} steps"),
                 ));
             }
@@ -328,7 +326,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
                 .map(|(seed, _)| *seed)
                 .collect::<Vec<u64>>()
         };
-        let sb3: Vec<(u64, bool)> = runs.iter().map(|(s, r)| (*s, r.solved_s0)).collect();
+        let sb3: Vec<(u64, bool)> = runs.iter().map(|(_, r)| (r.seed, r.solved_s0)).collect();
         let protocol = runs
             .iter()
             .filter(|(_, r)| r.protocol_successes * 100 >= 95 * r.protocol_episodes)
@@ -433,18 +431,15 @@ pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
     }
     let read = |who: &str| -> Result<Vec<PendulumRun>> {
         let dir = root.join(who);
-        let runs: Vec<(u64, PendulumRun)> = seed_rows(&dir)?;
-        let first = runs
-            .first()
-            .map(|(_, r)| (r.library.clone(), r.algo.clone(), r.steps, r.eval_episodes));
-        for (seed, r) in &runs {
-            check_seed(&dir, *seed, r.seed)?;
-            let same = first.as_ref().is_some_and(|f| {
-                (&f.0, &f.1, f.2, f.3) == (&r.library, &r.algo, r.steps, r.eval_episodes)
-            });
-            if !same || !r.mean_return.is_finite() {
+        let runs: Vec<(PathBuf, PendulumRun)> = seed_rows(&dir, |r: &PendulumRun| r.seed)?;
+        let same = |a: &PendulumRun, b: &PendulumRun| {
+            (&a.library, &a.algo, a.steps, a.eval_episodes)
+                == (&b.library, &b.algo, b.steps, b.eval_episodes)
+        };
+        for (path, r) in &runs {
+            if !same(r, &runs[0].1) || !r.mean_return.is_finite() {
                 return Err(Error::parse(
-                    dir.join(format!("s{seed}.csv")),
+                    path,
                     "every run of the folder has the first run's library, algo, steps and \
                      eval_episodes, and a finite mean_return",
                 ));
