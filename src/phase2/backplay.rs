@@ -16,6 +16,12 @@ pub trait Backplayer {
     /// Greedy success fraction of a saved `policy` over `episodes` episodes from B_ε(τ_k)
     /// (the verification of a finished skill, with many more episodes than β).
     fn verify(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32;
+    /// The same greedy episodes, run to move a hand-over: whether the skill found last
+    /// (`policy`, this problem's goal) also reaches its goal from the later ball B_ε(τ_k)
+    /// (`phase2.retargets`, [`super::chaining::skill_chaining`]). Default: [`Self::verify`].
+    fn verify_handover(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32 {
+        self.verify(k, policy, episodes)
+    }
     /// Whether this problem ran out of its step budget (then its result is discarded).
     fn exhausted(&self) -> bool {
         false
@@ -51,6 +57,10 @@ pub struct Walk {
     /// Return nothing at the first K whose test after training is 0 % while no K is saved
     /// yet (ours; the caller restarts the skill with a fresh learner). The paper walks on.
     pub give_up_when_dead: bool,
+    /// Return nothing once K is this many indices below T without a single success in any
+    /// test or training round (ours; `None`: the paper, whose walk goes on to K = 0 however
+    /// dead it is). The caller may then move the hand-over (`phase2.retargets`).
+    pub dead_walk: Option<usize>,
 }
 
 /// The largest K step of the adaptive walk.
@@ -101,7 +111,8 @@ pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (u
 ///
 /// The paper loops `while K > 0`; then K_s ≥ 1 always and Algorithm 1 (`while T > 0`) would
 /// never end, so we let K reach 0 (the start τ_0). [`Walk`] holds our options (larger or
-/// adaptive K steps, early stopping); the pseudo-code above is the walk with K − 1 steps (`k_step = 1`) and every switch off.
+/// adaptive K steps, early stopping, a bound on a walk without any success); the pseudo-code
+/// above is the walk with K − 1 steps (`k_step = 1`) and every switch off.
 pub fn backplay<B: Backplayer>(b: &mut B, t: usize, walk: &Walk) -> Option<(usize, B::Policy)> {
     backplay_candidates(b, t, walk).pop()
 }
@@ -118,8 +129,12 @@ pub fn backplay_candidates<B: Backplayer>(
     let mut kept: Vec<(usize, B::Policy)> = Vec::new();
     let mut step = walk.k_step;
     let mut k = t - 1;
+    // Whether any test or training round of this walk has reached the goal once.
+    let mut any_success = false;
     loop {
-        let mut solved = b.test(k) >= 1.0;
+        let first = b.test(k);
+        any_success |= first > 0.0;
+        let mut solved = first >= 1.0;
         if !solved && walk.adaptive && step > 1 {
             // A jump too far: back halfway towards the last saved K (T if none), testing
             // before any training; once the step is 1, K is trained as the paper does.
@@ -135,8 +150,9 @@ pub fn backplay_candidates<B: Backplayer>(
         }
         let mut dead = false;
         if !solved {
-            train_until_stable(b, k, walk);
+            let (_, best) = train_until_stable(b, k, walk);
             let success = b.test(k);
+            any_success |= best > 0.0 || success > 0.0;
             solved = success >= 1.0;
             dead = success <= 0.0 || (!solved && walk.stop_at_failure && b.ball_is_clear(k));
         }
@@ -150,6 +166,10 @@ pub fn backplay_candidates<B: Backplayer>(
             return kept;
         }
         if k == 0 {
+            return kept;
+        }
+        if !any_success && walk.dead_walk.is_some_and(|w| t - k >= w) {
+            // A dead walk: `w` Ks below T without one success (nothing is kept either).
             return kept;
         }
         k = k.saturating_sub(step);

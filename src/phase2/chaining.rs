@@ -401,11 +401,12 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     mut next: impl FnMut(usize, usize) -> Result<B>,
     mut finished: impl FnMut(B),
 ) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
-    let mut skills = Vec::new();
+    let mut skills: Vec<(usize, usize, B::Policy)> = Vec::new();
     let mut t = n;
     let mut failure = None;
-    // Learning problems made so far (skills plus restarts) and restarts of the current skill.
-    let (mut made, mut restarts) = (0, 0);
+    // Learning problems made so far (skills, restarts, hand-over tries), restarts of the
+    // current skill and moves of its hand-over.
+    let (mut made, mut restarts, mut moves) = (0, 0, 0);
     while t > 0 {
         let mut b = next(made, t)?;
         made += 1;
@@ -423,12 +424,41 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                 break;
             }
             None if restarts < config.restarts => restarts += 1,
+            None if moves < config.retargets && !skills.is_empty() => {
+                // No attempt found any K towards τ_T: move the hand-over of the skill found
+                // last (start T, target T′) to a later index of τ, if it passes from there.
+                let (_, t_last, policy) = skills.last().expect("not empty");
+                let mut b = next(made, *t_last)?;
+                made += 1;
+                let episodes = match config.verify_episodes {
+                    0 => config.beta,
+                    e => e,
+                };
+                let moved = handover(&mut b, t, *t_last, policy, episodes, config.dead_walk);
+                let exhausted = b.exhausted();
+                finished(b);
+                match moved {
+                    _ if exhausted => {
+                        failure = Some(Failure::Budget);
+                        break;
+                    }
+                    Some(k) => {
+                        skills.last_mut().expect("not empty").0 = k;
+                        t = k;
+                        (restarts, moves) = (0, moves + 1);
+                    }
+                    None => {
+                        failure = Some(Failure::BackplayFailed);
+                        break;
+                    }
+                }
+            }
             None => {
                 failure = Some(Failure::BackplayFailed);
                 break;
             }
             Some((k, policy)) => {
-                restarts = 0;
+                (restarts, moves) = (0, 0);
                 skills.push((k, t, policy));
                 if k > 0 && !config.chaining {
                     failure = Some(Failure::NoChaining);
@@ -440,6 +470,35 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     }
     skills.reverse();
     Ok((skills, failure))
+}
+
+/// Most balls a moved hand-over tries ([`handover`]).
+pub const MAX_HANDOVER_TRIES: usize = 4;
+
+/// A new start for the skill found last, whose start is τ_t and whose goal is `b`'s (τ_{t_last}):
+/// the indices t + 1 … t + `span` before t_last, those whose ball is clear of obstacles first,
+/// nearest first; at most [`MAX_HANDOVER_TRIES`] of them are tried, the first from which
+/// `policy` reaches its goal in every one of `episodes` greedy episodes is returned.
+pub fn handover<B: backplay::Backplayer>(
+    b: &mut B,
+    t: usize,
+    t_last: usize,
+    policy: &B::Policy,
+    episodes: usize,
+    span: usize,
+) -> Option<usize> {
+    let mut ks: Vec<usize> = (t + 1..t_last.min(t + span + 1)).collect();
+    // Clear balls first (a stable sort keeps them nearest first).
+    ks.sort_by_key(|&k| !b.ball_is_clear(k));
+    for k in ks.into_iter().take(MAX_HANDOVER_TRIES) {
+        if b.verify_handover(k, policy, episodes) >= 1.0 {
+            return Some(k);
+        }
+        if b.exhausted() {
+            break;
+        }
+    }
+    None
 }
 
 /// Most saved (K, π) of one Backplay that a failed verification falls back through.

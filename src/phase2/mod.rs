@@ -96,10 +96,25 @@ pub struct Phase2Config {
     /// ([`backplay::Walk::stop_at_failure`]); off in the paper's procedure.
     pub stop_at_failure: bool,
     /// Restarts of a skill with a fresh learner (ours; 0 = the paper): while a skill has
-    /// restarts left, a Backplay whose test after training is 0 % before any K was saved gives
-    /// up (its DDPG collapsed: walking K further from the goal cannot help), and the skill
-    /// starts again at T − 1 with new weights and an empty replay.
+    /// restarts left, a Backplay whose test after training fails before any K was saved gives
+    /// up — at 0 %, or, with `stop_at_failure`, below 100 % from a ball clear of walls (its
+    /// DDPG collapsed: walking K further from the goal cannot help) — and the skill starts
+    /// again at T − 1 with new weights and an empty replay.
     pub restarts: usize,
+    /// A bound on a dead walk (ours; 0 = off, the paper's procedure, whose Backplay walks K
+    /// down to 0 however long it finds no success): a Backplay whose K is `dead_walk` indices
+    /// below T without a single success in any test or training round gives up
+    /// ([`backplay::Walk::dead_walk`]). Then the skill restarts (`restarts`), and once no
+    /// restart is left the hand-over moves (`retargets`) or the run fails.
+    pub dead_walk: usize,
+    /// Moves of a hand-over (ours; 0 = off): when no attempt at a skill finds any K, the skill
+    /// found before it (target T′, start K = T) is verified greedily from the balls of the
+    /// indices after T (clear ones first, nearest first, at most
+    /// [`chaining::MAX_HANDOVER_TRIES`] of the next `dead_walk`), and the first from which it
+    /// passes every episode (`verify_episodes`, or β) becomes its start and the new skill's
+    /// target, with fresh learners. At most `retargets` moves between two skills found; a
+    /// `retarget` trace row records each try.
+    pub retargets: usize,
     /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
     /// deterministic policy and a pure step it never will), and stop the whole test once it
     /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
@@ -171,6 +186,8 @@ impl Default for Phase2Config {
             adaptive_k: false,
             stop_at_failure: false,
             restarts: 0,
+            dead_walk: 0,
+            retargets: 0,
             fast_tests: false,
             verify_episodes: 0,
             warm_start: false,
@@ -263,6 +280,18 @@ impl Check for Phase2Config {
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
         }
+        if self.retargets > 0 && self.dead_walk == 0 {
+            return Err(Error::invalid(
+                "phase2.retargets",
+                "a hand-over moves after a walk bounded by phase2.dead_walk: set it too",
+            ));
+        }
+        if self.retargets > 0 && !self.chaining {
+            return Err(Error::invalid(
+                "phase2.retargets",
+                "moves the hand-over between two skills, which needs phase2.chaining = true",
+            ));
+        }
         if self.chain_repairs > 0 && self.chain_verify_episodes == 0 {
             return Err(Error::invalid(
                 "phase2.chain_repairs",
@@ -320,6 +349,7 @@ impl Phase2Config {
             adaptive: self.adaptive_k,
             stop_at_failure: self.stop_at_failure,
             give_up_when_dead: false,
+            dead_walk: (self.dead_walk > 0).then_some(self.dead_walk),
         }
     }
 }
@@ -338,11 +368,14 @@ pub enum EventKind {
     /// The verification of the finished chain from B_ε(s_0)
     /// (`phase2.chain_verify_episodes` episodes).
     ChainVerify,
+    /// A try to move a hand-over after a dead walk (`phase2.retargets`): the skill found last
+    /// (target T) verified greedily from a later ball B_ε(τ_K).
+    Retarget,
 }
 
 impl EventKind {
     /// Its name in `trace.csv` and in messages (its serde name): `test`, `train`, `verify`,
-    /// `chain_verify`.
+    /// `chain_verify`, `retarget`.
     pub fn name(self) -> &'static str {
         self.into()
     }

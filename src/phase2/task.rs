@@ -290,6 +290,19 @@ impl<'a, E: Env> SkillTask<'a, E> {
         successes as f32 / n as f32
     }
 
+    /// `episodes` greedy episodes of a saved `policy` from B_ε(τ_k) (swapped in for π, then
+    /// swapped back), reported as `kind`.
+    fn greedy_with(&mut self, k: usize, policy: &Mlp, episodes: usize, kind: EventKind) -> f32 {
+        if self.spent_budget() {
+            return 0.0;
+        }
+        let current = std::mem::replace(&mut self.learner.actor, policy.clone());
+        let p = self.episodes(k, episodes, false);
+        self.learner.actor = current;
+        self.report(k, kind, p);
+        p
+    }
+
     fn report(&mut self, k: usize, kind: EventKind, success: f32) {
         let steps = self.steps;
         if let Some(f) = self.on_event.as_mut() {
@@ -331,14 +344,12 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
 
     /// Runs `episodes` greedy episodes of `policy` (swapped in for π, then swapped back).
     fn verify(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
-        if self.spent_budget() {
-            return 0.0;
-        }
-        let current = std::mem::replace(&mut self.learner.actor, policy.clone());
-        let p = self.episodes(k, episodes, false);
-        self.learner.actor = current;
-        self.report(k, EventKind::Verify, p);
-        p
+        self.greedy_with(k, policy, episodes, EventKind::Verify)
+    }
+
+    /// [`Self::verify`], reported as a `retarget` row.
+    fn verify_handover(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
+        self.greedy_with(k, policy, episodes, EventKind::Retarget)
     }
 
     fn exhausted(&self) -> bool {

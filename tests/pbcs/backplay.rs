@@ -52,6 +52,7 @@ pub fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
         adaptive: false,
         stop_at_failure: false,
         give_up_when_dead: false,
+        dead_walk: None,
     }
 }
 
@@ -389,5 +390,157 @@ fn without_chaining_a_second_skill_is_a_failure() {
         (skills.len(), failure),
         (1, None),
         "one skill covers τ: success"
+    );
+}
+
+/// A walk that finds no success anywhere ends `dead_walk` Ks below T (the paper's walks on to
+/// K = 0: `never_successful_without_a_kept_skill_goes_on_and_may_fail`); one success, in a
+/// test or a training round, lifts the bound.
+#[test]
+fn a_dead_walk_gives_up_at_its_bound_unless_something_succeeded() {
+    let bounded = Walk {
+        dead_walk: Some(3),
+        ..walk(2, 1, false)
+    };
+    let mut b = Scripted {
+        tests: (0..10).map(|k| (k, vec![0.0])).collect(),
+        train: vec![0.0; 100],
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 10, &bounded), None);
+    let tested: Vec<&String> = b.calls.iter().filter(|c| c.starts_with("test")).collect();
+    // K = 9, 8, 7: a test before and after training each, then T − K = 3.
+    assert_eq!(tested.len(), 6);
+    assert_eq!(tested.last().unwrap().as_str(), "test 7 = 0");
+    // One training round at 2 % (nothing saved): the walk is alive and goes on to K = 0.
+    let mut b = Scripted {
+        tests: (0..10).map(|k| (k, vec![0.0])).collect(),
+        train: [vec![0.02], vec![0.0; 100]].concat(),
+        ..Default::default()
+    };
+    assert_eq!(backplay(&mut b, 10, &bounded), None);
+    assert!(b.calls.iter().any(|c| c == "test 0 = 0"), "{:?}", b.calls);
+}
+
+/// Skill chaining where no walk towards τ_`dead` finds anything, and the skill found last (its
+/// target `t`) reaches its goal from any ball at or after `from`. Balls of odd indices touch a
+/// wall.
+struct DeadTarget {
+    t: usize,
+    dead: usize,
+    from: usize,
+    calls: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
+}
+
+impl Backplayer for DeadTarget {
+    type Policy = usize;
+    fn test(&mut self, k: usize) -> f32 {
+        f32::from(u8::from(self.t != self.dead && self.t - k <= 10))
+    }
+    fn train(&mut self, _k: usize) -> f32 {
+        0.0
+    }
+    fn policy(&self) -> usize {
+        self.t
+    }
+    fn verify(&mut self, k: usize, _policy: &usize, _episodes: usize) -> f32 {
+        self.test(k)
+    }
+    fn verify_handover(&mut self, k: usize, policy: &usize, episodes: usize) -> f32 {
+        assert_eq!(*policy, self.t, "the last skill's policy, on its own goal");
+        let p = f32::from(u8::from(k >= self.from));
+        self.calls
+            .borrow_mut()
+            .push(format!("handover {k} → {} ({episodes}) = {p}", self.t));
+        p
+    }
+    fn ball_is_clear(&self, k: usize) -> bool {
+        k.is_multiple_of(2)
+    }
+}
+
+/// After a dead walk with no restart left, the skill found last (25 → 35) is verified from
+/// the later balls, clear ones first, nearest first; the first that passes becomes its start
+/// and the next skill's target. Without `retargets` (the paper) the run fails there.
+#[test]
+fn a_dead_walk_moves_the_hand_over_to_a_later_clear_ball() {
+    let config = Phase2Config {
+        alpha: 2,
+        dead_walk: 5,
+        retargets: 1,
+        verify_episodes: 100,
+        ..Phase2Config::default()
+    };
+    let calls = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let mut made = Vec::new();
+    let (skills, failure) = skill_chaining(
+        35,
+        &config,
+        |n, t| {
+            made.push((n, t));
+            Ok(DeadTarget {
+                t,
+                dead: 25,
+                from: 29,
+                calls: calls.clone(),
+            })
+        },
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(failure, None);
+    // 35 → 25; 25 is dead: the skill ending at 35 is tried from 26, 28, 30 (clear), passes at
+    // 30; then 30 → 20, 20 → 10, 10 → 0.
+    assert_eq!(
+        *calls.borrow(),
+        [
+            "handover 26 → 35 (100) = 0",
+            "handover 28 → 35 (100) = 0",
+            "handover 30 → 35 (100) = 1"
+        ]
+    );
+    assert_eq!(made, [(0, 35), (1, 25), (2, 35), (3, 30), (4, 20), (5, 10)]);
+    let spans: Vec<(usize, usize)> = skills.iter().map(|(k, t, _)| (*k, *t)).collect();
+    assert_eq!(spans, [(0, 10), (10, 20), (20, 30), (30, 35)]);
+    // The paper: no move, the run fails at the dead target.
+    let paper = Phase2Config {
+        retargets: 0,
+        ..config.clone()
+    };
+    let (skills, failure) = skill_chaining(
+        35,
+        &paper,
+        |_, t| {
+            Ok(DeadTarget {
+                t,
+                dead: 25,
+                from: 29,
+                calls: calls.clone(),
+            })
+        },
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!((skills.len(), failure), (1, Some(Failure::BackplayFailed)));
+    // No ball within reach passes: the run fails after MAX_HANDOVER_TRIES tries.
+    calls.borrow_mut().clear();
+    let (_, failure) = skill_chaining(
+        35,
+        &config,
+        |_, t| {
+            Ok(DeadTarget {
+                t,
+                dead: 25,
+                from: 34,
+                calls: calls.clone(),
+            })
+        },
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(failure, Some(Failure::BackplayFailed));
+    assert_eq!(
+        calls.borrow().len(),
+        pbcs::phase2::chaining::MAX_HANDOVER_TRIES
     );
 }
