@@ -2,8 +2,8 @@
 //! statistics ([`CellStats`]): n, successes, Wilson 95 % interval, median and quartiles of
 //! environment steps, and the paper's figure beside ours.
 //!
-//! polars does the grouping and the order statistics; the Wilson interval is computed from its
-//! counts. Every number is then checked against the plain-Rust computation of
+//! polars does the grouping, the order statistics and the Wilson interval (written there a
+//! second time, [`wilson_exprs`]). Every number is then checked against the plain-Rust computation of
 //! [`crate::tables::cell_stats`], and a disagreement is an error: the two implementations keep
 //! each other honest every time `make figures` runs.
 
@@ -73,8 +73,40 @@ pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
             col("success_rate").median().alias("success_rate_median"),
             col("budget").first().alias("budget"),
         ])
+        .with_columns(wilson_exprs())
         .sort(["cell"], SortMultipleOptions::default())
         .collect()
+}
+
+/// The 95 % Wilson score interval of `successes` of `n` as polars expressions (`wilson_lo`,
+/// `wilson_hi`): the interval written a second time, so that the plain check, which uses
+/// [`crate::stats::wilson`], compares both ends against a second computation (the formula
+/// itself is checked against reference values and a bisection of the score test in
+/// `tests/stats.rs`).
+fn wilson_exprs() -> [Expr; 2] {
+    let z = crate::stats::Z95;
+    let z2 = z * z;
+    let (k, n) = (col("successes"), col("n"));
+    let p = k.clone() / n.clone();
+    let denom = lit(1.0) + lit(z2) / n.clone();
+    // The same operations in the same order as the plain one, so the two agree to the bit.
+    let centre = (p.clone() + lit(z2) / (lit(2.0) * n.clone())) / denom.clone();
+    let half = lit(z)
+        * (p.clone() * (lit(1.0) - p) / n.clone() + lit(z2) / (lit(4.0) * n.clone() * n.clone()))
+            .sqrt()
+        / denom;
+    let (lo, hi) = (centre.clone() - half.clone(), centre + half);
+    [
+        // Exactly 0 with no success and 1 with no failure; clipped to [0, 1] otherwise.
+        when(k.clone().eq(lit(0.0)).or(lo.clone().lt(lit(0.0))))
+            .then(lit(0.0))
+            .otherwise(lo)
+            .alias("wilson_lo"),
+        when(k.eq(n).or(hi.clone().gt(lit(1.0))))
+            .then(lit(1.0))
+            .otherwise(hi)
+            .alias("wilson_hi"),
+    ]
 }
 
 /// Aggregates `rows` of `exp` with polars into one [`CellStats`] per cell with runs, in the
@@ -117,6 +149,9 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             skills_median: get("skills_median")?,
             success_rate_median: get("success_rate_median")?,
             budget: get("budget")? as u64,
+            // polars' own interval: `same` checks it against the plain one.
+            wilson_lo: get("wilson_lo")?,
+            wilson_hi: get("wilson_hi")?,
             ..CellStats::counted(exp, c, k, n)
         });
     }
@@ -147,6 +182,7 @@ fn same(a: &[CellStats], b: &[CellStats]) -> bool {
                     (x.skills_median, y.skills_median),
                     (x.success_rate_median, y.success_rate_median),
                     (x.wilson_lo, y.wilson_lo),
+                    (x.wilson_hi, y.wilson_hi),
                 ]
                 .iter()
                 .all(|&(p, q)| close(p, q))

@@ -68,6 +68,15 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// A claim of `experiments/claims.toml` could not be judged: its table, or the cells it
+    /// compares, are missing.
+    #[error("claim {id}: {message}")]
+    Claim {
+        /// The claim's id.
+        id: String,
+        /// What is missing.
+        message: String,
+    },
     /// Rendering a picture failed.
     #[error("plot {path}: {message}")]
     Plot {

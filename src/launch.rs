@@ -53,7 +53,7 @@ impl<'a> Launch<'a> {
         exp.cells
             .iter()
             .flat_map(|cell| {
-                exp.seeds()
+                exp.seeds_of(cell)
                     .into_iter()
                     .map(move |seed| Pending { cell, seed })
             })
@@ -78,7 +78,7 @@ impl<'a> Launch<'a> {
         let mut out = String::new();
         for p in self.runs() {
             let dir = self.exp.cell_dir(results, p.cell);
-            let done = crate::experiment::read_finished(p.cell, p.seed, &dir)?.is_some();
+            let done = crate::experiment::read_finished(self.exp, p.cell, p.seed, &dir)?.is_some();
             out.push_str(&format!(
                 "pbcs {}{}\n",
                 self.args(&p),

@@ -28,12 +28,64 @@ pub fn results_dir(results: Option<&Path>, profile: Option<&str>) -> PathBuf {
 }
 
 /// The folder of the generated LaTeX: `tex` if given, else `paper/generated` for the
-/// committed grid and `<results>/tex` for a profile.
+/// committed grid in its own folder (no profile, `results` the default results folder), and
+/// `<results>/tex` for anything else (a profile, or another results folder): the report's
+/// committed LaTeX is written from the committed results only.
 pub fn tex_dir(tex: Option<&Path>, profile: Option<&str>, results: &Path) -> PathBuf {
-    tex.map(Path::to_path_buf).unwrap_or_else(|| match profile {
-        None => PathBuf::from("paper/generated"),
-        Some(_) => results.join("tex"),
-    })
+    match (tex, profile) {
+        (Some(tex), _) => tex.to_path_buf(),
+        (None, None) if same_folder(results, &results_dir(None, None)) => {
+            PathBuf::from("paper/generated")
+        }
+        _ => results.join("tex"),
+    }
+}
+
+/// Whether `a` and `b` name one folder (the same path, or the same folder once resolved).
+fn same_folder(a: &Path, b: &Path) -> bool {
+    a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+}
+
+/// Refuses a results folder that does not exist (or is not a folder), naming it: `aggregate`
+/// and `figures` read what is there and never invent an empty result.
+fn existing_results(results: &Path) -> Result<()> {
+    let why = if !results.exists() {
+        "no such results folder"
+    } else if !results.is_dir() {
+        "is not a folder"
+    } else {
+        return Ok(());
+    };
+    Err(crate::Error::io(
+        results,
+        std::io::Error::other(format!(
+            "{why}: give the folder that holds the runs (--results; `pbcs exp run` writes \
+             their rows into <results>/raw/)"
+        )),
+    ))
+}
+
+/// Every experiment's finished raw rows under `results` ([`crate::experiment::read_raw`]),
+/// refusing a results folder that does not exist or holds no row of any experiment.
+fn read_all_raw(exps: &[Experiment], results: &Path) -> Result<Vec<Vec<RawRow>>> {
+    existing_results(results)?;
+    let rows = exps
+        .iter()
+        .map(|exp| crate::experiment::read_raw(exp, results))
+        .collect::<Result<Vec<_>>>()?;
+    if rows.iter().all(Vec::is_empty) {
+        let names: Vec<&str> = exps.iter().map(|e| e.name.as_str()).collect();
+        return Err(crate::Error::io(
+            results,
+            std::io::Error::other(format!(
+                "holds no raw row of any experiment ({}: <results>/raw/<experiment>/<cell>/\
+                 s<seed>.csv, written by `pbcs exp run`): nothing to aggregate; give the folder \
+                 that holds them (--results, and --profile for a profile's runs)",
+                names.join(", ")
+            )),
+        ));
+    }
+    Ok(rows)
 }
 
 /// Every experiment file of the folder `dir` ([`experiment_files`]), resolved under `profile`.
@@ -64,7 +116,8 @@ pub struct Aggregated {
 /// tables ([`write_tables`]); an experiment without rows is reported and skipped. A build
 /// without the `polars` feature says so.
 #[cfg(not(feature = "polars"))]
-pub fn aggregate(_: &[Experiment], _: &Path) -> Result<Vec<Aggregated>> {
+pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {
+    read_all_raw(exps, results)?;
     Err(crate::Error::invalid(
         "features",
         "this build has no polars: build with `--features polars` (as `make figures` does), \
@@ -74,17 +127,18 @@ pub fn aggregate(_: &[Experiment], _: &Path) -> Result<Vec<Aggregated>> {
 
 /// Aggregates every experiment's raw rows under `results` with polars
 /// ([`crate::aggregate::aggregate`], checked against the plain computation) and writes its
-/// tables ([`write_tables`]); an experiment without rows is reported and skipped.
+/// tables ([`write_tables`]); an experiment without rows is reported and skipped. A results
+/// folder that does not exist or holds no row of any experiment is refused before anything is
+/// written.
 #[cfg(feature = "polars")]
 pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {
     let mut out = Vec::new();
-    for exp in exps {
-        let rows = crate::experiment::read_raw(exp, results)?;
+    for (exp, rows) in exps.iter().zip(read_all_raw(exps, results)?) {
         let table = crate::tables::table_path(results, &exp.name);
         let mut done = Aggregated {
             experiment: exp.name.clone(),
             runs: rows.len(),
-            expected: exp.cells.len() as u64 * exp.seed_count,
+            expected: exp.run_count(),
             cells: 0,
             table,
         };
@@ -107,13 +161,17 @@ pub struct Rendered {
     pub skipped: Vec<(String, PathBuf)>,
     /// The paper's claims judged against the tables.
     pub claims: Vec<Claim>,
+    /// Under a profile, the claims its smaller grid cannot judge (why, per claim); empty for
+    /// the committed grids, where such a claim is an error.
+    pub unjudged: Vec<String>,
     /// Every file written.
     pub files: Vec<PathBuf>,
 }
 
 /// Reads each experiment's table under `results`, judges the claims of `claims_file` against
 /// them, draws every declared figure into `figures` and writes the report's LaTeX into `tex`.
-/// The claims file is read first: a bad one stops before any work.
+/// The claims file is read first: a bad one stops before any work; so does a results folder
+/// that does not exist or holds no table of any experiment (nothing is written).
 pub fn render(
     exps: Vec<Experiment>,
     claims_file: &Path,
@@ -122,6 +180,7 @@ pub fn render(
     tex: &Path,
 ) -> Result<Rendered> {
     let specs = crate::claims::load_claims(claims_file)?;
+    existing_results(results)?;
     let mut tables = Vec::new();
     let mut skipped = Vec::new();
     for exp in exps {
@@ -133,16 +192,43 @@ pub fn render(
             skipped.push((exp.name.clone(), path));
         }
     }
+    if tables.is_empty() {
+        return Err(crate::Error::io(
+            results,
+            std::io::Error::other(format!(
+                "holds no table of any experiment (<results>/tables/<experiment>.csv: {}): \
+                 nothing to draw; run `pbcs aggregate` on it first, or give the folder that \
+                 holds the tables (--results)",
+                skipped
+                    .iter()
+                    .map(|(name, _)| name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        ));
+    }
     let named: Vec<(String, Vec<CellStats>)> = tables
         .iter()
         .map(|(e, s)| (e.name.clone(), s.clone()))
         .collect();
-    let claims = crate::claims::claims(&specs, &named);
-    let files = render_all(&tables, &claims, results, figures, tex)?;
+    // The committed grids judge every claim (one that cannot be judged is an error); a
+    // profile's smaller grid judges those it can.
+    let (claims, unjudged) = if tables.iter().any(|(e, _)| e.profile.is_some()) {
+        let (judged, errors) = crate::claims::claims_partial(&specs, &named);
+        (judged, errors.iter().map(ToString::to_string).collect())
+    } else {
+        (crate::claims::claims(&specs, &named)?, Vec::new())
+    };
+    let mut files = render_all(&tables, &claims, results, figures, tex)?;
+    files.extend(render_settings(
+        claims_file.parent().unwrap_or(Path::new(".")),
+        tex,
+    )?);
     Ok(Rendered {
         tables,
         skipped,
         claims,
+        unjudged,
         files,
     })
 }
@@ -262,6 +348,25 @@ pub fn render_all(
     for (name, text) in [
         ("numbers.tex", numbers),
         ("claims.tex", report::claims_tex(claims)),
+    ] {
+        let path = tex_dir.join(name);
+        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+/// The report's settings and departures tables from the files beside the claims file
+/// (`settings.toml` with the presets' values, `departures.toml`): `presets.tex` and
+/// `departures.tex` into `tex_dir`.
+fn render_settings(experiments: &Path, tex_dir: &Path) -> Result<Vec<PathBuf>> {
+    use crate::report::settings;
+    let rows = settings::load(&experiments.join("settings.toml"))?;
+    let departures = settings::load_departures(&experiments.join("departures.toml"))?;
+    let mut files = Vec::new();
+    for (name, text) in [
+        ("presets.tex", settings::presets_tex(&rows)),
+        ("departures.tex", settings::departures_tex(&departures)),
     ] {
         let path = tex_dir.join(name);
         write_atomic(&path, |w| w.write_all(text.as_bytes()))?;

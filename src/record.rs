@@ -97,6 +97,73 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
     write_atomic(&config, |w| w.write_all(config_text.as_bytes()))
 }
 
+/// The file that marks a run folder as incomplete: present while [`write_run_folder`] moves a
+/// run's files into place, and left behind when that fails. Readers of run folders
+/// ([`check_complete`]: `pbcs eval`, `pbcs.Chain`) refuse a folder that holds it.
+pub const INCOMPLETE: &str = "INCOMPLETE";
+
+/// What [`INCOMPLETE`] says to whoever opens it.
+const INCOMPLETE_TEXT: &str = "This run folder is incomplete: the run that wrote it stopped \
+     before all its files were in place (a full disk, an error). Its files are not a finished \
+     run, and `pbcs eval` refuses them. Run the same command again to complete it, or delete \
+     the folder.\n";
+
+/// Writes the files of one run into the folder `out`, all of them or none: `fill` writes them
+/// into a temporary folder inside `out` (`.writing-*`), so a failure there (a full disk, say)
+/// leaves `out` as it was (an earlier finished run of the same job stays whole) and the
+/// temporary folder is removed. Then [`INCOMPLETE`] is written into `out`, each file and
+/// folder is renamed into place (a folder of the same name, such as an earlier run's `chain/`,
+/// is replaced), and the marker is removed last. A failure while moving (something in the way
+/// of a file) leaves the marker: readers refuse the folder until a run completes it.
+pub fn write_run_folder(out: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let staging = tempfile::Builder::new()
+        .prefix(".writing-")
+        .tempdir_in(out)
+        .map_err(|e| Error::io(out, e))?;
+    fill(staging.path())?;
+    let listed: std::io::Result<Vec<_>> =
+        std::fs::read_dir(staging.path()).and_then(|d| d.map(|e| e.map(|e| e.path())).collect());
+    let mut entries = listed.map_err(|e| Error::io(staging.path(), e))?;
+    entries.sort();
+    // Folders replaced go here, inside the temporary folder, and are removed with it.
+    let aside = tempfile::Builder::new()
+        .prefix(".replaced-")
+        .tempdir_in(staging.path())
+        .map_err(|e| Error::io(staging.path(), e))?;
+    let marker = out.join(INCOMPLETE);
+    write_atomic(&marker, |w| w.write_all(INCOMPLETE_TEXT.as_bytes()))?;
+    for from in entries {
+        let Some(name) = from.file_name() else {
+            continue;
+        };
+        let to = out.join(name);
+        let old_dir = std::fs::symlink_metadata(&to).is_ok_and(|m| m.is_dir());
+        if from.is_dir() && old_dir {
+            let away = aside.path().join(name);
+            std::fs::rename(&to, &away).map_err(|e| Error::io(&to, e))?;
+        }
+        std::fs::rename(&from, &to).map_err(|e| Error::io(&to, e))?;
+    }
+    std::fs::remove_file(&marker).map_err(|e| Error::io(&marker, e))
+}
+
+/// Refuses the run folder `dir` if it is marked [`INCOMPLETE`] (its run failed while writing
+/// it), with an error naming the folder and saying what to do.
+pub fn check_complete(dir: &Path) -> Result<()> {
+    if dir.join(INCOMPLETE).exists() {
+        return Err(Error::io(
+            dir,
+            std::io::Error::other(format!(
+                "is marked incomplete (it holds {INCOMPLETE}): the run writing it stopped before \
+                 all its files were in place; run the same command again to complete it, or \
+                 delete the folder"
+            )),
+        ));
+    }
+    Ok(())
+}
+
 /// An exclusive claim on one piece of work (a run of a sweep): an OS advisory lock
 /// ([`std::fs::File::try_lock`]: `flock` on Unix, `LockFileEx` on Windows) on the file
 /// `path`, held while the guard lives. A second claim of the same path fails with a message
@@ -180,6 +247,63 @@ impl Drop for WorkLock {
     /// Removes the file, then (closing it) releases the lock.
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// A sweep's claim on a whole results folder: an OS advisory lock
+/// ([`std::fs::File::try_lock`], `flock` on Unix) on `<results>/sweep.lock`, held while the
+/// guard lives and released by the operating system when the process ends, however it ends.
+/// A sweep of several runs takes it exclusively before it reads what is finished and plans the
+/// rest, so a second sweep on the same folder is refused at its start, naming the folder,
+/// instead of taking a run the first one planned and making it stop between two runs. A
+/// process of one run (`pbcs exp run --cell C --seed S`, as `pbcs exp list --make` and
+/// `--slurm` start them side by side) takes it shared: such processes run together (each
+/// run's own [`WorkLock`] keeps two of them off one run), and none runs beside a sweep of
+/// several. The file stays (removing it could hand a new holder another file than the one a
+/// shared holder still locks); it holds nothing.
+#[derive(Debug)]
+pub struct FolderLock {
+    /// Holds the lock: closing it releases it.
+    _file: std::fs::File,
+}
+
+impl FolderLock {
+    /// The lock file of the results folder `results`.
+    pub fn path(results: &Path) -> std::path::PathBuf {
+        results.join("sweep.lock")
+    }
+
+    /// Takes the lock of the results folder `results` (created if needed): exclusively, or
+    /// `shared` with other holders that take it shared; refused, naming the folder, while
+    /// another process holds it in the other mode (or exclusively).
+    pub fn acquire(results: &Path, shared: bool) -> Result<FolderLock> {
+        std::fs::create_dir_all(results).map_err(|e| Error::io(results, e))?;
+        let path = FolderLock::path(results);
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(|e| Error::io(&path, e))?;
+        let taken = if shared {
+            file.try_lock_shared()
+        } else {
+            file.try_lock()
+        };
+        match taken {
+            Ok(()) => Ok(FolderLock { _file: file }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(Error::io(
+                results,
+                std::io::Error::other(format!(
+                    "results folder in use: another sweep is running on it (it holds {}); wait \
+                     for it to finish, or give this sweep another results folder (--results, \
+                     --out)",
+                    path.display()
+                )),
+            )),
+            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+        }
     }
 }
 

@@ -155,7 +155,7 @@ pub fn check_cell(
     let committed_dir = exp.cell_dir(results, c);
     let mut committed = Vec::new();
     for p in &runs {
-        match read_finished(p.cell, p.seed, &committed_dir)? {
+        match read_finished(exp, p.cell, p.seed, &committed_dir)? {
             Some(r) => committed.push(r),
             None => {
                 return Err(Error::invalid(

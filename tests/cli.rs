@@ -362,3 +362,236 @@ fn without_a_terminal_a_run_prints_a_line_per_skill() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("g090-maze2 seed 0: "), "{}", stderr(&o));
 }
+
+/// Before: `--jobs 0` silently ran one run at a time. Every command with `--jobs` refuses it
+/// in the argument parser, before any work.
+#[test]
+fn jobs_zero_is_refused_by_every_command_that_takes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let results = path(dir.path());
+    let exp = |command| {
+        vec![
+            "exp",
+            command,
+            "experiments/gamma.toml",
+            "--profile",
+            "smoke",
+            "--cell",
+            "g090-maze2",
+            "--seed",
+            "0",
+            "--results",
+            results,
+            "--jobs",
+            "0",
+        ]
+    };
+    let table = vec![
+        "table", "--sizes", "2", "--seeds", "1", "--out", results, "--jobs", "0",
+    ];
+    for args in [table, exp("run"), exp("check")] {
+        let o = pbcs(&args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: a usage error: {e}");
+        assert!(
+            e.contains("--jobs") && e.contains("at least 1") && e.contains("\"0\""),
+            "{args:?}: {e}"
+        );
+    }
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().next().is_none(),
+        "nothing ran"
+    );
+}
+
+/// Replaces the first line of `text` that starts with `key = ` by `key = value`.
+fn set_first(text: &str, key: &str, value: &str) -> String {
+    let prefix = format!("{key} = ");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(&prefix))
+        .unwrap_or_else(|| panic!("no {key} in {text}"));
+    text.replacen(line, &format!("{prefix}{value}"), 1)
+}
+
+/// Before: `pbcs eval` ran a chain whose manifest said `center = [nan, nan]`,
+/// `origin = [nan, inf]`, `action_scale = [1e30, -1e30]` or `skills = []` and reported a
+/// success rate with exit 0. Each is now refused, naming the file and the field; the chain as
+/// `pbcs run` saved it is evaluated.
+#[test]
+fn eval_refuses_a_manifest_with_a_bad_value_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = pbcs(&[
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let chain = out.join("chain");
+    let manifest = chain.join("manifest.toml");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let eval = || pbcs(&["eval", "--chain", path(&chain), "--episodes", "5"]);
+    let o = eval();
+    assert!(o.status.success(), "as saved: {}", stderr(&o));
+    for (key, value, field) in [
+        ("center", "[nan, nan]", "skills[0].center"),
+        ("origin", "[nan, inf]", "skills[0].origin"),
+        ("action_scale", "[1e30, -1e30]", "skills[0].action_scale"),
+    ] {
+        std::fs::write(&manifest, set_first(&text, key, value)).unwrap();
+        let o = eval();
+        let e = stderr(&o);
+        assert!(
+            !o.status.success(),
+            "{key} = {value}: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        assert!(
+            e.contains("manifest.toml") && e.contains(field) && !e.contains("panicked"),
+            "{key} = {value}: {e}"
+        );
+    }
+    std::fs::write(&manifest, "skills = []\n").unwrap();
+    let o = eval();
+    let e = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "skills = []: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(e.contains("manifest.toml") && e.contains("no skill"), "{e}");
+    std::fs::write(&manifest, &text).unwrap();
+    assert!(eval().status.success());
+}
+
+/// Before: when a file of `pbcs run` could not be written (a full disk; here a folder in the
+/// way of `run.png`), the run failed naming the file but left `record.csv` saying "solved"
+/// beside the chain, nothing marked the folder, and `pbcs eval` used it. Now the folder is
+/// marked incomplete and refused until a run completes it.
+#[test]
+fn a_run_that_cannot_write_all_its_files_leaves_its_folder_marked_incomplete() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir_all(out.join("run.png").join("in-the-way")).unwrap();
+    let args = [
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&out),
+    ];
+    let o = pbcs(&args);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("run.png"), "{}", stderr(&o));
+    assert!(
+        out.join("INCOMPLETE").exists(),
+        "the folder is not marked incomplete: {:?}",
+        std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect::<Vec<_>>()
+    );
+    let o = pbcs(&["eval", "--chain", path(&out.join("chain"))]);
+    assert!(!o.status.success(), "eval used an incomplete run's chain");
+    assert!(stderr(&o).contains("incomplete"), "{}", stderr(&o));
+    // The obstacle gone, the same command completes the folder.
+    std::fs::remove_dir_all(out.join("run.png")).unwrap();
+    let o = pbcs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join("INCOMPLETE").exists());
+    assert!(out.join("run.png").is_file());
+    let o = pbcs(&[
+        "eval",
+        "--chain",
+        path(&out.join("chain")),
+        "--episodes",
+        "5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Before: `pbcs figures --results <a folder that does not exist>` printed "wrote 2 files",
+/// replacing the committed paper/generated/numbers.tex and claims.tex with empty ones (the
+/// LaTeX went to paper/generated whatever `--results` held), exit 0; `pbcs aggregate` on a
+/// missing or empty folder exited 0 too. Both refuse such a folder, naming it, and write
+/// nothing; the LaTeX of another results folder defaults to `<results>/tex`.
+#[test]
+fn aggregate_and_figures_refuse_a_results_folder_without_rows() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let committed = || {
+        ["numbers.tex", "claims.tex"]
+            .map(|name| std::fs::read(root.join("paper/generated").join(name)).unwrap())
+    };
+    let before = committed();
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let empty = dir.path().join("empty");
+    std::fs::create_dir_all(empty.join("raw")).unwrap();
+    let figures = dir.path().join("figures");
+    for (results, aggregate_says, figures_says) in [
+        (&missing, "no such results folder", "no such results folder"),
+        (&empty, "holds no raw row", "holds no table"),
+    ] {
+        let o = pbcs(&["aggregate", "--results", path(results)]);
+        assert!(!o.status.success(), "aggregate {}", path(results));
+        let e = stderr(&o);
+        assert!(
+            e.contains(path(results)) && e.contains(aggregate_says),
+            "{e}"
+        );
+        let o = pbcs(&[
+            "figures",
+            "--results",
+            path(results),
+            "--figures",
+            path(&figures),
+        ]);
+        assert!(!o.status.success(), "figures {}", path(results));
+        let e = stderr(&o);
+        assert!(e.contains(path(results)) && e.contains(figures_says), "{e}");
+    }
+    assert_eq!(committed(), before, "paper/generated was written");
+    assert!(!figures.exists() && !missing.exists());
+    assert!(!empty.join("tex").exists() && !empty.join("tables").exists());
+    // Where the LaTeX goes: paper/generated only for the committed results folder.
+    use pbcs::pipeline::tex_dir;
+    let generated = Path::new("paper/generated");
+    assert_eq!(tex_dir(None, None, Path::new("results")), generated);
+    assert_eq!(tex_dir(None, None, &empty), empty.join("tex"));
+    let smoke = Path::new("results-smoke");
+    assert_eq!(tex_dir(None, Some("smoke"), smoke), smoke.join("tex"));
+    let tex = Path::new("elsewhere");
+    assert_eq!(tex_dir(Some(tex), None, &empty), tex);
+}
+
+/// Before: a second sweep on one results folder took the runs the first had planned, and the
+/// first died between two runs. A sweep on a folder another sweep holds is refused at its
+/// start, naming the folder, and runs nothing.
+#[test]
+fn a_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let held = pbcs::record::FolderLock::acquire(dir.path(), false).unwrap();
+    let o = pbcs(&[
+        "exp",
+        "run",
+        "experiments/table.toml",
+        "--profile",
+        "smoke",
+        "--results",
+        path(dir.path()),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains(path(dir.path())) && e.contains("in use"), "{e}");
+    assert!(!dir.path().join("raw").exists(), "a run went ahead");
+    drop(held);
+}

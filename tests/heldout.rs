@@ -8,7 +8,10 @@ use std::path::Path;
 #[test]
 fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
     let exp = Experiment::load(Path::new("experiments/heldout.toml"), None).unwrap();
-    let reg = exp.registered.expect("heldout.toml has a [registered] table");
+    let reg = exp
+        .registered
+        .clone()
+        .expect("heldout.toml has a [registered] table");
     let preset = std::fs::read(Path::new("experiments").join(&reg.preset)).unwrap();
     let hash: String = Sha256::digest(&preset)
         .iter()

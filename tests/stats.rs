@@ -14,6 +14,39 @@ fn wilson_known_values() {
     }
 }
 
+/// The Wilson interval is the set of p that the score test does not reject:
+/// |p̂ − p| ≤ z √(p (1 − p) / n). Its ends found by bisection on that inequality (no closed
+/// form shared with `wilson`) equal the closed form's, both ends, for every k of n ≤ 40.
+#[test]
+fn wilson_equals_the_inverted_score_test() {
+    let z = pbcs::stats::Z95;
+    for n in 1..=40u64 {
+        for k in 0..=n {
+            let p_hat = k as f64 / n as f64;
+            let accepted = |p: f64| (p_hat - p).abs() <= z * (p * (1.0 - p) / n as f64).sqrt();
+            // Bisection between a rejected and an accepted point (p̂ is always accepted).
+            let edge = |mut out: f64, mut inside: f64| {
+                for _ in 0..200 {
+                    let mid = 0.5 * (out + inside);
+                    if accepted(mid) {
+                        inside = mid;
+                    } else {
+                        out = mid;
+                    }
+                }
+                inside
+            };
+            let lo = if accepted(0.0) { 0.0 } else { edge(0.0, p_hat) };
+            let hi = if accepted(1.0) { 1.0 } else { edge(1.0, p_hat) };
+            let (l, h) = wilson(k, n, z);
+            assert!(
+                (l - lo).abs() < 1e-9 && (h - hi).abs() < 1e-9,
+                "{k}/{n}: closed form [{l}, {h}], bisection [{lo}, {hi}]"
+            );
+        }
+    }
+}
+
 #[test]
 fn wilson_invariants() {
     for n in 1..=60u64 {

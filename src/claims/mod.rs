@@ -318,26 +318,72 @@ pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
     Ok(file.claims)
 }
 
-/// Evaluates `specs` on the experiments' tables (name, per-cell statistics), in order. A claim
-/// whose experiment has no table here, or whose cells are missing, is left out.
-pub fn claims(specs: &[ClaimSpec], tables: &[(String, Vec<CellStats>)]) -> Vec<Claim> {
-    let table = |name: &str| -> &[CellStats] {
-        tables
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(&[], |(_, s)| s.as_slice())
-    };
+/// Evaluates `specs` on the experiments' tables (name, per-cell statistics), in order. Every
+/// claim is judged: one whose experiment (or `longer`, or `than_experiment`) has no table
+/// here, or whose table lacks the cells it compares, is an error naming the claim
+/// ([`Error::Claim`]), never a silent skip.
+pub fn claims(specs: &[ClaimSpec], tables: &[(String, Vec<CellStats>)]) -> Result<Vec<Claim>> {
     specs
         .iter()
-        .filter_map(|spec| evaluate(spec, table(&spec.experiment), &table))
+        .map(|spec| {
+            let table = |name: &str| -> Result<&[CellStats]> {
+                tables
+                    .iter()
+                    .find(|(n, _)| n == name)
+                    .map(|(_, s)| s.as_slice())
+                    .ok_or_else(|| {
+                        missing(
+                            spec,
+                            format!(
+                                "no table of experiment `{name}` (run it, then `pbcs aggregate`)"
+                            ),
+                        )
+                    })
+            };
+            evaluate(spec, &table)
+        })
         .collect()
+}
+
+/// A profile's (smaller) grid: every claim its tables can judge, in order, and the errors of
+/// those they cannot ([`claims`] on each alone). The committed grids use [`claims`], where
+/// any claim that cannot be judged is an error.
+pub fn claims_partial(
+    specs: &[ClaimSpec],
+    tables: &[(String, Vec<CellStats>)],
+) -> (Vec<Claim>, Vec<Error>) {
+    let mut judged = Vec::new();
+    let mut errors = Vec::new();
+    for spec in specs {
+        match claims(std::slice::from_ref(spec), tables) {
+            Ok(mut c) => judged.append(&mut c),
+            Err(e) => errors.push(e),
+        }
+    }
+    (judged, errors)
+}
+
+/// The error of a claim that cannot be judged.
+fn missing(spec: &ClaimSpec, message: String) -> Error {
+    Error::Claim {
+        id: spec.id.clone(),
+        message,
+    }
+}
+
+/// The error of a claim whose table has no cell of `method`.
+fn no_cells(spec: &ClaimSpec, experiment: &str, method: &str) -> Error {
+    missing(
+        spec,
+        format!("the table of experiment `{experiment}` has no cell of method `{method}`"),
+    )
 }
 
 fn evaluate<'a>(
     spec: &ClaimSpec,
-    stats: &[CellStats],
-    table: &impl Fn(&str) -> &'a [CellStats],
-) -> Option<Claim> {
+    table: &dyn Fn(&str) -> Result<&'a [CellStats]>,
+) -> Result<Claim> {
+    let stats = table(&spec.experiment)?;
     let claim = |ours: String, verdict: Verdict| Claim {
         id: spec.id.clone(),
         paper: spec.paper.clone(),
@@ -345,17 +391,18 @@ fn evaluate<'a>(
         verdict,
     };
     match &spec.test {
-        ClaimTest::FailsEverywhere { method, longer } => fails_everywhere(
-            &spec.id,
-            &spec.paper,
-            stats,
-            longer.as_deref().map_or(&[], table),
-            method,
-        ),
+        ClaimTest::FailsEverywhere { method, longer } => {
+            let longer = match longer {
+                Some(name) => table(name)?,
+                None => &[],
+            };
+            fails_everywhere(&spec.id, &spec.paper, stats, longer, method)
+                .ok_or_else(|| no_cells(spec, &spec.experiment, method))
+        }
         ClaimTest::SolvesEverywhere { method } => {
             let c = cells(stats, method);
             if c.is_empty() {
-                return None;
+                return Err(no_cells(spec, &spec.experiment, method));
             }
             let verdict = if c.iter().all(|s| solves(s)) {
                 Verdict::Agrees
@@ -376,75 +423,46 @@ fn evaluate<'a>(
                 })
                 .collect::<Vec<_>>()
                 .join("; ");
-            Some(claim(ours, verdict))
+            Ok(claim(ours, verdict))
         }
         ClaimTest::Beats {
+            method,
+            label,
             than,
-            than_experiment: Some(other),
-            ..
+            than_label,
+            pooled,
+            than_experiment,
         } => {
-            // `than`'s cells from the other table beside the claim's own cells.
+            // With `than_experiment`, `than`'s cells come from that table, beside the claim's
+            // own cells.
             let mut both = stats.to_vec();
-            both.extend(table(other).iter().filter(|s| &s.method == than).cloned());
-            let mut own = spec.clone();
-            if let ClaimTest::Beats {
-                than_experiment, ..
-            } = &mut own.test
-            {
-                *than_experiment = None;
+            if let Some(other) = than_experiment {
+                both.extend(table(other)?.iter().filter(|s| &s.method == than).cloned());
             }
-            evaluate(&own, &both, table)
-        }
-        ClaimTest::Beats {
-            method,
-            label,
-            than,
-            than_label,
-            pooled: false,
-            ..
-        } => {
-            let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
-            (!parts.is_empty()).then(|| claim(parts.join("; "), verdict))
-        }
-        ClaimTest::Beats {
-            method,
-            label,
-            than,
-            than_label,
-            pooled: true,
-            ..
-        } => {
-            // Per maze, and pooled over mazes (more seeds per bar; it decides when no maze
-            // does).
-            let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
-            // Pooled over the mazes both methods ran.
-            let shared: Vec<CellStats> = stats
-                .iter()
-                .filter(|s| {
-                    (&s.method == method || &s.method == than)
-                        && find(stats, method, s.maze).is_some()
-                        && find(stats, than, s.maze).is_some()
-                })
-                .cloned()
-                .collect();
-            let (a, b) = (pooled(&shared, method)?, pooled(&shared, than)?);
-            let verdict = match verdict {
-                Verdict::Inconclusive | Verdict::ExactTestOnly if beats(&a, &b) => Verdict::Agrees,
-                Verdict::Inconclusive if beats(&b, &a) => Verdict::Disagrees,
-                Verdict::Inconclusive if exact_better(&a, &b) => Verdict::ExactTestOnly,
-                v => v,
-            };
-            let ours = format!(
-                "{}; pooled: {}",
-                parts.join("; "),
-                versus(&a, &b, (label, than_label))
-            );
-            Some(claim(ours, verdict))
+            let (ours, verdict) = beats_claim(&both, (method, label), (than, than_label), *pooled)
+                .ok_or_else(|| {
+                    missing(
+                        spec,
+                        format!(
+                            "no maze where both `{method}` and `{than}` have a cell (experiment \
+                             `{}`{})",
+                            spec.experiment,
+                            than_experiment
+                                .as_ref()
+                                .map_or(String::new(), |o| format!(" and `{o}`"))
+                        ),
+                    )
+                })?;
+            Ok(claim(ours, verdict))
         }
         ClaimTest::StepsBelowPaper { method } => {
+            let c = cells(stats, method);
+            if c.is_empty() {
+                return Err(no_cells(spec, &spec.experiment, method));
+            }
             let mut parts = Vec::new();
             let mut below = Vec::new();
-            for s in cells(stats, method) {
+            for s in c {
                 if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
                     parts.push(format!(
                         "maze {}: median {} over {} solved runs vs the paper's {}",
@@ -457,7 +475,11 @@ fn evaluate<'a>(
                 }
             }
             if below.is_empty() {
-                return None;
+                // Cells, but no solved run on a size the paper reports: nothing to compare.
+                return Ok(claim(
+                    "no solved run on a size with a paper figure".to_string(),
+                    Verdict::Inconclusive,
+                ));
             }
             let ours = format!(
                 "{} (sizes with no solved run have no median)",
@@ -468,25 +490,67 @@ fn evaluate<'a>(
             } else {
                 Verdict::Inconclusive
             };
-            Some(claim(ours, verdict))
+            Ok(claim(ours, verdict))
         }
         ClaimTest::Pooled { methods } => {
+            let pool =
+                |m: &str| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
             let (m0, l0) = &methods[0];
             let (m1, l1) = &methods[1];
-            let (a, b) = (pooled(stats, m0)?, pooled(stats, m1)?);
+            let (a, b) = (pool(m0)?, pool(m1)?);
             let mut ours = format!(
                 "pooled over mazes: {l0} {} vs {l1} {}",
                 k_of_n(&a),
                 k_of_n(&b)
             );
             for (m, l) in &methods[2..] {
-                if let Some(p) = pooled(stats, m) {
-                    ours.push_str(&format!("; {l} {}", k_of_n(&p)));
-                }
+                ours.push_str(&format!("; {l} {}", k_of_n(&pool(m)?)));
             }
-            Some(claim(ours, Verdict::NoClaim))
+            Ok(claim(ours, Verdict::NoClaim))
         }
     }
+}
+
+/// "`a` does better than `b`" on `stats`: maze by maze ([`per_maze`]), and with `pool` the
+/// counts pooled over the mazes both ran decide a verdict no maze decides. `None` when no maze
+/// has both.
+fn beats_claim(
+    stats: &[CellStats],
+    (method, label): (&str, &str),
+    (than, than_label): (&str, &str),
+    pool: bool,
+) -> Option<(String, Verdict)> {
+    let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
+    if parts.is_empty() {
+        return None;
+    }
+    if !pool {
+        return Some((parts.join("; "), verdict));
+    }
+    // Pooled over the mazes both methods ran (more seeds per bar; it decides when no maze
+    // does).
+    let shared: Vec<CellStats> = stats
+        .iter()
+        .filter(|s| {
+            (s.method == method || s.method == than)
+                && find(stats, method, s.maze).is_some()
+                && find(stats, than, s.maze).is_some()
+        })
+        .cloned()
+        .collect();
+    let (a, b) = (pooled(&shared, method)?, pooled(&shared, than)?);
+    let verdict = match verdict {
+        Verdict::Inconclusive | Verdict::ExactTestOnly if beats(&a, &b) => Verdict::Agrees,
+        Verdict::Inconclusive if beats(&b, &a) => Verdict::Disagrees,
+        Verdict::Inconclusive if exact_better(&a, &b) => Verdict::ExactTestOnly,
+        v => v,
+    };
+    let ours = format!(
+        "{}; pooled: {}",
+        parts.join("; "),
+        versus(&a, &b, (label, than_label))
+    );
+    Some((ours, verdict))
 }
 
 #[cfg(test)]

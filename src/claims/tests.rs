@@ -52,7 +52,7 @@ fn pooled_counts_only_the_mazes_both_methods_ran() {
         cell("b", 2, 3, 10),
         cell("a", 5, 0, 10),
     ];
-    let c = &claims(&[spec], &[("t".to_string(), stats)])[0];
+    let c = &claims(&[spec], &[("t".to_string(), stats)]).unwrap()[0];
     assert!(c.ours.contains("pooled: A 9/10"), "{}", c.ours);
     assert_eq!(c.verdict, Verdict::ExactTestOnly);
 }
@@ -200,7 +200,7 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
         cell("b", 3, 2, 10),
     ];
     let tables = [("t".to_string(), stats)];
-    let verdict = |s: ClaimSpec| claims(&[s], &tables)[0].verdict;
+    let verdict = |s: ClaimSpec| claims(&[s], &tables).unwrap()[0].verdict;
     assert_eq!(verdict(beats(false)), Verdict::Inconclusive);
     assert_eq!(verdict(beats(true)), Verdict::Agrees);
     // `than` from another experiment's table: the same comparison.
@@ -213,18 +213,75 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
     {
         *than_experiment = Some("u".into());
     }
-    let c = &claims(&[across], &split)[0];
+    let c = &claims(&[across], &split).unwrap()[0];
     assert_eq!(c.verdict, Verdict::Agrees);
-    assert_eq!(c.ours, claims(&[beats(true)], &tables)[0].ours);
+    assert_eq!(c.ours, claims(&[beats(true)], &tables).unwrap()[0].ours);
     let shown = claims(
         &[spec(ClaimTest::Pooled {
             methods: vec![("a".into(), "A".into()), ("b".into(), "B".into())],
         })],
         &tables,
-    );
+    )
+    .unwrap();
     assert_eq!(shown[0].verdict, Verdict::NoClaim);
     assert_eq!(
         shown[0].ours,
         "pooled over mazes: A 14/20 [0.48, 0.85] vs B 4/20 [0.08, 0.42]"
     );
+}
+
+/// A claim whose table is missing, or whose table lacks the method's cells, is an error that
+/// names the claim and what is missing, never a silent skip.
+#[test]
+fn a_claim_without_its_table_or_cells_is_an_error() {
+    let spec = |test: ClaimTest| ClaimSpec {
+        id: "x".into(),
+        paper: "p".into(),
+        experiment: "t".into(),
+        test,
+    };
+    let beats = |than_experiment: Option<&str>| {
+        spec(ClaimTest::Beats {
+            method: "a".into(),
+            label: "A".into(),
+            than: "b".into(),
+            than_label: "B".into(),
+            pooled: false,
+            than_experiment: than_experiment.map(String::from),
+        })
+    };
+    let tables = [(
+        "t".to_string(),
+        vec![cell("a", 2, 7, 10), cell("b", 2, 2, 10)],
+    )];
+    assert!(claims(&[beats(None)], &tables).is_ok());
+    // The claim's own table missing.
+    let e = claims(&[beats(None)], &[]).unwrap_err().to_string();
+    assert!(e.contains("no table of experiment `t`"), "{e}");
+    // The other table missing.
+    let e = claims(&[beats(Some("u"))], &tables)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no table of experiment `u`"), "{e}");
+    // The cells missing: `b` ran no maze that `a` ran.
+    let apart = [(
+        "t".to_string(),
+        vec![cell("a", 2, 7, 10), cell("b", 3, 2, 10)],
+    )];
+    let e = claims(&[beats(None)], &apart).unwrap_err().to_string();
+    assert!(e.contains("no maze where both `a` and `b`"), "{e}");
+    for test in [
+        ClaimTest::SolvesEverywhere { method: "c".into() },
+        ClaimTest::FailsEverywhere {
+            method: "c".into(),
+            longer: None,
+        },
+        ClaimTest::StepsBelowPaper { method: "c".into() },
+        ClaimTest::Pooled {
+            methods: vec![("a".into(), "A".into()), ("c".into(), "C".into())],
+        },
+    ] {
+        let e = claims(&[spec(test)], &tables).unwrap_err().to_string();
+        assert!(e.contains("no cell of method `c`"), "{e}");
+    }
 }

@@ -1,7 +1,7 @@
 //! Where a run's raw files live (`<results>/raw/<experiment>/<cell>/s<seed>.*`) and reading
 //! them back.
 
-use super::{plan, read_row, Cell, Experiment, RawRow};
+use super::{plan, read_run_row, Cell, Experiment, RawRow};
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -11,11 +11,19 @@ pub fn run_file(dir: &Path, seed: u64, suffix: &str) -> PathBuf {
     dir.join(format!("s{seed}{suffix}"))
 }
 
-/// The finished raw row of (cell, seed) in `dir`, if there is one. A finished run of another
-/// config is an error: results of two configs are never mixed. Configs are compared by value,
-/// so a setting added later, absent from an older stored config, takes its default (the
-/// behaviour the older run had).
-pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow>> {
+/// The finished raw row of (cell, seed) of `exp` in `dir` (the cell's folder), if there is
+/// one. A finished run of another config is an error: results of two configs are never mixed.
+/// Configs are compared by value, so a setting added later, absent from an older stored
+/// config, takes its default (the behaviour the older run had). The row itself must be this
+/// run's and hold one record of values in range ([`read_run_row`]), else an error names the
+/// file, the line and the column: a resumed sweep, `pbcs aggregate` and `pbcs exp list` read
+/// rows through here alike.
+pub fn read_finished(
+    exp: &Experiment,
+    cell: &Cell,
+    seed: u64,
+    dir: &Path,
+) -> Result<Option<RawRow>> {
     let path = run_file(dir, seed, ".csv");
     if !path.exists() {
         return Ok(None);
@@ -30,7 +38,7 @@ pub fn read_finished(cell: &Cell, seed: u64, dir: &Path) -> Result<Option<RawRow
              the file, or choose another results folder (--results, --out)",
         ));
     }
-    read_row(&path).map(Some)
+    read_run_row(exp, cell, seed, &path).map(Some)
 }
 
 /// Wall seconds of a finished run, from its timing file (None if absent or unreadable).
@@ -62,7 +70,7 @@ pub fn evals_file(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> P
 pub fn read_raw(exp: &Experiment, results: &Path) -> Result<Vec<RawRow>> {
     let mut rows = Vec::new();
     for p in plan(exp, None, None)? {
-        if let Some(r) = read_finished(p.cell, p.seed, &exp.cell_dir(results, p.cell))? {
+        if let Some(r) = read_finished(exp, p.cell, p.seed, &exp.cell_dir(results, p.cell))? {
             rows.push(r);
         }
     }

@@ -42,7 +42,7 @@ pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
     read_wall_seconds,
 };
-pub use row::{read_row, RawRow};
+pub use row::{read_row, read_run_row, RawRow};
 pub use spec::paper_run;
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
@@ -146,10 +146,14 @@ pub struct Experiment {
     pub profile: Option<String>,
     /// First run seed.
     pub first_seed: u64,
-    /// Number of seeds.
+    /// Number of seeds (of every maze but those of `seeds_by_maze`).
     pub seed_count: u64,
+    /// Fewer seeds on some maze sizes (`seeds_by_maze = { "32" = 3 }`): size → seed count.
+    pub seeds_by_maze: std::collections::BTreeMap<usize, u64>,
     /// Seeds whose runs also keep the picture data.
     pub picture_seeds: Vec<u64>,
+    /// For a pre-registered grid, what was registered (`[registered]`).
+    pub registered: Option<Registration>,
     /// Maze sizes, in order.
     pub mazes: Vec<usize>,
     /// Methods (name, label), in order.
@@ -162,10 +166,42 @@ pub struct Experiment {
     pub report: ReportSpec,
 }
 
+/// A grid registered before any of its runs existed (`[registered]` of an experiment file):
+/// the preset file its methods run and that file's SHA-256 then. `tests/heldout.rs` fails when
+/// the preset no longer has that hash: the grid then says nothing about the preset as it is,
+/// and must be registered again on new layouts.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Registration {
+    /// The preset file in `experiments/` (`pbcs_fast.toml`).
+    pub preset: String,
+    /// Its SHA-256 (lower-case hex) when the grid was registered.
+    pub sha256: String,
+    /// The commit message's date of the registration (`2026-11-25`).
+    pub date: String,
+}
+
 impl Experiment {
     /// The run seeds, in order.
     pub fn seeds(&self) -> Vec<u64> {
         (self.first_seed..self.first_seed + self.seed_count).collect()
+    }
+
+    /// The run seeds of `cell`: [`Self::seeds`], or the first `seeds_by_maze[maze]` of them.
+    pub fn seeds_of(&self, cell: &Cell) -> Vec<u64> {
+        let n = self
+            .seeds_by_maze
+            .get(&cell.maze)
+            .map_or(self.seed_count, |&n| n.min(self.seed_count));
+        (self.first_seed..self.first_seed + n).collect()
+    }
+
+    /// How many runs the grid has: the seeds of every cell.
+    pub fn run_count(&self) -> u64 {
+        self.cells
+            .iter()
+            .map(|c| self.seeds_of(c).len() as u64)
+            .sum()
     }
 
     /// The cell called `id`, or an error listing the cells.

@@ -1,6 +1,6 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
-use super::{Cell, Experiment, Kind};
+use super::{Cell, Experiment, Job, Kind};
 use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
@@ -131,14 +131,260 @@ impl RawRow {
     }
 }
 
-/// Reads one raw row file.
+/// Reads one raw row file: a header and exactly one record, every value in range (a rate in
+/// [0, 1], no NaN or infinity, `solved` as the rate and the failure give it, the columns of the
+/// other kind empty or 0, the step counts adding up). An error names the file, the line and
+/// the column. [`read_run_row`] also checks the row against its place in an experiment.
 pub fn read_row(path: &Path) -> Result<RawRow> {
+    let (row, line) = read_row_at(path)?;
+    check_values(&row, path, line).map(|()| row)
+}
+
+/// Reads the raw row of (`cell`, `seed`) of `exp` at `path` ([`read_row`]) and checks that it
+/// is that run's row: the experiment's name, the cell's id, method, kind, maze size and
+/// layout seed, the seed, and what the cell's job fixes (learner, γ, chaining, starts,
+/// budget). A row edited or moved into another cell's folder is an error naming the file, the
+/// line and the column, never a run of another cell counted here.
+pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Result<RawRow> {
+    let (row, line) = read_row_at(path)?;
+    let starts =
+        |s: Option<StartMode>| s.map_or(String::new(), |s| format!("{s:?}").to_lowercase());
+    let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
+        Job::Vanilla(j) => (
+            Kind::Vanilla,
+            j.maze.seed,
+            j.learner.record_name(),
+            j.learner.gamma,
+            false,
+            None,
+            j.train.steps,
+        ),
+        Job::Pbcs(j) => (
+            Kind::Pbcs,
+            j.maze.seed,
+            j.learner.record_name(),
+            j.learner.gamma,
+            j.phase2.chaining,
+            Some(j.phase2.start),
+            j.phase2.max_env_steps,
+        ),
+    };
+    let fields: [(&str, String, String); 12] = [
+        ("experiment", row.experiment.clone(), exp.name.clone()),
+        ("cell", row.cell.clone(), cell.id.clone()),
+        ("method", row.method.clone(), cell.method.clone()),
+        ("kind", row.kind.name().into(), kind.name().into()),
+        ("maze", row.maze.to_string(), cell.maze.to_string()),
+        (
+            "maze_seed",
+            row.maze_seed.to_string(),
+            maze_seed.to_string(),
+        ),
+        ("seed", row.seed.to_string(), seed.to_string()),
+        ("learner", row.learner.clone(), learner),
+        ("gamma", row.gamma.to_string(), gamma.to_string()),
+        ("chaining", row.chaining.to_string(), chaining.to_string()),
+        ("starts", starts(row.starts), starts(start)),
+        ("budget", row.budget.to_string(), budget.to_string()),
+    ];
+    // (γ is compared as written: the row holds the job's f32, which prints the same.)
+    match fields.into_iter().find(|(_, found, want)| found != want) {
+        None => check_values(&row, path, line).map(|()| row),
+        Some((column, found, want)) => Err(Error::parse(
+            path,
+            format!(
+                "line {line}, column `{column}`: holds `{found}`, but this file is the row of \
+                 experiment `{}`, cell `{}`, seed {seed}, whose {column} is `{want}` (a row \
+                 edited or moved from another cell's folder is never counted; restore it, or \
+                 remove it and run the cell's seed again)",
+                exp.name, cell.id
+            ),
+        )),
+    }
+}
+
+/// The row of `path` (one record under the header, its values not yet checked) and the line
+/// its record starts on.
+fn read_row_at(path: &Path) -> Result<(RawRow, u64)> {
     let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
-    reader
-        .deserialize()
-        .next()
-        .ok_or_else(|| Error::parse(path, "empty raw row file"))?
-        .map_err(|e| Error::csv(path, e))
+    let headers = reader.headers().map_err(|e| row_error(path, e))?.clone();
+    let mut record = csv::StringRecord::new();
+    if !reader
+        .read_record(&mut record)
+        .map_err(|e| row_error(path, e))?
+    {
+        return Err(Error::parse(
+            path,
+            "holds no record under its header (a raw row file holds exactly one)",
+        ));
+    }
+    let line = record.position().map_or(2, csv::Position::line);
+    let row: RawRow = record
+        .deserialize(Some(&headers))
+        .map_err(|e| match e.kind() {
+            csv::ErrorKind::Deserialize { err, .. } => {
+                let message = err.kind().to_string();
+                // The reader's own errors (a number that does not parse) name the field's
+                // index; serde's (an unknown enum value) quote the value, found here.
+                let index = err.field().map(|i| i as usize).or_else(|| {
+                    let quoted = message.split('`').nth(1)?;
+                    let mut hits = (0..record.len()).filter(|&i| &record[i] == quoted);
+                    hits.next().filter(|_| hits.next().is_none())
+                });
+                let column = index
+                    .and_then(|i| Some((headers.get(i)?, record.get(i)?)))
+                    .map_or(String::new(), |(name, value)| {
+                        format!(", column `{name}` (`{value}`)")
+                    });
+                Error::parse(path, format!("line {line}{column}: {message}"))
+            }
+            _ => row_error(path, e),
+        })?;
+    let mut next = csv::StringRecord::new();
+    if reader
+        .read_record(&mut next)
+        .map_err(|e| row_error(path, e))?
+    {
+        let at = next.position().map_or(line + 1, csv::Position::line);
+        return Err(Error::parse(
+            path,
+            format!(
+                "line {at}: a second record (a raw row file holds exactly one run's row, on \
+                 line {line})"
+            ),
+        ));
+    }
+    Ok((row, line))
+}
+
+/// A CSV reader's error on a raw row file, said by line: a record of the wrong length names
+/// its line and both lengths; anything else is the reader's own message (which locates it).
+fn row_error(path: &Path, e: csv::Error) -> Error {
+    match e.kind() {
+        csv::ErrorKind::UnequalLengths {
+            pos,
+            expected_len,
+            len,
+        } => Error::parse(
+            path,
+            format!(
+                "line {}: {len} fields, but the header has {expected_len}",
+                pos.as_ref().map_or(0, csv::Position::line)
+            ),
+        ),
+        _ => Error::csv(path, e),
+    }
+}
+
+/// The checks of one row's own values ([`read_row`]), the row of `path` on `line`: an error
+/// names the column and what is wrong.
+fn check_values(r: &RawRow, path: &Path, line: u64) -> Result<()> {
+    value_error(r).map_err(|(column, message)| {
+        Error::parse(path, format!("line {line}, column `{column}`: {message}"))
+    })
+}
+
+/// The first of a row's values out of range or at odds with the others: its column and what is
+/// wrong. Each check holds for every row a run writes ([`RawRow::vanilla`], [`RawRow::pbcs`]).
+fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
+    let fail = |column, message: String| Err((column, message));
+    if !(r.success_rate.is_finite() && (0.0..=1.0).contains(&r.success_rate)) {
+        return fail(
+            "success_rate",
+            format!("{} is not a rate in [0, 1]", r.success_rate),
+        );
+    }
+    if !(r.gamma.is_finite() && (0.0..1.0).contains(&r.gamma)) {
+        return fail("gamma", format!("{} is not a discount in [0, 1)", r.gamma));
+    }
+    if r.budget == 0 {
+        return fail("budget", "0: a run's step budget is at least 1".into());
+    }
+    match r.kind {
+        Kind::Vanilla => {
+            let zero = [
+                ("phase1_steps", r.phase1_steps),
+                ("train_steps", r.train_steps),
+                ("test_steps", r.test_steps),
+                ("skills", r.skills as u64),
+            ];
+            if let Some((column, n)) = zero.into_iter().find(|&(_, n)| n != 0) {
+                return fail(column, format!("{n} in a vanilla row (PBCS only: 0 here)"));
+            }
+            if r.chaining {
+                return fail("chaining", "true in a vanilla row (PBCS only)".into());
+            }
+            if let Some(s) = r.starts {
+                return fail(
+                    "starts",
+                    format!("{s:?} in a vanilla row (PBCS only: empty)"),
+                );
+            }
+            if let Some(f) = r.failure {
+                return fail(
+                    "failure",
+                    format!("{} in a vanilla row (PBCS only: empty)", f.name()),
+                );
+            }
+            if r.env_steps != r.budget {
+                return fail(
+                    "env_steps",
+                    format!(
+                        "{} in a vanilla row, whose run trains its whole budget of {}",
+                        r.env_steps, r.budget
+                    ),
+                );
+            }
+            if let Some(first) = r.first_success_steps.filter(|&s| s > r.env_steps) {
+                return fail(
+                    "first_success_steps",
+                    format!("{first}, after the run's {} env steps", r.env_steps),
+                );
+            }
+        }
+        Kind::Pbcs => {
+            if r.starts.is_none() {
+                return fail("starts", "empty in a PBCS row (`ball` or `exact`)".into());
+            }
+            if let Some(first) = r.first_success_steps {
+                return fail(
+                    "first_success_steps",
+                    format!("{first} in a PBCS row (vanilla only: empty)"),
+                );
+            }
+            let sum = [r.phase1_steps, r.train_steps, r.test_steps]
+                .into_iter()
+                .try_fold(0u64, u64::checked_add);
+            if sum != Some(r.env_steps) {
+                return fail(
+                    "env_steps",
+                    format!(
+                        "{}, but phase1_steps + train_steps + test_steps = {} + {} + {}",
+                        r.env_steps, r.phase1_steps, r.train_steps, r.test_steps
+                    ),
+                );
+            }
+        }
+    }
+    let solved = r.failure.is_none() && r.success_rate >= crate::runs::SOLVED_AT;
+    if r.solved != solved {
+        return fail(
+            "solved",
+            format!(
+                "{}, but a run with success_rate {} and {} is {}solved (solved: no failure and \
+                 a success rate of at least {})",
+                r.solved,
+                r.success_rate,
+                r.failure.map_or("no failure".to_string(), |f| format!(
+                    "failure {}",
+                    f.name()
+                )),
+                if solved { "" } else { "not " },
+                crate::runs::SOLVED_AT
+            ),
+        );
+    }
+    Ok(())
 }
 
 /// One line per run, as sweeps print it: `pbcs-maze2 seed 3: solved (success 1.00) in 160484

@@ -92,6 +92,9 @@ pub(crate) struct ExperimentSpec {
     #[serde(default)]
     description: String,
     seeds: u64,
+    /// Fewer seeds on some sizes (`seeds_by_maze = { "32" = 3 }`), at most `seeds`.
+    #[serde(default)]
+    seeds_by_maze: BTreeMap<String, u64>,
     #[serde(default)]
     first_seed: u64,
     #[serde(default = "default_picture_seeds")]
@@ -109,6 +112,9 @@ pub(crate) struct ExperimentSpec {
     figures: Vec<FigureSpec>,
     #[serde(default)]
     report: ReportSpec,
+    /// A pre-registered grid: the preset it runs and that file's hash when registered.
+    #[serde(default)]
+    registered: Option<super::Registration>,
 }
 
 pub(crate) fn default_picture_seeds() -> Vec<u64> {
@@ -190,6 +196,24 @@ impl Experiment {
         }
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
         check_mazes(&mazes)?;
+        let mut seeds_by_maze = BTreeMap::new();
+        for (size, &n) in &spec.seeds_by_maze {
+            match size.parse::<usize>() {
+                Ok(m) if spec.mazes.contains(&m) && (1..=spec.seeds).contains(&n) => {
+                    seeds_by_maze.insert(m, n);
+                }
+                _ => {
+                    return Err(Error::invalid(
+                        "seeds_by_maze",
+                        format!(
+                            "\"{size}\" = {n}: needs a maze size of the file ({:?}) and 1 to \
+                             `seeds` ({}) seeds",
+                            spec.mazes, spec.seeds
+                        ),
+                    ))
+                }
+            }
+        }
         let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
         if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
@@ -314,7 +338,9 @@ impl Experiment {
             profile: profile.map(String::from),
             first_seed: spec.first_seed,
             seed_count,
+            seeds_by_maze,
             picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
+            registered: spec.registered,
             report: spec.report,
             figures: if spec.figures.is_empty() {
                 vec![FigureSpec::Bars {
@@ -376,7 +402,9 @@ impl Experiment {
             profile: None,
             first_seed: 0,
             seed_count: seeds,
+            seeds_by_maze: BTreeMap::new(),
             picture_seeds: default_picture_seeds(),
+            registered: None,
             mazes: sizes.to_vec(),
             methods: vec![(name.to_string(), name.to_string())],
             cells,

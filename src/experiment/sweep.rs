@@ -78,7 +78,9 @@ pub enum Event {
 /// (one thread each; each run is single-threaded and deterministic, so the bytes do not
 /// depend on `jobs`), every learner on `kernel`. `on_event` is called as each pair finishes.
 /// Returns the rows in the order of `runs`; the first error stops handing out new runs and is
-/// returned.
+/// returned. Before anything else the sweep takes the lock of `results`
+/// ([`crate::record::FolderLock`]): exclusively for several runs, shared for one; a folder
+/// another sweep holds is refused at once, naming it, and nothing is read or run.
 pub fn sweep(
     exp: &Experiment,
     runs: &[Pending],
@@ -87,11 +89,12 @@ pub fn sweep(
     kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<Vec<RawRow>> {
+    let _folder = crate::record::FolderLock::acquire(results, runs.len() <= 1)?;
     // Finished runs first (cheap), so that a config mismatch is reported before any work.
     let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());
     for p in runs {
         let dir = exp.cell_dir(results, p.cell);
-        let done = read_finished(p.cell, p.seed, &dir)?;
+        let done = read_finished(exp, p.cell, p.seed, &dir)?;
         if let Some(r) = &done {
             on_event(p, &Event::Skipped(r.clone()));
         }
@@ -107,7 +110,7 @@ pub fn sweep(
         let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
             .and_then(|_lock| {
                 // Finished by another sweep while this one was planning: read it back.
-                match read_finished(p.cell, p.seed, &dir)? {
+                match read_finished(exp, p.cell, p.seed, &dir)? {
                     Some(row) => Ok(row),
                     None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel),
                 }
@@ -153,7 +156,8 @@ pub fn run_parallel<T: Sync, R: Send>(
     Ok(done.into_iter().map(|(_, r)| r).collect())
 }
 
-/// Every (cell, seed) of the experiment, or of one cell, or one seed.
+/// Every (cell, seed) of the experiment (each cell with the seeds of its maze), or of one
+/// cell, or one seed.
 pub fn plan<'a>(
     exp: &'a Experiment,
     cell: Option<&str>,
@@ -179,8 +183,15 @@ pub fn plan<'a>(
         }
         None => exp.seeds(),
     };
+    // A cell runs the seeds of its maze ([`Experiment::seeds_of`]).
     Ok(cells
         .into_iter()
-        .flat_map(|c| seeds.iter().map(move |&s| Pending { cell: c, seed: s }))
+        .flat_map(|c| {
+            let own = exp.seeds_of(c);
+            seeds
+                .iter()
+                .filter(move |s| own.contains(s))
+                .map(move |&s| Pending { cell: c, seed: s })
+        })
         .collect())
 }

@@ -231,48 +231,35 @@ impl SkillChain {
         Ok(())
     }
 
-    /// Loads a chain saved by [`SkillChain::save`], its policies to run on `kernel`.
+    /// Loads a chain saved by [`SkillChain::save`], its policies to run on `kernel`. Every
+    /// value of the manifest is checked before a weight is read: at least one skill; finite
+    /// numbers; radius, action scales and action bounds positive; sizes, centre, origin and
+    /// scales of agreeing lengths; `start_index <= target_index`; a policy file inside the
+    /// folder holding at least the parameters its sizes say. Then the weights (their shapes,
+    /// all finite). An error names `manifest.toml` (or the weights' file) and the field
+    /// (`skills[2].center`).
     pub fn load(dir: &Path, kernel: Kernel) -> Result<Self> {
         let path = dir.join("manifest.toml");
         let manifest: Manifest = crate::validate::read_toml(&path)?;
+        manifest.check(&path)?;
         let mut skills = Vec::new();
         for (i, m) in manifest.skills.into_iter().enumerate() {
-            let bad = |field: &str, why: String| {
-                Error::parse(&path, format!("skills[{i}].{field}: {why}"))
-            };
-            if m.sizes.len() < 2 || m.sizes.contains(&0) {
-                return Err(bad(
-                    "sizes",
+            // Sizes that promise more parameters than the file holds are refused before the
+            // network is allocated (a typo in `sizes` must not exhaust the memory).
+            let weights = dir.join(&m.file);
+            let bytes = std::fs::metadata(&weights)
+                .map_err(|e| Error::io(&weights, e))?
+                .len();
+            let params = parameters(&m.sizes).unwrap_or(usize::MAX);
+            if (params as u64).saturating_mul(4) > bytes {
+                return Err(Error::parse(
+                    &path,
                     format!(
-                        "needs an input, an output and no empty layer, got {:?}",
-                        m.sizes
+                        "skills[{i}].sizes: {:?} means {params} parameters, more than {} holds \
+                         ({bytes} bytes)",
+                        m.sizes, m.file
                     ),
                 ));
-            }
-            let (input, output) = (m.sizes[0], *m.sizes.last().unwrap_or(&0));
-            for (field, len, want) in [
-                ("center", m.center.len(), input),
-                ("origin", m.origin.len(), input),
-                ("action_scale", m.action_scale.len(), output),
-            ] {
-                if len != want {
-                    return Err(bad(
-                        field,
-                        format!("has {len} values, the network needs {want}"),
-                    ));
-                }
-            }
-            if !m.action_bounds.is_empty() && m.action_bounds.len() != output {
-                return Err(bad(
-                    "action_bounds",
-                    format!(
-                        "has {} values, the network has {output} outputs",
-                        m.action_bounds.len()
-                    ),
-                ));
-            }
-            if !(m.radius.is_finite() && m.radius > 0.0) {
-                return Err(bad("radius", format!("must be positive, got {}", m.radius)));
             }
             let mut rng = Seeds::new(0).stream(Stream::Init);
             let head = if m.action_bounds.is_empty() {
@@ -281,7 +268,7 @@ impl SkillChain {
                 crate::nn::Head::Tanh(m.action_bounds.clone())
             };
             let mut policy = Mlp::new(&m.sizes, head, &mut rng);
-            policy.load(&dir.join(&m.file))?;
+            policy.load(&weights)?;
             skills.push(Skill {
                 policy,
                 activation: Ball {
@@ -294,5 +281,143 @@ impl SkillChain {
             });
         }
         Ok(SkillChain { skills, kernel })
+    }
+
+    /// Checks that the chain fits `env` (its manifest at `path`, named in errors): every
+    /// policy takes the environment's observations and gives its actions, and a tanh policy's
+    /// largest action (its bound times the skill's action scale) stays within the
+    /// environment's bound (what training wrote: scale b with bound 1, or scale 1 with bound b).
+    pub fn check_env<E: Env>(&self, env: &E, path: &Path) -> Result<()> {
+        for (i, s) in self.skills.iter().enumerate() {
+            let sizes = s.policy.sizes();
+            let (input, output) = (sizes[0], sizes[sizes.len() - 1]);
+            if input != env.obs_dim() || output != env.action_dim() {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "skills[{i}].sizes: {sizes:?} takes {input} inputs and gives {output} \
+                         actions, the environment has {} observations and {} actions",
+                        env.obs_dim(),
+                        env.action_dim()
+                    ),
+                ));
+            }
+            if let crate::nn::Head::Tanh(bounds) = s.policy.head() {
+                for (j, (scale, bound)) in s.inputs.action_scale.iter().zip(bounds).enumerate() {
+                    let (reach, limit) = (scale * bound, env.action_bound(j));
+                    if reach > limit * (1.0 + 1e-4) {
+                        return Err(Error::parse(
+                            path,
+                            format!(
+                                "skills[{i}].action_scale: {scale} times the policy's bound \
+                                 {bound} gives actions up to {reach}, beyond the environment's \
+                                 bound {limit}"
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The parameter count of an MLP of layer sizes `sizes` (None if it overflows).
+fn parameters(sizes: &[usize]) -> Option<usize> {
+    sizes.windows(2).try_fold(0usize, |n, w| {
+        w[0].checked_mul(w[1])?.checked_add(w[1])?.checked_add(n)
+    })
+}
+
+impl Manifest {
+    /// Checks every value of the manifest read from `path` before a file it names is read:
+    /// at least one skill, and each skill's values ([`ManifestSkill::check`]). An error names
+    /// `path` and the field.
+    fn check(&self, path: &Path) -> Result<()> {
+        if self.skills.is_empty() {
+            return Err(Error::parse(
+                path,
+                "skills: the chain has no skill (a saved chain has at least one)",
+            ));
+        }
+        for (i, skill) in self.skills.iter().enumerate() {
+            skill.check().map_err(|(field, why)| {
+                Error::parse(path, format!("skills[{i}].{field}: {why}"))
+            })?;
+        }
+        Ok(())
+    }
+}
+
+impl ManifestSkill {
+    /// The first bad value of the skill, as (field, why).
+    fn check(&self) -> std::result::Result<(), (&'static str, String)> {
+        let plain = Path::new(&self.file).file_name() == Some(std::ffi::OsStr::new(&self.file));
+        if !plain {
+            return Err((
+                "file",
+                format!(
+                    "must name a file in the chain's folder, got {:?}",
+                    self.file
+                ),
+            ));
+        }
+        if self.sizes.len() < 2 || self.sizes.contains(&0) {
+            return Err((
+                "sizes",
+                format!(
+                    "needs an input, an output and no empty layer, got {:?}",
+                    self.sizes
+                ),
+            ));
+        }
+        if parameters(&self.sizes).is_none() {
+            return Err((
+                "sizes",
+                format!("{:?} has more parameters than can be counted", self.sizes),
+            ));
+        }
+        let (input, output) = (self.sizes[0], self.sizes[self.sizes.len() - 1]);
+        let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);
+        for (field, values, want, positive) in [
+            ("center", Some(&self.center), input, false),
+            ("origin", Some(&self.origin), input, false),
+            ("action_scale", Some(&self.action_scale), output, true),
+            ("action_bounds", bounds, output, true),
+        ] {
+            let Some(values) = values else { continue };
+            if values.len() != want {
+                return Err((
+                    field,
+                    format!(
+                        "has {} values, the network (sizes {:?}) needs {want}",
+                        values.len(),
+                        self.sizes
+                    ),
+                ));
+            }
+            if values.iter().any(|v| !v.is_finite()) {
+                return Err((field, format!("must be finite numbers, got {values:?}")));
+            }
+            if positive && values.iter().any(|&v| v <= 0.0) {
+                return Err((field, format!("must be positive, got {values:?}")));
+            }
+        }
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err((
+                "radius",
+                format!("must be positive and finite, got {}", self.radius),
+            ));
+        }
+        if self.start_index > self.target_index {
+            return Err((
+                "start_index",
+                format!(
+                    "{} lies after the skill's target_index {}",
+                    self.start_index, self.target_index
+                ),
+            ));
+        }
+        Ok(())
     }
 }

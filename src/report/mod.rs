@@ -7,6 +7,7 @@ use crate::tables::CellStats;
 use std::fmt::Write as _;
 
 pub mod outside;
+pub mod settings;
 
 /// Escapes text for LaTeX (pdflatex): special characters, and the Greek letters and symbols
 /// our labels use.
@@ -36,6 +37,11 @@ pub fn tex(text: &str) -> String {
             '∈' => out.push_str("$\\in$"),
             '−' => out.push_str("$-$"),
             'µ' => out.push_str("\\textmu{}"),
+            '′' => out.push_str("$'$"),
+            '⌈' => out.push_str("$\\lceil$"),
+            '⌉' => out.push_str("$\\rceil$"),
+            '²' => out.push_str("$^2$"),
+            '→' => out.push_str("$\\to$"),
             _ => out.push(c),
         }
     }

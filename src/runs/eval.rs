@@ -68,9 +68,18 @@ pub struct ChainEval {
 
 /// A chain saved by `pbcs run` with what it needs to run: the job that built it (`run.toml`
 /// beside `manifest.toml`, or `../config.toml` for chains saved before it existed), the maze
-/// of that job, and the chain, its policies on `kernel`. A folder without the job, a
-/// malformed manifest or bad weights are errors naming the file.
+/// of that job, and the chain, its policies on `kernel`. A chain in a run folder marked
+/// incomplete ([`crate::record::check_complete`]), a folder without the job, a manifest with a
+/// bad value ([`SkillChain::load`]) or policies that do not fit the maze
+/// ([`SkillChain::check_env`]), or bad weights are errors naming the file.
 pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Maze, SkillChain)> {
+    let run_dir = match chain_dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        Some(_) => std::path::PathBuf::from("."),
+        None => chain_dir.join(".."),
+    };
+    crate::record::check_complete(chain_dir)?;
+    crate::record::check_complete(&run_dir)?;
     let own = chain_dir.join(CHAIN_JOB);
     let job_path = if own.exists() {
         own
@@ -90,6 +99,7 @@ pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Ma
     let job: PbcsJob = crate::validate::load(&job_path)?;
     let maze = Maze::new(&job.maze)?;
     let chain = SkillChain::load(chain_dir, kernel)?;
+    chain.check_env(&maze, &chain_dir.join("manifest.toml"))?;
     Ok((job, maze, chain))
 }
 

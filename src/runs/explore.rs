@@ -76,8 +76,14 @@ impl ExploreRun {
     }
 
     /// Writes into `out`: `summary.csv`, `trajectory.csv`, `archive.csv`, `explore.png`,
-    /// `explore.svg` and `timing.toml`.
+    /// `explore.svg` and `timing.toml`, all of them or none
+    /// ([`crate::record::write_run_folder`]: a failure leaves `out` as it was, or marked
+    /// incomplete).
     pub fn write(&self, job: &ExploreJob, out: &Path) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    }
+
+    fn write_files(&self, job: &ExploreJob, out: &Path) -> Result<()> {
         let (maze, found) = (&self.maze, &self.found);
         write_record(&out.join("summary.csv"), &self.summary)?;
         write_trajectory_csv(maze, found, &out.join("trajectory.csv"))?;

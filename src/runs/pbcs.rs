@@ -157,8 +157,14 @@ impl PbcsRun {
     /// `trace.csv` (every test, training round and verification: skill, K, T, event, success,
     /// env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the
     /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `run.png`, `run.svg`,
-    /// `timing.toml`.
+    /// `timing.toml`, all of them or none ([`crate::record::write_run_folder`]: a failure, a
+    /// full disk say, leaves `out` as it was, an earlier finished run included, or marked
+    /// incomplete, which `pbcs eval` refuses).
     pub fn write(&self, job: &PbcsJob, out: &Path) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    }
+
+    fn write_files(&self, job: &PbcsJob, out: &Path) -> Result<()> {
         let (record, phase2) = (&self.record, &self.phase2);
         write_record(&out.join("record.csv"), record)?;
         write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;

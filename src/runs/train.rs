@@ -119,8 +119,13 @@ impl TrainRun {
     /// `evaluation.csv` (PBCS's protocol after training, when `train.final_eval_episodes` asks
     /// for it: success and steps of each episode), `visited.csv`
     /// (lower-left corners of visited bins), `actor.safetensors`, `picture.csv`, `train.png`,
-    /// `train.svg`, `timing.toml`.
+    /// `train.svg`, `timing.toml`, all of them or none ([`crate::record::write_run_folder`]: a
+    /// failure leaves `out` as it was, or marked incomplete).
     pub fn write(&self, job: &TrainJob, out: &Path) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    }
+
+    fn write_files(&self, job: &TrainJob, out: &Path) -> Result<()> {
         let summary = &self.summary;
         write_record(&out.join("summary.csv"), summary)?;
         crate::record::write_records(&out.join("evals.csv"), &self.result.evals)?;

@@ -17,4 +17,6 @@ const COMPLETE: [&str; 4] = ["table", "gamma", "unseen", "beyond"];
 
 mod committed;
 mod files;
+mod locks;
+mod rows;
 mod sweeps;

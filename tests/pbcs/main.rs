@@ -258,3 +258,9 @@ fn a_limited_chain_run_stops_a_stuck_or_slow_skill() {
 }
 
 mod switches;
+
+/// A saved chain's manifest is checked value by value when it is loaded.
+mod manifest;
+
+/// A run folder is written completely or marked incomplete.
+mod run_folder;

@@ -187,7 +187,7 @@ pub enum Command {
         #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
         seeds: u64,
         /// Runs at a time (one thread each).
-        #[arg(long, default_value_t = 2)]
+        #[arg(long, default_value_t = 2, value_parser = parse_jobs)]
         jobs: usize,
         /// Results folder: rows in <OUT>/raw/<name>/, statistics in <OUT>/tables/<name>.csv,
         /// where <name> is the config's file stem or the preset's name [default: out/table].
@@ -214,8 +214,8 @@ pub enum Command {
         /// Figure folder [default: <results>/figures].
         #[arg(long)]
         figures: Option<PathBuf>,
-        /// Folder of the generated LaTeX [default: paper/generated, or <results>/tex for a
-        /// profile].
+        /// Folder of the generated LaTeX [default: paper/generated for the committed results
+        /// (no profile, results folder `results`), else <results>/tex].
         #[arg(long)]
         tex: Option<PathBuf>,
     },
@@ -283,7 +283,7 @@ pub enum ExpCommand {
         #[arg(long)]
         seed: Option<u64>,
         /// Runs at a time (one thread each; the bytes written do not depend on it).
-        #[arg(long, default_value_t = 2)]
+        #[arg(long, default_value_t = 2, value_parser = parse_jobs)]
         jobs: usize,
     },
     /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
@@ -314,13 +314,23 @@ pub enum ExpCommand {
         #[arg(long)]
         seed: Option<u64>,
         /// Runs at a time.
-        #[arg(long, default_value_t = 2)]
+        #[arg(long, default_value_t = 2, value_parser = parse_jobs)]
         jobs: usize,
         /// Fail unless every row is reproduced byte for byte (what CI asks of the rows the
         /// current code must reproduce).
         #[arg(long)]
         exact: bool,
     },
+}
+
+/// `--jobs`: a whole number of at least 1 (before: 0 silently ran as 1).
+fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "--jobs (runs at a time) is a whole number of at least 1, got {s:?}"
+        )),
+    }
 }
 
 /// `--maze`: a whole number from 2 to [`MAX_MAZE_SIZE`], said so for anything else (a

@@ -130,6 +130,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
             let claims = set.experiments.join("claims.toml");
             let done = pbcs::pipeline::render(exps, &claims, &results, &figures, &tex)?;
+            for why in &done.unjudged {
+                println!("{why} (not judged under this profile)");
+            }
             for (name, path) in &done.skipped {
                 println!("{name}: no table at {}, skipped", path.display());
             }

@@ -1,0 +1,288 @@
+//! The settings table: every field of the two presets (`experiments/pbcs_paper.toml`,
+//! `experiments/pbcs_fast.toml`), its value in each, what it does and where its value comes
+//! from (`experiments/settings.toml`). The values are read from the preset files, so the
+//! report's `\res{preset:<name>:<field>}` numbers, its settings table (`presets.tex`) and the
+//! README's table (`settings_markdown`) never restate a value by hand.
+//!
+//! ```
+//! use pbcs::config::Preset;
+//! use pbcs::report::settings::preset_values;
+//!
+//! let fast = preset_values(Preset::Fast).unwrap();
+//! let beta = fast.iter().find(|(f, _)| f == "phase2.beta").unwrap();
+//! assert_eq!(beta.1, "50");
+//! ```
+
+use crate::config::Preset;
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Where a setting's value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, strum::IntoStaticStr)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum Source {
+    /// The paper gives it.
+    Paper,
+    /// The paper leaves it open: our choice.
+    Open,
+    /// Our correction of our phase 2 (in both presets).
+    Correction,
+    /// Our idea beside the paper's procedure (off in `paper`).
+    Switch,
+    /// What a run is of (seed, maze).
+    Run,
+}
+
+/// One entry of `experiments/settings.toml`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingDoc {
+    /// `section.field` as in the preset files (`phase2.beta`), or a top-level field (`seed`).
+    pub field: String,
+    /// Where its value comes from.
+    pub source: Source,
+    /// What it does, in one line.
+    pub what: String,
+    /// Where its value was measured or justified.
+    pub evidence: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SettingsFile {
+    setting: Vec<SettingDoc>,
+}
+
+/// The presets in the table's column order.
+pub const PRESETS: [Preset; 2] = [Preset::Paper, Preset::Fast];
+
+/// Every field of a preset file with its value as written (`phase2.beta` → `50`), in the
+/// file's order.
+pub fn preset_values(preset: Preset) -> Result<Vec<(String, String)>> {
+    let path = Path::new("experiments").join(preset.file_name());
+    let value: toml::Table =
+        toml::from_str(preset.text()).map_err(|e| Error::parse(&path, e.to_string()))?;
+    let mut out = Vec::new();
+    flatten("", &value, &mut out);
+    Ok(out)
+}
+
+fn flatten(prefix: &str, table: &toml::Table, out: &mut Vec<(String, String)>) {
+    for (key, value) in table {
+        let name = format!("{prefix}{key}");
+        match value {
+            toml::Value::Table(t) => flatten(&format!("{name}."), t, out),
+            v => out.push((name, show(v))),
+        }
+    }
+}
+
+/// A value as the table shows it: strings unquoted, arrays joined by commas.
+fn show(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        toml::Value::Array(a) => a.iter().map(show).collect::<Vec<_>>().join(", "),
+        v => v.to_string(),
+    }
+}
+
+/// Reads `experiments/settings.toml` and checks it against the presets: the presets state the
+/// same fields, and each has exactly one entry (an entry without a field, or a field without
+/// an entry, is an error naming it). Returns the entries with each preset's value, in the
+/// file's order.
+pub fn load(path: &Path) -> Result<Vec<(SettingDoc, Vec<String>)>> {
+    let file: SettingsFile = crate::validate::read_toml(path)?;
+    let values = PRESETS
+        .iter()
+        .map(|&p| preset_values(p))
+        .collect::<Result<Vec<_>>>()?;
+    let fields: Vec<&String> = values[0].iter().map(|(f, _)| f).collect();
+    for (p, v) in PRESETS.iter().zip(&values).skip(1) {
+        let other: Vec<&String> = v.iter().map(|(f, _)| f).collect();
+        let mut a = fields.clone();
+        let mut b = other.clone();
+        a.sort();
+        b.sort();
+        if a != b {
+            return Err(Error::parse(
+                Path::new("experiments").join(p.file_name()),
+                format!(
+                    "states other fields than {} ({:?} against {:?})",
+                    PRESETS[0].file_name(),
+                    b,
+                    a
+                ),
+            ));
+        }
+    }
+    for f in &fields {
+        let n = file.setting.iter().filter(|s| &&s.field == f).count();
+        if n != 1 {
+            return Err(Error::parse(
+                path,
+                format!("the presets' field `{f}` has {n} entries here, not one"),
+            ));
+        }
+    }
+    file.setting
+        .into_iter()
+        .map(|doc| {
+            let row = values
+                .iter()
+                .map(|v| {
+                    v.iter()
+                        .find(|(f, _)| f == &doc.field)
+                        .map(|(_, x)| x.clone())
+                })
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        format!("`{}` is not a field of the presets", doc.field),
+                    )
+                })?;
+            Ok((doc, row))
+        })
+        .collect()
+}
+
+/// `presets.tex`: `\res{preset:<name>:<field>}` for every field of every preset, and the
+/// settings table (a `longtable`: field, value in `paper`, value in `fast`, source, what,
+/// evidence) as `\presetstable`.
+pub fn presets_tex(rows: &[(SettingDoc, Vec<String>)]) -> String {
+    let mut s = String::from(
+        "% Generated by `pbcs figures` from experiments/pbcs_*.toml and experiments/settings.toml. \
+         Do not edit.\n\\providecommand{\\res}[1]{\\csname res:#1\\endcsname}\n",
+    );
+    for (doc, values) in rows {
+        for (p, v) in PRESETS.iter().zip(values) {
+            let _ = writeln!(
+                s,
+                "\\expandafter\\def\\csname res:preset:{}:{}\\endcsname{{{}}}",
+                p.name(),
+                doc.field,
+                super::tex(v)
+            );
+        }
+    }
+    s.push_str("\\newcommand{\\presetstable}{%\n");
+    s.push_str(
+        "\\begin{longtable}{@{}p{0.2\\textwidth}p{0.08\\textwidth}p{0.08\\textwidth}\
+         p{0.3\\textwidth}p{0.26\\textwidth}@{}}\n\\toprule\nsetting & \\texttt{paper} & \
+         \\texttt{fast} & what it does (source) & where its value comes from \\\\\n\\midrule\n\
+         \\endhead\n",
+    );
+    for (doc, values) in rows {
+        let source: &str = doc.source.into();
+        let _ = writeln!(
+            s,
+            "\\texttt{{{}}} & {} \\\\",
+            super::tex(&doc.field),
+            [
+                values
+                    .iter()
+                    .map(|v| format!("\\texttt{{{}}}", super::tex(v)))
+                    .collect::<Vec<_>>()
+                    .join(" & "),
+                format!("{} ({source})", super::tex(&doc.what)),
+                super::tex(&doc.evidence),
+            ]
+            .join(" & ")
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{longtable}}\n");
+    s
+}
+
+/// The README's settings table (Markdown): the same rows as [`presets.tex`].
+pub fn settings_markdown(rows: &[(SettingDoc, Vec<String>)]) -> String {
+    let mut s = String::from(
+        "| setting | `paper` | `fast` | what it does | source | where its value comes from |\n\
+         | --- | --- | --- | --- | --- | --- |\n",
+    );
+    for (doc, values) in rows {
+        let source: &str = doc.source.into();
+        let cells: Vec<String> = values.iter().map(|v| format!("`{v}`")).collect();
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {} | {source} | {} |",
+            doc.field,
+            cells.join(" | "),
+            doc.what.replace('|', "\\|"),
+            doc.evidence.replace('|', "\\|"),
+        );
+    }
+    s
+}
+
+/// One entry of `experiments/departures.toml`: where the `paper` preset departs from the
+/// paper's text.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Departure {
+    /// Where in the paper (`Algorithm 2, loop bound`).
+    pub place: String,
+    /// What the paper writes.
+    pub paper: String,
+    /// What the code does.
+    pub ours: String,
+    /// Why.
+    pub why: String,
+    /// The experiment that measured the difference, or `no`.
+    pub measured: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DeparturesFile {
+    departure: Vec<Departure>,
+}
+
+/// Reads `experiments/departures.toml` (at least one entry; no empty text).
+pub fn load_departures(path: &Path) -> Result<Vec<Departure>> {
+    let file: DeparturesFile = crate::validate::read_toml(path)?;
+    for (i, d) in file.departure.iter().enumerate() {
+        for (name, text) in [
+            ("place", &d.place),
+            ("paper", &d.paper),
+            ("ours", &d.ours),
+            ("why", &d.why),
+            ("measured", &d.measured),
+        ] {
+            if text.trim().is_empty() {
+                return Err(Error::parse(
+                    path,
+                    format!("departure[{i}].{name} is empty"),
+                ));
+            }
+        }
+    }
+    Ok(file.departure)
+}
+
+/// `departures.tex`: the departures as a `longtable` (`\departurestable`).
+pub fn departures_tex(departures: &[Departure]) -> String {
+    let mut s = String::from(
+        "% Generated by `pbcs figures` from experiments/departures.toml. Do not edit.\n\
+         \\newcommand{\\departurestable}{%\n\
+         \\begin{longtable}{@{}p{0.16\\textwidth}p{0.22\\textwidth}p{0.24\\textwidth}\
+         p{0.2\\textwidth}p{0.12\\textwidth}@{}}\n\\toprule\nwhere & the paper & the code & \
+         why & measured \\\\\n\\midrule\n\\endhead\n",
+    );
+    for d in departures {
+        let _ = writeln!(
+            s,
+            "{} \\\\",
+            [&d.place, &d.paper, &d.ours, &d.why, &d.measured]
+                .iter()
+                .map(|t| super::tex(t))
+                .collect::<Vec<_>>()
+                .join(" & ")
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{longtable}}\n");
+    s
+}

@@ -1,0 +1,110 @@
+//! One sweep per results folder. Before, a second sweep started while the first was between
+//! two runs took a run the first had planned, and the first died ("another process is doing
+//! this run") while the second finished: the locks were per (cell, seed), taken after each
+//! sweep had planned.
+
+use super::*;
+use pbcs::experiment::Pending;
+use pbcs::nn::kernel::Kernel;
+use pbcs::record::FolderLock;
+
+/// The smoke profile's two cheapest runs (the vanilla learners at 3000 steps: well under a
+/// second each).
+fn two_runs(exp: &Experiment) -> Vec<Pending<'_>> {
+    let runs: Vec<Pending> = plan(exp, None, None)
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.cell.id == "ddpg-maze2" || p.cell.id == "td3-maze2")
+        .collect();
+    assert_eq!(runs.len(), 2);
+    runs
+}
+
+/// Whether the error `e` refuses the results folder `dir`, naming it.
+fn refuses_folder(e: &str, dir: &Path) -> bool {
+    e.contains(&dir.display().to_string()) && e.contains("in use")
+}
+
+/// A second sweep started between the first sweep's two runs (of the same plan, or of one of
+/// its runs) is refused at its start, naming the folder, and runs nothing; the first goes on
+/// unaffected and does both runs.
+#[test]
+fn a_second_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    let runs = two_runs(&exp);
+    let kernel = Kernel::detect();
+    let second = Mutex::new(Vec::new());
+    let ran = Mutex::new(0);
+    let rows = sweep(&exp, &runs, dir.path(), 1, kernel, |_, e| {
+        if !matches!(e, Event::Ran(..)) {
+            return;
+        }
+        *ran.lock().unwrap() += 1;
+        if *ran.lock().unwrap() > 1 {
+            return;
+        }
+        for others in [&runs[..], &runs[1..]] {
+            let done = sweep(&exp, others, dir.path(), 1, kernel, |_, _| {});
+            second.lock().unwrap().push(match done {
+                Ok(rows) => format!("the second sweep went ahead: {} rows", rows.len()),
+                Err(e) => e.to_string(),
+            });
+        }
+    })
+    .unwrap();
+    let second = second.into_inner().unwrap();
+    assert_eq!(second.len(), 2);
+    for e in &second {
+        assert!(refuses_folder(e, dir.path()), "{e}");
+    }
+    assert_eq!(rows.len(), 2);
+    assert_eq!(*ran.lock().unwrap(), 2, "the first sweep did both runs");
+    // Once the first has finished, the folder is free: a sweep finds both runs done.
+    let skipped = Mutex::new(0);
+    sweep(&exp, &runs, dir.path(), 1, kernel, |_, e| {
+        if matches!(e, Event::Skipped(_)) {
+            *skipped.lock().unwrap() += 1;
+        }
+    })
+    .unwrap();
+    assert_eq!(*skipped.lock().unwrap(), 2);
+}
+
+/// Processes of one run each (`pbcs exp list --make`, `--slurm`) share a folder; a sweep of
+/// several runs is refused beside them, and they beside it, before anything is read or run.
+#[test]
+fn single_runs_share_a_results_folder_and_a_sweep_of_several_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    let runs = two_runs(&exp);
+    let kernel = Kernel::detect();
+    let row = |p: &Pending| {
+        exp.cell_dir(dir.path(), p.cell)
+            .join(format!("s{}.csv", p.seed))
+    };
+    // Another single run holds the folder (shared): this single run goes ahead beside it.
+    let other = FolderLock::acquire(dir.path(), true).unwrap();
+    sweep(&exp, &runs[..1], dir.path(), 1, kernel, |_, _| {}).unwrap();
+    assert!(row(&runs[0]).exists());
+    let e = sweep(&exp, &runs, dir.path(), 1, kernel, |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(refuses_folder(&e, dir.path()), "{e}");
+    assert!(!row(&runs[1]).exists(), "the refused sweep ran nothing");
+    drop(other);
+    // A sweep of several holds it (exclusive): a single run is refused too.
+    let sweeping = FolderLock::acquire(dir.path(), false).unwrap();
+    let e = sweep(&exp, &runs[1..], dir.path(), 1, kernel, |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(refuses_folder(&e, dir.path()), "{e}");
+    assert!(!row(&runs[1]).exists());
+    drop(sweeping);
+    assert_eq!(
+        sweep(&exp, &runs, dir.path(), 1, kernel, |_, _| {})
+            .unwrap()
+            .len(),
+        2
+    );
+}

@@ -1,0 +1,155 @@
+//! A raw row is trusted only where it agrees with its place: its file's experiment, cell and
+//! seed, what the cell's job fixes, values in range, one record. Before, an edited row moved a
+//! run into another cell (`pbcs aggregate` still counted "250 of 250 runs"), duplicated a seed
+//! or carried NaN into the tables, and lines after the first record were ignored.
+
+use super::*;
+use pbcs::experiment::{read_run_row, run_file, Cell, Job, Kind, RawRow};
+use std::path::PathBuf;
+
+/// Writes a made-up finished PBCS run of (`cell`, `seed`) of `exp` into `results` as a sweep
+/// leaves it (its job file and its row; nothing is run): the path of the row.
+fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
+    let Job::Pbcs(j) = &cell.job else {
+        panic!("{}: not a PBCS cell", cell.id)
+    };
+    let dir = exp.cell_dir(results, cell);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        run_file(&dir, seed, ".toml"),
+        cell.job.with_seed(seed).to_toml(),
+    )
+    .unwrap();
+    let row = RawRow {
+        experiment: exp.name.clone(),
+        cell: cell.id.clone(),
+        method: cell.method.clone(),
+        kind: Kind::Pbcs,
+        maze: cell.maze,
+        maze_seed: j.maze.seed,
+        seed,
+        learner: j.learner.record_name(),
+        gamma: j.learner.gamma,
+        chaining: j.phase2.chaining,
+        starts: Some(j.phase2.start),
+        solved: true,
+        success_rate: 0.97,
+        env_steps: 3300,
+        budget: j.phase2.max_env_steps,
+        first_success_steps: None,
+        phase1_steps: 1000,
+        train_steps: 2000,
+        test_steps: 300,
+        skills: 2,
+        failure: None,
+    };
+    let path = run_file(&dir, seed, ".csv");
+    pbcs::record::write_record(&path, &row).unwrap();
+    path
+}
+
+/// `path` with the value of `column` on the record's line (line 2) replaced by `value`.
+fn edit(path: &Path, column: &str, value: &str) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let i = lines[0].split(',').position(|c| c == column).unwrap();
+    let mut fields: Vec<&str> = lines[1].split(',').collect();
+    fields[i] = value;
+    lines[1] = fields.join(",");
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+}
+
+/// Each edit of a row is refused wherever rows are read (`aggregate`'s [`read_raw`], and a
+/// sweep that resumes), naming the file, the line and the column by its name.
+#[test]
+fn an_edited_raw_row_is_refused_naming_its_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let results = dir.path();
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let cell = exp.cell("pbcs-maze2").unwrap();
+    let path = write_run(&exp, results, cell, 3);
+    assert_eq!(
+        read_raw(&exp, results).unwrap().len(),
+        1,
+        "the made-up row is valid"
+    );
+    for (column, value) in [
+        // `sed -i '2s/,pbcs-maze2,/,pbcs-maze5,/'`: the run moved to another cell.
+        ("cell", "pbcs-maze5"),
+        // A second seed 4, a row filed under maze 7, under another experiment or method.
+        ("seed", "4"),
+        ("maze", "7"),
+        ("experiment", "gamma"),
+        ("method", "pbcs_fast"),
+        ("kind", "vanilla"),
+        ("budget", "5"),
+        // Values out of range, or that contradict each other.
+        ("success_rate", "NaN"),
+        ("success_rate", "inf"),
+        ("success_rate", "1.5"),
+        ("success_rate", "-0.1"),
+        ("gamma", "NaN"),
+        ("solved", "false"),
+        ("env_steps", "1"),
+        ("first_success_steps", "7"),
+        // Not a value of its column: named by the column's name (before: "field 5").
+        ("maze_seed", "x"),
+        ("starts", "everywhere"),
+    ] {
+        edit(&path, column, value);
+        let e = read_raw(&exp, results).unwrap_err().to_string();
+        assert!(
+            e.contains(&path.display().to_string())
+                && e.contains("line 2")
+                && e.contains(&format!("column `{column}`")),
+            "{column} = {value}: {e}"
+        );
+        // A resumed sweep reads finished rows the same way: refused, not trusted (the run
+        // is not re-run either).
+        let runs = plan(&exp, Some("pbcs-maze2"), Some(3)).unwrap();
+        let kernel = pbcs::nn::kernel::Kernel::detect();
+        let e = sweep(&exp, &runs, results, 1, kernel, |_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("column `{column}`")), "sweep: {e}");
+        write_run(&exp, results, cell, 3);
+    }
+    // Lines after the first record: refused, naming the line (before: ignored).
+    let text = std::fs::read_to_string(&path).unwrap();
+    let record = text.lines().nth(1).unwrap().to_string();
+    std::fs::write(&path, format!("{text}{record}\n")).unwrap();
+    let e = read_raw(&exp, results).unwrap_err().to_string();
+    assert!(e.contains("line 3") && e.contains("s3.csv"), "{e}");
+    // A record short of a field, and a header without a record.
+    let header = text.lines().next().unwrap();
+    let short = record.rsplit_once(',').unwrap().0;
+    std::fs::write(&path, format!("{header}\n{short}\n")).unwrap();
+    let e = read_raw(&exp, results).unwrap_err().to_string();
+    assert!(e.contains("line 2") && e.contains("s3.csv"), "{e}");
+    std::fs::write(&path, format!("{header}\n")).unwrap();
+    let e = read_raw(&exp, results).unwrap_err().to_string();
+    assert!(e.contains("no record") && e.contains("s3.csv"), "{e}");
+}
+
+/// Every committed raw row is its run's row and holds values in range: the checks above hold
+/// for all of them.
+#[test]
+fn every_committed_raw_row_agrees_with_its_place() {
+    let results = Path::new("results");
+    let mut checked = 0;
+    for f in files() {
+        let exp = Experiment::load(&f, None).unwrap();
+        for cell in &exp.cells {
+            for seed in exp.seeds() {
+                let path = run_file(&exp.cell_dir(results, cell), seed, ".csv");
+                if path.exists() {
+                    read_run_row(&exp, cell, seed, &path)
+                        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                    checked += 1;
+                }
+            }
+        }
+    }
+    // table 250, gamma 80, unseen 40, beyond 100, ablations and protocol.
+    assert!(checked >= 590, "only {checked} committed rows");
+}

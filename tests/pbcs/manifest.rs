@@ -1,0 +1,260 @@
+//! A saved chain's manifest is checked value by value when it is loaded (issue 33, probe 11):
+//! before, `center = [nan, nan]`, `origin = [nan, inf]`, `action_scale = [1e30, -1e30]` and
+//! `skills = []` loaded, and `pbcs eval` reported a success rate with exit 0. Each bad value
+//! is now an error naming `manifest.toml` and the field; a freshly saved chain still loads.
+
+use super::constant_policy;
+use pbcs::nn::kernel::Kernel;
+use pbcs::nn::{Head, Mlp};
+use pbcs::phase2::goal::Inputs;
+use pbcs::phase2::{Ball, Skill, SkillChain};
+use pbcs::rng::{Seeds, Stream};
+use std::path::Path;
+
+/// A one-skill chain saved into a fresh folder, with the manifest's text.
+fn saved() -> (tempfile::TempDir, String) {
+    let chain = SkillChain {
+        skills: vec![Skill {
+            policy: constant_policy([1.0, 0.0]),
+            activation: Ball {
+                center: vec![0.5, 0.5],
+                radius: 0.1,
+            },
+            start_index: 0,
+            target_index: 3,
+            inputs: Inputs::new(vec![0.5, 0.5], vec![1.0, 1.0]),
+        }],
+        kernel: Kernel::detect(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    chain.save(dir.path()).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("manifest.toml")).unwrap();
+    (dir, text)
+}
+
+/// The error of loading the chain in `dir` once `from` is replaced by `to` in its manifest.
+fn load_error(dir: &Path, text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "{from} not in {text}");
+    std::fs::write(dir.join("manifest.toml"), text.replacen(from, to, 1)).unwrap();
+    SkillChain::load(dir, Kernel::detect())
+        .map(|c| format!("loaded {} skills", c.skills.len()))
+        .expect_err("a manifest with a bad value must not load")
+        .to_string()
+}
+
+fn assert_names(err: &str, field: &str) {
+    assert!(
+        err.contains("manifest.toml") && err.contains(field),
+        "the error should name manifest.toml and {field}: {err}"
+    );
+}
+
+#[test]
+fn a_nan_center_is_refused_naming_the_field() {
+    let (dir, text) = saved();
+    let err = load_error(
+        dir.path(),
+        &text,
+        "center = [0.5, 0.5]",
+        "center = [nan, nan]",
+    );
+    assert_names(&err, "skills[0].center");
+    assert!(err.contains("finite"), "{err}");
+}
+
+#[test]
+fn a_non_finite_origin_is_refused_naming_the_field() {
+    let (dir, text) = saved();
+    let err = load_error(
+        dir.path(),
+        &text,
+        "origin = [0.5, 0.5]",
+        "origin = [nan, inf]",
+    );
+    assert_names(&err, "skills[0].origin");
+    assert!(err.contains("finite"), "{err}");
+}
+
+#[test]
+fn a_negative_action_scale_is_refused_naming_the_field() {
+    let (dir, text) = saved();
+    let err = load_error(
+        dir.path(),
+        &text,
+        "action_scale = [1.0, 1.0]",
+        "action_scale = [1e30, -1e30]",
+    );
+    assert_names(&err, "skills[0].action_scale");
+    assert!(err.contains("positive"), "{err}");
+    for bad in ["[inf, 1.0]", "[0.0, 1.0]"] {
+        let err = load_error(
+            dir.path(),
+            &text,
+            "action_scale = [1.0, 1.0]",
+            &format!("action_scale = {bad}"),
+        );
+        assert_names(&err, "skills[0].action_scale");
+    }
+}
+
+#[test]
+fn an_empty_chain_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("manifest.toml"), "skills = []\n").unwrap();
+    let err = SkillChain::load(dir.path(), Kernel::detect())
+        .map(|c| format!("loaded {} skills", c.skills.len()))
+        .unwrap_err()
+        .to_string();
+    assert_names(&err, "skills");
+    assert!(err.contains("no skill"), "{err}");
+}
+
+/// The other values: indices, bounds, the policy's file, parameter counts, weights.
+#[test]
+fn indices_bounds_files_and_parameter_counts_are_checked() {
+    let (dir, text) = saved();
+    for (from, to, field) in [
+        (
+            "start_index = 0",
+            "start_index = 4",
+            "skills[0].start_index",
+        ),
+        ("radius = 0.1", "radius = inf", "skills[0].radius"),
+        (
+            "action_bounds = [0.1, 0.1]",
+            "action_bounds = [0.1, -0.1]",
+            "skills[0].action_bounds",
+        ),
+        (
+            "action_bounds = [0.1, 0.1]",
+            "action_bounds = [nan, 0.1]",
+            "skills[0].action_bounds",
+        ),
+        (
+            "file = \"skill0.safetensors\"",
+            "file = \"../skill0.safetensors\"",
+            "skills[0].file",
+        ),
+        // More parameters than the file holds: refused before the network is allocated.
+        (
+            "sizes = [2, 4, 2]",
+            "sizes = [2, 4000000000, 2]",
+            "skills[0].sizes",
+        ),
+        (
+            "sizes = [2, 4, 2]",
+            "sizes = [2, 9223372036854775807, 2]",
+            "skills[0].sizes",
+        ),
+    ] {
+        let err = load_error(dir.path(), &text, from, to);
+        assert_names(&err, field);
+    }
+    // The second skill is named by its index.
+    let two = format!("{text}\n{text}");
+    std::fs::write(dir.path().join("manifest.toml"), &two).unwrap();
+    SkillChain::load(dir.path(), Kernel::detect()).unwrap();
+    let second = two.rfind("center = [0.5, 0.5]").unwrap();
+    let bad = format!(
+        "{}center = [0.5, nan]{}",
+        &two[..second],
+        &two[second + 19..]
+    );
+    std::fs::write(dir.path().join("manifest.toml"), bad).unwrap();
+    let err = SkillChain::load(dir.path(), Kernel::detect())
+        .unwrap_err()
+        .to_string();
+    assert_names(&err, "skills[1].center");
+    // A non-finite weight: an error naming the policy's file.
+    std::fs::write(dir.path().join("manifest.toml"), &text).unwrap();
+    let mut policy = constant_policy([1.0, 0.0]);
+    policy.params[3] = f32::NAN;
+    policy.save(&dir.path().join("skill0.safetensors")).unwrap();
+    let err = SkillChain::load(dir.path(), Kernel::detect())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("skill0.safetensors") && err.contains("not finite"),
+        "{err}"
+    );
+}
+
+/// A chain of two maze skills with what each input mode writes: goal-relative (origin the
+/// goal, scale the maze's bound 0.1, tanh bound 1) and raw (origin 0, scale 1, tanh bound 0.1).
+fn maze_chain() -> SkillChain {
+    let policy = |bound: f32| {
+        let mut rng = Seeds::new(0).stream(Stream::Init);
+        Mlp::new(&[2, 8, 2], Head::Tanh(vec![bound; 2]), &mut rng)
+    };
+    let skill = |policy, center: Vec<f32>, k, inputs| Skill {
+        policy,
+        activation: Ball {
+            center,
+            radius: 0.1,
+        },
+        start_index: k,
+        target_index: k + 5,
+        inputs,
+    };
+    SkillChain {
+        skills: vec![
+            skill(
+                policy(1.0),
+                vec![0.5, 0.5],
+                0,
+                Inputs::new(vec![1.0, 0.5], vec![0.1, 0.1]),
+            ),
+            skill(
+                policy(0.1),
+                vec![1.0, 0.5],
+                5,
+                Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),
+            ),
+        ],
+        kernel: Kernel::detect(),
+    }
+}
+
+/// A freshly saved chain loads back equal, alone and as a chain of `pbcs run` (with its job,
+/// checked against the maze); policies that do not fit the maze are refused there.
+#[test]
+fn a_freshly_saved_chain_loads_and_policies_must_fit_the_maze() {
+    let chain = maze_chain();
+    let dir = tempfile::tempdir().unwrap();
+    chain.save(dir.path()).unwrap();
+    assert_eq!(
+        SkillChain::load(dir.path(), Kernel::detect()).unwrap(),
+        chain
+    );
+    let mut job = pbcs::config::Preset::Fast.job().unwrap();
+    job.maze.size = 2;
+    let run_toml = dir.path().join(pbcs::runs::CHAIN_JOB);
+    let job_text = pbcs::validate::to_toml(&job, &run_toml).unwrap();
+    std::fs::write(&run_toml, job_text).unwrap();
+    let (_, _, loaded) = pbcs::runs::load_saved_chain(dir.path(), Kernel::detect()).unwrap();
+    assert_eq!(loaded, chain);
+    let e = pbcs::runs::eval_chain(dir.path(), 3, None, Kernel::detect()).unwrap();
+    assert_eq!((e.skills, e.episodes), (2, 3));
+
+    // A policy of 3 inputs on the 2-d maze.
+    let mut wrong = maze_chain();
+    let mut rng = Seeds::new(0).stream(Stream::Init);
+    wrong.skills[1].policy = Mlp::new(&[3, 8, 2], Head::Tanh(vec![0.1; 2]), &mut rng);
+    wrong.skills[1].activation.center = vec![1.0, 0.5, 0.0];
+    wrong.skills[1].inputs = Inputs::new(vec![0.0; 3], vec![1.0, 1.0]);
+    wrong.save(dir.path()).unwrap();
+    let err = pbcs::runs::load_saved_chain(dir.path(), Kernel::detect())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert_names(&err, "skills[1].sizes");
+    // Actions beyond the maze's bound: a raw policy's bound 0.1 scaled by 1e30.
+    let mut wrong = maze_chain();
+    wrong.skills[1].inputs.action_scale = vec![1e30, 1.0];
+    wrong.save(dir.path()).unwrap();
+    let err = pbcs::runs::load_saved_chain(dir.path(), Kernel::detect())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert_names(&err, "skills[1].action_scale");
+}
