@@ -5,7 +5,7 @@ JOBS ?= 2
 # A profile of the experiment files (`smoke`); empty: the committed grids.
 PROFILE ?=
 # The committed grids (the table's DDPG and TD3 cells give the 1M-step learning curves).
-EXPERIMENTS ?= table gamma unseen beyond ablations protocol
+EXPERIMENTS ?= table gamma unseen beyond ablations protocol switches heldout
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)

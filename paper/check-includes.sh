@@ -23,12 +23,13 @@ fi
 # defined: an undefined \csname expands to nothing, so a typo would vanish silently from the PDF.
 keys=0
 for kind in res setting; do
-  file=generated/numbers.tex
-  [ "$kind" = setting ] && file=generated/settings.tex
+  files="generated/numbers.tex generated/presets.tex"
+  [ "$kind" = setting ] && files=generated/settings.tex
   while read -r key; do
     keys=$((keys + 1))
-    if ! grep -qF "\\csname $kind:$key\\endcsname" "$file" 2>/dev/null; then
-      echo "paper/report.tex quotes \\$kind{$key}, which $file does not define" >&2
+    # shellcheck disable=SC2086
+    if ! grep -qsF "\\csname $kind:$key\\endcsname" $files; then
+      echo "paper/report.tex quotes \\$kind{$key}, which $files does not define" >&2
       missing=1
     fi
   done < <(grep -v '^\s*%' report.tex | grep -o "[\\]$kind{[^}]*}" | sed 's/.*{\(.*\)}/\1/' | sort -u)

@@ -130,9 +130,11 @@ pub enum Preset {
     /// training), with our corrections and our choices of the settings it leaves open:
     /// `experiments/pbcs_paper.toml`.
     Paper,
-    /// Everything of ours that measured better (shortened τ, early stop, adaptive K steps,
-    /// capped training rounds, warm-started skills, path-limited tests, verified skills and
-    /// a verified, repaired chain): `experiments/pbcs_fast.toml`.
+    /// The paper's procedure with switches of ours (shortened τ, early stop, adaptive K
+    /// steps, capped training rounds, restarts, bounded walks and moved hand-overs,
+    /// warm-started skills, path-limited tests, verified skills and a verified, repaired
+    /// chain; which are kept on evidence: `experiments/settings.toml`):
+    /// `experiments/pbcs_fast.toml`.
     Fast,
 }
 
