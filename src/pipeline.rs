@@ -343,6 +343,7 @@ pub fn render_all(
             let routes = crate::tables::routes::read_routes(&routes)?;
             numbers.push_str(&report::routes_numbers_tex(&exp.name, &routes));
         }
+        numbers.push_str(&report::extra_numbers_tex(exp, results)?);
     }
     numbers.push_str(&render_outside(results, tex_dir, &mut files)?);
     for (name, text) in [

@@ -456,7 +456,7 @@ fn the_same_job_in_two_experiments_gave_the_same_row() {
     ] {
         let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
         for c in &exp.cells {
-            for seed in exp.seeds() {
+            for seed in exp.seeds_of(c) {
                 let dir = exp.cell_dir(Path::new("results"), c);
                 let job = c.job.with_seed(seed).to_toml();
                 let csv = std::fs::read_to_string(dir.join(format!("s{seed}.csv"))).unwrap();

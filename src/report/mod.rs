@@ -158,6 +158,100 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
     s
 }
 
+/// The numbers of one experiment that its table of cells does not hold, for `numbers.tex`
+/// (each added where its source exists under `results`):
+///
+/// - `\res{<experiment>:seeds}` (seeds per cell, as declared) and `…:pictureseeds` (the seeds
+///   drawn, comma-separated; `--` for none);
+/// - `\res{<experiment>:<method>:cfg:<field>}`: each field of the method's jobs
+///   (`phase2.beta`, `maze.seed`, `train.final_eval_episodes`, as the preset files name them)
+///   on which all the method's cells agree (so not `maze.size`, nor a budget set per maze;
+///   not the run seed), with its value as the settings table shows it;
+/// - from `<experiment>.chains.csv`: `\res{<experiment>:<cell>:s<seed>:chain}`, the chain
+///   success of run `seed` in percent of its evaluation episodes (0 for a chain never
+///   completed);
+/// - from `<experiment>.routes.csv`: `\res{<experiment>:<cell>:routes:fewest}` (the fewest
+///   steps from s_0 to the target, median over the cell's runs) and `…:routes:tauleft` (the τ
+///   phase 2 worked on as a percentage of phase 1's, median over the cell's runs: below 100
+///   where `shorten` is on).
+pub fn extra_numbers_tex(
+    exp: &crate::experiment::Experiment,
+    results: &std::path::Path,
+) -> crate::Result<String> {
+    let mut s = String::new();
+    let name = exp.name.as_str();
+    def_res(&mut s, name, "seeds", &exp.seed_count.to_string());
+    let pictures: Vec<String> = exp.picture_seeds.iter().map(u64::to_string).collect();
+    let pictures = if pictures.is_empty() {
+        "--".to_string()
+    } else {
+        pictures.join(", ")
+    };
+    def_res(&mut s, name, "pictureseeds", &pictures);
+    for (method, _) in &exp.methods {
+        let jobs: Vec<Vec<(String, String)>> = exp
+            .cells
+            .iter()
+            .filter(|c| &c.method == method)
+            .map(|c| {
+                settings::toml_values(&c.job.to_toml())
+                    .map_err(|e| crate::Error::invalid("job", e.to_string()))
+            })
+            .collect::<crate::Result<_>>()?;
+        let Some((first, others)) = jobs.split_first() else {
+            continue;
+        };
+        for (field, value) in first {
+            let agreed = others
+                .iter()
+                .all(|o| o.iter().any(|(f, v)| f == field && v == value));
+            if field != "seed" && agreed {
+                def_res(&mut s, name, &format!("{method}:cfg:{field}"), value);
+            }
+        }
+    }
+    let chains = crate::criteria::chains_path(results, name);
+    if chains.exists() {
+        for run in crate::criteria::read_chains(&chains)? {
+            let percent = format!("{:.0}", f64::from(run.success_rate) * 100.0);
+            def_res(
+                &mut s,
+                name,
+                &format!("{}:s{}:chain", run.cell, run.seed),
+                &percent,
+            );
+        }
+    }
+    let routes = crate::tables::routes::routes_path(results, name);
+    if routes.exists() {
+        let routes = crate::tables::routes::read_routes(&routes)?;
+        let mut cells: Vec<&str> = routes.iter().map(|r| r.cell.as_str()).collect();
+        cells.dedup();
+        for cell in cells {
+            let of = || routes.iter().filter(|r| r.cell == cell);
+            let mut fewest: Vec<f64> = of().map(|r| r.fewest_steps as f64).collect();
+            let mut left: Vec<f64> = of()
+                .map(|r| r.phase2_tau_steps as f64 / r.tau_steps.max(1) as f64)
+                .collect();
+            let fewest = crate::stats::median(&mut fewest);
+            let left = crate::stats::median(&mut left);
+            def_res(
+                &mut s,
+                name,
+                &format!("{cell}:routes:fewest"),
+                &format!("{fewest:.0}"),
+            );
+            def_res(
+                &mut s,
+                name,
+                &format!("{cell}:routes:tauleft"),
+                &format!("{:.0}", left * 100.0),
+            );
+        }
+    }
+    Ok(s)
+}
+
 /// For an experiment with a `scaling` figure: each cell's shortest path as
 /// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
 /// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c, whole from 10
@@ -363,6 +457,8 @@ pub fn claims_tex(claims: &[Claim]) -> String {
 /// `settings.tex`: the settings of the `settings.pbcs` and `settings.vanilla` cells of the
 /// first maze as `\setting{<name>}`, so that the report quotes the configs instead of retyping
 /// them.
+/// The vanilla cell's learner gives `vanillahidden`, `vanillaactorlr`, `vanillacriticlr`,
+/// `vanillatau`, `vanillabatch` and `vanillanoisesigma` beside the PBCS cell's.
 pub fn settings_tex(
     exp: &crate::experiment::Experiment,
     settings: &crate::experiment::SettingsSpec,
@@ -415,6 +511,20 @@ pub fn settings_tex(
                     "learningstarts",
                     human_steps(j.train.learning_starts as f64),
                 );
+                let l = &j.learner;
+                put(
+                    "vanillahidden",
+                    l.hidden
+                        .iter()
+                        .map(|h| h.to_string())
+                        .collect::<Vec<_>>()
+                        .join("×"),
+                );
+                put("vanillaactorlr", l.actor_lr.to_string());
+                put("vanillacriticlr", l.critic_lr.to_string());
+                put("vanillatau", l.tau.to_string());
+                put("vanillabatch", l.batch_size.to_string());
+                put("vanillanoisesigma", l.noise_sigma.to_string());
             }
             _ => {}
         }
@@ -457,6 +567,90 @@ mod tests {
             " & \\textit{\\small paper: 321k S} & \\textit{\\small paper: --} \\\\[3pt]"
         );
         assert!(tex.contains("\\begin{tabular}{rcc}") && tex.contains("maze & PBCS & Other"));
+    }
+
+    /// The numbers beside the table of cells: seeds, the settings every cell of a method shares
+    /// (not the maze size where mazes differ, not the run seed), each run's chain success in
+    /// percent and each routes cell's fewest steps and share of phase 1's τ.
+    #[test]
+    fn the_extra_numbers_give_settings_runs_and_routes() {
+        use crate::criteria::ChainSuccess;
+        use crate::tables::routes::Route;
+        let exp = Experiment::of_job("m", &Default::default(), &[2, 5], 10).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let key = |k: &str, v: &str| format!("\\csname res:m:{k}\\endcsname{{{v}}}");
+        let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
+        assert!(tex.contains(&key("seeds", "10")), "{tex}");
+        assert!(tex.contains(&key("m:cfg:phase2.beta", "50")), "{tex}");
+        assert!(
+            !tex.contains("cfg:maze.size") && !tex.contains("cfg:seed\\"),
+            "{tex}"
+        );
+        assert!(
+            !tex.contains(":chain\\") && !tex.contains(":routes:"),
+            "{tex}"
+        );
+        let run = |seed: u64, rate: f32| ChainSuccess {
+            experiment: "m".into(),
+            cell: "m-maze5".into(),
+            method: "m".into(),
+            label: "m".into(),
+            maze: 5,
+            seed,
+            complete: rate > 0.0,
+            success_rate: rate,
+            solved: rate >= 0.95,
+            env_steps: 1000,
+            paper_steps: None,
+        };
+        crate::record::write_records(
+            &crate::criteria::chains_path(dir.path(), "m"),
+            &[run(1, 0.29), run(4, 0.0)],
+        )
+        .unwrap();
+        let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
+            cell: "m-maze5".into(),
+            method: "m".into(),
+            maze: 5,
+            seed,
+            solved: true,
+            tau_steps: tau,
+            phase2_tau_steps: phase2_tau,
+            chain_steps: Some(70.0),
+            successes: 100,
+            fewest_steps: 62,
+        };
+        crate::record::write_records(
+            &crate::tables::routes::routes_path(dir.path(), "m"),
+            &[route(0, 400, 100), route(1, 400, 120), route(2, 300, 90)],
+        )
+        .unwrap();
+        let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
+        for (k, v) in [
+            ("m-maze5:s1:chain", "29"),
+            ("m-maze5:s4:chain", "0"),
+            ("m-maze5:routes:fewest", "62"),
+            ("m-maze5:routes:tauleft", "30"),
+        ] {
+            assert!(tex.contains(&key(k, v)), "{k}: {tex}");
+        }
+    }
+
+    /// The code's constants as the report quotes them.
+    #[test]
+    fn the_code_constants_are_quoted_in_their_units() {
+        let tex = settings::code_tex();
+        for (k, v) in [
+            ("solved_at_percent", "95"),
+            ("confidence_percent", "95"),
+            ("exact_test_level", "0.05"),
+            ("thresholds:1_percent", "50"),
+            ("thresholds:4_percent", "100"),
+            ("max_adaptive_step", "16"),
+        ] {
+            let line = format!("\\csname res:code:{k}\\endcsname{{{v}}}");
+            assert!(tex.contains(&line), "{k}: {tex}");
+        }
     }
 
     /// Known values: two cells; the chains are 1.1 and 1.2 times the fewest steps, τ four and

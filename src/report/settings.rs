@@ -70,6 +70,73 @@ pub fn preset_values(preset: Preset) -> Result<Vec<(String, String)>> {
     Ok(out)
 }
 
+/// Every field of a TOML text with its value as the settings table shows it (`phase2.beta` →
+/// `50`), in the text's order: what [`preset_values`] reads from a preset file, for any job
+/// (the report's `\res{<experiment>:<method>:cfg:<field>}`).
+pub fn toml_values(text: &str) -> std::result::Result<Vec<(String, String)>, toml::de::Error> {
+    let value: toml::Table = toml::from_str(text)?;
+    let mut out = Vec::new();
+    flatten("", &value, &mut out);
+    Ok(out)
+}
+
+/// The constants of the code that the report quotes, as `\res{code:<name>}` (`name` is the
+/// Rust constant's, lower case; a fraction shown in percent says so with `_percent`):
+/// `solved_at_percent` ([`crate::runs::SOLVED_AT`]), `confidence_percent` (the level of the
+/// Wilson intervals, from [`crate::stats::Z95`]), `exact_test_level`
+/// ([`crate::claims::EXACT_TEST_LEVEL`]), `thresholds:<i>_percent` (the i-th of
+/// [`crate::criteria::THRESHOLDS`], from 1), `max_adaptive_step`
+/// ([`crate::phase2::backplay::MAX_ADAPTIVE_STEP`]), `max_handover_tries`
+/// ([`crate::phase2::chaining::MAX_HANDOVER_TRIES`]) and `max_verified_candidates`
+/// ([`crate::phase2::MAX_VERIFIED_CANDIDATES`]).
+pub fn code_tex() -> String {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let percent = |x: f64| format!("{:.0}", x * 100.0);
+    let level = Normal::new(0.0, 1.0).map_or(f64::NAN, |n| 2.0 * n.cdf(crate::stats::Z95) - 1.0);
+    let mut values = vec![
+        (
+            "solved_at_percent".to_string(),
+            percent(f64::from(crate::runs::SOLVED_AT)),
+        ),
+        ("confidence_percent".to_string(), percent(level)),
+        (
+            "exact_test_level".to_string(),
+            crate::claims::EXACT_TEST_LEVEL.to_string(),
+        ),
+    ];
+    for (i, t) in crate::criteria::THRESHOLDS.iter().enumerate() {
+        values.push((
+            format!("thresholds:{}_percent", i + 1),
+            percent(f64::from(*t)),
+        ));
+    }
+    for (name, v) in [
+        (
+            "max_adaptive_step",
+            crate::phase2::backplay::MAX_ADAPTIVE_STEP,
+        ),
+        (
+            "max_handover_tries",
+            crate::phase2::chaining::MAX_HANDOVER_TRIES,
+        ),
+        (
+            "max_verified_candidates",
+            crate::phase2::MAX_VERIFIED_CANDIDATES,
+        ),
+    ] {
+        values.push((name.to_string(), v.to_string()));
+    }
+    let mut s = String::new();
+    for (name, v) in values {
+        let _ = writeln!(
+            s,
+            "\\expandafter\\def\\csname res:code:{name}\\endcsname{{{}}}",
+            super::tex(&v)
+        );
+    }
+    s
+}
+
 fn flatten(prefix: &str, table: &toml::Table, out: &mut Vec<(String, String)>) {
     for (key, value) in table {
         let name = format!("{prefix}{key}");
@@ -168,6 +235,7 @@ pub fn presets_tex(rows: &[(SettingDoc, Vec<String>)]) -> String {
             );
         }
     }
+    s.push_str(&code_tex());
     s.push_str("\\newcommand{\\presetstable}{%\n");
     s.push_str(
         "\\begin{longtable}{@{}p{0.2\\textwidth}p{0.08\\textwidth}p{0.08\\textwidth}\
