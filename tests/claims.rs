@@ -403,7 +403,7 @@ fn unseen_states_ball_starts_beat_exact_starts() {
 /// fitted exponent lies in (1, 1.2], and the two cells with the same L (9×9 of layout 0, 6×6
 /// of layout 2) differ by less than 10 %.
 #[test]
-fn the_fast_preset_solves_unseen_sizes_and_layouts_at_a_cost_near_linear_in_the_path() {
+fn the_fast_preset_solves_the_development_grid_at_a_cost_near_linear_in_the_path() {
     let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
     let rows = read_raw(&exp, Path::new("results")).unwrap();
     assert_eq!(rows.len(), exp.cells.len() * exp.seed_count as usize);

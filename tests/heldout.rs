@@ -35,3 +35,78 @@ fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
     let runs: usize = exp.cells.iter().map(|c| exp.seeds_of(c).len()).sum();
     assert_eq!(runs, 2 * (10 + 10 + 5 + 3));
 }
+
+/// The README quotes the held-out grid's results as `methods_by_maze_markdown` generates them
+/// from the committed tables, between its `heldout:begin` and `heldout:end` markers: no
+/// number of that block is typed.
+#[test]
+fn the_readme_quotes_the_held_out_results_as_generated() {
+    let results = Path::new("results");
+    let stats = pbcs::tables::read_table(&pbcs::tables::table_path(results, "heldout")).unwrap();
+    let runs =
+        pbcs::criteria::read_chains(&pbcs::criteria::chains_path(results, "heldout")).unwrap();
+    assert_eq!(runs.len(), 56, "every registered run has its chain row");
+    let generated = pbcs::tables::methods_by_maze_markdown(&stats, &runs);
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let begin = "<!-- heldout:begin (generated from results/tables/heldout.csv and heldout.chains.csv: tests/heldout.rs) -->\n";
+    let end = "<!-- heldout:end -->";
+    let at = readme
+        .find(begin)
+        .expect("the README's heldout:begin marker")
+        + begin.len();
+    let to = at
+        + readme[at..]
+            .find(end)
+            .expect("the README's heldout:end marker");
+    assert_eq!(
+        &readme[at..to],
+        format!("\n{generated}\n"),
+        "the README's held-out block differs from what the committed tables give: paste the \
+         generated block (left: README, right: generated)"
+    );
+}
+
+/// Known values: one maze, two methods, one chain below 100 %.
+#[test]
+fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
+    let stats =
+        pbcs::tables::read_table(&pbcs::tables::table_path(Path::new("results"), "heldout"))
+            .unwrap();
+    let eight: Vec<_> = stats.into_iter().filter(|c| c.maze == 8).collect();
+    let run = |cell: &str, label: &str, seed: u64, rate: f32| pbcs::criteria::ChainSuccess {
+        experiment: "heldout".into(),
+        cell: cell.into(),
+        method: cell[..1].into(),
+        label: label.into(),
+        maze: 8,
+        seed,
+        complete: true,
+        success_rate: rate,
+        solved: rate >= 0.95,
+        env_steps: 1,
+        paper_steps: None,
+    };
+    let md = pbcs::tables::methods_by_maze_markdown(
+        &eight,
+        &[
+            run("a-maze8", "layout 2611", 0, 1.0),
+            run("a-maze8", "layout 2611", 1, 0.97),
+            run("b-maze8", "layout 2612", 0, 1.0),
+        ],
+    );
+    let lines: Vec<&str> = md.lines().collect();
+    assert_eq!(
+        lines[0],
+        "| size | layout 2611: solved, Wilson 95 %, median steps, chains at 100 % | layout 2612: \
+         solved, Wilson 95 %, median steps, chains at 100 % |"
+    );
+    assert_eq!(lines[1], "| --- | --- | --- |");
+    assert_eq!(
+        lines[2],
+        "| 8 | 10/10, [0.72, 1.00], 296k, 1/2 | 10/10, [0.72, 1.00], 522k, 1/1 |"
+    );
+    assert_eq!(
+        lines[4],
+        "Chains below 100 % of their evaluation episodes: layout 2611 size 8 seed 1 (97 %)."
+    );
+}

@@ -22,6 +22,12 @@ pub trait Backplayer {
     fn verify_handover(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32 {
         self.verify(k, policy, episodes)
     }
+    /// Told that the walk gave up at K = `k` as a dead walk ([`Walk::dead_walk`]): no test or
+    /// training round reached the goal once. Default: nothing (a [`super::task::SkillTask`]
+    /// writes a `dead_walk` trace row).
+    fn gave_up(&mut self, k: usize) {
+        let _ = k;
+    }
     /// Whether this problem ran out of its step budget (then its result is discarded).
     fn exhausted(&self) -> bool {
         false
@@ -170,6 +176,7 @@ pub fn backplay_candidates<B: Backplayer>(
         }
         if !any_success && walk.dead_walk.is_some_and(|w| t - k >= w) {
             // A dead walk: `w` Ks below T without one success (nothing is kept either).
+            b.gave_up(k);
             return kept;
         }
         k = k.saturating_sub(step);

@@ -371,11 +371,14 @@ pub enum EventKind {
     /// A try to move a hand-over after a dead walk (`phase2.retargets`): the skill found last
     /// (target T) verified greedily from a later ball B_ε(τ_K).
     Retarget,
+    /// A Backplay walk that gave up at K (`phase2.dead_walk`): K was that many indices below
+    /// T and no test or training round had reached the goal once (success 0, no steps).
+    DeadWalk,
 }
 
 impl EventKind {
     /// Its name in `trace.csv` and in messages (its serde name): `test`, `train`, `verify`,
-    /// `chain_verify`, `retarget`.
+    /// `chain_verify`, `retarget`, `dead_walk`.
     pub fn name(self) -> &'static str {
         self.into()
     }

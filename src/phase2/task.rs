@@ -352,6 +352,11 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         self.greedy_with(k, policy, episodes, EventKind::Retarget)
     }
 
+    /// A `dead_walk` trace row at K, success 0.
+    fn gave_up(&mut self, k: usize) {
+        self.report(k, EventKind::DeadWalk, 0.0);
+    }
+
     fn exhausted(&self) -> bool {
         self.spent_budget()
     }

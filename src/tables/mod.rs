@@ -202,6 +202,85 @@ pub fn grid_markdown(stats: &[CellStats], timings: &[CellTiming]) -> String {
     s
 }
 
+/// An experiment's cells as a markdown table with one row per maze and one column per method
+/// (its label): solved k/n with the Wilson interval, the median environment steps, and how
+/// many of the cell's chains reached the target in every evaluation episode (from the
+/// experiment's `chains.csv` rows, `runs`); then one line naming each run whose chain did not
+/// (its success in percent), or saying that none did. What the README quotes for the
+/// held-out grid (`tests/heldout.rs` holds the two equal).
+pub fn methods_by_maze_markdown(
+    stats: &[CellStats],
+    runs: &[crate::criteria::ChainSuccess],
+) -> String {
+    use crate::fmt::human_steps;
+    let mut labels: Vec<(&str, &str)> = Vec::new();
+    let mut mazes: Vec<usize> = Vec::new();
+    for c in stats {
+        if !labels.iter().any(|(m, _)| *m == c.method) {
+            labels.push((&c.method, &c.label));
+        }
+        if !mazes.contains(&c.maze) {
+            mazes.push(c.maze);
+        }
+    }
+    let mut s = String::from("| size |");
+    for (_, label) in &labels {
+        s.push_str(&format!(
+            " {label}: solved, Wilson 95 %, median steps, chains at 100 % |"
+        ));
+    }
+    s.push_str("\n| --- |");
+    s.push_str(&" --- |".repeat(labels.len()));
+    s.push('\n');
+    for maze in &mazes {
+        s.push_str(&format!("| {maze} |"));
+        for (method, _) in &labels {
+            match stats
+                .iter()
+                .find(|c| c.maze == *maze && c.method == *method)
+            {
+                Some(c) => {
+                    let cell: Vec<_> = runs.iter().filter(|r| r.cell == c.cell).collect();
+                    let perfect = cell.iter().filter(|r| r.success_rate >= 1.0).count();
+                    s.push_str(&format!(
+                        " {}/{}, [{:.2}, {:.2}], {}, {perfect}/{} |",
+                        c.successes,
+                        c.n,
+                        c.wilson_lo,
+                        c.wilson_hi,
+                        human_steps(c.steps_median),
+                        cell.len()
+                    ));
+                }
+                None => s.push_str(" - |"),
+            }
+        }
+        s.push('\n');
+    }
+    let below: Vec<String> = runs
+        .iter()
+        .filter(|r| r.success_rate < 1.0)
+        .map(|r| {
+            format!(
+                "{} size {} seed {} ({:.0} %)",
+                r.label,
+                r.maze,
+                r.seed,
+                f64::from(r.success_rate) * 100.0
+            )
+        })
+        .collect();
+    if below.is_empty() {
+        s.push_str("\nEvery chain reached the target in every evaluation episode.\n");
+    } else {
+        s.push_str(&format!(
+            "\nChains below 100 % of their evaluation episodes: {}.\n",
+            below.join("; ")
+        ));
+    }
+    s
+}
+
 /// Writes a table atomically.
 pub fn write_table(path: &Path, rows: &[CellStats]) -> Result<()> {
     crate::record::write_records(path, rows)

@@ -40,6 +40,9 @@ impl Backplayer for Scripted {
         ));
         p
     }
+    fn gave_up(&mut self, k: usize) {
+        self.calls.push(format!("dead walk at {k}"));
+    }
 }
 
 /// Backplay's walk: α, K step, early stop; the paper's fixed step.
@@ -412,6 +415,9 @@ fn a_dead_walk_gives_up_at_its_bound_unless_something_succeeded() {
     // K = 9, 8, 7: a test before and after training each, then T − K = 3.
     assert_eq!(tested.len(), 6);
     assert_eq!(tested.last().unwrap().as_str(), "test 7 = 0");
+    // ... and says so, once, at the K where it stopped (a `dead_walk` trace row).
+    assert_eq!(b.calls.last().unwrap().as_str(), "dead walk at 7");
+    assert_eq!(b.calls.iter().filter(|c| c.starts_with("dead")).count(), 1);
     // One training round at 2 % (nothing saved): the walk is alive and goes on to K = 0.
     let mut b = Scripted {
         tests: (0..10).map(|k| (k, vec![0.0])).collect(),
@@ -420,6 +426,11 @@ fn a_dead_walk_gives_up_at_its_bound_unless_something_succeeded() {
     };
     assert_eq!(backplay(&mut b, 10, &bounded), None);
     assert!(b.calls.iter().any(|c| c == "test 0 = 0"), "{:?}", b.calls);
+    assert!(
+        !b.calls.iter().any(|c| c.starts_with("dead")),
+        "{:?}",
+        b.calls
+    );
 }
 
 /// Skill chaining where no walk towards τ_`dead` finds anything, and the skill found last (its

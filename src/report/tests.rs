@@ -1,0 +1,181 @@
+//! Tests of the report's generated LaTeX (`super`).
+
+use super::*;
+use crate::experiment::Experiment;
+
+/// Three short lines per maze: "k/n (j), median", the interval, the paper's figure; a
+/// method without the cell gets dashes.
+#[test]
+fn the_results_table_puts_counts_interval_and_paper_on_three_lines() {
+    let exp = Experiment::of_job("pbcs", &Default::default(), &[2], 10).unwrap();
+    let cell = CellStats {
+        steps_median: 195_000.0,
+        solved_within_paper: Some(8),
+        ..CellStats::counted(&exp, &exp.cells[0], 9, 10)
+    };
+    let methods = [
+        ("pbcs".to_string(), "PBCS".to_string()),
+        ("other".to_string(), "Other".to_string()),
+    ];
+    let tex = results_table_tex(&[cell], &[2], &methods);
+    let lines: Vec<&str> = tex
+        .lines()
+        .skip_while(|l| !l.starts_with("\\midrule"))
+        .collect();
+    assert_eq!(lines[1], "$2\\times2$ & 9/10 (8), 195k & -- \\\\");
+    assert_eq!(
+        lines[2],
+        " & \\textcolor{gray}{\\small [0.60, 0.98]} & \\\\"
+    );
+    assert_eq!(
+        lines[3],
+        " & \\textit{\\small paper: 321k S} & \\textit{\\small paper: --} \\\\[3pt]"
+    );
+    assert!(tex.contains("\\begin{tabular}{rcc}") && tex.contains("maze & PBCS & Other"));
+}
+
+/// The numbers beside the table of cells: seeds, the settings every cell of a method shares
+/// (not the maze size where mazes differ, not the run seed), each run's chain success in
+/// percent and each routes cell's fewest steps and share of phase 1's τ.
+#[test]
+fn the_extra_numbers_give_settings_runs_and_routes() {
+    use crate::criteria::ChainSuccess;
+    use crate::tables::routes::Route;
+    let exp = Experiment::of_job("m", &Default::default(), &[2, 5], 10).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let key = |k: &str, v: &str| format!("\\csname res:m:{k}\\endcsname{{{v}}}");
+    let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
+    assert!(tex.contains(&key("seeds", "10")), "{tex}");
+    assert!(tex.contains(&key("m:cfg:phase2.beta", "50")), "{tex}");
+    assert!(
+        !tex.contains("cfg:maze.size") && !tex.contains("cfg:seed\\"),
+        "{tex}"
+    );
+    assert!(
+        !tex.contains(":chain\\") && !tex.contains(":routes:"),
+        "{tex}"
+    );
+    let run = |seed: u64, rate: f32| ChainSuccess {
+        experiment: "m".into(),
+        cell: "m-maze5".into(),
+        method: "m".into(),
+        label: "m".into(),
+        maze: 5,
+        seed,
+        complete: rate > 0.0,
+        success_rate: rate,
+        solved: rate >= 0.95,
+        env_steps: 1000,
+        paper_steps: None,
+    };
+    crate::record::write_records(
+        &crate::criteria::chains_path(dir.path(), "m"),
+        &[
+            run(1, 0.29),
+            run(4, 0.0),
+            ChainSuccess {
+                complete: true,
+                ..run(7, 0.0)
+            },
+        ],
+    )
+    .unwrap();
+    let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
+        cell: "m-maze5".into(),
+        method: "m".into(),
+        maze: 5,
+        seed,
+        solved: true,
+        tau_steps: tau,
+        phase2_tau_steps: phase2_tau,
+        chain_steps: Some(70.0),
+        successes: 100,
+        fewest_steps: 62,
+    };
+    crate::record::write_records(
+        &crate::tables::routes::routes_path(dir.path(), "m"),
+        &[route(0, 400, 100), route(1, 400, 120), route(2, 300, 90)],
+    )
+    .unwrap();
+    let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
+    for (k, v) in [
+        ("m-maze5:s1:chain", "29"),
+        ("m-maze5:s4:chain", "0"),
+        ("m-maze5:routes:fewest", "62"),
+        ("m-maze5:routes:tauleft", "30"),
+        ("m-maze5:unsolved", "3"),
+        ("m-maze5:incomplete", "1"),
+        ("m-maze5:zerochains", "1"),
+    ] {
+        assert!(tex.contains(&key(k, v)), "{k}: {tex}");
+    }
+}
+
+/// The code's constants as the report quotes them.
+#[test]
+fn the_code_constants_are_quoted_in_their_units() {
+    let tex = settings::code_tex();
+    for (k, v) in [
+        ("solved_at_percent", "95"),
+        ("confidence_percent", "95"),
+        ("exact_test_level", "0.05"),
+        ("thresholds:1_percent", "50"),
+        ("thresholds:4_percent", "100"),
+        ("max_adaptive_step", "16"),
+    ] {
+        let line = format!("\\csname res:code:{k}\\endcsname{{{v}}}");
+        assert!(tex.contains(&line), "{k}: {tex}");
+    }
+}
+
+/// Known values: two cells; the chains are 1.1 and 1.2 times the fewest steps, τ four and
+/// five times the chain; one run without a successful episode counts nowhere.
+#[test]
+fn the_routes_numbers_give_the_spread_over_cells() {
+    use crate::tables::routes::Route;
+    let route = |cell: &str, chain: Option<f64>, tau: usize, fewest: usize| Route {
+        cell: cell.into(),
+        method: "m".into(),
+        maze: 5,
+        seed: 0,
+        solved: chain.is_some(),
+        tau_steps: tau,
+        phase2_tau_steps: tau,
+        chain_steps: chain,
+        successes: u64::from(chain.is_some()),
+        fewest_steps: fewest,
+    };
+    let tex = routes_numbers_tex(
+        "x",
+        &[
+            route("a", Some(110.0), 440, 100),
+            route("b", Some(120.0), 600, 100),
+            route("b", None, 600, 100),
+        ],
+    );
+    for (key, value) in [
+        ("runs", "2"),
+        ("shorter", "2"),
+        ("fewestlo", "1.10"),
+        ("fewesthi", "1.20"),
+        ("taulo", "4.0"),
+        ("tauhi", "5.0"),
+        ("phase1lo", "4.0"),
+        ("phase1hi", "5.0"),
+    ] {
+        let line = format!("\\csname res:x:routes:{key}\\endcsname{{{value}}}");
+        assert!(tex.contains(&line), "{key}: {tex}");
+    }
+    assert_eq!(routes_numbers_tex("x", &[route("a", None, 1, 1)]), "");
+    // A shortened τ: phase 2 worked on 440 steps, phase 1's τ had 880.
+    let shortened = crate::tables::routes::Route {
+        tau_steps: 880,
+        ..route("a", Some(110.0), 440, 100)
+    };
+    let tex = routes_numbers_tex("x", &[shortened]);
+    assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");
+    assert!(
+        tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"),
+        "{tex}"
+    );
+}
