@@ -269,3 +269,102 @@ fn enum_names_are_their_serde_names() {
         .collect();
     assert_eq!(kernels, ["portable", "matrixmultiply", "avx2", "avx512"]);
 }
+
+/// Switches that mean nothing together are refused when a job is loaded, the message naming
+/// both fields: each pair on top of a preset that is valid alone.
+#[test]
+fn switches_that_cannot_combine_are_refused_naming_both_fields() {
+    for (base, set, field, other) in [
+        (
+            "pbcs_fast.toml",
+            "chaining = false\nretargets = 3\nchain_repairs = 0\n",
+            "phase2.retargets",
+            "phase2.chaining",
+        ),
+        (
+            "pbcs_fast.toml",
+            "chaining = false\nretargets = 0\n",
+            "phase2.chain_repairs",
+            "phase2.chaining",
+        ),
+        (
+            "pbcs_fast.toml",
+            "inputs = \"raw\"\n",
+            "phase2.warm_start",
+            "phase2.inputs",
+        ),
+        (
+            "pbcs_fast.toml",
+            "path_limit = 2.0\n",
+            "phase2.test_path_limit",
+            "phase2.path_limit",
+        ),
+        (
+            "pbcs_fast.toml",
+            "dead_walk = 0\n",
+            "phase2.retargets",
+            "phase2.dead_walk",
+        ),
+        (
+            "pbcs_paper.toml",
+            "chain_repairs = 2\n",
+            "phase2.chain_repairs",
+            "phase2.chain_verify_episodes",
+        ),
+    ] {
+        let preset = std::fs::read_to_string(format!("experiments/{base}")).unwrap();
+        // The preset's own [phase2] table, with the pair's fields replaced.
+        let mut text = String::new();
+        let fields: Vec<&str> = set
+            .lines()
+            .map(|l| l.split(" = ").next().unwrap())
+            .collect();
+        for line in preset.lines() {
+            let key = line.split(" = ").next().unwrap_or("").trim();
+            if !fields.contains(&key) {
+                text.push_str(line);
+                text.push('\n');
+            }
+            if line.trim() == "[phase2]" {
+                text.push_str(set);
+            }
+        }
+        let (_dir, path) = write(&text);
+        let msg = load::<PbcsJob>(&path).unwrap_err().to_string();
+        assert!(
+            msg.contains(field) && msg.contains(other),
+            "{base} with {set:?}: {msg}"
+        );
+    }
+}
+
+/// `pbcs run --no-chaining` on the default preset runs PBCS without chaining: the switches
+/// that act between skills (moved hand-overs, chain repairs) are turned off with it, and the
+/// command says so.
+#[test]
+fn no_chaining_on_the_default_preset_turns_off_what_acts_between_skills() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args([
+            "run",
+            "--maze",
+            "2",
+            "--seed",
+            "0",
+            "--quiet",
+            "--no-chaining",
+            "--out",
+        ])
+        .arg(dir.path().join("run"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("phase2.retargets") && stderr.contains("phase2.chain_repairs"),
+        "{stderr}"
+    );
+    let config = std::fs::read_to_string(dir.path().join("run/config.toml")).unwrap();
+    let job: PbcsJob = toml::from_str(&config).unwrap();
+    assert!(!job.phase2.chaining && job.phase2.retargets == 0 && job.phase2.chain_repairs == 0);
+}

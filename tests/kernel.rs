@@ -313,6 +313,45 @@ fn trained(kernel: Kernel, config: &LearnerConfig, updates: u32) -> Vec<f32> {
     p
 }
 
+/// A learner switched to a kernel (`set_kernel`) is, bit for bit, the learner built on it:
+/// every product, Adam step and soft update runs there, and `kernel()` says so.
+#[test]
+fn a_learner_switched_to_a_kernel_equals_one_built_on_it() {
+    let config = LearnerConfig {
+        hidden: vec![24, 40],
+        batch_size: 37,
+        ..LearnerConfig::td3()
+    };
+    for kernel in kernels() {
+        let mut built = Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), kernel).unwrap();
+        assert_eq!(built.kernel(), kernel);
+        for i in 0..20 {
+            built.update(&batch(config.batch_size, i));
+        }
+        // (the targets are private: their soft updates show in the critics' next updates)
+        let mut p = built.actor.params.clone();
+        for c in &built.critics {
+            p.extend(&c.params);
+        }
+        let mut switched =
+            Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), Kernel::detect()).unwrap();
+        switched.set_kernel(kernel);
+        assert_eq!(switched.kernel(), kernel, "{}", kernel.name());
+        for i in 0..20 {
+            switched.update(&batch(config.batch_size, i));
+        }
+        let mut q = switched.actor.params.clone();
+        for c in &switched.critics {
+            q.extend(&c.params);
+        }
+        assert!(
+            p.iter().zip(&q).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{}: a switched learner differs from a built one",
+            kernel.name()
+        );
+    }
+}
+
 /// The AVX-512 and AVX2 kernels give the same bytes for whole DDPG and TD3 updates (so a run's
 /// CSVs do not depend on which of the two a machine has); the portable kernel agrees up to
 /// rounding.

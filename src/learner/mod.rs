@@ -373,8 +373,9 @@ impl Learner {
                 .sum::<usize>()
     }
 
-    /// Runs every later product and optimiser step on `kernel` (all kernels but
-    /// `matrixmultiply` give the same bytes; see [`crate::nn::kernel`]).
+    /// Runs every later product, optimiser step and soft update on `kernel` (AVX-512 and
+    /// AVX2 give the same bytes; `portable` and `matrixmultiply` round differently; see
+    /// [`crate::nn::kernel`]).
     ///
     /// # Panics
     /// If this CPU cannot run `kernel` (see [`Kernel::available`]).
@@ -397,11 +398,12 @@ impl Learner {
         for o in &mut self.critic_opts {
             o.kernel = kernel;
         }
+        self.kernel = kernel;
     }
 
-    /// The kernel the update runs on.
+    /// The kernel the update runs on (products, optimiser steps and soft updates alike).
     pub fn kernel(&self) -> Kernel {
-        self.actor_opt.kernel
+        self.kernel
     }
 
     /// Greedy actions π(s) for a batch of `n` observations (one forward pass).

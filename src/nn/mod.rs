@@ -3,8 +3,9 @@
 //! Every learner update runs one actor and one or two critics forward and backward, once per
 //! environment step, so this is the hot path of the project. The networks are plain ReLU MLPs
 //! whose parameters live in one flat vector; a layer is one matrix product with its bias and
-//! activation fused in ([`kernel`]: AVX-512, AVX2 or portable, chosen at run time, all giving
-//! the same bytes), so a whole update does no allocation and no per-operation bookkeeping. candle is kept for what it does well: its
+//! activation fused in ([`kernel`]: AVX-512 or AVX2, chosen at run time and giving the same
+//! bytes, or the portable loops, which round each product separately), so a whole update does
+//! no allocation and no per-operation bookkeeping. candle is kept for what it does well: its
 //! autograd is the oracle the tests check these gradients against ([`candle_ref`]), and
 //! safetensors is the file format of saved policies ([`Mlp::save`], [`Mlp::load`],
 //! [`candle_ref::load_module`]).

@@ -1,8 +1,9 @@
 //! Algorithm 1 on the maze's learning problems ([`chain_skills`]), and the verification and
 //! repair of the finished chain (`repair_chain`, ours).
 //!
-//! Each skill is one fresh learning problem ([`SkillTask`]: a new DDPG, the shaped reward,
-//! starts in B_ε(τ_K)); [`skill_chaining`] walks them backwards from τ_N. With
+//! Each skill is one learning problem ([`SkillTask`]: a learner, the shaped reward, starts in
+//! B_ε(τ_K)) — a new DDPG as in the paper, or, with `phase2.warm_start`, the learner of the
+//! skill saved before it; [`skill_chaining`] walks them backwards from τ_N. With
 //! `phase2.chain_verify_episodes` the finished chain is then executed from B_ε(s_0); a skill in
 //! whose section episodes stall is learned again on its section τ_{K_i} … τ_{T_i}, half of the
 //! starts at τ_{K_i} now being the states where the chain really entered its ball, and the

@@ -104,7 +104,7 @@ pub struct Phase2Config {
     /// A bound on a dead walk (ours; 0 = off, the paper's procedure, whose Backplay walks K
     /// down to 0 however long it finds no success): a Backplay whose K is `dead_walk` indices
     /// below T without a single success in any test or training round gives up
-    /// ([`backplay::Walk::dead_walk`]). Then the skill restarts (`restarts`), and once no
+    /// ([`backplay::Walk::dead_walk`]), writing a `dead_walk` trace row. Then the skill restarts (`restarts`), and once no
     /// restart is left the hand-over moves (`retargets`) or the run fails.
     pub dead_walk: usize,
     /// Moves of a hand-over (ours; 0 = off): when no attempt at a skill finds any K, the skill
@@ -144,8 +144,8 @@ pub struct Phase2Config {
     /// start near its goal does not spend `max_steps` steps to show that it fails.
     pub path_limit: f32,
     /// The same limit for greedy episodes only (ours; 0 = off): tests and verifications of
-    /// a skill; training episodes keep `max_steps` (or `path_limit`'s, the smaller applying
-    /// to greedy episodes when both are set).
+    /// a skill; training episodes keep `max_steps`. Not with `path_limit`, which limits every
+    /// episode already (the check refuses both).
     pub test_path_limit: f32,
     /// Verification of the finished chain (ours; 0 = off, the paper's procedure): the chain
     /// runs greedily from `chain_verify_episodes` starts uniform in B_ε(s_0) (stream
@@ -292,6 +292,28 @@ impl Check for Phase2Config {
                 "moves the hand-over between two skills, which needs phase2.chaining = true",
             ));
         }
+        if self.chain_repairs > 0 && !self.chaining {
+            return Err(Error::invalid(
+                "phase2.chain_repairs",
+                "learns a failing skill's section of τ again as a chain of skills, which needs \
+                 phase2.chaining = true (set phase2.chain_repairs = 0 without chaining)",
+            ));
+        }
+        if self.warm_start && self.inputs == InputMode::Raw {
+            return Err(Error::invalid(
+                "phase2.warm_start",
+                "hands a skill's learner to the next skill, whose goal lies elsewhere: only \
+                 phase2.inputs = \"goal_relative\" makes that the same problem (with \
+                 phase2.inputs = \"raw\" set phase2.warm_start = false)",
+            ));
+        }
+        if self.path_limit > 0.0 && self.test_path_limit > 0.0 {
+            return Err(Error::invalid(
+                "phase2.test_path_limit",
+                "limits greedy episodes only, while phase2.path_limit limits every episode: \
+                 set one of the two (0 turns a limit off)",
+            ));
+        }
         if self.chain_repairs > 0 && self.chain_verify_episodes == 0 {
             return Err(Error::invalid(
                 "phase2.chain_repairs",
@@ -313,13 +335,10 @@ impl Phase2Config {
         }
     }
 
-    /// The path limit of greedy episodes: the smaller of `path_limit` and `test_path_limit`
-    /// where both are set, else the one set (0: none).
+    /// The path limit of greedy episodes: `path_limit` or `test_path_limit`, whichever is set
+    /// (the check refuses both; 0: none).
     pub fn greedy_path_limit(&self) -> f32 {
-        match (self.path_limit, self.test_path_limit) {
-            (a, b) if a > 0.0 && b > 0.0 => a.min(b),
-            (a, b) => a.max(b),
-        }
+        self.path_limit.max(self.test_path_limit)
     }
 
     /// What the networks of a skill aiming at `goal` see and emit ([`InputMode`]).

@@ -80,7 +80,8 @@ pub struct SkillTask<'a, E: Env> {
     pub goal: Goal,
     /// What the networks see and emit.
     pub inputs: Inputs,
-    /// The learner being trained (a fresh DDPG for each skill).
+    /// The learner being trained: a fresh one for each skill, as in the paper, or the previous
+    /// problem's with `phase2.warm_start`.
     pub learner: Learner,
     replay: Replay,
     batch: Batch,

@@ -123,22 +123,22 @@ fn path_limits_shorten_episodes_near_the_goal() {
     assert_eq!(t.steps.test, 50 * 11 + 50 * 5);
     let mut t = task(&maze, &config, &states, &obs, 1_000_000);
     assert_eq!(t.test(0), 1.0);
-    // `test_path_limit` limits greedy episodes the same way; with both set, the smaller.
-    for (path, test) in [(0.0, 1.5), (3.0, 1.5), (1.5, 3.0)] {
-        let config = Phase2Config {
-            path_limit: path,
-            test_path_limit: test,
-            ..Phase2Config::default()
-        };
-        let away = unit_policy([-1.0, 0.0]);
-        let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
-        assert_eq!(t.test(0), 0.0);
-        assert_eq!(
-            t.steps.test,
-            50 * 11,
-            "path_limit {path}, test_path_limit {test}"
-        );
-    }
+    // `test_path_limit` limits greedy episodes the same way; both at once are refused.
+    let both = Phase2Config {
+        path_limit: 3.0,
+        test_path_limit: 1.5,
+        ..Phase2Config::default()
+    };
+    let msg = pbcs::validate::Check::check(&both).unwrap_err().to_string();
+    assert!(msg.contains("phase2.test_path_limit") && msg.contains("phase2.path_limit"));
+    let config = Phase2Config {
+        test_path_limit: 1.5,
+        ..Phase2Config::default()
+    };
+    let away = unit_policy([-1.0, 0.0]);
+    let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
+    assert_eq!(t.test(0), 0.0);
+    assert_eq!(t.steps.test, 50 * 11, "test_path_limit 1.5");
     let bad = Phase2Config {
         test_path_limit: f32::NAN,
         ..Phase2Config::default()

@@ -163,7 +163,8 @@ pub enum Command {
         preset: Option<Preset>,
         #[command(flatten)]
         learner: LearnerArgs,
-        /// PBCS without skill chaining (fail when a second skill would be needed).
+        /// PBCS without skill chaining (fail when a second skill would be needed); also turns
+        /// off `phase2.retargets` and `phase2.chain_repairs`, which act between skills.
         #[arg(long)]
         no_chaining: bool,
         /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).

@@ -64,7 +64,21 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 |j: &mut PbcsJob| (&mut j.maze, &mut j.seed),
             )?;
             learner.apply(&mut job.learner);
-            job.phase2.chaining &= !no_chaining;
+            if no_chaining {
+                // PBCS without chaining has one skill: what acts between skills goes with it.
+                let p = &mut job.phase2;
+                p.chaining = false;
+                let between = [
+                    ("phase2.retargets", &mut p.retargets),
+                    ("phase2.chain_repairs", &mut p.chain_repairs),
+                ];
+                for (field, value) in between {
+                    if *value > 0 {
+                        eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
+                        *value = 0;
+                    }
+                }
+            }
             if exact_starts {
                 job.phase2.start = pbcs::phase2::StartMode::Exact;
             }

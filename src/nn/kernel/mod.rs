@@ -12,8 +12,9 @@
 //! | [`Kernel::Portable`] | everywhere | plain `a·b + c` (two roundings), same order |
 //! | [`Kernel::Matrixmultiply`] | everywhere | the `matrixmultiply` crate (the package's earlier path) |
 //!
-//! A kernel is an explicit input: a learner runs on the kernel of its
-//! [`LearnerConfig`](crate::learner::LearnerConfig) (`kernel`, [`Kernel::detect`] by default),
+//! A kernel is an explicit input: a learner runs on the kernel handed to
+//! [`Learner::new`](crate::learner::Learner::new) (the run's: [`Kernel::detect`] unless
+//! `PBCS_KERNEL` names one) or to [`Learner::set_kernel`](crate::learner::Learner::set_kernel),
 //! a [`SkillChain`](crate::phase2::SkillChain) on its own, and `timing.toml` records which
 //! ran. Nothing here is process-wide state: the `pbcs` command reads the environment variable
 //! `PBCS_KERNEL` (`auto`, `avx512`, `avx2`, `portable`, `matrixmultiply`) once
