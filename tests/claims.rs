@@ -57,19 +57,20 @@ fn cell<'a>(t: &'a [CellStats], method: &str, maze: usize) -> &'a CellStats {
         .unwrap_or_else(|| panic!("no cell {method}-maze{maze}"))
 }
 
+/// Every experiment file with cells (all of them are committed whole:
+/// `every_experiment_with_cells_is_complete` in tests/experiments).
+fn committed_experiments() -> Vec<Experiment> {
+    pbcs::experiment::experiment_files(Path::new("experiments"))
+        .unwrap()
+        .iter()
+        .map(|f| Experiment::load(f, None).unwrap())
+        .collect()
+}
+
 #[test]
 fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
-    for name in [
-        "table",
-        "gamma",
-        "unseen",
-        "beyond",
-        "ablations",
-        "protocol",
-        "switches",
-        "heldout",
-    ] {
-        let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
+    for exp in committed_experiments() {
+        let name = exp.name.as_str();
         assert!(
             exp.seed_count >= 10,
             "{name}: the claims need 10 seeds per cell"
@@ -444,17 +445,8 @@ fn the_fast_preset_solves_the_development_grid_at_a_cost_near_linear_in_the_path
 fn the_same_job_in_two_experiments_gave_the_same_row() {
     use std::collections::BTreeMap;
     let mut by_job: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
-    for name in [
-        "table",
-        "gamma",
-        "unseen",
-        "beyond",
-        "ablations",
-        "protocol",
-        "switches",
-        "heldout",
-    ] {
-        let exp = Experiment::load(Path::new(&format!("experiments/{name}.toml")), None).unwrap();
+    for exp in committed_experiments() {
+        let name = exp.name.as_str();
         for c in &exp.cells {
             for seed in exp.seeds_of(c) {
                 let dir = exp.cell_dir(Path::new("results"), c);

@@ -595,3 +595,32 @@ fn a_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
     assert!(!dir.path().join("raw").exists(), "a run went ahead");
     drop(held);
 }
+
+/// `pbcs run --no-chaining` on the default preset runs PBCS without chaining: the switches
+/// that act between skills (moved hand-overs, chain repairs) are turned off with it, and the
+/// command says so.
+#[test]
+fn no_chaining_on_the_default_preset_turns_off_what_acts_between_skills() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = pbcs(&[
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--no-chaining",
+        "--out",
+        path(&out),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("phase2.retargets") && err.contains("phase2.chain_repairs"),
+        "{err}"
+    );
+    let config = std::fs::read_to_string(out.join("config.toml")).unwrap();
+    let job: pbcs::config::PbcsJob = toml::from_str(&config).unwrap();
+    assert!(!job.phase2.chaining && job.phase2.retargets == 0 && job.phase2.chain_repairs == 0);
+}

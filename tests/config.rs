@@ -337,34 +337,3 @@ fn switches_that_cannot_combine_are_refused_naming_both_fields() {
         );
     }
 }
-
-/// `pbcs run --no-chaining` on the default preset runs PBCS without chaining: the switches
-/// that act between skills (moved hand-overs, chain repairs) are turned off with it, and the
-/// command says so.
-#[test]
-fn no_chaining_on_the_default_preset_turns_off_what_acts_between_skills() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_pbcs"))
-        .args([
-            "run",
-            "--maze",
-            "2",
-            "--seed",
-            "0",
-            "--quiet",
-            "--no-chaining",
-            "--out",
-        ])
-        .arg(dir.path().join("run"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(
-        stderr.contains("phase2.retargets") && stderr.contains("phase2.chain_repairs"),
-        "{stderr}"
-    );
-    let config = std::fs::read_to_string(dir.path().join("run/config.toml")).unwrap();
-    let job: PbcsJob = toml::from_str(&config).unwrap();
-    assert!(!job.phase2.chaining && job.phase2.retargets == 0 && job.phase2.chain_repairs == 0);
-}

@@ -329,10 +329,12 @@ fn a_learner_switched_to_a_kernel_equals_one_built_on_it() {
             built.update(&batch(config.batch_size, i));
         }
         // (the targets are private: their soft updates show in the critics' next updates)
-        let mut p = built.actor.params.clone();
-        for c in &built.critics {
-            p.extend(&c.params);
-        }
+        let params = |l: &Learner| -> Vec<f32> {
+            let mut p = l.actor.params.clone();
+            l.critics.iter().for_each(|c| p.extend(&c.params));
+            p
+        };
+        let p = params(&built);
         let mut switched =
             Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), Kernel::detect()).unwrap();
         switched.set_kernel(kernel);
@@ -340,10 +342,7 @@ fn a_learner_switched_to_a_kernel_equals_one_built_on_it() {
         for i in 0..20 {
             switched.update(&batch(config.batch_size, i));
         }
-        let mut q = switched.actor.params.clone();
-        for c in &switched.critics {
-            q.extend(&c.params);
-        }
+        let q = params(&switched);
         assert!(
             p.iter().zip(&q).all(|(a, b)| a.to_bits() == b.to_bits()),
             "{}: a switched learner differs from a built one",
