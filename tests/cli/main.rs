@@ -5,7 +5,9 @@
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-fn pbcs(args: &[&str]) -> Output {
+mod results;
+
+pub(crate) fn pbcs(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pbcs"))
         .args(args)
         .env_remove("PBCS_KERNEL")
@@ -13,11 +15,11 @@ fn pbcs(args: &[&str]) -> Output {
         .expect("spawn pbcs")
 }
 
-fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn path(p: &Path) -> &str {
+pub(crate) fn path(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
@@ -270,55 +272,6 @@ fn a_config_that_leaves_settings_out_says_so() {
     );
 }
 
-/// The Makefile runs the binary cargo builds (before: a hard-coded `target/release/pbcs`,
-/// rc 127 under `CARGO_TARGET_DIR`, and a stale binary never rebuilt), and `make paper`
-/// without LaTeX says what to install before building anything. Needs `make` (skipped, with a
-/// message, where it is absent).
-#[test]
-fn the_makefile_uses_cargos_binary_and_checks_latex_first() {
-    let make = |args: &[&str], env: &[(&str, &str)]| {
-        let mut c = Command::new("make");
-        c.args(args).envs(env.iter().copied());
-        c.output()
-    };
-    let Ok(o) = make(
-        &["-n", "cell", "EXP=table", "CELL=ddpg-maze2", "SEED=0"],
-        &[("CARGO_TARGET_DIR", "/elsewhere/tgt")],
-    ) else {
-        eprintln!("make is not installed: skipped");
-        return;
-    };
-    let plan = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", stderr(&o));
-    // The `bin` prerequisite always asks cargo (which rebuilds a stale binary), then runs the
-    // binary where cargo put it.
-    assert!(plan.contains("cargo build --release"), "{plan}");
-    assert!(
-        plan.contains("/elsewhere/tgt/release/pbcs exp check experiments/table.toml --cell ddpg-maze2 --seed 0"),
-        "{plan}"
-    );
-    // `make paper` with no latexmk on PATH (a PATH holding only `make`): a clear message,
-    // exit 2, nothing built.
-    let which = Command::new("sh")
-        .args(["-c", "command -v make"])
-        .output()
-        .unwrap();
-    let make_path = String::from_utf8_lossy(&which.stdout).trim().to_string();
-    let bin = tempfile::tempdir().unwrap();
-    std::os::unix::fs::symlink(&make_path, bin.path().join("make")).unwrap();
-    let o = Command::new(bin.path().join("make"))
-        .arg("paper")
-        .env("PATH", bin.path())
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        out.contains("needs latexmk") && out.contains("apt install"),
-        "{out}"
-    );
-}
-
 /// Without a terminal (logs, CI, cluster jobs) a long run says what it is doing: a line per
 /// skill found (before: nothing until the end). Also the smaller probes: `--help` names where
 /// defaults come from, `train` takes `--gamma`, a grid of 0 seeds is refused.
@@ -517,83 +470,6 @@ fn a_run_that_cannot_write_all_its_files_leaves_its_folder_marked_incomplete() {
         "5",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-}
-
-/// Before: `pbcs figures --results <a folder that does not exist>` printed "wrote 2 files",
-/// replacing the committed paper/generated/numbers.tex and claims.tex with empty ones (the
-/// LaTeX went to paper/generated whatever `--results` held), exit 0; `pbcs aggregate` on a
-/// missing or empty folder exited 0 too. Both refuse such a folder, naming it, and write
-/// nothing; the LaTeX of another results folder defaults to `<results>/tex`.
-#[test]
-fn aggregate_and_figures_refuse_a_results_folder_without_rows() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let committed = || {
-        ["numbers.tex", "claims.tex"]
-            .map(|name| std::fs::read(root.join("paper/generated").join(name)).unwrap())
-    };
-    let before = committed();
-    let dir = tempfile::tempdir().unwrap();
-    let missing = dir.path().join("missing");
-    let empty = dir.path().join("empty");
-    std::fs::create_dir_all(empty.join("raw")).unwrap();
-    let figures = dir.path().join("figures");
-    for (results, aggregate_says, figures_says) in [
-        (&missing, "no such results folder", "no such results folder"),
-        (&empty, "holds no raw row", "holds no table"),
-    ] {
-        let o = pbcs(&["aggregate", "--results", path(results)]);
-        assert!(!o.status.success(), "aggregate {}", path(results));
-        let e = stderr(&o);
-        assert!(
-            e.contains(path(results)) && e.contains(aggregate_says),
-            "{e}"
-        );
-        let o = pbcs(&[
-            "figures",
-            "--results",
-            path(results),
-            "--figures",
-            path(&figures),
-        ]);
-        assert!(!o.status.success(), "figures {}", path(results));
-        let e = stderr(&o);
-        assert!(e.contains(path(results)) && e.contains(figures_says), "{e}");
-    }
-    assert_eq!(committed(), before, "paper/generated was written");
-    assert!(!figures.exists() && !missing.exists());
-    assert!(!empty.join("tex").exists() && !empty.join("tables").exists());
-    // Where the LaTeX goes: paper/generated only for the committed results folder.
-    use pbcs::pipeline::tex_dir;
-    let generated = Path::new("paper/generated");
-    assert_eq!(tex_dir(None, None, Path::new("results")), generated);
-    assert_eq!(tex_dir(None, None, &empty), empty.join("tex"));
-    let smoke = Path::new("results-smoke");
-    assert_eq!(tex_dir(None, Some("smoke"), smoke), smoke.join("tex"));
-    let tex = Path::new("elsewhere");
-    assert_eq!(tex_dir(Some(tex), None, &empty), tex);
-}
-
-/// Before: a second sweep on one results folder took the runs the first had planned, and the
-/// first died between two runs. A sweep on a folder another sweep holds is refused at its
-/// start, naming the folder, and runs nothing.
-#[test]
-fn a_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
-    let dir = tempfile::tempdir().unwrap();
-    let held = pbcs::record::FolderLock::acquire(dir.path(), false).unwrap();
-    let o = pbcs(&[
-        "exp",
-        "run",
-        "experiments/table.toml",
-        "--profile",
-        "smoke",
-        "--results",
-        path(dir.path()),
-    ]);
-    assert!(!o.status.success());
-    let e = stderr(&o);
-    assert!(e.contains(path(dir.path())) && e.contains("in use"), "{e}");
-    assert!(!dir.path().join("raw").exists(), "a run went ahead");
-    drop(held);
 }
 
 /// `pbcs run --no-chaining` on the default preset runs PBCS without chaining: the switches
