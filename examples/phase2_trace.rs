@@ -23,7 +23,7 @@ fn main() -> anyhow::Result<()> {
         &mut seeds.stream(Stream::Explore),
         |_, _| {},
     )?;
-    let tau = &pbcs::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+    let tau = &pbcs::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2)?.states;
     println!("phase 1: {} steps, |τ| = {}", found.env_steps, tau.len());
     let t0 = std::time::Instant::now();
     let out = chain_skills(

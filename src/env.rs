@@ -47,40 +47,24 @@ pub trait Env {
         self.start()
     }
 
-    /// A state drawn uniformly from the ball of radius `radius` around `center` (in
-    /// observation space): Backplay's starts in B_ε(τ_K), which are usually states never
-    /// visited. The default cannot make new states and returns `center`; environments that can
-    /// should override it. The state may be one the agent cannot leave (inside a wall).
-    fn sample_ball(
-        &self,
-        center: &Self::State,
-        radius: f32,
-        rng: &mut crate::rng::Rng,
-    ) -> Self::State {
-        let _ = (radius, rng);
-        center.clone()
-    }
-
-    /// A short sequence of actions that takes `from` to (within rounding of) `to` while staying
-    /// at least `clearance` away from anything that blocks, if the environment knows one (a
-    /// straight line in the maze). Only used to shorten phase-1 trajectories before phase 2
-    /// (an option of ours, off in the paper's preset). The default knows none.
-    fn connect(
-        &self,
-        from: &Self::State,
-        to: &Self::State,
-        clearance: f32,
-    ) -> Option<Vec<Vec<f32>>> {
-        let _ = (from, to, clearance);
+    /// Backplay's starts in a ball ([`SampleBall`]), if this environment can make new states:
+    /// return `Some(self)` from an environment that implements it. `None` (the default): the
+    /// settings that need it (`phase2.start = "ball"`, `phase2.chain_verify_episodes`, an
+    /// evaluation ball of radius above 0) are refused with [`crate::error::Error::Capability`],
+    /// never replaced by exact starts.
+    fn ball_starts(&self) -> Option<&dyn SampleBall<Self::State>> {
         None
     }
 
-    /// Whether the ball of radius `radius` around `center` is clear of everything that blocks
-    /// (`Some(true)`), touches something (`Some(false)`), or unknown (`None`, the default).
-    /// Used by PBCS's `phase2.stop_at_failure` option: a partial failure from a clear ball
-    /// is the policy's, not a wall's.
-    fn ball_is_clear(&self, center: &Self::State, radius: f32) -> Option<bool> {
-        let _ = (center, radius);
+    /// Whether a ball touches anything that blocks ([`BallIsClear`]), if this environment
+    /// knows: `Some(self)` from one that implements it. Needed by `phase2.stop_at_failure`.
+    fn clear_balls(&self) -> Option<&dyn BallIsClear<Self::State>> {
+        None
+    }
+
+    /// Short clear paths between two states ([`Connect`]), if this environment knows them:
+    /// `Some(self)` from one that implements it. Needed by `phase2.shorten`.
+    fn connector(&self) -> Option<&dyn Connect<Self::State>> {
         None
     }
 
@@ -102,6 +86,84 @@ pub trait Env {
     /// Column names of the observation, for CSV headers.
     fn obs_names(&self) -> Vec<String> {
         (0..self.obs_dim()).map(|i| format!("o{i}")).collect()
+    }
+}
+
+/// A capability: states drawn uniformly from the ball of radius `radius` around `center` (in
+/// observation space), Backplay's starts in B_ε(τ_K), usually states never visited. The state
+/// may be one the agent cannot leave (inside a wall). An environment offers it through
+/// [`Env::ball_starts`].
+pub trait SampleBall<S> {
+    /// One state uniform in the ball (as the environment defines "uniform", e.g. clamped to
+    /// its bounds).
+    fn sample_ball(&self, center: &S, radius: f32, rng: &mut crate::rng::Rng) -> S;
+}
+
+/// A capability: whether the ball of radius `radius` around `center` is clear of everything
+/// that blocks. PBCS's `phase2.stop_at_failure` ends a skill at a failure from a clear ball
+/// (the policy's, not a wall's), and moved hand-overs try clear balls first. An environment
+/// offers it through [`Env::clear_balls`].
+pub trait BallIsClear<S> {
+    /// `true` when nothing that blocks meets the ball (a conservative answer is allowed).
+    fn ball_is_clear(&self, center: &S, radius: f32) -> bool;
+}
+
+/// A capability: a short sequence of actions that takes `from` to (within rounding of) `to`
+/// while staying at least `clearance` away from anything that blocks, when the environment
+/// knows one (a straight line in the maze); `None` for a pair it cannot join. Used only to
+/// shorten phase-1 trajectories before phase 2 (`phase2.shorten`, off in the paper's preset).
+/// An environment offers it through [`Env::connector`].
+pub trait Connect<S> {
+    /// The actions from `from` to `to`, or `None`.
+    fn connect(&self, from: &S, to: &S, clearance: f32) -> Option<Vec<Vec<f32>>>;
+}
+
+/// The hooks of [`Env`] a setting needs, by name, for [`crate::error::Error::Capability`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Capability {
+    /// [`Env::ball_starts`] ([`SampleBall`]).
+    SampleBall,
+    /// [`Env::clear_balls`] ([`BallIsClear`]).
+    BallIsClear,
+    /// [`Env::connector`] ([`Connect`]).
+    Connect,
+}
+
+impl Capability {
+    /// The hook's name, as the error prints it (`Env::ball_starts`).
+    pub fn hook(self) -> &'static str {
+        match self {
+            Capability::SampleBall => "Env::ball_starts (SampleBall)",
+            Capability::BallIsClear => "Env::clear_balls (BallIsClear)",
+            Capability::Connect => "Env::connector (Connect)",
+        }
+    }
+
+    /// Whether `env` offers it.
+    pub fn offered_by<E: Env + ?Sized>(self, env: &E) -> bool {
+        match self {
+            Capability::SampleBall => env.ball_starts().is_some(),
+            Capability::BallIsClear => env.clear_balls().is_some(),
+            Capability::Connect => env.connector().is_some(),
+        }
+    }
+
+    /// `Ok` when `env` offers it, else the error naming `setting` (the field that asks for
+    /// it, as written in a config: `phase2.start = "ball"`) and the hook.
+    pub fn require<E: Env + ?Sized>(self, env: &E, setting: &str) -> crate::error::Result<()> {
+        if self.offered_by(env) {
+            Ok(())
+        } else {
+            Err(self.missing(setting))
+        }
+    }
+
+    /// The error for `setting`, which needs this hook of an environment that lacks it.
+    pub fn missing(self, setting: &str) -> crate::error::Error {
+        crate::error::Error::Capability {
+            setting: setting.to_string(),
+            hook: self.hook(),
+        }
     }
 }
 
@@ -129,15 +191,22 @@ pub struct EvalEpisode {
 /// uniform in B_ε(s_0) (radius `epsilon` around [`Env::start`]), drawn in order from the
 /// [`crate::rng::Stream::Eval`] stream of `seeds`. The same seed gives every policy the same
 /// starts, so a chain and a vanilla policy of one run seed are judged from the same states.
+/// With `epsilon` = 0 every start is s_0; a ball needs [`Env::ball_starts`].
 pub fn evaluation_starts<E: Env + ?Sized>(
     env: &E,
     epsilon: f32,
     episodes: usize,
     seeds: &crate::rng::Seeds,
-) -> Vec<E::State> {
-    let mut rng = seeds.stream(crate::rng::Stream::Eval);
+) -> crate::error::Result<Vec<E::State>> {
     let start = env.start();
-    (0..episodes)
-        .map(|_| env.sample_ball(&start, epsilon, &mut rng))
-        .collect()
+    let Some(ball) = env.ball_starts() else {
+        if epsilon > 0.0 {
+            Capability::SampleBall.require(env, "an evaluation ball of radius ε > 0")?;
+        }
+        return Ok(vec![start; episodes]);
+    };
+    let mut rng = seeds.stream(crate::rng::Stream::Eval);
+    Ok((0..episodes)
+        .map(|_| ball.sample_ball(&start, epsilon, &mut rng))
+        .collect())
 }

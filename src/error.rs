@@ -77,6 +77,18 @@ pub enum Error {
         /// What is missing.
         message: String,
     },
+    /// A setting asks for a hook the environment does not offer (see [`crate::env::Capability`]):
+    /// refused instead of run without it.
+    #[error(
+        "`{setting}` needs the environment's {hook}, which this environment does not offer \
+         (implement it, or change the setting)"
+    )]
+    Capability {
+        /// The setting that needs it, as written in a config (`phase2.start = "ball"`).
+        setting: String,
+        /// The hook (`Env::ball_starts (SampleBall)`).
+        hook: &'static str,
+    },
     /// Rendering a picture failed.
     #[error("plot {path}: {message}")]
     Plot {

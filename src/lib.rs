@@ -8,7 +8,7 @@
 //! | paper | module |
 //! | --- | --- |
 //! | Appendix "Experimental Setup": the maze MDP | [`maze`] |
-//! | Background, "Reset-anywhere" | [`env`] (pure `step(&State, action)`) |
+//! | Background, "Reset-anywhere" | [`env`] (pure `step(&State, action)`; PBCS's optional hooks as capabilities) |
 //! | Phase 1 and appendix algorithm "Exploration algorithm" | [`explore`] |
 //! | Settings the paper gives or leaves open | [`config`] |
 //! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
@@ -17,6 +17,7 @@
 //! | Wilson score intervals (appendix on γ); Fisher's exact test | [`stats`] |
 //! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
+//! [`rooms`] is a second environment for PBCS (two rooms and a door, every hook offered);
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
 //! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
 //! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws mazes
@@ -66,6 +67,7 @@ pub mod record;
 pub mod report;
 pub mod reproduce;
 pub mod rng;
+pub mod rooms;
 pub mod runs;
 pub mod stats;
 pub mod tables;

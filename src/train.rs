@@ -325,7 +325,7 @@ pub fn train_vanilla<E: Env>(
             train.final_eval_epsilon,
             train.final_eval_episodes,
             seeds,
-        );
+        )?;
         greedy_episodes(env, &mut learner, starts, train.final_eval_max_steps)
     } else {
         Vec::new()

@@ -107,7 +107,7 @@ fn shortened_trajectories_are_real_steps_and_much_shorter() {
         let tau = explore(&maze, &ExploreConfig::default(), &mut rng, |_, _| {})
             .unwrap()
             .trajectory;
-        let short = shorten(&maze, &tau, 0.1);
+        let short = shorten(&maze, &tau, 0.1).unwrap();
         assert_eq!(short.states[0], tau.states[0]);
         assert!(
             maze.reached(short.states.last().unwrap()),

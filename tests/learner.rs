@@ -392,7 +392,7 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
     assert_eq!(a.learner.actor.params, b.learner.actor.params);
     assert_eq!(b.final_eval.len(), 20);
     // The same episodes, replayed by hand from the protocol's starts.
-    let starts = evaluation_starts(&maze, 0.1, 20, &Seeds::new(3));
+    let starts = evaluation_starts(&maze, 0.1, 20, &Seeds::new(3)).unwrap();
     assert!(starts
         .iter()
         .all(|s| (s - maze.start()).norm() <= 0.1 + 1e-6));

@@ -148,7 +148,8 @@ impl ChainCore {
             self.job.phase2.epsilon,
             n,
             &pbcs::rng::Seeds::new(seed),
-        );
+        )
+        .map_err(py_err)?;
         let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
         Ok(Array2::from_shape_vec((n, 2), flat)
             .expect("two coordinates per state")

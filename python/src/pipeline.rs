@@ -81,7 +81,7 @@ pub(crate) fn evaluation_starts<'py>(
         ));
     }
     let seeds = pbcs::rng::Seeds::new(count("seed", seed)?);
-    let starts = pbcs::env::evaluation_starts(&maze, epsilon, n, &seeds);
+    let starts = pbcs::env::evaluation_starts(&maze, epsilon, n, &seeds).map_err(py_err)?;
     let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
     Ok(Array2::from_shape_vec((n, 2), flat)
         .expect("two coordinates per state")

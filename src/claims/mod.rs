@@ -400,29 +400,7 @@ fn evaluate<'a>(
                 .ok_or_else(|| no_cells(spec, &spec.experiment, method))
         }
         ClaimTest::SolvesEverywhere { method } => {
-            let c = cells(stats, method);
-            if c.is_empty() {
-                return Err(no_cells(spec, &spec.experiment, method));
-            }
-            let verdict = if c.iter().all(|s| solves(s)) {
-                Verdict::Agrees
-            } else if c.iter().any(|s| fails(s)) {
-                Verdict::Disagrees
-            } else {
-                Verdict::Inconclusive
-            };
-            let ours = c
-                .iter()
-                .map(|s| {
-                    format!(
-                        "maze {}: {} within {} steps",
-                        s.maze,
-                        k_of_n(s),
-                        human_steps(s.budget as f64)
-                    )
-                })
-                .collect::<Vec<_>>()
-                .join("; ");
+            let (ours, verdict) = solves_everywhere(spec, stats, method)?;
             Ok(claim(ours, verdict))
         }
         ClaimTest::Beats {
@@ -456,59 +434,109 @@ fn evaluate<'a>(
             Ok(claim(ours, verdict))
         }
         ClaimTest::StepsBelowPaper { method } => {
-            let c = cells(stats, method);
-            if c.is_empty() {
-                return Err(no_cells(spec, &spec.experiment, method));
-            }
-            let mut parts = Vec::new();
-            let mut below = Vec::new();
-            for s in c {
-                if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
-                    parts.push(format!(
-                        "maze {}: median {} over {} solved runs vs the paper's {}",
-                        s.maze,
-                        human_steps(m),
-                        s.successes,
-                        human_steps(p as f64)
-                    ));
-                    below.push(m < p as f64);
-                }
-            }
-            if below.is_empty() {
-                // Cells, but no solved run on a size the paper reports: nothing to compare.
-                return Ok(claim(
-                    "no solved run on a size with a paper figure".to_string(),
-                    Verdict::Inconclusive,
-                ));
-            }
-            let ours = format!(
-                "{} (sizes with no solved run have no median)",
-                parts.join("; ")
-            );
-            let verdict = if below.iter().all(|&b| b) {
-                Verdict::FewerSteps
-            } else {
-                Verdict::Inconclusive
-            };
+            let (ours, verdict) = steps_below_paper(spec, stats, method)?;
             Ok(claim(ours, verdict))
         }
         ClaimTest::Pooled { methods } => {
-            let pool =
-                |m: &str| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
-            let (m0, l0) = &methods[0];
-            let (m1, l1) = &methods[1];
-            let (a, b) = (pool(m0)?, pool(m1)?);
-            let mut ours = format!(
-                "pooled over mazes: {l0} {} vs {l1} {}",
-                k_of_n(&a),
-                k_of_n(&b)
-            );
-            for (m, l) in &methods[2..] {
-                ours.push_str(&format!("; {l} {}", k_of_n(&pool(m)?)));
-            }
-            Ok(claim(ours, Verdict::NoClaim))
+            Ok(claim(pooled_claim(spec, stats, methods)?, Verdict::NoClaim))
         }
     }
+}
+
+/// `method` solves every maze of `stats` (within each cell's budget).
+fn solves_everywhere(
+    spec: &ClaimSpec,
+    stats: &[CellStats],
+    method: &str,
+) -> Result<(String, Verdict)> {
+    let c = cells(stats, method);
+    if c.is_empty() {
+        return Err(no_cells(spec, &spec.experiment, method));
+    }
+    let verdict = if c.iter().all(|s| solves(s)) {
+        Verdict::Agrees
+    } else if c.iter().any(|s| fails(s)) {
+        Verdict::Disagrees
+    } else {
+        Verdict::Inconclusive
+    };
+    let ours = c
+        .iter()
+        .map(|s| {
+            format!(
+                "maze {}: {} within {} steps",
+                s.maze,
+                k_of_n(s),
+                human_steps(s.budget as f64)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    Ok((ours, verdict))
+}
+
+/// `method`'s median steps of solved runs below the paper's on every size that has both.
+fn steps_below_paper(
+    spec: &ClaimSpec,
+    stats: &[CellStats],
+    method: &str,
+) -> Result<(String, Verdict)> {
+    let c = cells(stats, method);
+    if c.is_empty() {
+        return Err(no_cells(spec, &spec.experiment, method));
+    }
+    let mut parts = Vec::new();
+    let mut below = Vec::new();
+    for s in c {
+        if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
+            parts.push(format!(
+                "maze {}: median {} over {} solved runs vs the paper's {}",
+                s.maze,
+                human_steps(m),
+                s.successes,
+                human_steps(p as f64)
+            ));
+            below.push(m < p as f64);
+        }
+    }
+    if below.is_empty() {
+        // Cells, but no solved run on a size the paper reports: nothing to compare.
+        return Ok((
+            "no solved run on a size with a paper figure".to_string(),
+            Verdict::Inconclusive,
+        ));
+    }
+    let ours = format!(
+        "{} (sizes with no solved run have no median)",
+        parts.join("; ")
+    );
+    let verdict = if below.iter().all(|&b| b) {
+        Verdict::FewerSteps
+    } else {
+        Verdict::Inconclusive
+    };
+    Ok((ours, verdict))
+}
+
+/// The solved counts of `methods` (name, label) pooled over the mazes of `stats`.
+fn pooled_claim(
+    spec: &ClaimSpec,
+    stats: &[CellStats],
+    methods: &[(String, String)],
+) -> Result<String> {
+    let pool = |m: &str| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
+    let (m0, l0) = &methods[0];
+    let (m1, l1) = &methods[1];
+    let (a, b) = (pool(m0)?, pool(m1)?);
+    let mut ours = format!(
+        "pooled over mazes: {l0} {} vs {l1} {}",
+        k_of_n(&a),
+        k_of_n(&b)
+    );
+    for (m, l) in &methods[2..] {
+        ours.push_str(&format!("; {l} {}", k_of_n(&pool(m)?)));
+    }
+    Ok(ours)
 }
 
 /// "`a` does better than `b`" on `stats`: maze by maze ([`per_maze`]), and with `pool` the

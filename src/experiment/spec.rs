@@ -166,41 +166,35 @@ pub(crate) fn merge(into: &mut toml::Table, from: &toml::Table) {
     }
 }
 
-impl Experiment {
-    /// Reads and resolves an experiment file under `profile` (None: the committed grid).
-    /// Every cell's job is validated; duplicate method names, an unknown profile, an empty
-    /// grid and keys that a job does not have are errors naming the method or field.
-    pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
-        let spec: ExperimentSpec = crate::validate::read_toml(path)?;
-        let name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .ok_or_else(|| Error::parse(path, "no file name"))?;
-        let folder = path.parent().unwrap_or(Path::new("."));
-        let prof = match profile {
-            None => ProfileSpec::default(),
-            Some(p) => spec.profiles.get(p).cloned().ok_or_else(|| {
+/// A method's name and its label in tables and figures.
+type MethodLabel = (String, String);
+
+impl ExperimentSpec {
+    /// The profile named `profile` of the file at `path` (None: the committed grid, an empty
+    /// profile).
+    fn profile(&self, path: &Path, profile: Option<&str>) -> Result<ProfileSpec> {
+        match profile {
+            None => Ok(ProfileSpec::default()),
+            Some(p) => self.profiles.get(p).cloned().ok_or_else(|| {
                 Error::invalid(
                     "profile",
                     format!(
                         "{} has no profile `{p}` (it has: {})",
                         path.display(),
-                        spec.profiles.keys().cloned().collect::<Vec<_>>().join(", ")
+                        self.profiles.keys().cloned().collect::<Vec<_>>().join(", ")
                     ),
                 )
-            })?,
-        };
-        let seed_count = prof.seeds.unwrap_or(spec.seeds);
-        if seed_count == 0 {
-            return Err(Error::invalid("seeds", "must be at least 1"));
+            }),
         }
-        let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
-        check_mazes(&mazes)?;
-        let mut seeds_by_maze = BTreeMap::new();
-        for (size, &n) in &spec.seeds_by_maze {
+    }
+
+    /// `seeds_by_maze`, its keys read as maze sizes of the file, each count 1 to `seeds`.
+    fn seeds_by_maze(&self) -> Result<BTreeMap<usize, u64>> {
+        let mut out = BTreeMap::new();
+        for (size, &n) in &self.seeds_by_maze {
             match size.parse::<usize>() {
-                Ok(m) if spec.mazes.contains(&m) && (1..=spec.seeds).contains(&n) => {
-                    seeds_by_maze.insert(m, n);
+                Ok(m) if self.mazes.contains(&m) && (1..=self.seeds).contains(&n) => {
+                    out.insert(m, n);
                 }
                 _ => {
                     return Err(Error::invalid(
@@ -208,26 +202,26 @@ impl Experiment {
                         format!(
                             "\"{size}\" = {n}: needs a maze size of the file ({:?}) and 1 to \
                              `seeds` ({}) seeds",
-                            spec.mazes, spec.seeds
+                            self.mazes, self.seeds
                         ),
                     ))
                 }
             }
         }
-        let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
-        if all_methods.is_empty() {
-            return Err(Error::invalid("method", "an experiment needs a [[method]]"));
-        }
-        // The file's `by_maze` may name any size the file or one of its profiles runs (a
-        // profile narrows the sizes); a profile's, only the sizes that profile runs.
-        let mut file_mazes: BTreeSet<usize> = spec.mazes.iter().copied().collect();
-        for p in spec.profiles.values() {
+        Ok(out)
+    }
+
+    /// The file's `by_maze` may name any size the file or one of its profiles runs (a profile
+    /// narrows the sizes); the profile's `prof`, only the sizes it runs (`mazes`).
+    fn check_by_maze(&self, path: &Path, prof: &ProfileSpec, mazes: &[usize]) -> Result<()> {
+        let mut file_mazes: BTreeSet<usize> = self.mazes.iter().copied().collect();
+        for p in self.profiles.values() {
             file_mazes.extend(p.mazes.iter().flatten());
         }
         let file_mazes: Vec<usize> = file_mazes.into_iter().collect();
         for (field, by_maze, sizes) in [
-            ("by_maze", &spec.by_maze, &file_mazes),
-            ("profile.by_maze", &prof.by_maze, &mazes),
+            ("by_maze", &self.by_maze, file_mazes.as_slice()),
+            ("profile.by_maze", &prof.by_maze, mazes),
         ] {
             for key in by_maze.keys() {
                 if !key.parse::<usize>().is_ok_and(|n| sizes.contains(&n)) {
@@ -238,6 +232,12 @@ impl Experiment {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Each method's name is valid and unique, its own `mazes` a subset of the file's, its
+    /// paper numbers keyed by maze sizes of the file.
+    fn check_methods(&self, all_methods: &[&MethodSpec]) -> Result<()> {
         let mut names = BTreeSet::new();
         for m in all_methods.iter().copied() {
             check_method_name(&m.name)?;
@@ -248,18 +248,18 @@ impl Experiment {
                 ));
             }
             if let Some(own) = &m.mazes {
-                if own.is_empty() || own.iter().any(|n| !spec.mazes.contains(n)) {
+                if own.is_empty() || own.iter().any(|n| !self.mazes.contains(n)) {
                     return Err(Error::invalid(
                         "method.mazes",
                         format!(
                             "method `{}`: {own:?} must be a non-empty subset of `mazes` {:?}",
-                            m.name, spec.mazes
+                            m.name, self.mazes
                         ),
                     ));
                 }
             }
             for key in m.paper_steps.keys().chain(m.paper_solved.keys()) {
-                if !key.parse::<usize>().is_ok_and(|n| spec.mazes.contains(&n)) {
+                if !key.parse::<usize>().is_ok_and(|n| self.mazes.contains(&n)) {
                     return Err(Error::invalid(
                         "method.paper_steps",
                         format!("method `{}`: `{key}` is not one of `mazes`", m.name),
@@ -267,65 +267,111 @@ impl Experiment {
                 }
             }
         }
-        // Merge each method's tables once, then resolve each cell.
+        Ok(())
+    }
+
+    /// The methods (name, label) and the cells of the grid: each method's base file with its
+    /// `set` merged once, then per maze size the file's `by_maze`, the profile's tables and
+    /// the profile's `by_maze`, resolved into a validated job.
+    fn cells(
+        &self,
+        path: &Path,
+        prof: &ProfileSpec,
+        all_methods: &[&MethodSpec],
+        mazes: &[usize],
+    ) -> Result<(Vec<MethodLabel>, Vec<Cell>)> {
+        let folder = path.parent().unwrap_or(Path::new("."));
         let mut methods = Vec::new();
-        let mut cells = Vec::new();
         let mut resolved = Vec::new();
         for m in all_methods.iter().copied() {
-            let base_path = folder.join(&m.base);
-            let mut table: toml::Table = crate::validate::read_toml(&base_path)?;
+            let mut table: toml::Table = crate::validate::read_toml(&folder.join(&m.base))?;
             merge(&mut table, &m.set);
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((m.name.clone(), label.clone()));
             resolved.push((m, label, table));
         }
-        for &n in &mazes {
+        let mut cells = Vec::new();
+        for &n in mazes {
             let key = n.to_string();
             for (m, label, table) in &resolved {
                 if m.mazes.as_ref().is_some_and(|own| !own.contains(&n)) {
                     continue;
                 }
                 let mut table = table.clone();
-                if let Some(t) = spec.by_maze.get(&key) {
+                if let Some(t) = self.by_maze.get(&key) {
                     merge(&mut table, t.of(m.kind));
                 }
-                merge(&mut table, KindTables::of_profile(&prof, m.kind));
+                merge(&mut table, KindTables::of_profile(prof, m.kind));
                 if let Some(t) = prof.by_maze.get(&key) {
                     merge(&mut table, t.of(m.kind));
                 }
-                let what = |e: toml::de::Error| {
-                    Error::parse(
-                        path,
-                        format!("method `{}` ({} job, maze {n}): {e}", m.name, m.kind.name()),
-                    )
-                };
-                let job = match m.kind {
-                    Kind::Vanilla => {
-                        let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
-                        j.maze.size = n;
-                        j.seed = 0;
-                        Job::Vanilla(j)
-                    }
-                    Kind::Pbcs => {
-                        let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
-                        j.maze.size = n;
-                        j.seed = 0;
-                        Job::Pbcs(j)
-                    }
-                };
-                job.check()
-                    .map_err(|e| located(e, &format!("method `{}`, maze {n}", m.name)))?;
                 cells.push(Cell {
                     id: format!("{}-maze{n}", m.name),
                     method: m.name.clone(),
                     label: label.clone(),
                     maze: n,
-                    job,
-                    paper_steps: m.paper_steps.get(&n.to_string()).copied(),
-                    paper_solved: m.paper_solved.get(&n.to_string()).copied(),
+                    job: cell_job(path, m, table, n)?,
+                    paper_steps: m.paper_steps.get(&key).copied(),
+                    paper_solved: m.paper_solved.get(&key).copied(),
                 });
             }
         }
+        Ok((methods, cells))
+    }
+}
+
+/// The validated job of method `m` on maze size `n` from its merged `table` (seed 0).
+fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, n: usize) -> Result<Job> {
+    let what = |e: toml::de::Error| {
+        Error::parse(
+            path,
+            format!("method `{}` ({} job, maze {n}): {e}", m.name, m.kind.name()),
+        )
+    };
+    let job = match m.kind {
+        Kind::Vanilla => {
+            let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
+            j.maze.size = n;
+            j.seed = 0;
+            Job::Vanilla(j)
+        }
+        Kind::Pbcs => {
+            let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
+            j.maze.size = n;
+            j.seed = 0;
+            Job::Pbcs(j)
+        }
+    };
+    job.check()
+        .map_err(|e| located(e, &format!("method `{}`, maze {n}", m.name)))?;
+    Ok(job)
+}
+
+impl Experiment {
+    /// Reads and resolves an experiment file under `profile` (None: the committed grid).
+    /// Every cell's job is validated; duplicate method names, an unknown profile, an empty
+    /// grid and keys that a job does not have are errors naming the method or field.
+    pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
+        let spec: ExperimentSpec = crate::validate::read_toml(path)?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .ok_or_else(|| Error::parse(path, "no file name"))?;
+        let prof = spec.profile(path, profile)?;
+        let seed_count = prof.seeds.unwrap_or(spec.seeds);
+        if seed_count == 0 {
+            return Err(Error::invalid("seeds", "must be at least 1"));
+        }
+        let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
+        check_mazes(&mazes)?;
+        let seeds_by_maze = spec.seeds_by_maze()?;
+        let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
+        if all_methods.is_empty() {
+            return Err(Error::invalid("method", "an experiment needs a [[method]]"));
+        }
+        spec.check_by_maze(path, &prof, &mazes)?;
+        spec.check_methods(&all_methods)?;
+        let (methods, cells) = spec.cells(path, &prof, &all_methods, &mazes)?;
         check_figures(path, &spec.figures, &methods)?;
         check_report(path, &spec.report, &cells)?;
         Ok(Experiment {

@@ -142,32 +142,7 @@ pub fn render_experiment(
                 files.extend(render_figure(&grid, &stem)?);
             }
             FigureSpec::Mazes { name, method } => {
-                for c in exp.cells.iter().filter(|c| &c.method == method) {
-                    let (Some(s), Some(data)) =
-                        (stats_of(stats, c), cell_picture(exp, results, c)?)
-                    else {
-                        continue;
-                    };
-                    let maze = cell_maze(c)?;
-                    let title = format!(
-                        "{0}, maze {1}×{1}, seed {2}: phase-1 τ (red), chain rollouts (green), \
-                         activation balls (purple) — {3}",
-                        c.label,
-                        c.maze,
-                        exp.picture_seeds[0],
-                        summary(s)
-                    );
-                    let stem = out.join(format!("{name}{}", c.maze));
-                    crate::plot::render_maze(
-                        &maze,
-                        &data.picture(title),
-                        &stem.with_extension("png"),
-                        &stem.with_extension("svg"),
-                        crate::plot::SVG_MAX_POINTS,
-                    )?;
-                    files.push(stem.with_extension("png"));
-                    files.push(stem.with_extension("svg"));
-                }
+                files.extend(maze_pictures(exp, results, stats, out, name, method)?);
             }
             FigureSpec::Curves { .. } => {
                 let path = curves_path(results, &exp.name);
@@ -215,43 +190,90 @@ pub fn render_experiment(
                 files.extend(render_figure(&Scaling::new(exp, data), &stem)?);
             }
             FigureSpec::Panels { methods, .. } => {
-                let solved = |n: usize, m: &str| {
-                    stats
-                        .iter()
-                        .find(|s| s.maze == n && s.method == m)
-                        .map_or(0, |s| s.successes as i64)
-                };
-                let pick = exp.mazes.iter().copied().max_by_key(|&n| {
-                    (
-                        (solved(n, &methods[0]) - solved(n, &methods[1])).abs(),
-                        -(n as i64),
-                    )
-                });
-                let Some(n) = pick else { continue };
-                let mut panels = Vec::new();
-                for m in methods {
-                    let Some(c) = exp.cells.iter().find(|c| c.maze == n && &c.method == m) else {
-                        continue;
-                    };
-                    if let (Some(s), Some(data)) =
-                        (stats_of(stats, c), cell_picture(exp, results, c)?)
-                    {
-                        let title = format!(
-                            "{}, maze {n}×{n}, seed {}: {}",
-                            c.label,
-                            exp.picture_seeds[0],
-                            summary(s)
-                        );
-                        panels.push((cell_maze(c)?, data, title));
-                    }
-                }
-                if !panels.is_empty() {
-                    files.extend(render_figure(&Panels { panels }, &stem)?);
+                if let Some(panels) = panels(exp, results, stats, methods)? {
+                    files.extend(render_figure(&panels, &stem)?);
                 }
             }
         }
     }
     Ok(files)
+}
+
+/// One picture per cell of `method` (its first picture seed's τ, chain rollouts and balls),
+/// `<name><N>.{png,svg}` in `out`; cells without a picture or a table row are skipped.
+fn maze_pictures(
+    exp: &Experiment,
+    results: &Path,
+    stats: &[CellStats],
+    out: &Path,
+    name: &str,
+    method: &str,
+) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for c in exp.cells.iter().filter(|c| c.method == method) {
+        let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?) else {
+            continue;
+        };
+        let maze = cell_maze(c)?;
+        let title = format!(
+            "{0}, maze {1}×{1}, seed {2}: phase-1 τ (red), chain rollouts (green), \
+             activation balls (purple) — {3}",
+            c.label,
+            c.maze,
+            exp.picture_seeds[0],
+            summary(s)
+        );
+        let stem = out.join(format!("{name}{}", c.maze));
+        crate::plot::render_maze(
+            &maze,
+            &data.picture(title),
+            &stem.with_extension("png"),
+            &stem.with_extension("svg"),
+            crate::plot::SVG_MAX_POINTS,
+        )?;
+        files.push(stem.with_extension("png"));
+        files.push(stem.with_extension("svg"));
+    }
+    Ok(files)
+}
+
+/// Side-by-side pictures of `methods` on the maze where the first two differ most in solved
+/// runs (the smallest such maze); `None` when no cell has a picture.
+fn panels(
+    exp: &Experiment,
+    results: &Path,
+    stats: &[CellStats],
+    methods: &[String],
+) -> Result<Option<Panels>> {
+    let solved = |n: usize, m: &str| {
+        stats
+            .iter()
+            .find(|s| s.maze == n && s.method == m)
+            .map_or(0, |s| s.successes as i64)
+    };
+    let pick = exp.mazes.iter().copied().max_by_key(|&n| {
+        (
+            (solved(n, &methods[0]) - solved(n, &methods[1])).abs(),
+            -(n as i64),
+        )
+    });
+    let Some(n) = pick else { return Ok(None) };
+    let mut panels = Vec::new();
+    for m in methods {
+        let Some(c) = exp.cells.iter().find(|c| c.maze == n && &c.method == m) else {
+            continue;
+        };
+        if let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?) {
+            let title = format!(
+                "{}, maze {n}×{n}, seed {}: {}",
+                c.label,
+                exp.picture_seeds[0],
+                summary(s)
+            );
+            panels.push((cell_maze(c)?, data, title));
+        }
+    }
+    Ok((!panels.is_empty()).then_some(Panels { panels }))
 }
 
 #[cfg(test)]

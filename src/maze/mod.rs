@@ -34,7 +34,7 @@ mod walls;
 pub use layout::{Layout, Side};
 pub use walls::{Wall, Walls};
 
-use crate::env::{Env, Step};
+use crate::env::{BallIsClear, Connect, Env, SampleBall, Step};
 use crate::error::{Error, Result};
 use crate::validate::{positive_finite, Check};
 use parry2d::math::{Point, Vector};
@@ -320,12 +320,6 @@ impl Env for Maze {
         vec!["x".into(), "y".into()]
     }
 
-    /// Conservative: walls grown by `radius` in every axis direction (a square, not a disc)
-    /// must not contain the centre.
-    fn ball_is_clear(&self, center: &Point<f32>, radius: f32) -> Option<bool> {
-        Some(!self.walls.segment_hits_with_margin(center, center, radius))
-    }
-
     /// The target disc: centre `target`, radius `maze.target_radius`.
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
         Some((
@@ -334,6 +328,28 @@ impl Env for Maze {
         ))
     }
 
+    fn ball_starts(&self) -> Option<&dyn SampleBall<Point<f32>>> {
+        Some(self)
+    }
+
+    fn clear_balls(&self) -> Option<&dyn BallIsClear<Point<f32>>> {
+        Some(self)
+    }
+
+    fn connector(&self) -> Option<&dyn Connect<Point<f32>>> {
+        Some(self)
+    }
+}
+
+impl BallIsClear<Point<f32>> for Maze {
+    /// Conservative: walls grown by `radius` in every axis direction (a square, not a disc)
+    /// must not contain the centre.
+    fn ball_is_clear(&self, center: &Point<f32>, radius: f32) -> bool {
+        !self.walls.segment_hits_with_margin(center, center, radius)
+    }
+}
+
+impl Connect<Point<f32>> for Maze {
     /// The straight line from `from` to `to` in equal steps of at most `max_action` per axis,
     /// when the whole segment stays `clearance` away from every wall (walls grown by the
     /// clearance on each side) and is at most 2 units long.
@@ -348,7 +364,9 @@ impl Env for Maze {
         let a = vec![d.x / steps, d.y / steps];
         Some(vec![a; steps as usize])
     }
+}
 
+impl SampleBall<Point<f32>> for Maze {
     /// Uniform in the disc (r = radius·√u, angle uniform), clamped to [0, N]² so that a start
     /// never lies outside the outer walls (it may lie inside a wall, where it cannot move, as
     /// the paper notes).

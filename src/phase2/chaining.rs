@@ -14,7 +14,7 @@ use super::task::{SkillTask, StepCounts};
 use super::{
     Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, TraceRow,
 };
-use crate::env::Env;
+use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
@@ -44,6 +44,7 @@ pub fn chain_skills<E: Env>(
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
+    config.require_hooks(env)?;
     let chainer = Chainer::new(
         env,
         tau,
@@ -204,7 +205,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         ];
         let budget = config.max_env_steps.saturating_sub(self.spent.get());
         let goal = config.goal(env, &self.obs, lo + t);
-        let mut task = SkillTask::new(env, config, states, goal, t, learner, rngs, budget)
+        let mut task = SkillTask::new(env, config, states, goal, t, learner, rngs, budget)?
             .with_entries(entries.to_vec());
         let before = self.spent.get();
         task.on_event = Some(Box::new(move |p: Progress| {
@@ -255,6 +256,7 @@ struct ChainCheck<S> {
 fn check_chain<E: Env, P: FnMut(usize, Progress)>(
     c: &Chainer<'_, E, P>,
     chain: &SkillChain,
+    ball: &dyn SampleBall<E::State>,
     rng: &mut Rng,
 ) -> ChainCheck<E::State> {
     let n = chain.skills.len();
@@ -265,7 +267,7 @@ fn check_chain<E: Env, P: FnMut(usize, Progress)>(
     };
     let mut spent = 0;
     for _ in 0..c.config.chain_verify_episodes {
-        let start = c.env.sample_ball(&c.tau[0], c.config.epsilon, rng);
+        let start = ball.sample_ball(&c.tau[0], c.config.epsilon, rng);
         let r = chain.run_limited(
             c.env,
             start,
@@ -316,13 +318,18 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
     c: &Chainer<'_, E, P>,
     chain: &mut SkillChain,
 ) -> Result<Option<Failure>> {
+    let setting = "phase2.chain_verify_episodes";
+    let ball = c
+        .env
+        .ball_starts()
+        .ok_or_else(|| Capability::SampleBall.missing(setting))?;
     let mut rng = c.seeds.stream(Stream::ChainVerify);
     let mut repairs = 0;
     loop {
         if c.exhausted() {
             return Ok(Some(Failure::Budget));
         }
-        let check = check_chain(c, chain, &mut rng);
+        let check = check_chain(c, chain, ball, &mut rng);
         let episodes = c.config.chain_verify_episodes;
         let success = check.successes as f32 / episodes as f32;
         // The skill where the most failed episodes stopped (the first among ties).
@@ -537,57 +544,5 @@ pub fn verified<B: backplay::Backplayer>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::toy::Toy1D;
-
-    /// With `warm_start`, the problem after a saved skill (an earlier target on τ) takes over
-    /// the last learner; a restart (same target) or a repair of a later section starts from
-    /// the seeds, as every problem does without the switch.
-    #[test]
-    fn warm_start_takes_over_the_last_learner_only_for_the_next_skill() {
-        let tau: Vec<f32> = (0..=10).map(|i| 0.9 - 0.08 * i as f32).collect();
-        let lc = LearnerConfig::ddpg();
-        let seeds = Seeds::new(5);
-        let kernel = Kernel::detect();
-        let fresh = |n: u32| {
-            Learner::new(&lc, 1, &[1.0], &seeds.skill(n), kernel)
-                .unwrap()
-                .actor
-                .params
-        };
-        // A learner unlike any fresh one: the weights of sub-run 99.
-        let trained = Learner::new(&lc, 1, &[1.0], &seeds.skill(99), kernel).unwrap();
-        for warm in [false, true] {
-            let config = Phase2Config {
-                warm_start: warm,
-                ..Phase2Config::default()
-            };
-            let mut progress = |_: usize, _: Progress| {};
-            let c = Chainer::new(&Toy1D, &tau, &lc, &config, &seeds, 0, kernel, &mut progress);
-            // (last target, new target, expected: warm?)
-            for (n, (last_t, t, takes_over)) in [(6, 3, true), (6, 6, false), (6, 8, false)]
-                .into_iter()
-                .enumerate()
-            {
-                *c.last.borrow_mut() = Some((last_t, trained.clone()));
-                let task = c.task(&tau, 0, t, &[]).unwrap();
-                let expected = if warm && takes_over {
-                    trained.actor.params.clone()
-                } else {
-                    fresh(n as u32)
-                };
-                let got = &task.learner.actor.params;
-                assert!(
-                    got == &expected,
-                    "warm {warm}, T {last_t} → {t}: {} params, first {:?}; expected {} params, \
-                     first {:?}",
-                    got.len(),
-                    &got[..3],
-                    expected.len(),
-                    &expected[..3]
-                );
-            }
-        }
-    }
-}
+#[path = "chaining_tests.rs"]
+mod tests;

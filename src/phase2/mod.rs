@@ -236,6 +236,30 @@ impl Variant {
     }
 }
 
+impl Phase2Config {
+    /// Refuses, naming the setting and the hook, a setting that needs a hook of [`Env`] that
+    /// `env` does not offer: ball starts and the chain's verification need
+    /// [`Env::ball_starts`], `stop_at_failure` [`Env::clear_balls`], `shorten`
+    /// [`Env::connector`]. (Before, each silently did something else: exact starts, no stop,
+    /// no shortening.)
+    pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
+        use crate::env::Capability;
+        if self.start == StartMode::Ball {
+            Capability::SampleBall.require(env, "phase2.start = \"ball\"")?;
+        }
+        if self.chain_verify_episodes > 0 {
+            Capability::SampleBall.require(env, "phase2.chain_verify_episodes")?;
+        }
+        if self.stop_at_failure {
+            Capability::BallIsClear.require(env, "phase2.stop_at_failure")?;
+        }
+        if self.shorten {
+            Capability::Connect.require(env, "phase2.shorten")?;
+        }
+        Ok(())
+    }
+}
+
 impl Check for Phase2Config {
     fn check(&self) -> Result<()> {
         for (field, v) in [
@@ -280,6 +304,13 @@ impl Check for Phase2Config {
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
         }
+        self.check_combinations()
+    }
+}
+
+impl Phase2Config {
+    /// The switches that cannot combine, each refused naming both fields.
+    fn check_combinations(&self) -> Result<()> {
         if self.retargets > 0 && self.dead_walk == 0 {
             return Err(Error::invalid(
                 "phase2.retargets",
@@ -497,10 +528,10 @@ pub fn phase2_trajectory<E: Env>(
     env: &E,
     tau: &crate::explore::Trajectory<E::State>,
     config: &Phase2Config,
-) -> crate::explore::Trajectory<E::State> {
+) -> Result<crate::explore::Trajectory<E::State>> {
     if config.shorten {
         crate::explore::shorten(env, tau, config.epsilon)
     } else {
-        tau.clone()
+        Ok(tau.clone())
     }
 }

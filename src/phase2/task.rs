@@ -6,7 +6,7 @@
 use super::backplay::Backplayer;
 use super::goal::{Goal, Inputs};
 use super::{EventKind, Phase2Config, StartMode};
-use crate::env::Env;
+use crate::env::{Env, SampleBall};
 use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
@@ -72,6 +72,9 @@ fn episode_limits<E: Env>(env: &E, config: &Phase2Config, p: f32, lengths: &[f32
 /// One skill's learning problem on a trajectory section τ_0 … τ_T.
 pub struct SkillTask<'a, E: Env> {
     env: &'a E,
+    /// Where starts in B_ε(τ_k) come from: the environment's [`SampleBall`] with
+    /// [`StartMode::Ball`] (required by [`SkillTask::new`]), `None` with exact starts.
+    ball: Option<&'a dyn SampleBall<E::State>>,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
     states: &'a [E::State],
@@ -122,13 +125,18 @@ impl<'a, E: Env> SkillTask<'a, E> {
         learner: Learner,
         rngs: [Rng; 3],
         budget: u64,
-    ) -> Self {
+    ) -> crate::error::Result<Self> {
+        config.require_hooks(env)?;
         let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
         let lengths = lengths_to_goal(env, &states[..=t]);
-        SkillTask {
+        Ok(SkillTask {
             env,
+            ball: match config.start {
+                StartMode::Ball => env.ball_starts(),
+                StartMode::Exact => None,
+            },
             config,
             states,
             t,
@@ -153,7 +161,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
             limits: episode_limits(env, config, config.path_limit, &lengths),
             test_limits: episode_limits(env, config, config.greedy_path_limit(), &lengths),
             on_event: None,
-        }
+        })
     }
 
     /// Draws half of the starts at K = 0 from `entries` (where an executed chain entered
@@ -182,11 +190,12 @@ impl<'a, E: Env> SkillTask<'a, E> {
                     let i = self.rng_start.random_range(0..self.entries.len());
                     self.entries[i].clone()
                 }
-                StartMode::Ball => {
-                    self.env
-                        .sample_ball(&self.states[k], self.config.epsilon, &mut self.rng_start)
-                }
-                StartMode::Exact => self.states[k].clone(),
+                _ => match self.ball {
+                    Some(ball) => {
+                        ball.sample_ball(&self.states[k], self.config.epsilon, &mut self.rng_start)
+                    }
+                    None => self.states[k].clone(),
+                },
             })
             .collect()
     }
@@ -362,7 +371,12 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         self.spent_budget()
     }
 
+    /// Whether B_ε(τ_k) is clear; `false` where the environment cannot tell (then
+    /// `stop_at_failure` is refused before the task is made, and moved hand-overs try the
+    /// nearest balls first).
     fn ball_is_clear(&self, k: usize) -> bool {
-        self.env.ball_is_clear(&self.states[k], self.config.epsilon) == Some(true)
+        self.env
+            .clear_balls()
+            .is_some_and(|c| c.ball_is_clear(&self.states[k], self.config.epsilon))
     }
 }

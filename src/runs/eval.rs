@@ -15,6 +15,9 @@ use std::path::Path;
 
 pub use crate::env::EvalEpisode;
 
+/// The states of one chain rollout, start first.
+pub type RolloutStates = Vec<Point<f32>>;
+
 /// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
 /// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
 /// steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
@@ -24,10 +27,10 @@ pub fn evaluate_chain(
     job: &PbcsJob,
     episodes: usize,
     seed: u64,
-) -> (Vec<EvalEpisode>, Vec<Vec<Point<f32>>>) {
+) -> Result<(Vec<EvalEpisode>, Vec<RolloutStates>)> {
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    let starts = evaluation_starts(maze, job.phase2.epsilon, episodes, &Seeds::new(seed));
+    let starts = evaluation_starts(maze, job.phase2.epsilon, episodes, &Seeds::new(seed))?;
     for start in starts {
         let r = chain.run(maze, start, job.phase2.eval_max_steps);
         rows.push(EvalEpisode {
@@ -38,7 +41,7 @@ pub fn evaluate_chain(
             rollouts.push(r.states);
         }
     }
-    (rows, rollouts)
+    Ok((rows, rollouts))
 }
 
 /// The file in a saved chain's folder that holds the job that built it.
@@ -121,7 +124,7 @@ pub fn eval_chain(
     }
     let (job, maze, chain) = load_saved_chain(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
-    let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed);
+    let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed)?;
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
     let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };

@@ -105,7 +105,7 @@ impl PbcsRun {
         let clock = Instant::now();
         let mut rng = seeds.stream(Stream::Explore);
         let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-        let tau = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2).states;
+        let tau = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2)?.states;
         let phase2 = chain_skills(
             &maze,
             &tau,
@@ -125,7 +125,7 @@ impl PbcsRun {
                 job,
                 job.phase2.eval_episodes,
                 job.seed,
-            )
+            )?
         } else {
             (Vec::new(), Vec::new())
         };

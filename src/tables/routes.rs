@@ -68,7 +68,7 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
         let maze = Maze::new(&job.maze)?;
         let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
         let found = crate::explore::explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-        let walked = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2);
+        let walked = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2)?;
         let mut steps: Vec<f64> = episodes
             .iter()
             .filter(|e| e.success)

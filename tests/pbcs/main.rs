@@ -10,6 +10,7 @@ use pbcs::rng::{Seeds, Stream};
 use std::collections::HashMap;
 
 mod backplay;
+mod capabilities;
 use backplay::{walk, Scripted};
 
 /// An open plane: no walls, actions clipped to ±0.1, reward 1 when x ≥ 3.

@@ -76,7 +76,7 @@ fn task_with<'a>(
     learner.actor = policy;
     let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
     let goal = config.goal(maze, obs, t);
-    SkillTask::new(maze, config, states, goal, t, learner, rngs, budget)
+    SkillTask::new(maze, config, states, goal, t, learner, rngs, budget).unwrap()
 }
 
 #[test]

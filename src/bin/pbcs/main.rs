@@ -59,29 +59,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             exact_starts,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
-            let mut job = run.load(
-                || preset.job(),
-                |j: &mut PbcsJob| (&mut j.maze, &mut j.seed),
-            )?;
-            learner.apply(&mut job.learner);
-            if no_chaining {
-                // PBCS without chaining has one skill: what acts between skills goes with it.
-                let p = &mut job.phase2;
-                p.chaining = false;
-                let between = [
-                    ("phase2.retargets", &mut p.retargets),
-                    ("phase2.chain_repairs", &mut p.chain_repairs),
-                ];
-                for (field, value) in between {
-                    if *value > 0 {
-                        eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
-                        *value = 0;
-                    }
-                }
-            }
-            if exact_starts {
-                job.phase2.start = pbcs::phase2::StartMode::Exact;
-            }
+            let job = pbcs_job(&run, preset, &learner, no_chaining, exact_starts)?;
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
             let label = runs::method_name(run.config.as_deref(), preset);
@@ -92,14 +70,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             episodes,
             seed,
             out,
-        } => {
-            let e = runs::eval_chain(&chain, episodes as usize, seed, kernel)?;
-            let out = out.unwrap_or_else(|| chain.clone());
-            e.write(&out)?;
-            println!("{}", e.summary(&chain, e.seed));
-            println!("wrote {}/eval-s{}.{{csv,png,svg}}", out.display(), e.seed);
-            Ok(())
-        }
+        } => eval(&chain, episodes as usize, seed, out, kernel),
         Command::Table {
             config,
             preset,
@@ -107,110 +78,29 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seeds,
             jobs,
             out,
-        } => {
-            let preset = preset.unwrap_or(Preset::Fast);
-            let job: PbcsJob = match &config {
-                Some(p) => config::load(p)?,
-                None => preset.job()?,
-            };
-            let name = runs::method_name(config.as_deref(), preset);
-            let exp = Experiment::of_job(&name, &job, &sizes, seeds)?;
-            let (rows, ran) = sweep(
-                &exp,
-                &pbcs::experiment::plan(&exp, None, None)?,
-                &out,
-                jobs,
-                kernel,
-            )?;
-            let stats = pbcs::tables::cell_stats(&exp, &rows);
-            let table = pbcs::tables::table_path(&out, &exp.name);
-            pbcs::tables::write_table(&table, &stats)?;
-            println!(
-                "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
-                 statistics in {}",
-                job.phase2.variant().name(),
-                rows.len() - ran,
-                out.join("raw").join(&exp.name).display(),
-                table.display()
-            );
-            let timings = pbcs::tables::cell_timings(&exp, &out, &rows);
-            print!("{}", pbcs::tables::grid_markdown(&stats, &timings));
-            Ok(())
-        }
+        } => table(
+            config.as_deref(),
+            preset.unwrap_or(Preset::Fast),
+            &sizes,
+            seeds,
+            jobs,
+            &out,
+            kernel,
+        ),
         Command::Aggregate { set } => aggregate(&set),
-        Command::Figures { set, figures, tex } => {
-            let (exps, results) = set.load()?;
-            let figures = figures.unwrap_or_else(|| results.join("figures"));
-            let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
-            let claims = set.experiments.join("claims.toml");
-            let done = pbcs::pipeline::render(exps, &claims, &results, &figures, &tex)?;
-            for why in &done.unjudged {
-                println!("{why} (not judged under this profile)");
-            }
-            for (name, path) in &done.skipped {
-                println!("{name}: no table at {}, skipped", path.display());
-            }
-            for (exp, stats) in &done.tables {
-                print!(
-                    "\n{} — {}\n{}",
-                    exp.name,
-                    exp.title,
-                    pbcs::tables::markdown(stats)
-                );
-            }
-            println!("\nthe paper's claims against our tables:");
-            for c in &done.claims {
-                println!(
-                    "- {} — {}: {}",
-                    c.id,
-                    c.verdict.word().to_uppercase(),
-                    c.ours
-                );
-            }
-            let (n, f, t) = (done.files.len(), figures.display(), tex.display());
-            println!("\nwrote {n} files into {f} and {t}");
-            Ok(())
-        }
+        Command::Figures { set, figures, tex } => render(&set, figures, tex),
         Command::Exp { command } => match command {
             ExpCommand::Run {
                 exp: args,
                 cell,
                 seed,
                 jobs,
-            } => {
-                let (exp, results) = args.load()?;
-                let plan = pbcs::experiment::plan(&exp, cell.as_deref(), seed)?;
-                let (rows, ran) = sweep(&exp, &plan, &results, jobs, kernel)?;
-                println!(
-                    "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
-                    exp.name,
-                    exp.profile.as_deref().unwrap_or("committed grid"),
-                    rows.len(),
-                    rows.len() - ran,
-                    results.join("raw").join(&exp.name).display()
-                );
-                print!(
-                    "{}",
-                    pbcs::tables::markdown(&pbcs::tables::cell_stats(&exp, &rows))
-                );
-                Ok(())
-            }
+            } => exp_run(&args, cell.as_deref(), seed, jobs, kernel),
             ExpCommand::List {
                 exp: args,
                 make,
                 slurm,
-            } => {
-                let (exp, results) = args.load()?;
-                let profile = args.profile.as_deref();
-                let launch =
-                    pbcs::launch::Launch::new(&exp, &args.file, profile, args.results.as_deref());
-                match (make, slurm) {
-                    (true, _) => print!("{}", launch.makefile(&results)),
-                    (_, true) => print!("{}", launch.slurm(&results)),
-                    _ => print!("{}", launch.commands(&results)?),
-                }
-                Ok(())
-            }
+            } => exp_list(&args, make, slurm),
             ExpCommand::Check {
                 exp: args,
                 cell,
@@ -220,6 +110,168 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } => exp_check(&args, &cell, seed, jobs, kernel, exact),
         },
     }
+}
+
+/// The job of `pbcs run`: the preset or `--config`, then the flags.
+fn pbcs_job(
+    run: &RunArgs,
+    preset: Preset,
+    learner: &LearnerArgs,
+    no_chaining: bool,
+    exact_starts: bool,
+) -> anyhow::Result<PbcsJob> {
+    let mut job = run.load(
+        || preset.job(),
+        |j: &mut PbcsJob| (&mut j.maze, &mut j.seed),
+    )?;
+    learner.apply(&mut job.learner);
+    if no_chaining {
+        // PBCS without chaining has one skill: what acts between skills goes with it.
+        let p = &mut job.phase2;
+        p.chaining = false;
+        let between = [
+            ("phase2.retargets", &mut p.retargets),
+            ("phase2.chain_repairs", &mut p.chain_repairs),
+        ];
+        for (field, value) in between {
+            if *value > 0 {
+                eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
+                *value = 0;
+            }
+        }
+    }
+    if exact_starts {
+        job.phase2.start = pbcs::phase2::StartMode::Exact;
+    }
+    Ok(job)
+}
+
+/// `pbcs eval`: a saved chain from its folder, into `out` (default: the chain's folder).
+fn eval(
+    chain: &Path,
+    episodes: usize,
+    seed: Option<u64>,
+    out: Option<std::path::PathBuf>,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
+    let e = runs::eval_chain(chain, episodes, seed, kernel)?;
+    let out = out.unwrap_or_else(|| chain.to_path_buf());
+    e.write(&out)?;
+    println!("{}", e.summary(chain, e.seed));
+    println!("wrote {}/eval-s{}.{{csv,png,svg}}", out.display(), e.seed);
+    Ok(())
+}
+
+/// `pbcs table`: one procedure over maze sizes × seeds, swept into `out`, its table printed.
+fn table(
+    config: Option<&Path>,
+    preset: Preset,
+    sizes: &[usize],
+    seeds: u64,
+    jobs: usize,
+    out: &Path,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
+    let job: PbcsJob = match config {
+        Some(p) => config::load(p)?,
+        None => preset.job()?,
+    };
+    let name = runs::method_name(config, preset);
+    let exp = Experiment::of_job(&name, &job, sizes, seeds)?;
+    let plan = pbcs::experiment::plan(&exp, None, None)?;
+    let (rows, ran) = sweep(&exp, &plan, out, jobs, kernel)?;
+    let stats = pbcs::tables::cell_stats(&exp, &rows);
+    let table = pbcs::tables::table_path(out, &exp.name);
+    pbcs::tables::write_table(&table, &stats)?;
+    println!(
+        "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
+         statistics in {}",
+        job.phase2.variant().name(),
+        rows.len() - ran,
+        out.join("raw").join(&exp.name).display(),
+        table.display()
+    );
+    let timings = pbcs::tables::cell_timings(&exp, out, &rows);
+    print!("{}", pbcs::tables::grid_markdown(&stats, &timings));
+    Ok(())
+}
+
+/// `pbcs figures`: every figure, the claims and the report's LaTeX from the tables.
+fn render(
+    set: &SetArgs,
+    figures: Option<std::path::PathBuf>,
+    tex: Option<std::path::PathBuf>,
+) -> anyhow::Result<()> {
+    let (exps, results) = set.load()?;
+    let figures = figures.unwrap_or_else(|| results.join("figures"));
+    let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
+    let claims = set.experiments.join("claims.toml");
+    let done = pbcs::pipeline::render(exps, &claims, &results, &figures, &tex)?;
+    for why in &done.unjudged {
+        println!("{why} (not judged under this profile)");
+    }
+    for (name, path) in &done.skipped {
+        println!("{name}: no table at {}, skipped", path.display());
+    }
+    for (exp, stats) in &done.tables {
+        print!(
+            "\n{} — {}\n{}",
+            exp.name,
+            exp.title,
+            pbcs::tables::markdown(stats)
+        );
+    }
+    println!("\nthe paper's claims against our tables:");
+    for c in &done.claims {
+        println!(
+            "- {} — {}: {}",
+            c.id,
+            c.verdict.word().to_uppercase(),
+            c.ours
+        );
+    }
+    let (n, f, t) = (done.files.len(), figures.display(), tex.display());
+    println!("\nwrote {n} files into {f} and {t}");
+    Ok(())
+}
+
+/// `pbcs exp run`: an experiment's planned runs (or one cell, one seed), resuming.
+fn exp_run(
+    args: &ExpArgs,
+    cell: Option<&str>,
+    seed: Option<u64>,
+    jobs: usize,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
+    let (exp, results) = args.load()?;
+    let plan = pbcs::experiment::plan(&exp, cell, seed)?;
+    let (rows, ran) = sweep(&exp, &plan, &results, jobs, kernel)?;
+    println!(
+        "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
+        exp.name,
+        exp.profile.as_deref().unwrap_or("committed grid"),
+        rows.len(),
+        rows.len() - ran,
+        results.join("raw").join(&exp.name).display()
+    );
+    print!(
+        "{}",
+        pbcs::tables::markdown(&pbcs::tables::cell_stats(&exp, &rows))
+    );
+    Ok(())
+}
+
+/// `pbcs exp list`: the runs as commands, a Makefile or a SLURM array.
+fn exp_list(args: &ExpArgs, make: bool, slurm: bool) -> anyhow::Result<()> {
+    let (exp, results) = args.load()?;
+    let profile = args.profile.as_deref();
+    let launch = pbcs::launch::Launch::new(&exp, &args.file, profile, args.results.as_deref());
+    match (make, slurm) {
+        (true, _) => print!("{}", launch.makefile(&results)),
+        (_, true) => print!("{}", launch.slurm(&results)),
+        _ => print!("{}", launch.commands(&results)?),
+    }
+    Ok(())
 }
 
 fn aggregate(set: &SetArgs) -> anyhow::Result<()> {

@@ -1,0 +1,182 @@
+//! Two rooms joined by a door: a second environment for PBCS, not the paper's maze.
+//!
+//! The rooms are [0, 1]² and [1, 2] × [0, 1], side by side; the wall x = 1 between them is
+//! open only at heights 0.8 – 1 (the door). The agent starts at (0.3, 0.2) and must reach the
+//! disc of radius 0.2 around (1.7, 0.2), just across the wall from its start, so the greedy
+//! straight line fails and the path goes up through the door. Actions move the point by at
+//! most 0.1 per axis; a step that would cross the wall outside the door does not move; reward
+//! 1 and the end of the episode in the target disc, 0 otherwise.
+//!
+//! It offers every PBCS hook of [`Env`]: starts in a ball ([`SampleBall`]), clear balls
+//! ([`BallIsClear`]) and straight paths ([`Connect`]), so every switch of the `fast` preset
+//! applies to it.
+//!
+//! ```
+//! use pbcs::env::Env;
+//! use pbcs::rooms::TwoRooms;
+//!
+//! let rooms = TwoRooms;
+//! // Straight at the wall: blocked, the point stays where it was.
+//! assert_eq!(rooms.step(&[0.95, 0.2], &[0.1, 0.0]).state, [0.95, 0.2]);
+//! // Through the door.
+//! assert_eq!(rooms.step(&[0.95, 0.9], &[0.1, 0.0]).state, [1.05, 0.9]);
+//! let done = rooms.step(&[1.7, 0.35], &[0.0, -0.1]);
+//! assert_eq!((done.reward, done.terminal), (1.0, true));
+//! ```
+
+use crate::env::{BallIsClear, Connect, Env, SampleBall, Step};
+use crate::rng::Rng;
+use parry2d::math::{Isometry, Point};
+use parry2d::shape::Segment;
+use rand::Rng as _;
+
+/// Two rooms and a door; the state is the point (x, y).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TwoRooms;
+
+/// The centre of the target disc.
+pub const TARGET: [f32; 2] = [1.7, 0.2];
+/// The radius of the target disc.
+pub const TARGET_RADIUS: f32 = 0.2;
+/// The door: heights of the wall x = 1 that are open.
+pub const DOOR: (f32, f32) = (0.8, 1.0);
+/// The largest move per axis.
+pub const MAX_ACTION: f32 = 0.1;
+/// The rooms' extent: x in [0, WIDTH], y in [0, HEIGHT].
+const WIDTH: f32 = 2.0;
+const HEIGHT: f32 = 1.0;
+
+impl TwoRooms {
+    /// Whether the segment from `s` to `n` crosses the wall x = 1 outside the door.
+    pub fn blocked(s: &[f32; 2], n: &[f32; 2]) -> bool {
+        if (s[0] - 1.0) * (n[0] - 1.0) > 0.0 || s[0] == n[0] {
+            return false; // both on one side
+        }
+        let t = (1.0 - s[0]) / (n[0] - s[0]);
+        let y = s[1] + t * (n[1] - s[1]);
+        !(DOOR.0 < y && y < DOOR.1)
+    }
+
+    /// Whether the segment from `a` to `b` keeps `clearance` from the wall between the rooms
+    /// and from the outer walls.
+    fn clear_segment(a: &[f32; 2], b: &[f32; 2], clearance: f32) -> bool {
+        let inside = |p: &[f32; 2]| {
+            (clearance..=WIDTH - clearance).contains(&p[0])
+                && (clearance..=HEIGHT - clearance).contains(&p[1])
+        };
+        if !(inside(a) && inside(b)) {
+            return false; // the rooms are convex: a segment between inside points stays inside
+        }
+        let wall = Segment::new(Point::new(1.0, 0.0), Point::new(1.0, DOOR.0));
+        let path = Segment::new(Point::new(a[0], a[1]), Point::new(b[0], b[1]));
+        let id = Isometry::identity();
+        parry2d::query::distance(&id, &wall, &id, &path).is_ok_and(|d| d >= clearance)
+            && !Self::blocked(a, b)
+    }
+}
+
+impl Env for TwoRooms {
+    type State = [f32; 2];
+
+    fn obs_dim(&self) -> usize {
+        2
+    }
+
+    fn action_dim(&self) -> usize {
+        2
+    }
+
+    fn action_bound(&self, _i: usize) -> f32 {
+        MAX_ACTION
+    }
+
+    fn start(&self) -> [f32; 2] {
+        [0.3, 0.2]
+    }
+
+    fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+        Some((TARGET.to_vec(), TARGET_RADIUS))
+    }
+
+    fn observe(&self, s: &[f32; 2], out: &mut [f32]) {
+        out.copy_from_slice(s);
+    }
+
+    /// Pure: moves by the clipped action (NaN counts as 0) unless the wall blocks it; reward 1
+    /// and the end of the episode in the target disc.
+    fn step(&self, s: &[f32; 2], a: &[f32]) -> Step<[f32; 2]> {
+        let clip = |v: f32| {
+            if v.is_nan() {
+                0.0
+            } else {
+                v.clamp(-MAX_ACTION, MAX_ACTION)
+            }
+        };
+        let n = [
+            (s[0] + clip(a[0])).clamp(0.0, WIDTH),
+            (s[1] + clip(a[1])).clamp(0.0, HEIGHT),
+        ];
+        let n = if Self::blocked(s, &n) { *s } else { n };
+        let done = (n[0] - TARGET[0]).hypot(n[1] - TARGET[1]) < TARGET_RADIUS;
+        Step {
+            state: n,
+            reward: f32::from(u8::from(done)),
+            terminal: done,
+        }
+    }
+
+    fn obs_names(&self) -> Vec<String> {
+        vec!["x".into(), "y".into()]
+    }
+
+    fn ball_starts(&self) -> Option<&dyn SampleBall<[f32; 2]>> {
+        Some(self)
+    }
+
+    fn clear_balls(&self) -> Option<&dyn BallIsClear<[f32; 2]>> {
+        Some(self)
+    }
+
+    fn connector(&self) -> Option<&dyn Connect<[f32; 2]>> {
+        Some(self)
+    }
+}
+
+impl SampleBall<[f32; 2]> for TwoRooms {
+    /// Uniform in the disc (r = radius·√u, angle uniform), clamped to the rooms; a point
+    /// across the wall from the centre is replaced by the centre (a start is reachable from
+    /// the ball's centre).
+    fn sample_ball(&self, center: &[f32; 2], radius: f32, rng: &mut Rng) -> [f32; 2] {
+        let r = radius * rng.random::<f32>().sqrt();
+        let phi = std::f32::consts::TAU * rng.random::<f32>();
+        let p = [
+            (center[0] + r * phi.cos()).clamp(0.0, WIDTH),
+            (center[1] + r * phi.sin()).clamp(0.0, HEIGHT),
+        ];
+        if Self::blocked(center, &p) {
+            *center
+        } else {
+            p
+        }
+    }
+}
+
+impl BallIsClear<[f32; 2]> for TwoRooms {
+    /// The disc lies inside the rooms and keeps its radius from the wall between them.
+    fn ball_is_clear(&self, center: &[f32; 2], radius: f32) -> bool {
+        Self::clear_segment(center, center, radius)
+    }
+}
+
+impl Connect<[f32; 2]> for TwoRooms {
+    /// The straight line in equal steps of at most [`MAX_ACTION`] per axis, when it keeps
+    /// `clearance` from every wall and is at most 2 long (as the maze's).
+    fn connect(&self, from: &[f32; 2], to: &[f32; 2], clearance: f32) -> Option<Vec<Vec<f32>>> {
+        let d = [to[0] - from[0], to[1] - from[1]];
+        if d[0].hypot(d[1]) > 2.0 || !Self::clear_segment(from, to, clearance) {
+            return None;
+        }
+        let steps = (d[0].abs().max(d[1].abs()) / MAX_ACTION).ceil().max(1.0);
+        Some(vec![vec![d[0] / steps, d[1] / steps]; steps as usize])
+    }
+}

@@ -1,0 +1,139 @@
+//! A setting that needs a hook the environment does not offer is refused, naming the setting
+//! and the hook (before: ball starts became exact starts, `stop_at_failure` never stopped,
+//! `shorten` returned τ unchanged, all silently). [`super::Plane`] offers none of the hooks;
+//! [`TwoRooms`] and the maze offer all three.
+
+use super::Plane;
+use pbcs::config::{MazeConfig, Preset};
+use pbcs::env::{evaluation_starts, Env};
+use pbcs::error::Error;
+use pbcs::explore::Trajectory;
+use pbcs::learner::LearnerConfig;
+use pbcs::maze::Maze;
+use pbcs::nn::kernel::Kernel;
+use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Config, StartMode};
+use pbcs::rng::Seeds;
+use pbcs::rooms::TwoRooms;
+
+/// The error `chain_skills` on the plane gives for `config`, before any work.
+fn refusal(config: &Phase2Config) -> Error {
+    let tau: Vec<[f32; 2]> = (0..31).map(|i| [0.1 * i as f32, 0.0]).collect();
+    let learner = LearnerConfig::ddpg();
+    chain_skills(
+        &Plane,
+        &tau,
+        &learner,
+        config,
+        &Seeds::new(0),
+        0,
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .expect_err("refused")
+}
+
+fn says(e: &Error, setting: &str, hook: &str) {
+    let text = e.to_string();
+    assert!(
+        matches!(e, Error::Capability { .. }) && text.contains(setting) && text.contains(hook),
+        "{text}"
+    );
+}
+
+#[test]
+fn each_setting_that_needs_a_missing_hook_is_refused_naming_both() {
+    // The fast preset asks for every hook; each is refused in turn as the one before is
+    // turned off.
+    let mut c = Preset::Fast.job().unwrap().phase2;
+    says(&refusal(&c), "phase2.start = \"ball\"", "Env::ball_starts");
+    c.start = StartMode::Exact;
+    says(
+        &refusal(&c),
+        "phase2.chain_verify_episodes",
+        "Env::ball_starts",
+    );
+    (c.chain_verify_episodes, c.chain_repairs) = (0, 0);
+    says(&refusal(&c), "phase2.stop_at_failure", "Env::clear_balls");
+    c.stop_at_failure = false;
+    says(&refusal(&c), "phase2.shorten", "Env::connector");
+    c.shorten = false;
+    c.require_hooks(&Plane).unwrap();
+    // `shorten` itself, called on τ.
+    let tau = Trajectory {
+        states: vec![[0.0, 0.0], [0.1, 0.0]],
+        actions: vec![vec![0.1, 0.0]],
+    };
+    let mut s = c.clone();
+    s.shorten = true;
+    says(
+        &phase2_trajectory(&Plane, &tau, &s).unwrap_err(),
+        "phase2.shorten",
+        "Env::connector",
+    );
+    assert_eq!(phase2_trajectory(&Plane, &tau, &c).unwrap(), tau);
+    // The evaluation protocol's ball.
+    says(
+        &evaluation_starts(&Plane, 0.1, 3, &Seeds::new(0)).unwrap_err(),
+        "evaluation ball",
+        "Env::ball_starts",
+    );
+    let at_start = evaluation_starts(&Plane, 0.0, 3, &Seeds::new(0)).unwrap();
+    assert_eq!(at_start, vec![Plane.start(); 3]);
+}
+
+#[test]
+fn the_rooms_and_the_maze_offer_every_hook_the_presets_use() {
+    let maze = Maze::new(&MazeConfig::default()).unwrap();
+    for preset in [Preset::Paper, Preset::Fast] {
+        let c = preset.job().unwrap().phase2;
+        c.require_hooks(&TwoRooms).unwrap();
+        c.require_hooks(&maze).unwrap();
+    }
+}
+
+/// The rooms' hooks agree with their step: a ball start is within the radius and reachable
+/// from the centre, a clear ball is one no start of which is across the wall, a connected
+/// path is made of steps that move as asked and end at the target state.
+#[test]
+fn the_rooms_hooks_agree_with_the_step() {
+    use pbcs::env::{BallIsClear, Connect, SampleBall};
+    use rand::Rng as _;
+    let rooms = TwoRooms;
+    let mut rng = Seeds::new(7).stream(pbcs::rng::Stream::Eval);
+    let mut clear = 0;
+    for _ in 0..2000 {
+        let c = [rng.random_range(0.0..2.0f32), rng.random_range(0.0..1.0f32)];
+        let r = rng.random_range(0.01..0.3f32);
+        let p = rooms.sample_ball(&c, r, &mut rng);
+        assert!((p[0] - c[0]).hypot(p[1] - c[1]) <= r + 1e-6, "{c:?} {p:?}");
+        assert!(!TwoRooms::blocked(&c, &p), "{c:?} → {p:?} crosses the wall");
+        if rooms.ball_is_clear(&c, r) {
+            clear += 1;
+            // Clear: the ball stays in the rooms and off the wall below the door.
+            assert!(c[0] - r >= 0.0 && c[0] + r <= 2.0 && c[1] - r >= 0.0 && c[1] + r <= 1.0);
+            assert!(c[1] >= 0.8 || (c[0] - 1.0).abs() >= r, "{c:?} {r}");
+        }
+        let to = [rng.random_range(0.0..2.0f32), rng.random_range(0.0..1.0f32)];
+        if let Some(path) = rooms.connect(&c, &to, 0.05) {
+            assert!(!TwoRooms::blocked(&c, &to));
+            let mut s = c;
+            for a in &path {
+                let n = rooms.step(&s, a).state;
+                assert!((n[0] - s[0] - a[0]).abs() < 1e-5 && (n[1] - s[1] - a[1]).abs() < 1e-5);
+                s = n;
+            }
+            assert!(
+                (s[0] - to[0]).abs() < 1e-4 && (s[1] - to[1]).abs() < 1e-4,
+                "{s:?} {to:?}"
+            );
+        }
+    }
+    assert!(clear > 500, "{clear} clear balls of 2000");
+    // Known values: the start's ball is clear, one on the wall is not, the door joins the
+    // rooms only through its middle with a clearance of 0.1.
+    assert!(rooms.ball_is_clear(&rooms.start(), 0.1));
+    assert!(!rooms.ball_is_clear(&[1.05, 0.4], 0.1));
+    assert!(rooms.connect(&[0.5, 0.5], &[1.5, 0.5], 0.01).is_none());
+    assert!(rooms.connect(&[0.7, 0.9], &[1.3, 0.9], 0.09).is_some());
+    assert!(rooms.connect(&[0.7, 0.9], &[1.3, 0.9], 0.11).is_none());
+}
