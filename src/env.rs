@@ -167,6 +167,33 @@ impl Capability {
     }
 }
 
+/// What a picture of a planar environment draws under the data ([`Planar::scene`]): its
+/// extent, its walls, its target and its start, in the plane of [`Planar::point`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The drawn extent: x in [0, `width`], y in [0, `height`].
+    pub width: f32,
+    /// See `width`.
+    pub height: f32,
+    /// Walls as axis-aligned rectangles: (min corner, max corner).
+    pub walls: Vec<[(f32, f32); 2]>,
+    /// The target disc: centre and radius.
+    pub target: ((f32, f32), f32),
+    /// The start s_0.
+    pub start: (f32, f32),
+}
+
+/// An environment whose states are points of a plane, which `pbcs run` and `pbcs eval` can
+/// draw: τ, the chain's rollouts and its activation balls over [`Planar::scene`]. The maze
+/// and the two rooms are planar.
+pub trait Planar: Env {
+    /// Where `state` is drawn.
+    fn point(&self, state: &Self::State) -> (f32, f32);
+
+    /// The picture's frame: extent, walls, target, start.
+    fn scene(&self) -> Scene;
+}
+
 /// Fills `out` with an action drawn uniformly from the action box of `env`.
 pub fn random_action<E: Env + ?Sized>(env: &E, rng: &mut impl Rng, out: &mut [f32]) {
     for (i, a) in out.iter_mut().enumerate() {

@@ -4,9 +4,8 @@
 //! produces PNG (bitmap backend) and SVG. Text uses the DejaVu Sans font shipped in
 //! `figures/fonts/`, registered once, so no system font lookup happens.
 
-use crate::env::Env;
+use crate::env::Scene;
 use crate::error::{Error, Result};
-use crate::maze::Maze;
 use plotters::coord::types::RangedCoordf32;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -98,31 +97,16 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
     }
 }
 
-/// Draws `picture` over `maze` on `area` (any plotters backend; the caller presents it).
-pub fn draw_maze<DB: DrawingBackend>(
+/// Draws `picture` over `scene` (a maze's, [`crate::env::Planar::scene`]) on `area` (any plotters
+/// backend; the caller presents it).
+pub fn draw_scene<DB: DrawingBackend>(
     area: DrawingArea<DB, Shift>,
-    maze: &Maze,
+    scene: &Scene,
     picture: &MazePicture,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     area.fill(&WHITE)?;
-    // A titled (stand-alone) picture gets a legend line at the bottom, fitted to the width;
-    // untitled panels of a grid do not.
-    let area = if picture.title.is_empty() {
-        area
-    } else {
-        let (w, h) = area.dim_in_pixel();
-        let (area, bottom) = area.split_vertically(h.saturating_sub(LEGEND_PX));
-        let text = legend(picture);
-        let chars = text.chars().count().max(1) as f64;
-        let size = ((w as f64 - 20.0) / (0.55 * chars)).clamp(8.0, 12.0);
-        bottom.draw(&Text::new(
-            text,
-            (10, 2),
-            ("sans-serif", size).into_font().color(&BLACK),
-        ))?;
-        area
-    };
-    let n = maze.size() as f32;
+    let area = with_legend(area, picture)?;
+    let (w, h) = (scene.width, scene.height);
     let margin = 0.1;
     let mut builder = ChartBuilder::on(&area);
     builder.margin(10);
@@ -135,7 +119,7 @@ pub fn draw_maze<DB: DrawingBackend>(
         builder.caption(&picture.title, ("sans-serif", size));
     }
     let mut chart: Chart<DB> =
-        builder.build_cartesian_2d(-margin..n + margin, -margin..n + margin)?;
+        builder.build_cartesian_2d(-margin..w + margin, -margin..h + margin)?;
     // Faint archive / visited points.
     let faint = RGBColor(70, 110, 200).mix(0.25);
     chart.draw_series(
@@ -154,10 +138,9 @@ pub fn draw_maze<DB: DrawingBackend>(
             .map(|&(x, y)| Rectangle::new([(x, y), (x + side, y + side)], area_colour.filled())),
     )?;
     // Walls.
-    chart.draw_series(maze.walls().walls().iter().map(|w| {
-        let b = w.aabb();
-        Rectangle::new([(b.mins.x, b.mins.y), (b.maxs.x, b.maxs.y)], BLACK.filled())
-    }))?;
+    chart.draw_series(
+        (scene.walls.iter()).map(|&corners| Rectangle::new(corners, BLACK.filled())),
+    )?;
     // Rollouts, then τ on top of them (it would hide under ten rollouts otherwise). Each
     // segment is its own 2-pixel line: the bitmap backend joins a wide polyline with mitres,
     // and at a near reversal (τ is a random walk) a mitre spikes far out of the maze.
@@ -182,13 +165,41 @@ pub fn draw_maze<DB: DrawingBackend>(
             .collect();
         chart.draw_series(LineSeries::new(ring, purple.stroke_width(2)))?;
     }
-    // Target region and start.
-    let t = maze.target();
-    let r = maze.config().target_radius;
+    draw_target_and_start(&mut chart, scene)
+}
+
+/// A titled (stand-alone) picture gets a legend line at the bottom of `area`, fitted to the
+/// width; untitled panels of a grid do not. Returns the area left for the picture.
+fn with_legend<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    picture: &MazePicture,
+) -> std::result::Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>> {
+    if picture.title.is_empty() {
+        return Ok(area);
+    }
+    let (w, h) = area.dim_in_pixel();
+    let (area, bottom) = area.split_vertically(h.saturating_sub(LEGEND_PX));
+    let text = legend(picture);
+    let chars = text.chars().count().max(1) as f64;
+    let size = ((w as f64 - 20.0) / (0.55 * chars)).clamp(8.0, 12.0);
+    bottom.draw(&Text::new(
+        text,
+        (10, 2),
+        ("sans-serif", size).into_font().color(&BLACK),
+    ))?;
+    Ok(area)
+}
+
+/// The target region (a filled, outlined disc) and the start (a blue dot).
+fn draw_target_and_start<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
+    scene: &Scene,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let ((tx, ty), r) = scene.target;
     let ring: Vec<(f32, f32)> = (0..=64)
         .map(|i| {
             let a = i as f32 / 64.0 * std::f32::consts::TAU;
-            (t.x + r * a.cos(), t.y + r * a.sin())
+            (tx + r * a.cos(), ty + r * a.sin())
         })
         .collect();
     chart.draw_series(std::iter::once(Polygon::new(
@@ -196,8 +207,7 @@ pub fn draw_maze<DB: DrawingBackend>(
         RGBColor(0, 160, 0).mix(0.35).filled(),
     )))?;
     chart.draw_series(LineSeries::new(ring, RGBColor(0, 120, 0).stroke_width(2)))?;
-    let s = maze.start();
-    chart.draw_series(std::iter::once(Circle::new((s.x, s.y), 5, BLUE.filled())))?;
+    chart.draw_series(std::iter::once(Circle::new(scene.start, 5, BLUE.filled())))?;
     Ok(())
 }
 
@@ -238,26 +248,30 @@ pub fn render_figure<F: Figure>(figure: &F, stem: &Path) -> Result<[std::path::P
     Ok([png, svg])
 }
 
-/// Pixel size of a maze picture: 40 px per cell, between 400 and 1200 px.
-fn side_px(maze: &Maze) -> u32 {
-    (maze.size() as u32 * 40).clamp(400, 1200)
+/// Pixel size of a scene's picture: 40 px per unit of its longer side, that side between
+/// 400 and 1200 px (a maze: 40 px per cell), the shorter side in proportion.
+fn scene_px(scene: &Scene) -> (u32, u32) {
+    let long = scene.width.max(scene.height);
+    let side = (long as u32 * 40).clamp(400, 1200);
+    let px = |x: f32| (side as f32 * x / long).round() as u32;
+    (px(scene.width), px(scene.height))
 }
 
-/// Renders `picture` over `maze` to a PNG file and an SVG file (both written atomically).
+/// Renders `picture` over `scene` to a PNG file and an SVG file (both written atomically).
 /// The SVG draws at most `svg_max_points` of the faint points and of the area squares (a
 /// deterministic stride), so that it stays small for millions of states; the PNG draws all.
-pub fn render_maze(
-    maze: &Maze,
+pub fn render_scene(
+    scene: &Scene,
     picture: &MazePicture,
     png: &Path,
     svg: &Path,
     svg_max_points: usize,
 ) -> Result<()> {
     register_font();
-    let side = side_px(maze);
+    let (w, h) = scene_px(scene);
     let size = (
-        side,
-        side + if picture.title.is_empty() {
+        w,
+        h + if picture.title.is_empty() {
             0
         } else {
             30 + LEGEND_PX
@@ -265,7 +279,7 @@ pub fn render_maze(
     );
     crate::record::write_atomic_via_path(png, |tmp| {
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
-        draw_maze(root.clone(), maze, picture)
+        draw_scene(root.clone(), scene, picture)
             .and_then(|()| root.present())
             .map_err(|e| plot_err(png, e))
     })?;
@@ -282,31 +296,32 @@ pub fn render_maze(
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        draw_maze(root.clone(), maze, &svg_picture)
+        draw_scene(root.clone(), scene, &svg_picture)
             .and_then(|()| root.present())
             .map_err(|e| plot_err(svg, e))?;
     }
     crate::record::write_atomic(svg, |out| out.write_all(text.as_bytes()))
 }
 
-/// Draws `picture` over `maze` into an RGB image of `side × side` pixels (row-major, three
+/// Draws `picture` over `scene` into an RGB image of `side × side` pixels (row-major, three
 /// bytes a pixel), without title or legend: what the Python environment's `render()` returns.
 ///
 /// ```
+/// use pbcs::env::Planar;
 /// use pbcs::maze::{Maze, MazeConfig};
 /// use pbcs::plot::{render_rgb, MazePicture};
 ///
 /// let maze = Maze::new(&MazeConfig { size: 2, ..Default::default() }).unwrap();
-/// let rgb = render_rgb(&maze, &MazePicture::default(), 64).unwrap();
+/// let rgb = render_rgb(&maze.scene(), &MazePicture::default(), 64).unwrap();
 /// assert_eq!(rgb.len(), 64 * 64 * 3);
 /// assert_eq!(&rgb[..3], &[255, 255, 255]); // the white margin
 /// ```
-pub fn render_rgb(maze: &Maze, picture: &MazePicture, side: u32) -> Result<Vec<u8>> {
+pub fn render_rgb(scene: &Scene, picture: &MazePicture, side: u32) -> Result<Vec<u8>> {
     register_font();
     let mut buf = vec![0u8; side as usize * side as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (side, side)).into_drawing_area();
-        draw_maze(root.clone(), maze, picture)
+        draw_scene(root.clone(), scene, picture)
             .and_then(|()| root.present())
             .map_err(|e| plot_err(Path::new("<rgb array>"), e))?;
     }

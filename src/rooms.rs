@@ -24,7 +24,7 @@
 //! assert_eq!((done.reward, done.terminal), (1.0, true));
 //! ```
 
-use crate::env::{BallIsClear, Connect, Env, SampleBall, Step};
+use crate::env::{BallIsClear, Connect, Env, Planar, SampleBall, Scene, Step};
 use crate::rng::Rng;
 use parry2d::math::{Isometry, Point};
 use parry2d::shape::Segment;
@@ -139,6 +139,30 @@ impl Env for TwoRooms {
 
     fn connector(&self) -> Option<&dyn Connect<[f32; 2]>> {
         Some(self)
+    }
+}
+
+impl Planar for TwoRooms {
+    fn point(&self, s: &[f32; 2]) -> (f32, f32) {
+        (s[0], s[1])
+    }
+
+    /// The 2 × 1 rectangle, its border and the wall below the door drawn 0.02 thick.
+    fn scene(&self) -> Scene {
+        let t = 0.02;
+        Scene {
+            width: WIDTH,
+            height: HEIGHT,
+            walls: vec![
+                [(-t, -t), (WIDTH + t, 0.0)],
+                [(-t, HEIGHT), (WIDTH + t, HEIGHT + t)],
+                [(-t, 0.0), (0.0, HEIGHT)],
+                [(WIDTH, 0.0), (WIDTH + t, HEIGHT)],
+                [(1.0 - t / 2.0, 0.0), (1.0 + t / 2.0, DOOR.0)],
+            ],
+            target: ((TARGET[0], TARGET[1]), TARGET_RADIUS),
+            start: (0.3, 0.2),
+        }
     }
 }
 

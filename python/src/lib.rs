@@ -122,7 +122,7 @@ pub(crate) fn rgb<'py>(
         ));
     }
     let side = side as u32;
-    let buf = render_rgb(maze, picture, side).map_err(py_err)?;
+    let buf = render_rgb(&pbcs::env::Planar::scene(maze), picture, side).map_err(py_err)?;
     let a = Array3::from_shape_vec((side as usize, side as usize, 3), buf)
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     Ok(a.into_pyarray(py))

@@ -301,70 +301,8 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
         return fail("budget", "0: a run's step budget is at least 1".into());
     }
     match r.kind {
-        Kind::Vanilla => {
-            let zero = [
-                ("phase1_steps", r.phase1_steps),
-                ("train_steps", r.train_steps),
-                ("test_steps", r.test_steps),
-                ("skills", r.skills as u64),
-            ];
-            if let Some((column, n)) = zero.into_iter().find(|&(_, n)| n != 0) {
-                return fail(column, format!("{n} in a vanilla row (PBCS only: 0 here)"));
-            }
-            if r.chaining {
-                return fail("chaining", "true in a vanilla row (PBCS only)".into());
-            }
-            if let Some(s) = r.starts {
-                return fail(
-                    "starts",
-                    format!("{s:?} in a vanilla row (PBCS only: empty)"),
-                );
-            }
-            if let Some(f) = r.failure {
-                return fail(
-                    "failure",
-                    format!("{} in a vanilla row (PBCS only: empty)", f.name()),
-                );
-            }
-            if r.env_steps != r.budget {
-                return fail(
-                    "env_steps",
-                    format!(
-                        "{} in a vanilla row, whose run trains its whole budget of {}",
-                        r.env_steps, r.budget
-                    ),
-                );
-            }
-            if let Some(first) = r.first_success_steps.filter(|&s| s > r.env_steps) {
-                return fail(
-                    "first_success_steps",
-                    format!("{first}, after the run's {} env steps", r.env_steps),
-                );
-            }
-        }
-        Kind::Pbcs => {
-            if r.starts.is_none() {
-                return fail("starts", "empty in a PBCS row (`ball` or `exact`)".into());
-            }
-            if let Some(first) = r.first_success_steps {
-                return fail(
-                    "first_success_steps",
-                    format!("{first} in a PBCS row (vanilla only: empty)"),
-                );
-            }
-            let sum = [r.phase1_steps, r.train_steps, r.test_steps]
-                .into_iter()
-                .try_fold(0u64, u64::checked_add);
-            if sum != Some(r.env_steps) {
-                return fail(
-                    "env_steps",
-                    format!(
-                        "{}, but phase1_steps + train_steps + test_steps = {} + {} + {}",
-                        r.env_steps, r.phase1_steps, r.train_steps, r.test_steps
-                    ),
-                );
-            }
-        }
+        Kind::Vanilla => vanilla_value_error(r)?,
+        Kind::Pbcs => pbcs_value_error(r)?,
     }
     let solved = r.failure.is_none() && r.success_rate >= crate::runs::SOLVED_AT;
     if r.solved != solved {
@@ -381,6 +319,78 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
                 )),
                 if solved { "" } else { "not " },
                 crate::runs::SOLVED_AT
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// [`value_error`] of a vanilla row: PBCS's columns empty or 0, the whole budget trained.
+fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
+    let fail = |column, message: String| Err((column, message));
+    let zero = [
+        ("phase1_steps", r.phase1_steps),
+        ("train_steps", r.train_steps),
+        ("test_steps", r.test_steps),
+        ("skills", r.skills as u64),
+    ];
+    if let Some((column, n)) = zero.into_iter().find(|&(_, n)| n != 0) {
+        return fail(column, format!("{n} in a vanilla row (PBCS only: 0 here)"));
+    }
+    if r.chaining {
+        return fail("chaining", "true in a vanilla row (PBCS only)".into());
+    }
+    if let Some(s) = r.starts {
+        return fail(
+            "starts",
+            format!("{s:?} in a vanilla row (PBCS only: empty)"),
+        );
+    }
+    if let Some(f) = r.failure {
+        return fail(
+            "failure",
+            format!("{} in a vanilla row (PBCS only: empty)", f.name()),
+        );
+    }
+    if r.env_steps != r.budget {
+        return fail(
+            "env_steps",
+            format!(
+                "{} in a vanilla row, whose run trains its whole budget of {}",
+                r.env_steps, r.budget
+            ),
+        );
+    }
+    if let Some(first) = r.first_success_steps.filter(|&s| s > r.env_steps) {
+        return fail(
+            "first_success_steps",
+            format!("{first}, after the run's {} env steps", r.env_steps),
+        );
+    }
+    Ok(())
+}
+
+/// [`value_error`] of a PBCS row: its starts set, no vanilla column, its steps summing up.
+fn pbcs_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
+    let fail = |column, message: String| Err((column, message));
+    if r.starts.is_none() {
+        return fail("starts", "empty in a PBCS row (`ball` or `exact`)".into());
+    }
+    if let Some(first) = r.first_success_steps {
+        return fail(
+            "first_success_steps",
+            format!("{first} in a PBCS row (vanilla only: empty)"),
+        );
+    }
+    let sum = [r.phase1_steps, r.train_steps, r.test_steps]
+        .into_iter()
+        .try_fold(0u64, u64::checked_add);
+    if sum != Some(r.env_steps) {
+        return fail(
+            "env_steps",
+            format!(
+                "{}, but phase1_steps + train_steps + test_steps = {} + {} + {}",
+                r.env_steps, r.phase1_steps, r.train_steps, r.test_steps
             ),
         );
     }

@@ -1,6 +1,7 @@
 //! Bar and dot charts over cells: success with Wilson 95 % intervals, each run's chain
 //! success, and the performance profile against the paper's steps.
 
+use super::columns::RunColumns;
 use super::{category_label, DrawResult, PALETTE};
 use crate::experiment::{Baseline, Experiment};
 use crate::plot::Figure;
@@ -257,58 +258,40 @@ pub(crate) type ChainRun = (u64, bool, f32);
 pub struct ChainSpread {
     title: String,
     /// (method index, maze, runs), in drawing order.
-    columns: Vec<(usize, usize, Vec<ChainRun>)>,
-    methods: Vec<(String, String)>,
+    runs: RunColumns<ChainRun>,
 }
 
 impl ChainSpread {
     /// The figure of `exp`'s `chains`.
     pub fn new(exp: &Experiment, chains: &[crate::criteria::ChainSuccess]) -> ChainSpread {
-        let mut columns = Vec::new();
-        let methods: Vec<(String, String)> = exp
-            .methods
-            .iter()
-            .filter(|(m, _)| chains.iter().any(|c| &c.method == m))
-            .cloned()
-            .collect();
-        for (j, (m, _)) in methods.iter().enumerate() {
-            for &n in &exp.mazes {
-                let runs: Vec<ChainRun> = chains
-                    .iter()
-                    .filter(|c| &c.method == m && c.maze == n)
-                    .map(|c| (c.seed, c.complete, c.success_rate))
-                    .collect();
-                if !runs.is_empty() {
-                    columns.push((j, n, runs));
-                }
-            }
-        }
+        let runs = RunColumns::new(exp, |m, n| {
+            chains
+                .iter()
+                .filter(|c| c.method == m && c.maze == n)
+                .map(|c| (c.seed, c.complete, c.success_rate))
+                .collect()
+        });
         ChainSpread {
             title: format!("{}: chain success of each PBCS run", exp.title),
-            columns,
-            methods,
+            runs,
         }
     }
 }
 
 impl Figure for ChainSpread {
     fn size(&self) -> (u32, u32) {
-        ((60 * self.columns.len() as u32 + 200).max(700), 560)
+        self.runs.size()
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let width = self.columns.len() as f64;
+        let width = self.runs.columns.len() as f64;
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, ("sans-serif", 18))
             .margin(15)
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..width, -0.06..1.06)?;
-        let labels: Vec<String> = self
-            .columns
-            .iter()
-            .map(|(_, n, _)| format!("{n}×{n}"))
-            .collect();
+        let labels = self.runs.labels();
         let label = category_label(&labels);
         chart
             .configure_mesh()
@@ -325,11 +308,16 @@ impl Figure for ChainSpread {
             ],
             BLACK.mix(0.6).stroke_width(1),
         )))?;
-        for (j, (_, label)) in self.methods.iter().enumerate() {
+        for (j, (_, label)) in self.runs.methods.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
             // Seeds spread across the column so equal values stay visible.
             let spread = |i: usize, seed: u64| i as f64 + 0.2 + 0.06 * (seed % 10) as f64;
-            let columns = self.columns.iter().enumerate().filter(|(_, c)| c.0 == j);
+            let columns = self
+                .runs
+                .columns
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.0 == j);
             let dots: Vec<(f64, f64)> = columns
                 .clone()
                 .flat_map(|(i, (_, _, runs))| {

@@ -2,10 +2,11 @@
 //! τ, chain rollouts and activation balls) and side-by-side panels of two methods.
 
 use super::{cell_picture, centred_text, stats_of, summary, DrawResult, GREEN_BG, RED_BG};
+use crate::env::Planar;
 use crate::error::Result;
 use crate::experiment::Experiment;
 use crate::maze::Maze;
-use crate::plot::{draw_maze, Figure, PictureData};
+use crate::plot::{draw_scene, Figure, PictureData};
 use crate::tables::scaling::cell_maze;
 use crate::tables::CellStats;
 use plotters::coord::Shift;
@@ -156,7 +157,7 @@ impl Figure for ResultsGrid {
                     };
                     band.fill(&colour)?;
                     centred_text(&band, &summary(s), 15, &WHITE)?;
-                    draw_maze(picture, maze, &data.picture(String::new()))?;
+                    draw_scene(picture, &maze.scene(), &data.picture(String::new()))?;
                 }
                 None => {
                     band.fill(&RGBColor(150, 150, 150))?;
@@ -185,7 +186,7 @@ impl Figure for Panels {
             .iter()
             .zip(&self.panels)
         {
-            draw_maze(area.clone(), maze, &data.picture(title.clone()))?;
+            draw_scene(area.clone(), &maze.scene(), &data.picture(title.clone()))?;
         }
         Ok(())
     }

@@ -5,6 +5,7 @@
 //! Every figure is written as PNG and SVG with the bundled font (see [`crate::plot`]).
 
 mod bars;
+mod columns;
 mod curves;
 mod grid;
 mod routes;
@@ -224,8 +225,8 @@ fn maze_pictures(
             summary(s)
         );
         let stem = out.join(format!("{name}{}", c.maze));
-        crate::plot::render_maze(
-            &maze,
+        crate::plot::render_scene(
+            &crate::env::Planar::scene(&maze),
             &data.picture(title),
             &stem.with_extension("png"),
             &stem.with_extension("svg"),

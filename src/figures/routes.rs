@@ -2,6 +2,7 @@
 //! evaluation episode, a dot) and phase 1's trajectory τ it was built from (a cross), both
 //! divided by the fewest steps from s_0 ([`crate::tables::routes`]), one column per cell.
 
+use super::columns::RunColumns;
 use super::{category_label, DrawResult, PALETTE};
 use crate::experiment::Experiment;
 use crate::plot::Figure;
@@ -16,52 +17,39 @@ type RunRatios = (u64, Option<f64>, f64);
 pub struct Routes {
     title: String,
     /// (method index, maze, its runs), in drawing order.
-    columns: Vec<(usize, usize, Vec<RunRatios>)>,
-    methods: Vec<(String, String)>,
+    runs: RunColumns<RunRatios>,
 }
 
 impl Routes {
     /// The figure of `exp`'s routes table.
     pub fn new(exp: &Experiment, routes: &[Route]) -> Routes {
-        let methods: Vec<(String, String)> = exp
-            .methods
-            .iter()
-            .filter(|(m, _)| routes.iter().any(|r| &r.method == m))
-            .cloned()
-            .collect();
-        let mut columns = Vec::new();
-        for (j, (m, _)) in methods.iter().enumerate() {
-            for &n in &exp.mazes {
-                let runs: Vec<RunRatios> = routes
-                    .iter()
-                    .filter(|r| &r.method == m && r.maze == n)
-                    .map(|r| {
-                        let fewest = r.fewest_steps.max(1) as f64;
-                        let tau = r.phase2_tau_steps as f64 / fewest;
-                        (r.seed, r.chain_steps.map(|c| c / fewest), tau)
-                    })
-                    .collect();
-                if !runs.is_empty() {
-                    columns.push((j, n, runs));
-                }
-            }
-        }
+        let runs = RunColumns::new(exp, |m, n| {
+            routes
+                .iter()
+                .filter(|r| r.method == m && r.maze == n)
+                .map(|r| {
+                    let fewest = r.fewest_steps.max(1) as f64;
+                    let tau = r.phase2_tau_steps as f64 / fewest;
+                    (r.seed, r.chain_steps.map(|c| c / fewest), tau)
+                })
+                .collect()
+        });
         Routes {
             title: format!("{}: path length / fewest steps", exp.title),
-            columns,
-            methods,
+            runs,
         }
     }
 }
 
 impl Figure for Routes {
     fn size(&self) -> (u32, u32) {
-        ((60 * self.columns.len() as u32 + 200).max(700), 560)
+        self.runs.size()
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let width = self.columns.len() as f64;
+        let width = self.runs.columns.len() as f64;
         let top = self
+            .runs
             .columns
             .iter()
             .flat_map(|c| c.2.iter().map(|r| r.2.max(r.1.unwrap_or(1.0))))
@@ -73,11 +61,7 @@ impl Figure for Routes {
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..width, (0.9..top).log_scale())?;
-        let labels: Vec<String> = self
-            .columns
-            .iter()
-            .map(|(_, n, _)| format!("{n}×{n}"))
-            .collect();
+        let labels = self.runs.labels();
         let label = category_label(&labels);
         chart
             .configure_mesh()
@@ -91,11 +75,16 @@ impl Figure for Routes {
             vec![(0.0, 1.0), (width, 1.0)],
             BLACK.mix(0.6).stroke_width(1),
         )))?;
-        for (j, (_, label)) in self.methods.iter().enumerate() {
+        for (j, (_, label)) in self.runs.methods.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
             // Seeds spread across the column so equal values stay visible.
             let spread = |i: usize, seed: u64| i as f64 + 0.2 + 0.06 * (seed % 10) as f64;
-            let columns = self.columns.iter().enumerate().filter(|(_, c)| c.0 == j);
+            let columns = self
+                .runs
+                .columns
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.0 == j);
             let dots: Vec<(f64, f64)> = columns
                 .clone()
                 .flat_map(|(i, (_, _, runs))| {

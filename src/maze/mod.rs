@@ -34,7 +34,7 @@ mod walls;
 pub use layout::{Layout, Side};
 pub use walls::{Wall, Walls};
 
-use crate::env::{BallIsClear, Connect, Env, SampleBall, Step};
+use crate::env::{BallIsClear, Connect, Env, Planar, SampleBall, Scene, Step};
 use crate::error::{Error, Result};
 use crate::validate::{positive_finite, Check};
 use parry2d::math::{Point, Vector};
@@ -338,6 +338,28 @@ impl Env for Maze {
 
     fn connector(&self) -> Option<&dyn Connect<Point<f32>>> {
         Some(self)
+    }
+}
+
+impl Planar for Maze {
+    fn point(&self, state: &Point<f32>) -> (f32, f32) {
+        (state.x, state.y)
+    }
+
+    /// The N × N square, each wall's box, the target disc, s_0.
+    fn scene(&self) -> Scene {
+        let n = self.size() as f32;
+        let walls = self.walls.walls().iter().map(|w| {
+            let b = w.aabb();
+            [(b.mins.x, b.mins.y), (b.maxs.x, b.maxs.y)]
+        });
+        Scene {
+            width: n,
+            height: n,
+            walls: walls.collect(),
+            target: ((self.target.x, self.target.y), self.config.target_radius),
+            start: (self.start.x, self.start.y),
+        }
     }
 }
 

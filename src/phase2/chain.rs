@@ -2,8 +2,8 @@
 //! A_i = B_ε(τ_{K_i}) — its execution (π_0 until the state enters A_1, then π_1, ...) and its
 //! persistence (`manifest.toml` and one safetensors file per policy).
 
+use super::goal::dist;
 use super::goal::Inputs;
-use super::task::dist;
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;

@@ -32,9 +32,18 @@
 //! assert_eq!(act, [0.1, -0.05]);
 //! ```
 
-use super::task::dist;
 use crate::env::Env;
 use serde::{Deserialize, Serialize};
+
+/// L2 distance between two observations.
+#[inline]
+pub fn dist(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f32>()
+        .sqrt()
+}
 
 /// The shaped reward of a step that reaches the goal (the paper's 10).
 pub const REACHED_REWARD: f32 = 10.0;

@@ -4,7 +4,7 @@
 //! [`Inputs`]: observations relative to the goal's centre, actions in [−1, 1]ᵈ.
 
 use super::backplay::Backplayer;
-use super::goal::{Goal, Inputs};
+use super::goal::{dist, Goal, Inputs};
 use super::{EventKind, Phase2Config, StartMode};
 use crate::env::{Env, SampleBall};
 use crate::learner::noise::Noise;
@@ -20,16 +20,6 @@ pub struct StepCounts {
     pub train: u64,
     /// In greedy test episodes (Backplay's tests).
     pub test: u64,
-}
-
-/// L2 distance between two observations.
-#[inline]
-pub fn dist(a: &[f32], b: &[f32]) -> f32 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f32>()
-        .sqrt()
 }
 
 /// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in observations).

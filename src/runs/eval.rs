@@ -4,11 +4,12 @@
 use super::{ball_circles, DRAWN_ROLLOUTS};
 use crate::config::PbcsJob;
 use crate::env::evaluation_starts;
+use crate::env::Planar;
 use crate::error::{Error, Result};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::phase2::SkillChain;
-use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
+use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::rng::Seeds;
 use parry2d::math::Point;
 use std::path::Path;
@@ -158,8 +159,8 @@ impl ChainEval {
             "saved chain, maze {} (layout {}), eval seed {seed}: success {}/{}",
             self.job.maze.size, self.job.maze.seed, self.successes, self.episodes
         );
-        render_maze(
-            &self.maze,
+        render_scene(
+            &self.maze.scene(),
             &self.picture.picture(title),
             &out.join(format!("eval-s{seed}.png")),
             &out.join(format!("eval-s{seed}.svg")),

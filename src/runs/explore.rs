@@ -3,10 +3,11 @@
 use super::{claim, write_timing};
 use crate::config::ExploreJob;
 use crate::env::Env;
+use crate::env::Planar;
 use crate::error::Result;
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
-use crate::plot::{render_maze, MazePicture, SVG_MAX_POINTS};
+use crate::plot::{render_scene, MazePicture, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Check;
@@ -192,8 +193,8 @@ pub(crate) fn render_exploration(
         tau_paths: vec![&path],
         ..MazePicture::default()
     };
-    render_maze(
-        maze,
+    render_scene(
+        &maze.scene(),
         &picture,
         &out.join("explore.png"),
         &out.join("explore.svg"),

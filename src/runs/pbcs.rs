@@ -4,6 +4,7 @@ use super::{
     claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
 };
 use crate::config::PbcsJob;
+use crate::env::Planar;
 use crate::error::Result;
 use crate::explore::{explore, Exploration};
 use crate::maze::Maze;
@@ -11,7 +12,7 @@ use crate::nn::kernel::Kernel;
 use crate::phase2::{
     chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode, Variant,
 };
-use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
+use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Check;
@@ -195,8 +196,8 @@ impl PbcsRun {
             record.skills,
             100.0 * record.success_rate
         );
-        render_maze(
-            &self.maze,
+        render_scene(
+            &self.maze.scene(),
             &self.picture.picture(title),
             &out.join("run.png"),
             &out.join("run.svg"),

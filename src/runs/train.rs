@@ -2,11 +2,12 @@
 
 use super::{claim, write_timing, SOLVED_AT};
 use crate::config::TrainJob;
+use crate::env::Planar;
 use crate::error::Result;
 use crate::learner::{ActorUpdate, Algo};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
-use crate::plot::{render_maze, PictureData, SVG_MAX_POINTS};
+use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
 use crate::train::train_vanilla;
@@ -154,8 +155,8 @@ impl TrainRun {
             job.train.steps,
             100.0 * summary.final_success
         );
-        render_maze(
-            &self.maze,
+        render_scene(
+            &self.maze.scene(),
             &self.picture.picture(title),
             &out.join("train.png"),
             &out.join("train.svg"),
