@@ -16,6 +16,7 @@
 //! assert!(bad.check().unwrap_err().to_string().contains("maze.size"));
 //! ```
 
+use crate::envs::EnvName;
 use crate::error::Result;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
@@ -84,7 +85,12 @@ impl Check for TrainJob {
 pub struct PbcsJob {
     /// The run seed.
     pub seed: u64,
-    /// The maze.
+    /// The environment ([`crate::envs::EnvName`]): the maze unless named (and then left out
+    /// of the written job, so a maze job reads as before the registry).
+    #[serde(skip_serializing_if = "EnvName::is_maze")]
+    pub env: EnvName,
+    /// The maze (the environment's size and layout when `env` is the maze; left at its
+    /// defaults otherwise).
     pub maze: MazeConfig,
     /// Phase 1.
     pub explore: ExploreConfig,
@@ -98,6 +104,7 @@ impl Default for PbcsJob {
     fn default() -> Self {
         PbcsJob {
             seed: 0,
+            env: EnvName::Maze,
             maze: MazeConfig::default(),
             explore: ExploreConfig::default(),
             learner: LearnerConfig {
@@ -111,6 +118,16 @@ impl Default for PbcsJob {
 
 impl Check for PbcsJob {
     fn check(&self) -> Result<()> {
+        if !self.env.is_maze() && self.maze != MazeConfig::default() {
+            return Err(crate::error::Error::invalid(
+                "maze",
+                format!(
+                    "sets the maze, but env = \"{}\" runs another environment (leave [maze] \
+                     out, or set env = \"maze\")",
+                    self.env.name()
+                ),
+            ));
+        }
         self.maze.check()?;
         self.explore.check()?;
         self.learner.check()?;

@@ -17,7 +17,8 @@
 //! | Wilson score intervals (appendix on γ); Fisher's exact test | [`stats`] |
 //! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
-//! [`rooms`] is a second environment for PBCS (two rooms and a door, every hook offered);
+//! [`rooms`] is a second environment for PBCS (two rooms and a door, every hook offered),
+//! and [`envs`] names the environments jobs and the command run;
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
 //! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
 //! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws mazes
@@ -50,6 +51,7 @@ pub mod claims;
 pub mod config;
 pub mod criteria;
 pub mod env;
+pub mod envs;
 pub mod error;
 pub mod experiment;
 pub mod explore;

@@ -443,16 +443,26 @@ fn evaluate<'a>(
     }
 }
 
+/// The cells of `method` in `stats`, or the error that the claim's table has none.
+fn method_cells<'a>(
+    spec: &ClaimSpec,
+    stats: &'a [CellStats],
+    method: &str,
+) -> Result<Vec<&'a CellStats>> {
+    let c = cells(stats, method);
+    if c.is_empty() {
+        return Err(no_cells(spec, &spec.experiment, method));
+    }
+    Ok(c)
+}
+
 /// `method` solves every maze of `stats` (within each cell's budget).
 fn solves_everywhere(
     spec: &ClaimSpec,
     stats: &[CellStats],
     method: &str,
 ) -> Result<(String, Verdict)> {
-    let c = cells(stats, method);
-    if c.is_empty() {
-        return Err(no_cells(spec, &spec.experiment, method));
-    }
+    let c = method_cells(spec, stats, method)?;
     let verdict = if c.iter().all(|s| solves(s)) {
         Verdict::Agrees
     } else if c.iter().any(|s| fails(s)) {
@@ -481,10 +491,7 @@ fn steps_below_paper(
     stats: &[CellStats],
     method: &str,
 ) -> Result<(String, Verdict)> {
-    let c = cells(stats, method);
-    if c.is_empty() {
-        return Err(no_cells(spec, &spec.experiment, method));
-    }
+    let c = method_cells(spec, stats, method)?;
     let mut parts = Vec::new();
     let mut below = Vec::new();
     for s in c {

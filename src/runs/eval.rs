@@ -3,37 +3,38 @@
 
 use super::{ball_circles, DRAWN_ROLLOUTS};
 use crate::config::PbcsJob;
-use crate::env::evaluation_starts;
 use crate::env::Planar;
+use crate::env::{evaluation_starts, Env, Scene};
+use crate::envs::{EnvName, Visit};
 use crate::error::{Error, Result};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::phase2::SkillChain;
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::rng::Seeds;
-use parry2d::math::Point;
 use std::path::Path;
 
 pub use crate::env::EvalEpisode;
 
-/// The states of one chain rollout, start first.
-pub type RolloutStates = Vec<Point<f32>>;
+/// A chain's evaluation episodes and the states (start first) of its first
+/// [`DRAWN_ROLLOUTS`] rollouts.
+pub type ChainEpisodes<S> = (Vec<EvalEpisode>, Vec<Vec<S>>);
 
 /// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
 /// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
 /// steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
-pub fn evaluate_chain(
-    maze: &Maze,
+pub fn evaluate_chain<E: Env>(
+    env: &E,
     chain: &SkillChain,
     job: &PbcsJob,
     episodes: usize,
     seed: u64,
-) -> Result<(Vec<EvalEpisode>, Vec<RolloutStates>)> {
+) -> Result<ChainEpisodes<E::State>> {
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    let starts = evaluation_starts(maze, job.phase2.epsilon, episodes, &Seeds::new(seed))?;
+    let starts = evaluation_starts(env, job.phase2.epsilon, episodes, &Seeds::new(seed))?;
     for start in starts {
-        let r = chain.run(maze, start, job.phase2.eval_max_steps);
+        let r = chain.run(env, start, job.phase2.eval_max_steps);
         rows.push(EvalEpisode {
             success: r.success,
             steps: r.states.len() - 1,
@@ -65,9 +66,9 @@ pub struct ChainEval {
     pub interval: (f64, f64),
     /// Each episode: success and steps.
     pub rows: Vec<EvalEpisode>,
-    /// The picture: the first rollouts over the maze, with the activation balls.
+    /// The picture: the first rollouts over the environment, with the activation balls.
     pub picture: PictureData,
-    maze: Maze,
+    scene: Scene,
 }
 
 /// A chain saved by `pbcs run` with what it needs to run: the job that built it (`run.toml`
@@ -77,6 +78,24 @@ pub struct ChainEval {
 /// bad value ([`SkillChain::load`]) or policies that do not fit the maze
 /// ([`SkillChain::check_env`]), or bad weights are errors naming the file.
 pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Maze, SkillChain)> {
+    let (job, chain) = load_saved_job(chain_dir, kernel)?;
+    if !job.env.is_maze() {
+        return Err(Error::invalid(
+            "env",
+            format!(
+                "{}: a chain of env = \"{}\", not of the maze (`pbcs eval` runs it)",
+                chain_dir.display(),
+                job.env.name()
+            ),
+        ));
+    }
+    let maze = Maze::new(&job.maze)?;
+    chain.check_env(&maze, &chain_dir.join("manifest.toml"))?;
+    Ok((job, maze, chain))
+}
+
+/// A saved chain's job and chain (the checks of [`load_saved_chain`] but the environment's).
+fn load_saved_job(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, SkillChain)> {
     let run_dir = match chain_dir.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         Some(_) => std::path::PathBuf::from("."),
@@ -101,10 +120,8 @@ pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Ma
         parent
     };
     let job: PbcsJob = crate::validate::load(&job_path)?;
-    let maze = Maze::new(&job.maze)?;
     let chain = SkillChain::load(chain_dir, kernel)?;
-    chain.check_env(&maze, &chain_dir.join("manifest.toml"))?;
-    Ok((job, maze, chain))
+    Ok((job, chain))
 }
 
 /// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
@@ -123,14 +140,20 @@ pub fn eval_chain(
     if episodes == 0 {
         return Err(Error::invalid("--episodes", "must be at least 1"));
     }
-    let (job, maze, chain) = load_saved_chain(chain_dir, kernel)?;
+    let (job, chain) = load_saved_job(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
-    let (rows, rollouts) = evaluate_chain(&maze, &chain, &job, episodes, seed)?;
+    let work = EvalOn {
+        chain_dir,
+        chain: &chain,
+        job: &job,
+        episodes,
+        seed,
+    };
+    let (rows, rollout_paths, scene) = job.env.visit(&job.maze, work)?;
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
-    let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
     let picture = PictureData {
-        rollout_paths: rollouts.iter().map(|r| xy(r)).collect(),
+        rollout_paths,
         circles: ball_circles(&chain),
         ..PictureData::default()
     };
@@ -143,8 +166,33 @@ pub fn eval_chain(
         interval,
         rows,
         picture,
-        maze,
+        scene,
     })
+}
+
+/// [`eval_chain`] on the environment the chain's job names: the episodes, the drawn
+/// rollouts' points and the scene.
+struct EvalOn<'a> {
+    chain_dir: &'a Path,
+    chain: &'a SkillChain,
+    job: &'a PbcsJob,
+    episodes: usize,
+    seed: u64,
+}
+
+impl Visit for EvalOn<'_> {
+    type Output = (Vec<EvalEpisode>, Vec<Vec<(f32, f32)>>, Scene);
+
+    fn on<E: Planar>(self, env: E) -> Result<Self::Output> {
+        (self.chain).check_env(&env, &self.chain_dir.join("manifest.toml"))?;
+        let (rows, rollouts) =
+            evaluate_chain(&env, self.chain, self.job, self.episodes, self.seed)?;
+        let points = rollouts
+            .iter()
+            .map(|r| r.iter().map(|s| env.point(s)).collect())
+            .collect();
+        Ok((rows, points, env.scene()))
+    }
 }
 
 impl ChainEval {
@@ -156,11 +204,13 @@ impl ChainEval {
         std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
         crate::record::write_records(&out.join(format!("eval-s{seed}.csv")), &self.rows)?;
         let title = format!(
-            "saved chain, maze {} (layout {}), eval seed {seed}: success {}/{}",
-            self.job.maze.size, self.job.maze.seed, self.successes, self.episodes
+            "saved chain, {}, eval seed {seed}: success {}/{}",
+            self.job.env.label(&self.job.maze),
+            self.successes,
+            self.episodes
         );
         render_scene(
-            &self.maze.scene(),
+            &self.scene,
             &self.picture.picture(title),
             &out.join(format!("eval-s{seed}.png")),
             &out.join(format!("eval-s{seed}.svg")),
@@ -173,12 +223,17 @@ impl ChainEval {
     /// What `pbcs eval` prints for the chain in `chain_dir` evaluated from starts of `seed`.
     pub fn summary(&self, chain_dir: &Path, seed: u64) -> String {
         format!(
-            "chain {} ({} skills) on maze {} (layout seed {}), start seed {seed}: success \
-             {}/{} = {:.1} % [Wilson 95 % {:.1}, {:.1} %]",
+            "chain {} ({} skills) on {}, start seed {seed}: success {}/{} = {:.1} % [Wilson 95 \
+             % {:.1}, {:.1} %]",
             chain_dir.display(),
             self.skills,
-            self.job.maze.size,
-            self.job.maze.seed,
+            match self.job.env {
+                EnvName::Maze => format!(
+                    "maze {} (layout seed {})",
+                    self.job.maze.size, self.job.maze.seed
+                ),
+                other => other.name().to_string(),
+            },
             self.successes,
             self.episodes,
             100.0 * self.successes as f64 / self.episodes as f64,

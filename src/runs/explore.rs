@@ -116,20 +116,23 @@ pub fn run_explore(
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
 /// the last row).
-pub(crate) fn write_trajectory_csv(
-    maze: &Maze,
-    found: &Exploration<Point<f32>>,
+pub(crate) fn write_trajectory_csv<E: Env>(
+    env: &E,
+    found: &Exploration<E::State>,
     path: &Path,
 ) -> Result<()> {
     let mut header = vec!["t".to_string()];
-    header.extend(maze.obs_names());
-    header.extend((0..maze.action_dim()).map(|i| format!("a{i}")));
+    header.extend(env.obs_names());
+    header.extend((0..env.action_dim()).map(|i| format!("a{i}")));
     let tau = &found.trajectory;
+    let mut obs = vec![0.0; env.obs_dim()];
     let rows = tau.states.iter().enumerate().map(|(t, s)| {
-        let mut row = vec![t.to_string(), s.x.to_string(), s.y.to_string()];
+        env.observe(s, &mut obs);
+        let mut row = vec![t.to_string()];
+        row.extend(obs.iter().map(f32::to_string));
         match tau.actions.get(t) {
             Some(a) => row.extend(a.iter().map(f32::to_string)),
-            None => row.extend((0..maze.action_dim()).map(|_| String::new())),
+            None => row.extend((0..env.action_dim()).map(|_| String::new())),
         }
         row
     });

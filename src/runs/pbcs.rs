@@ -5,7 +5,8 @@ use super::{
 };
 use crate::config::PbcsJob;
 use crate::env::Planar;
-use crate::error::Result;
+use crate::envs::{EnvName, Visit};
+use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
@@ -16,7 +17,6 @@ use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Check;
-use parry2d::math::Point;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -25,10 +25,10 @@ use std::time::Instant;
 /// sweep keeps it as a [`crate::experiment::RawRow`] ([`crate::experiment::RawRow::pbcs`]).
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct RunRecord {
-    /// Maze size N.
-    pub maze: usize,
-    /// Maze layout seed.
-    pub maze_seed: u64,
+    /// Maze size N (empty for another environment).
+    pub maze: Option<usize>,
+    /// Maze layout seed (empty for another environment).
+    pub maze_seed: Option<u64>,
     /// Run seed.
     pub seed: u64,
     /// `pbcs` or `pbcs_no_chaining`.
@@ -62,23 +62,26 @@ pub struct RunRecord {
     pub trajectory_len: usize,
     /// States of the trajectory phase 2 worked on (τ, or τ shortened).
     pub phase2_trajectory_len: usize,
+    /// The environment ([`EnvName`]; the last column, so the others keep their places).
+    pub env: EnvName,
 }
 
 /// Chain rollouts drawn in the picture.
 pub const DRAWN_ROLLOUTS: usize = 10;
 
-/// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
-/// the evaluation's rollouts; [`PbcsRun::write`] writes it.
+/// One PBCS run's outcome ([`PbcsRun::compute`] on the maze, [`PbcsRun::compute_on`] on any
+/// planar environment): the record, τ, the chain and its trace, the evaluation's rollouts;
+/// [`PbcsRun::write`] writes it.
 #[derive(Debug, Clone)]
-pub struct PbcsRun {
-    /// The maze solved.
-    pub maze: Maze,
+pub struct PbcsRun<E: Planar = Maze> {
+    /// The environment solved.
+    pub env: E,
     /// The `record.csv` row.
     pub record: RunRecord,
     /// What phase 1 found (τ and the archive).
-    pub found: Exploration<Point<f32>>,
+    pub found: Exploration<E::State>,
     /// The trajectory phase 2 worked on (τ, or τ shortened).
-    pub tau: Vec<Point<f32>>,
+    pub tau: Vec<E::State>,
     /// The chain, its step counts and Backplay's trace.
     pub phase2: Phase2Outcome,
     /// The chain's evaluation episodes (none when phase 2 failed).
@@ -91,24 +94,48 @@ pub struct PbcsRun {
     pub seconds: f64,
 }
 
-impl PbcsRun {
-    /// Runs PBCS for `job`: phase 1, phase 2 ([`chain_skills`]), then the chain's evaluation
-    /// from starts uniform in B_ε(s_0), every network on `kernel`. `progress(skill, report)`
-    /// is called during phase 2. Writes nothing.
+impl PbcsRun<Maze> {
+    /// [`PbcsRun::compute_on`] the maze of `job`: what sweeps and tables run. A job naming
+    /// another environment is refused here (experiments are of mazes so far); `pbcs run`
+    /// ([`run_pbcs`]) runs any.
     pub fn compute(
         job: &PbcsJob,
         kernel: Kernel,
         progress: impl FnMut(usize, Progress),
     ) -> Result<PbcsRun> {
+        if !job.env.is_maze() {
+            return Err(Error::invalid(
+                "env",
+                format!(
+                    "\"{}\": experiments and tables run the maze so far (`pbcs run --env {0}` \
+                     runs it)",
+                    job.env.name()
+                ),
+            ));
+        }
         job.check()?;
-        let maze = Maze::new(&job.maze)?;
+        PbcsRun::compute_on(Maze::new(&job.maze)?, job, kernel, progress)
+    }
+}
+
+impl<E: Planar> PbcsRun<E> {
+    /// Runs PBCS for `job` on `env`: phase 1, phase 2 ([`chain_skills`]), then the chain's
+    /// evaluation from starts uniform in B_ε(s_0), every network on `kernel`.
+    /// `progress(skill, report)` is called during phase 2. Writes nothing.
+    pub fn compute_on(
+        env: E,
+        job: &PbcsJob,
+        kernel: Kernel,
+        progress: impl FnMut(usize, Progress),
+    ) -> Result<PbcsRun<E>> {
+        job.check()?;
         let seeds = Seeds::new(job.seed);
         let clock = Instant::now();
         let mut rng = seeds.stream(Stream::Explore);
-        let found = explore(&maze, &job.explore, &mut rng, |_, _| {})?;
-        let tau = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2)?.states;
+        let found = explore(&env, &job.explore, &mut rng, |_, _| {})?;
+        let tau = crate::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2)?.states;
         let phase2 = chain_skills(
-            &maze,
+            &env,
             &tau,
             &job.learner,
             &job.phase2,
@@ -120,13 +147,7 @@ impl PbcsRun {
         // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
         let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
         {
-            evaluate_chain(
-                &maze,
-                &phase2.chain,
-                job,
-                job.phase2.eval_episodes,
-                job.seed,
-            )?
+            evaluate_chain(&env, &phase2.chain, job, job.phase2.eval_episodes, job.seed)?
         } else {
             (Vec::new(), Vec::new())
         };
@@ -134,7 +155,7 @@ impl PbcsRun {
         let wins = evaluation.iter().filter(|e| e.success).count();
         let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
         let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
-        let xy = |v: &[Point<f32>]| -> Vec<(f32, f32)> { v.iter().map(|p| (p.x, p.y)).collect() };
+        let xy = |v: &[E::State]| -> Vec<(f32, f32)> { v.iter().map(|s| env.point(s)).collect() };
         let picture = PictureData {
             tau_paths: vec![xy(&tau)],
             rollout_paths: rollouts.iter().map(|r| xy(r)).collect(),
@@ -142,7 +163,7 @@ impl PbcsRun {
             ..PictureData::default()
         };
         Ok(PbcsRun {
-            maze,
+            env,
             record,
             found,
             tau,
@@ -168,7 +189,7 @@ impl PbcsRun {
     fn write_files(&self, job: &PbcsJob, out: &Path) -> Result<()> {
         let (record, phase2) = (&self.record, &self.phase2);
         write_record(&out.join("record.csv"), record)?;
-        write_trajectory_csv(&self.maze, &self.found, &out.join("trajectory.csv"))?;
+        write_trajectory_csv(&self.env, &self.found, &out.join("trajectory.csv"))?;
         write_skills_csv(&phase2.chain, &out.join("skills.csv"))?;
         crate::record::write_records(&out.join("trace.csv"), &phase2.trace)?;
         crate::record::write_records(&out.join("evaluation.csv"), &self.evaluation)?;
@@ -186,18 +207,17 @@ impl PbcsRun {
         })?;
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
-            "{} {}, maze {} (layout {}), seed {}: {} steps, {} skills, chain success {:.0} %",
+            "{} {}, {}, seed {}: {} steps, {} skills, chain success {:.0} %",
             record.variant.name(),
             record.learner,
-            job.maze.size,
-            job.maze.seed,
+            job.env.label(&job.maze),
             job.seed,
             record.total_steps,
             record.skills,
             100.0 * record.success_rate
         );
         render_scene(
-            &self.maze.scene(),
+            &self.env.scene(),
             &self.picture.picture(title),
             &out.join("run.png"),
             &out.join("run.svg"),
@@ -214,17 +234,19 @@ impl PbcsRun {
 
 impl RunRecord {
     /// The record of `job` from what its run found.
-    fn new(
+    fn new<S>(
         job: &PbcsJob,
-        found: &Exploration<Point<f32>>,
+        found: &Exploration<S>,
         phase2: &Phase2Outcome,
         phase2_trajectory_len: usize,
         success_rate: f32,
     ) -> RunRecord {
         let lc = &job.learner;
+        let maze = job.env.is_maze().then_some(&job.maze);
         RunRecord {
-            maze: job.maze.size,
-            maze_seed: job.maze.seed,
+            env: job.env,
+            maze: maze.map(|m| m.size),
+            maze_seed: maze.map(|m| m.seed),
             seed: job.seed,
             variant: job.phase2.variant(),
             learner: lc.record_name(),
@@ -270,9 +292,33 @@ pub fn run_pbcs(
 ) -> Result<(RunRecord, f64)> {
     job.check()?;
     claim(job, out)?;
-    let run = PbcsRun::compute(job, kernel, progress)?;
-    run.write(job, out)?;
-    Ok((run.record, run.seconds))
+    job.env.visit(
+        &job.maze,
+        RunInto {
+            job,
+            kernel,
+            out,
+            progress,
+        },
+    )
+}
+
+/// [`run_pbcs`] on the environment the job names.
+struct RunInto<'a, P> {
+    job: &'a PbcsJob,
+    kernel: Kernel,
+    out: &'a Path,
+    progress: P,
+}
+
+impl<P: FnMut(usize, Progress)> Visit for RunInto<'_, P> {
+    type Output = (RunRecord, f64);
+
+    fn on<E: Planar>(self, env: E) -> Result<(RunRecord, f64)> {
+        let run = PbcsRun::compute_on(env, self.job, self.kernel, self.progress)?;
+        run.write(self.job, self.out)?;
+        Ok((run.record, run.seconds))
+    }
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target
@@ -299,13 +345,14 @@ impl RunRecord {
     /// the environment steps went, with the wall clock `seconds`.
     pub fn summary(&self, eval_episodes: usize, seconds: f64) -> String {
         format!(
-            "{} ({}) on maze {} (layout seed {}), run seed {}: {} — chain success {:.0} % over \
-             {} episodes, {} skills{}\nenv steps: phase 1 {}, training {}, tests {}, total {}; \
-             |τ| = {}; {:.1} s",
+            "{} ({}) on {}, run seed {}: {} — chain success {:.0} % over {} episodes, {} \
+             skills{}\nenv steps: phase 1 {}, training {}, tests {}, total {}; |τ| = {}; {:.1} s",
             self.variant.name(),
             self.learner,
-            self.maze,
-            self.maze_seed,
+            match (self.maze, self.maze_seed) {
+                (Some(n), Some(m)) => format!("maze {n} (layout seed {m})"),
+                _ => self.env.name().to_string(),
+            },
             self.seed,
             if self.solved { "SOLVED" } else { "not solved" },
             100.0 * self.success_rate,

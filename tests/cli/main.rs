@@ -5,6 +5,7 @@
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
+mod envs;
 mod results;
 
 pub(crate) fn pbcs(args: &[&str]) -> Output {

@@ -4,6 +4,7 @@
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, MazeConfig, Preset, MAX_MAZE_SIZE};
+use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
 use pbcs::learner::{ActorUpdate, Algo, LearnerConfig};
 use pbcs::runs;
@@ -170,6 +171,10 @@ pub enum Command {
         /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
         #[arg(long)]
         exact_starts: bool,
+        /// The environment (`pbcs::envs`); overrides `env` [default: the config's, else the
+        /// maze]. --maze and --maze-seed apply to the maze only.
+        #[arg(long, value_enum)]
+        env: Option<EnvName>,
     },
     /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
     /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts

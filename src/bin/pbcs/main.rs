@@ -9,6 +9,7 @@ use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, PbcsJob, Preset, TrainJob};
+use pbcs::envs::EnvName;
 use pbcs::experiment::{Experiment, Pending, RawRow};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
@@ -57,9 +58,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             learner,
             no_chaining,
             exact_starts,
+            env,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
-            let job = pbcs_job(&run, preset, &learner, no_chaining, exact_starts)?;
+            let mut job = pbcs_job(&run, preset, &learner, no_chaining, exact_starts)?;
+            job.env = env.unwrap_or(job.env);
+            if !job.env.is_maze() && (run.maze.is_some() || run.maze_seed.is_some()) {
+                anyhow::bail!(
+                    "--maze and --maze-seed set the maze, but the run's environment is `{}`",
+                    job.env.name()
+                );
+            }
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
             let label = runs::method_name(run.config.as_deref(), preset);
@@ -378,12 +387,13 @@ fn exp_check(
 
 fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
     job.check()?;
-    let out = run.out_dir(
-        &format!("run/{label}"),
-        &job.maze,
-        job.seed,
-        &runs::pbcs_suffix(job),
-    );
+    let suffix = runs::pbcs_suffix(job);
+    let out = match job.env {
+        EnvName::Maze => run.out_dir(&format!("run/{label}"), &job.maze, job.seed, &suffix),
+        other => (run.out.clone()).unwrap_or_else(|| {
+            format!("out/run/{label}/{}-s{}{suffix}", other.name(), job.seed).into()
+        }),
+    };
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
@@ -407,7 +417,7 @@ fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow
         bar.set_message(p.status(skill, total, total as f64 / secs.max(1e-9)));
         bar.tick();
     })
-    .with_context(|| format!("PBCS on maze {} seed {}", job.maze.size, job.seed))?;
+    .with_context(|| format!("PBCS on {} seed {}", job.env.label(&job.maze), job.seed))?;
     bar.finish_and_clear();
     println!("{}", record.summary(job.phase2.eval_episodes, seconds));
     let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";

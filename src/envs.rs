@@ -1,0 +1,93 @@
+//! Environments by name: the registry the `pbcs` command, jobs and the Python package read.
+//!
+//! A job names its environment (`env = "rooms"`; none: the maze, so every config written
+//! before the registry means what it meant). [`EnvName::visit`] builds the environment a name
+//! stands for and hands it to generic code ([`Visit`]), which sees only [`Planar`] (an
+//! [`crate::env::Env`] that can be drawn). Adding an environment is its own file, one variant
+//! here and one arm in [`EnvName::visit`].
+//!
+//! ```
+//! use pbcs::config::MazeConfig;
+//! use pbcs::env::{Env, Planar};
+//! use pbcs::envs::{EnvName, Visit};
+//!
+//! /// The start of whichever environment is named.
+//! struct Start;
+//! impl Visit for Start {
+//!     type Output = (f32, f32);
+//!     fn on<E: Planar>(self, env: E) -> pbcs::Result<(f32, f32)> {
+//!         Ok(env.point(&env.start()))
+//!     }
+//! }
+//! let maze = MazeConfig::default();
+//! assert_eq!(EnvName::Maze.visit(&maze, Start).unwrap(), (0.5, 0.5));
+//! assert_eq!(EnvName::Rooms.visit(&maze, Start).unwrap(), (0.3, 0.2));
+//! assert_eq!("rooms".parse::<EnvName>().unwrap(), EnvName::Rooms);
+//! ```
+
+use crate::env::Planar;
+use crate::error::Result;
+use crate::maze::{Maze, MazeConfig};
+use crate::rooms::TwoRooms;
+use serde::{Deserialize, Serialize};
+
+/// The environments PBCS runs on, by name.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    clap::ValueEnum,
+    strum::IntoStaticStr,
+    strum::EnumString,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum EnvName {
+    /// The paper's continuous maze (`src/maze/`), sized and laid out by the job's `[maze]`.
+    #[default]
+    Maze,
+    /// Two rooms joined by a door (`src/rooms.rs`); it has no parameters.
+    Rooms,
+}
+
+/// Generic work on whichever environment a name stands for ([`EnvName::visit`]).
+pub trait Visit {
+    /// What the work returns.
+    type Output;
+    /// The work on `env`.
+    fn on<E: Planar>(self, env: E) -> Result<Self::Output>;
+}
+
+impl EnvName {
+    /// The name as written in a job and on the command line (`maze`, `rooms`).
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
+    /// How titles and messages name the environment: `maze 5 (layout 0)`, `rooms`.
+    pub fn label(self, maze: &MazeConfig) -> String {
+        match self {
+            EnvName::Maze => format!("maze {} (layout {})", maze.size, maze.seed),
+            other => other.name().to_string(),
+        }
+    }
+
+    /// Whether this is the maze (the default, left out of written jobs).
+    pub fn is_maze(&self) -> bool {
+        *self == EnvName::Maze
+    }
+
+    /// Builds the environment this name stands for (the maze from `maze`) and runs `work` on
+    /// it.
+    pub fn visit<V: Visit>(self, maze: &MazeConfig, work: V) -> Result<V::Output> {
+        match self {
+            EnvName::Maze => work.on(Maze::new(maze)?),
+            EnvName::Rooms => work.on(TwoRooms),
+        }
+    }
+}
