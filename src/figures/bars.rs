@@ -49,19 +49,9 @@ impl SuccessBars {
 /// Width in pixels of the legend beside a bar chart.
 const BAR_LEGEND_WIDTH: u32 = 300;
 
-impl Figure for SuccessBars {
-    fn size(&self) -> (u32, u32) {
-        (
-            (260 * self.mazes.len() as u32 + 200).max(700) + BAR_LEGEND_WIDTH,
-            520,
-        )
-    }
-
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let groups = self.mazes.len() as f64;
-        // The legend stands beside the chart, never over a bar or an interval.
-        let (w, _) = root.dim_in_pixel();
-        let (root, side) = root.split_horizontally(w - BAR_LEGEND_WIDTH);
+impl SuccessBars {
+    /// The legend beside the chart: a colour swatch and a label per method.
+    fn draw_legend<DB: DrawingBackend>(&self, side: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         for (j, (_, label)) in self.methods.iter().enumerate() {
             let (x, y) = (10, 60 + 26 * j as i32);
             let colour = PALETTE[j % PALETTE.len()];
@@ -75,6 +65,39 @@ impl Figure for SuccessBars {
                 ("sans-serif", 15).into_font(),
             ))?;
         }
+        Ok(())
+    }
+
+    /// Each maze's group holds the methods that ran on it (all of them in a full grid), side
+    /// by side in the file's order.
+    fn slots(&self) -> Vec<Vec<&str>> {
+        self.mazes
+            .iter()
+            .map(|&n| {
+                self.methods
+                    .iter()
+                    .map(|(name, _)| name.as_str())
+                    .filter(|name| self.stats.iter().any(|s| s.maze == n && s.method == *name))
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+impl Figure for SuccessBars {
+    fn size(&self) -> (u32, u32) {
+        (
+            (260 * self.mazes.len() as u32 + 200).max(700) + BAR_LEGEND_WIDTH,
+            520,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let groups = self.mazes.len() as f64;
+        // The legend stands beside the chart, never over a bar or an interval.
+        let (w, _) = root.dim_in_pixel();
+        let (root, side) = root.split_horizontally(w - BAR_LEGEND_WIDTH);
+        self.draw_legend(&side)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 20))
             .margin(15)
@@ -91,19 +114,7 @@ impl Figure for SuccessBars {
             .y_desc("success rate (Wilson 95 % interval)")
             .label_style(("sans-serif", 15))
             .draw()?;
-        // Each maze's group holds the methods that ran on it (all of them in a full grid),
-        // side by side in the file's order.
-        let slots: Vec<Vec<&str>> = self
-            .mazes
-            .iter()
-            .map(|&n| {
-                self.methods
-                    .iter()
-                    .map(|(name, _)| name.as_str())
-                    .filter(|name| self.stats.iter().any(|s| s.maze == n && s.method == *name))
-                    .collect()
-            })
-            .collect();
+        let slots = self.slots();
         for (j, (name, _)) in self.methods.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
             let bars: Vec<(f64, f64, &CellStats)> = self

@@ -190,6 +190,16 @@ pub fn extra_numbers_tex(
         pictures.join(", ")
     };
     def_res(&mut s, name, "pictureseeds", &pictures);
+    method_settings_tex(&mut s, exp)?;
+    chain_numbers_tex(&mut s, name, results)?;
+    route_numbers_tex(&mut s, name, results)?;
+    Ok(s)
+}
+
+/// `\res{<experiment>:<method>:cfg:<field>}` for each setting all of a method's cells share
+/// (the seed left out).
+fn method_settings_tex(s: &mut String, exp: &crate::experiment::Experiment) -> crate::Result<()> {
+    let name = exp.name.as_str();
     for (method, _) in &exp.methods {
         let jobs: Vec<Vec<(String, String)>> = exp
             .cells
@@ -208,17 +218,23 @@ pub fn extra_numbers_tex(
                 .iter()
                 .all(|o| o.iter().any(|(f, v)| f == field && v == value));
             if field != "seed" && agreed {
-                def_res(&mut s, name, &format!("{method}:cfg:{field}"), value);
+                def_res(s, name, &format!("{method}:cfg:{field}"), value);
             }
         }
     }
+    Ok(())
+}
+
+/// Each run's chain success `\res{<experiment>:<cell>:s<seed>:chain}` and per cell the counts
+/// of unsolved runs, incomplete chains and complete chains at 0 %, from the chains table.
+fn chain_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> crate::Result<()> {
     let chains = crate::criteria::chains_path(results, name);
     if chains.exists() {
         let runs = crate::criteria::read_chains(&chains)?;
         for run in &runs {
             let percent = format!("{:.0}", f64::from(run.success_rate) * 100.0);
             def_res(
-                &mut s,
+                s,
                 name,
                 &format!("{}:s{}:chain", run.cell, run.seed),
                 &percent,
@@ -236,10 +252,16 @@ pub fn extra_numbers_tex(
                     of().filter(|r| r.complete && r.success_rate <= 0.0).count(),
                 ),
             ] {
-                def_res(&mut s, name, &format!("{cell}:{field}"), &count.to_string());
+                def_res(s, name, &format!("{cell}:{field}"), &count.to_string());
             }
         }
     }
+    Ok(())
+}
+
+/// Per cell the median fewest steps and the median share of τ phase 2 kept, from the routes
+/// table.
+fn route_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> crate::Result<()> {
     let routes = crate::tables::routes::routes_path(results, name);
     if routes.exists() {
         let routes = crate::tables::routes::read_routes(&routes)?;
@@ -254,20 +276,20 @@ pub fn extra_numbers_tex(
             let fewest = crate::stats::median(&mut fewest);
             let left = crate::stats::median(&mut left);
             def_res(
-                &mut s,
+                s,
                 name,
                 &format!("{cell}:routes:fewest"),
                 &format!("{fewest:.0}"),
             );
             def_res(
-                &mut s,
+                s,
                 name,
                 &format!("{cell}:routes:tauleft"),
                 &format!("{:.0}", left * 100.0),
             );
         }
     }
-    Ok(s)
+    Ok(())
 }
 
 /// For an experiment with a `scaling` figure: each cell's shortest path as

@@ -277,23 +277,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
     if !root.is_dir() {
         return Ok(Vec::new());
     }
-    let mut folders: Vec<(usize, String, PathBuf)> = Vec::new();
-    for entry in std::fs::read_dir(&root).map_err(|e| Error::io(&root, e))? {
-        let path = entry.map_err(|e| Error::io(&root, e))?.path();
-        let name = path
-            .file_name()
-            .and_then(|n| n.to_str())
-            .unwrap_or("")
-            .to_string();
-        let parsed = name
-            .split_once("-maze")
-            .and_then(|(a, m)| m.parse::<usize>().ok().map(|m| (m, a.to_string())));
-        match parsed {
-            Some((maze, algo)) if path.is_dir() => folders.push((maze, algo, path)),
-            _ => {}
-        }
-    }
-    folders.sort();
+    let folders = sb3_folders(&root)?;
     let mut out: Vec<MazeComparison> = Vec::new();
     for (maze, algo, dir) in &folders {
         let runs: Vec<(PathBuf, MazeRun)> = seed_rows(dir, |r: &MazeRun| r.seed)?;
@@ -301,24 +285,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
             continue;
         };
         let (steps, library) = (first.steps, first.library.clone());
-        for (path, r) in &runs {
-            if r.protocol_episodes == 0 || r.protocol_successes > r.protocol_episodes {
-                return Err(Error::parse(
-                    path,
-                    format!(
-                        "protocol_successes {} of protocol_episodes {}: need 0 <= successes \
-                         <= episodes, episodes > 0",
-                        r.protocol_successes, r.protocol_episodes
-                    ),
-                ));
-            }
-            if r.steps != steps || r.algo != *algo || r.library != library {
-                return Err(Error::parse(
-                    path,
-                    format!("every run of the folder must be {library} {algo} at {steps} steps"),
-                ));
-            }
-        }
+        check_sb3_runs(&runs, algo, steps, &library)?;
         let ours = ours_at(table, results, algo, *maze, steps)?;
         let solved = |v: &[(u64, bool)]| {
             v.iter()
@@ -345,10 +312,68 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
         line.sb3_seeds = seeds_text(sb3_seeds);
         out.push(line);
     }
-    // One pooled line per maze with more than one learner.
-    let mazes: std::collections::BTreeSet<usize> = out.iter().map(|c| c.maze).collect();
+    let pooled = pooled_comparisons(&out)?;
+    out.extend(pooled);
+    Ok(out)
+}
+
+/// The SB3 folders `<algo>-maze<N>` under `root`, sorted by maze, then algorithm.
+fn sb3_folders(root: &Path) -> Result<Vec<(usize, String, PathBuf)>> {
+    let mut folders: Vec<(usize, String, PathBuf)> = Vec::new();
+    for entry in std::fs::read_dir(root).map_err(|e| Error::io(root, e))? {
+        let path = entry.map_err(|e| Error::io(root, e))?.path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("")
+            .to_string();
+        let parsed = name
+            .split_once("-maze")
+            .and_then(|(a, m)| m.parse::<usize>().ok().map(|m| (m, a.to_string())));
+        match parsed {
+            Some((maze, algo)) if path.is_dir() => folders.push((maze, algo, path)),
+            _ => {}
+        }
+    }
+    folders.sort();
+    Ok(folders)
+}
+
+/// Every run of one SB3 folder has a valid protocol count and the first run's steps,
+/// algorithm and library.
+fn check_sb3_runs(
+    runs: &[(PathBuf, MazeRun)],
+    algo: &str,
+    steps: u64,
+    library: &str,
+) -> Result<()> {
+    for (path, r) in runs {
+        if r.protocol_episodes == 0 || r.protocol_successes > r.protocol_episodes {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "protocol_successes {} of protocol_episodes {}: need 0 <= successes \
+                     <= episodes, episodes > 0",
+                    r.protocol_successes, r.protocol_episodes
+                ),
+            ));
+        }
+        if r.steps != steps || r.algo != algo || r.library != library {
+            return Err(Error::parse(
+                path,
+                format!("every run of the folder must be {library} {algo} at {steps} steps"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// One pooled line per maze with more than one learner in `lines`.
+fn pooled_comparisons(lines_in: &[MazeComparison]) -> Result<Vec<MazeComparison>> {
+    let mut out = Vec::new();
+    let mazes: std::collections::BTreeSet<usize> = lines_in.iter().map(|c| c.maze).collect();
     for maze in mazes {
-        let lines: Vec<&MazeComparison> = out.iter().filter(|c| c.maze == maze).collect();
+        let lines: Vec<&MazeComparison> = lines_in.iter().filter(|c| c.maze == maze).collect();
         if lines.len() < 2 {
             continue;
         }
