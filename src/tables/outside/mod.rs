@@ -18,7 +18,7 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};
-use crate::stats::{fisher_exact, mean_sd, t_interval, welch, wilson, Z95};
+use crate::stats::{fisher_exact, wilson, Z95};
 use crate::train::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -51,41 +51,6 @@ pub struct MazeRun {
     pub protocol_successes: u64,
     /// Episodes of that protocol.
     pub protocol_episodes: u64,
-}
-
-/// One Pendulum-v1 run (`cargo run --example pendulum`, `python/benches/sb3_pendulum.py`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PendulumRun {
-    /// `pbcs` or `sb3-<version>`.
-    pub library: String,
-    /// The learner (`td3`).
-    pub algo: String,
-    /// The run's seed.
-    pub seed: u64,
-    /// Environment steps of training.
-    pub steps: u64,
-    /// Greedy episodes of the final evaluation.
-    pub eval_episodes: u64,
-    /// Their mean return.
-    pub mean_return: f64,
-}
-
-/// A published figure to set beside the runs (`results/outside/pendulum/published.toml`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Published {
-    /// Where it is published (a file and commit a reader can open).
-    pub source: String,
-    /// The learner.
-    pub algo: String,
-    /// Environment steps of training.
-    pub steps: u64,
-    /// Episodes its evaluation averaged.
-    pub eval_episodes: u64,
-    /// Mean return.
-    pub mean: f64,
-    /// Standard deviation of the return over those episodes (one trained agent).
-    pub std: f64,
 }
 
 /// One line of `outside.maze.csv`: ours against SB3 for one learner (or `pooled`), at one step
@@ -124,46 +89,6 @@ pub struct MazeComparison {
     pub sb3_protocol_solved: u64,
     /// Two-sided p-value of Fisher's exact test, ours against SB3.
     pub fisher_p: f64,
-}
-
-/// One line of `outside.pendulum.csv`: one source of final mean returns.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PendulumRow {
-    /// `ours`, `sb3` or `published`.
-    pub source: String,
-    /// The library (or the publication for `published`).
-    pub library: String,
-    /// Runs (seeds); 1 for a published agent.
-    pub n: u64,
-    /// Environment steps of training.
-    pub steps: u64,
-    /// Greedy episodes each run's return averages (the published evaluation's episodes for
-    /// `published`).
-    pub eval_episodes: u64,
-    /// Mean over runs of the final mean return (the published mean for `published`).
-    pub mean: f64,
-    /// Standard deviation over runs (over the published evaluation's episodes for
-    /// `published`).
-    pub sd: f64,
-    /// The worst run's return (empty for `published`).
-    pub min: Option<f64>,
-    /// The best run's return.
-    pub max: Option<f64>,
-    /// Student's t 95 % interval of the mean, lower end.
-    pub ci_lo: Option<f64>,
-    /// Upper end.
-    pub ci_hi: Option<f64>,
-    /// Welch's test of ours against this source: mean(ours) − mean(this).
-    pub diff_vs_ours: Option<f64>,
-    /// Its t.
-    pub welch_t: Option<f64>,
-    /// Its degrees of freedom.
-    pub welch_df: Option<f64>,
-    /// Its two-sided p-value.
-    pub welch_p: Option<f64>,
-    /// Runs whose return lies within one standard deviation of the published mean (empty
-    /// without a published figure, and for `published`).
-    pub within_published: Option<u64>,
 }
 
 /// One line of `update_cost.csv` and `outside.timing.csv` (wall clock, not deterministic).
@@ -446,117 +371,6 @@ fn comparison(
     }
 }
 
-/// The Pendulum lines: `ours` (`pendulum/ours/`), `sb3` (`pendulum/sb3/`, with Welch's test of
-/// ours against it) and `published` (`pendulum/published.toml`, if present); empty without
-/// the folder.
-pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
-    let root = outside_dir(results).join("pendulum");
-    if !root.is_dir() {
-        return Ok(Vec::new());
-    }
-    let read = |who: &str| -> Result<Vec<PendulumRun>> {
-        let dir = root.join(who);
-        let runs: Vec<(PathBuf, PendulumRun)> = seed_rows(&dir, |r: &PendulumRun| r.seed)?;
-        let same = |a: &PendulumRun, b: &PendulumRun| {
-            (&a.library, &a.algo, a.steps, a.eval_episodes)
-                == (&b.library, &b.algo, b.steps, b.eval_episodes)
-        };
-        for (path, r) in &runs {
-            if !same(r, &runs[0].1) || !r.mean_return.is_finite() {
-                return Err(Error::parse(
-                    path,
-                    "every run of the folder has the first run's library, algo, steps and \
-                     eval_episodes, and a finite mean_return",
-                ));
-            }
-        }
-        if runs.len() < 2 {
-            return Err(Error::parse(&dir, "fewer than two runs (s<seed>.csv)"));
-        }
-        Ok(runs.into_iter().map(|(_, r)| r).collect())
-    };
-    let (ours, sb3) = (read("ours")?, read("sb3")?);
-    if (&ours[0].algo, ours[0].steps, ours[0].eval_episodes)
-        != (&sb3[0].algo, sb3[0].steps, sb3[0].eval_episodes)
-    {
-        return Err(Error::parse(
-            root.join("sb3"),
-            "SB3's runs differ from ours in algo, steps or eval_episodes",
-        ));
-    }
-    let published = root.join("published.toml");
-    let published: Option<Published> = if published.exists() {
-        let text = std::fs::read_to_string(&published).map_err(|e| Error::io(&published, e))?;
-        let p: Published = toml::from_str(&text).map_err(|e| Error::parse(&published, e))?;
-        if p.algo != ours[0].algo
-            || p.steps != ours[0].steps
-            || !(p.mean.is_finite() && p.std >= 0.0)
-        {
-            return Err(Error::parse(
-                &published,
-                format!(
-                    "the published figure must be of {} at {} steps, with a finite mean and std >= 0",
-                    ours[0].algo, ours[0].steps
-                ),
-            ));
-        }
-        Some(p)
-    } else {
-        None
-    };
-    let band = published.as_ref().map(|p| (p.mean - p.std, p.mean + p.std));
-    let returns = |v: &[PendulumRun]| v.iter().map(|r| r.mean_return).collect::<Vec<f64>>();
-    let ours_returns = returns(&ours);
-    let line = |source: &str, runs: &[PendulumRun], test: bool| -> Result<PendulumRow> {
-        let r = returns(runs);
-        let (mean, sd) = mean_sd(&r)
-            .ok_or_else(|| Error::parse(root.join(source), "fewer than two runs (s<seed>.csv)"))?;
-        let (ci_lo, ci_hi) = t_interval(&r).map_or((None, None), |(a, b)| (Some(a), Some(b)));
-        let w = if test { welch(&ours_returns, &r) } else { None };
-        Ok(PendulumRow {
-            source: source.to_string(),
-            library: runs[0].library.clone(),
-            n: runs.len() as u64,
-            steps: runs[0].steps,
-            eval_episodes: runs[0].eval_episodes,
-            mean,
-            sd,
-            min: r.iter().copied().reduce(f64::min),
-            max: r.iter().copied().reduce(f64::max),
-            ci_lo,
-            ci_hi,
-            diff_vs_ours: w.map(|_| mean_sd(&ours_returns).map_or(f64::NAN, |m| m.0) - mean),
-            welch_t: w.map(|w| w.0),
-            welch_df: w.map(|w| w.1),
-            welch_p: w.map(|w| w.2),
-            within_published: band
-                .map(|(lo, hi)| r.iter().filter(|&&x| (lo..=hi).contains(&x)).count() as u64),
-        })
-    };
-    let mut out = vec![line("ours", &ours, false)?, line("sb3", &sb3, true)?];
-    if let Some(p) = published {
-        out.push(PendulumRow {
-            source: "published".into(),
-            library: p.source,
-            n: 1,
-            steps: p.steps,
-            eval_episodes: p.eval_episodes,
-            mean: p.mean,
-            sd: p.std,
-            min: None,
-            max: None,
-            ci_lo: None,
-            ci_hi: None,
-            diff_vs_ours: None,
-            welch_t: None,
-            welch_df: None,
-            welch_p: None,
-            within_published: None,
-        });
-    }
-    Ok(out)
-}
-
 /// The update-cost lines of `<results>/outside/update_cost.csv` (empty without it).
 pub fn update_costs(results: &Path) -> Result<Vec<UpdateCost>> {
     let path = outside_dir(results).join("update_cost.csv");
@@ -595,6 +409,9 @@ pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<Pa
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
     Ok(files)
 }
+
+mod pendulum;
+pub use pendulum::{pendulum_rows, PendulumRow, PendulumRun, Published};
 
 #[cfg(test)]
 mod tests;
