@@ -396,8 +396,9 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
 /// ```
 ///
 /// α, the K walk, early stopping, verification, restarts and chaining come from `config`.
-/// `next(n, T)` makes the n-th fresh learning problem (a new DDPG each time; n counts
-/// restarts too, so it equals the skill's index when nothing restarts);
+/// `next(n, T)` makes the n-th learning problem (its learner fresh from the seeds, or, with
+/// `warm_start`, the last saved skill's; n counts restarts too, so it equals the skill's index
+/// when nothing restarts);
 /// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
 /// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
 /// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run

@@ -9,16 +9,16 @@
 //! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
 //!   collecting skills backwards, then reversing them;
 //! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
-//!   executing it uses π_0 until the state enters A_1, then π_1, and so on ([`chain`]: type,
+//!   executing it uses π_0 until the state enters A_1, then π_1, and so on ([`skill_chain`]: type,
 //!   execution, persistence).
 
 pub mod backplay;
-pub mod chain;
 pub mod chaining;
 pub mod goal;
+pub mod skill_chain;
 pub mod task;
 
-pub use chain::{Ball, Rollout, Skill, SkillChain};
+pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;
 use crate::error::{Error, Result};
