@@ -3,7 +3,9 @@
 //! PBCS needs to reset the environment to any state (phase 1 resets to archived states,
 //! Backplay to states near τ_K). Here that is free: [`Env::step`] is a pure function of
 //! `(&State, action)`, as in gymnax, so "resetting" is just passing another state. Implement
-//! this trait for your own environment to run phase 1 and phase 2 on it.
+//! this trait for your own environment to run phase 1 and phase 2 on it; PBCS's ball starts
+//! (the presets' `phase2.start = "ball"`, and the evaluation's B_ε(s_0)), clear balls and
+//! shortening need the hooks of [`Capability`], which a setting refuses to run without.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -228,7 +230,9 @@ pub fn evaluation_starts<E: Env + ?Sized>(
     let start = env.start();
     let Some(ball) = env.ball_starts() else {
         if epsilon > 0.0 {
-            Capability::SampleBall.require(env, "an evaluation ball of radius ε > 0")?;
+            let setting =
+                "an evaluation ball B_ε(s_0), ε > 0 (phase2.epsilon, train.final_eval_epsilon)";
+            Capability::SampleBall.require(env, setting)?;
         }
         return Ok(vec![start; episodes]);
     };

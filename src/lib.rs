@@ -21,8 +21,8 @@
 //! and [`envs`] names the environments jobs and the command run;
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
 //! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
-//! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws mazes
-//! with plotters, and [`runs`] turns a job into an outcome (`compute`) and writes it (`write`):
+//! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws planar
+//! environments with plotters, and [`runs`] turns a job into an outcome (`compute`) and writes it (`write`):
 //! what the `pbcs` command runs. The experiment pipeline, one way: [`experiment`] (grids of
 //! cells × seeds, declared in TOML, swept with resume) → `aggregate` and [`tables`] (per-cell
 //! statistics, curves, shortest paths, routes) → [`pipeline`] (writes `results/tables/`, then

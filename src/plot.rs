@@ -1,6 +1,7 @@
-//! Pictures of mazes with plotters: walls, archive states, trajectories, markers.
+//! Pictures of planar environments with plotters (a maze, the rooms: the walls, target and
+//! start of an [`crate::env::Scene`]), archive states, trajectories, markers.
 //!
-//! The renderers draw in maze coordinates on any plotters backend, so the same drawing code
+//! The renderers draw in the environment's coordinates on any plotters backend, so the same drawing code
 //! produces PNG (bitmap backend) and SVG. Text uses the DejaVu Sans font shipped in
 //! `figures/fonts/`, registered once, so no system font lookup happens.
 
@@ -252,7 +253,7 @@ pub fn render_figure<F: Figure>(figure: &F, stem: &Path) -> Result<[std::path::P
 /// 400 and 1200 px (a maze: 40 px per cell), the shorter side in proportion.
 fn scene_px(scene: &Scene) -> (u32, u32) {
     let long = scene.width.max(scene.height);
-    let side = (long as u32 * 40).clamp(400, 1200);
+    let side = ((long * 40.0).round() as u32).clamp(400, 1200);
     let px = |x: f32| (side as f32 * x / long).round() as u32;
     (px(scene.width), px(scene.height))
 }

@@ -320,6 +320,21 @@ impl ExperimentSpec {
     }
 }
 
+/// Experiments are grids of maze sizes so far: a PBCS job naming another environment is
+/// refused, naming `env` and `what` (the method).
+fn refuse_other_env(job: &PbcsJob, what: &str) -> Result<()> {
+    if job.env.is_maze() {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "env",
+        format!(
+            "{what}: \"{}\" — experiments run the maze so far (`pbcs run --env {0}` runs it)",
+            job.env.name()
+        ),
+    ))
+}
+
 /// The validated job of method `m` on maze size `n` from its merged `table` (seed 0).
 fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, n: usize) -> Result<Job> {
     let what = |e: toml::de::Error| {
@@ -337,6 +352,7 @@ fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, n: usize) -> Result
         }
         Kind::Pbcs => {
             let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
+            refuse_other_env(&j, &format!("method `{}`", m.name))?;
             j.maze.size = n;
             j.seed = 0;
             Job::Pbcs(j)
@@ -426,6 +442,7 @@ impl Experiment {
             .iter()
             .map(|&n| {
                 let mut j = job.clone();
+                refuse_other_env(&j, &format!("method `{name}`"))?;
                 j.maze.size = n;
                 j.seed = 0;
                 j.check().map_err(|e| located(e, &format!("maze {n}")))?;

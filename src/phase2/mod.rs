@@ -239,7 +239,7 @@ impl Variant {
 impl Phase2Config {
     /// Refuses, naming the setting and the hook, a setting that needs a hook of [`Env`] that
     /// `env` does not offer: ball starts and the chain's verification need
-    /// [`Env::ball_starts`], `stop_at_failure` [`Env::clear_balls`], `shorten`
+    /// [`Env::ball_starts`], `stop_at_failure` and `retargets` [`Env::clear_balls`], `shorten`
     /// [`Env::connector`]. (Before, each silently did something else: exact starts, no stop,
     /// no shortening.)
     pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
@@ -252,6 +252,10 @@ impl Phase2Config {
         }
         if self.stop_at_failure {
             Capability::BallIsClear.require(env, "phase2.stop_at_failure")?;
+        }
+        if self.retargets > 0 {
+            // Moved hand-overs try clear balls first.
+            Capability::BallIsClear.require(env, "phase2.retargets")?;
         }
         if self.shorten {
             Capability::Connect.require(env, "phase2.shorten")?;

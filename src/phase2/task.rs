@@ -361,9 +361,8 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         self.spent_budget()
     }
 
-    /// Whether B_ε(τ_k) is clear; `false` where the environment cannot tell (then
-    /// `stop_at_failure` is refused before the task is made, and moved hand-overs try the
-    /// nearest balls first).
+    /// Whether B_ε(τ_k) is clear; `false` where the environment cannot tell (the settings that
+    /// read it, `stop_at_failure` and `retargets`, are refused before the task is made).
     fn ball_is_clear(&self, k: usize) -> bool {
         self.env
             .clear_balls()

@@ -124,7 +124,7 @@ fn load_saved_job(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, SkillCha
     Ok((job, chain))
 }
 
-/// Re-runs the chain saved in `chain_dir` on the maze it was built for: `episodes` episodes
+/// Re-runs the chain saved in `chain_dir` on the environment its job names: `episodes` episodes
 /// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (default: the run's
 /// own seed, which reproduces the run's evaluation exactly), each at most
 /// `phase2.eval_max_steps` steps, the policies on `kernel`. Writes nothing
@@ -197,7 +197,7 @@ impl Visit for EvalOn<'_> {
 
 impl ChainEval {
     /// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and
-    /// `eval-s<seed>.png`/`.svg` (the first rollouts over the maze) into `out` (`pbcs eval`:
+    /// `eval-s<seed>.png`/`.svg` (the first rollouts over the environment) into `out` (`pbcs eval`:
     /// the chain folder unless `--out` says otherwise).
     pub fn write(&self, out: &Path) -> Result<()> {
         let seed = self.seed;

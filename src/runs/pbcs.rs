@@ -119,6 +119,15 @@ impl PbcsRun<Maze> {
 }
 
 impl<E: Planar> PbcsRun<E> {
+    /// Refuses, before any work, a `job` that needs a hook `env` lacks: phase 2's
+    /// ([`crate::phase2::Phase2Config::require_hooks`]) and the evaluation's starts in
+    /// B_ε(s_0) (ball starts).
+    pub fn require_hooks(env: &E, job: &PbcsJob) -> Result<()> {
+        job.phase2.require_hooks(env)?;
+        crate::env::Capability::SampleBall
+            .require(env, "phase2.epsilon (the evaluation's B_ε(s_0))")
+    }
+
     /// Runs PBCS for `job` on `env`: phase 1, phase 2 ([`chain_skills`]), then the chain's
     /// evaluation from starts uniform in B_ε(s_0), every network on `kernel`.
     /// `progress(skill, report)` is called during phase 2. Writes nothing.
@@ -129,6 +138,7 @@ impl<E: Planar> PbcsRun<E> {
         progress: impl FnMut(usize, Progress),
     ) -> Result<PbcsRun<E>> {
         job.check()?;
+        Self::require_hooks(&env, job)?;
         let seeds = Seeds::new(job.seed);
         let clock = Instant::now();
         let mut rng = seeds.stream(Stream::Explore);
@@ -281,9 +291,10 @@ pub(crate) fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
         .collect()
 }
 
-/// Runs PBCS for `job` into `out`: claims the folder (writing `config.toml`) before any work,
-/// then [`PbcsRun::compute`] and [`PbcsRun::write`]. `progress(skill, report)` is called
-/// during phase 2.
+/// Runs PBCS for `job` into `out` on the environment it names ([`crate::envs`]): refuses a
+/// setting the environment lacks a hook for ([`PbcsRun::require_hooks`]), claims the folder
+/// (writing `config.toml`) before any work, then [`PbcsRun::compute_on`] and
+/// [`PbcsRun::write`]. `progress(skill, report)` is called during phase 2.
 pub fn run_pbcs(
     job: &PbcsJob,
     kernel: Kernel,
@@ -291,7 +302,6 @@ pub fn run_pbcs(
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
     job.check()?;
-    claim(job, out)?;
     job.env.visit(
         &job.maze,
         RunInto {
@@ -315,6 +325,8 @@ impl<P: FnMut(usize, Progress)> Visit for RunInto<'_, P> {
     type Output = (RunRecord, f64);
 
     fn on<E: Planar>(self, env: E) -> Result<(RunRecord, f64)> {
+        PbcsRun::require_hooks(&env, self.job)?;
+        claim(self.job, self.out)?;
         let run = PbcsRun::compute_on(env, self.job, self.kernel, self.progress)?;
         run.write(self.job, self.out)?;
         Ok((run.record, run.seconds))

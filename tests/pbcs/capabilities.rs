@@ -55,6 +55,8 @@ fn each_setting_that_needs_a_missing_hook_is_refused_naming_both() {
     (c.chain_verify_episodes, c.chain_repairs) = (0, 0);
     says(&refusal(&c), "phase2.stop_at_failure", "Env::clear_balls");
     c.stop_at_failure = false;
+    says(&refusal(&c), "phase2.retargets", "Env::clear_balls");
+    c.retargets = 0;
     says(&refusal(&c), "phase2.shorten", "Env::connector");
     c.shorten = false;
     c.require_hooks(&Plane).unwrap();

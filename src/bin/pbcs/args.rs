@@ -40,7 +40,8 @@ pub struct RunArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
-    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact]].
+    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact],
+    /// out/run/<…>/<env>-s<seed>[…] for another environment].
     /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -137,7 +138,7 @@ pub enum Command {
         #[arg(long)]
         steps: Option<u64>,
     },
-    /// Re-run a chain saved by `pbcs run` (its `chain/` folder) on its maze: success rate with
+    /// Re-run a chain saved by `pbcs run` (its `chain/` folder) on its environment: success rate with
     /// its Wilson interval; writes eval-s<seed>.csv and a picture (into the chain folder by default).
     Eval {
         /// The chain folder (`<run folder>/chain`).
