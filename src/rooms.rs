@@ -161,7 +161,7 @@ impl Planar for TwoRooms {
                 [(1.0 - t / 2.0, 0.0), (1.0 + t / 2.0, DOOR.0)],
             ],
             target: ((TARGET[0], TARGET[1]), TARGET_RADIUS),
-            start: (0.3, 0.2),
+            start: self.point(&self.start()),
         }
     }
 }

@@ -184,7 +184,8 @@ impl Visit for EvalOn<'_> {
     type Output = (Vec<EvalEpisode>, Vec<Vec<(f32, f32)>>, Scene);
 
     fn on<E: Planar>(self, env: E) -> Result<Self::Output> {
-        (self.chain).check_env(&env, &self.chain_dir.join("manifest.toml"))?;
+        let manifest = self.chain_dir.join("manifest.toml");
+        self.chain.check_env(&env, &manifest)?;
         let (rows, rollouts) =
             evaluate_chain(&env, self.chain, self.job, self.episodes, self.seed)?;
         let points = rollouts
