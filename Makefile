@@ -4,8 +4,9 @@ CARGO ?= cargo
 JOBS ?= 2
 # A profile of the experiment files (`smoke`); empty: the committed grids.
 PROFILE ?=
-# The committed grids (the table's DDPG and TD3 cells give the 1M-step learning curves).
-EXPERIMENTS ?= table gamma unseen beyond ablations protocol switches heldout
+# The committed grids: every experiment file, one with a [[method]] (the table's DDPG and TD3
+# cells give the 1M-step learning curves). A new file joins without an edit here.
+EXPERIMENTS ?= $(patsubst experiments/%.toml,%,$(shell grep -l '^\[\[method\]\]' experiments/*.toml))
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
 RESULTS = $(if $(PROFILE),results-$(PROFILE),results)
@@ -17,7 +18,7 @@ TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
 .PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
-        commands paper check-paper smoke python
+        commands paper check-paper smoke python experiments
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
@@ -27,6 +28,7 @@ help:
 	@echo "make results   re-run every experiment (resumable; JOBS=2; PROFILE=smoke)"
 	@echo "make results-parallel   the same through make -j\$$JOBS, one rule per (cell, seed)"
 	@echo "make commands  print one command per (cell, seed), for a cluster's job array"
+	@echo "make experiments   list the experiment grids (EXPERIMENTS)"
 	@echo "make cell EXP=table CELL=pbcs-maze2 [SEED=3]   re-run one table cell and compare"
 	@echo "make paper     build paper/report.pdf (needs latexmk + texlive)"
 	@echo "make smoke     the whole pipeline on the smoke profile (what CI runs)"
@@ -70,6 +72,9 @@ results-parallel: bin
 	mkdir -p $(TARGET_DIR)
 	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) > $(TARGET_DIR)/runs-$$e.mk || exit 1; \
 	  $(MAKE) -f $(TARGET_DIR)/runs-$$e.mk -j$(JOBS) PBCS=$(PBCS) || exit 1; done
+
+experiments:
+	@echo $(EXPERIMENTS)
 
 commands: bin
 	@for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml $(PROFILE_FLAG); done

@@ -14,7 +14,7 @@
 //!
 //! let run = |seed, complete, success_rate| ChainSuccess {
 //!     experiment: "t".into(), cell: "pbcs-maze2".into(), method: "pbcs".into(),
-//!     label: "PBCS".into(), maze: 2, seed, complete, success_rate,
+//!     label: "PBCS".into(), site: pbcs::experiment::Site::Maze(2), seed, complete, success_rate,
 //!     solved: complete && success_rate >= 0.95, env_steps: 1000, paper_steps: Some(321_000),
 //! };
 //! let c = &criteria(&[run(0, true, 1.0), run(1, true, 0.93), run(2, false, 0.0)])[0];
@@ -40,8 +40,9 @@ pub struct ChainSuccess {
     pub method: String,
     /// Method label.
     pub label: String,
-    /// Maze size.
-    pub maze: usize,
+    /// Maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: crate::experiment::Site,
     /// Run seed.
     pub seed: u64,
     /// Whether phase 2 ended without a failure (a complete chain was evaluated).
@@ -68,8 +69,9 @@ pub struct Criteria {
     pub method: String,
     /// Method label.
     pub label: String,
-    /// Maze size.
-    pub maze: usize,
+    /// Maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: crate::experiment::Site,
     /// Runs.
     pub n: u64,
     /// Runs whose chain is complete.
@@ -103,13 +105,13 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
             label: exp
                 .cell(&r.cell)
                 .map_or_else(|_| r.method.clone(), |c| c.label.clone()),
-            maze: r.maze,
+            site: r.site,
             seed: r.seed,
             complete: r.failure.is_none(),
             success_rate: r.success_rate,
             solved: r.solved,
             env_steps: r.env_steps,
-            paper_steps: crate::experiment::paper_run(crate::phase2::Variant::Pbcs, r.maze).0,
+            paper_steps: crate::experiment::paper_run(crate::phase2::Variant::Pbcs, r.site).0,
         })
         .collect()
 }
@@ -126,7 +128,7 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
                     cell: r.cell.clone(),
                     method: r.method.clone(),
                     label: r.label.clone(),
-                    maze: r.maze,
+                    site: r.site,
                     n: 0,
                     complete: 0,
                     at_0_50: 0,
@@ -177,7 +179,8 @@ pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
 ///
 /// let run = |steps, solved| ChainSuccess {
 ///     experiment: "t".into(), cell: "c".into(), method: "m".into(), label: "m".into(),
-///     maze: 2, seed: 0, complete: true, success_rate: 1.0, solved, env_steps: steps,
+///     site: pbcs::experiment::Site::Maze(2), seed: 0, complete: true, success_rate: 1.0,
+///     solved, env_steps: steps,
 ///     paper_steps: Some(100),
 /// };
 /// let runs = [run(10, true), run(50, true), run(150, true), run(20, false)];

@@ -39,6 +39,9 @@ use serde::{Deserialize, Serialize};
     Default,
     PartialEq,
     Eq,
+    PartialOrd,
+    Ord,
+    Hash,
     Serialize,
     Deserialize,
     clap::ValueEnum,
@@ -75,6 +78,16 @@ impl EnvName {
             EnvName::Maze => format!("maze {} (layout {})", maze.size, maze.seed),
             other => other.name().to_string(),
         }
+    }
+
+    /// The names of the environments other than the maze, comma-separated (for messages).
+    pub fn others() -> String {
+        <EnvName as clap::ValueEnum>::value_variants()
+            .iter()
+            .filter(|e| !e.is_maze())
+            .map(|e| e.name())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Whether this is the maze (the default, left out of written jobs).

@@ -312,7 +312,7 @@ pub fn render_all(
         if exp.report.results_table {
             extra.push((
                 "table.tex",
-                report::results_table_tex(stats, &exp.mazes, &exp.methods),
+                report::results_table_tex(stats, &exp.sites, &exp.methods),
             ));
         }
         if let Some(settings) = &exp.report.settings {

@@ -53,7 +53,7 @@ fn table(name: &str) -> Vec<CellStats> {
 
 fn cell<'a>(t: &'a [CellStats], method: &str, maze: usize) -> &'a CellStats {
     t.iter()
-        .find(|s| s.method == method && s.maze == maze)
+        .find(|s| s.method == method && s.site == pbcs::experiment::Site::Maze(maze))
         .unwrap_or_else(|| panic!("no cell {method}-maze{maze}"))
 }
 
@@ -327,7 +327,7 @@ fn gamma_study_lower_gamma_and_the_argmax_actor_help_on_maze_2_only() {
     let g = table("gamma");
     for s in g
         .iter()
-        .filter(|s| s.maze == 3 || s.method.starts_with("g099"))
+        .filter(|s| s.site.size() == Some(3) || s.method.starts_with("g099"))
     {
         assert!(
             fails(s),
@@ -375,8 +375,8 @@ fn unseen_states_ball_starts_beat_exact_starts() {
         exact.n
     );
     for b in u.iter().filter(|s| s.method == "ball") {
-        let e = cell(&u, "exact", b.maze);
-        assert!(b.successes > e.successes && !beats(e, b), "maze {}", b.maze);
+        let e = cell(&u, "exact", b.site.size().unwrap());
+        assert!(b.successes > e.successes && !beats(e, b), "maze {}", b.site);
     }
     // Backplay itself succeeds with exact starts: every exact-start run built a complete chain
     // within its budget; what fails is the chain's evaluation from starts off τ.

@@ -31,7 +31,7 @@ fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
         };
         assert!([2611, 2612].contains(&j.maze.seed), "{}", c.id);
     }
-    assert_eq!(exp.mazes, [8, 16, 24, 32]);
+    assert_eq!(exp.sites, [8, 16, 24, 32].map(pbcs::experiment::Site::Maze));
     let runs: usize = exp.cells.iter().map(|c| exp.seeds_of(c).len()).sum();
     assert_eq!(runs, 2 * (10 + 10 + 5 + 3));
 }
@@ -72,13 +72,16 @@ fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
     let stats =
         pbcs::tables::read_table(&pbcs::tables::table_path(Path::new("results"), "heldout"))
             .unwrap();
-    let eight: Vec<_> = stats.into_iter().filter(|c| c.maze == 8).collect();
+    let eight: Vec<_> = stats
+        .into_iter()
+        .filter(|c| c.site.size() == Some(8))
+        .collect();
     let run = |cell: &str, label: &str, seed: u64, rate: f32| pbcs::criteria::ChainSuccess {
         experiment: "heldout".into(),
         cell: cell.into(),
         method: cell[..1].into(),
         label: label.into(),
-        maze: 8,
+        site: pbcs::experiment::Site::Maze(8),
         seed,
         complete: true,
         success_rate: rate,

@@ -9,6 +9,7 @@
 //! is *inconclusive*.
 
 use crate::error::{Error, Result};
+use crate::experiment::Site;
 use crate::fmt::human_steps;
 use crate::tables::CellStats;
 use serde::Deserialize;
@@ -118,10 +119,10 @@ fn per_maze(
     let mut parts = Vec::new();
     let (mut a_wins, mut b_wins, mut a_exact, mut b_exact) = (false, false, false, false);
     for s in cells(stats, a) {
-        if let Some(t) = find(stats, b, s.maze) {
+        if let Some(t) = find(stats, b, s.site) {
             parts.push(format!(
-                "maze {}: {}",
-                s.maze,
+                "{}: {}",
+                s.site.named(),
                 versus(s, t, (a_name, b_name))
             ));
             a_wins |= beats(s, t);
@@ -153,8 +154,8 @@ fn cells<'a>(stats: &'a [CellStats], method: &str) -> Vec<&'a CellStats> {
     stats.iter().filter(|s| s.method == method).collect()
 }
 
-pub(crate) fn find<'a>(stats: &'a [CellStats], method: &str, maze: usize) -> Option<&'a CellStats> {
-    stats.iter().find(|s| s.method == method && s.maze == maze)
+pub(crate) fn find<'a>(stats: &'a [CellStats], method: &str, site: Site) -> Option<&'a CellStats> {
+    stats.iter().find(|s| s.method == method && s.site == site)
 }
 
 /// Pools a method's cells over mazes (counts added; interval recomputed).
@@ -191,12 +192,12 @@ fn fails_everywhere(
     let mut verdicts = Vec::new();
     for s in c {
         let mut part = format!(
-            "maze {}: {} solved within {} steps",
-            s.maze,
+            "{}: {} solved within {} steps",
+            s.site.named(),
             k_of_n(s),
             human_steps(s.budget as f64)
         );
-        let long = find(longer, method, s.maze).filter(|l| l.budget > s.budget);
+        let long = find(longer, method, s.site).filter(|l| l.budget > s.budget);
         if let Some(l) = long {
             part.push_str(&format!(
                 ", {} within {}",
@@ -474,8 +475,8 @@ fn solves_everywhere(
         .iter()
         .map(|s| {
             format!(
-                "maze {}: {} within {} steps",
-                s.maze,
+                "{}: {} within {} steps",
+                s.site.named(),
                 k_of_n(s),
                 human_steps(s.budget as f64)
             )
@@ -497,8 +498,8 @@ fn steps_below_paper(
     for s in c {
         if let (Some(m), Some(p)) = (s.solved_steps_median, s.paper_steps) {
             parts.push(format!(
-                "maze {}: median {} over {} solved runs vs the paper's {}",
-                s.maze,
+                "{}: median {} over {} solved runs vs the paper's {}",
+                s.site.named(),
                 human_steps(m),
                 s.successes,
                 human_steps(p as f64)
@@ -568,8 +569,8 @@ fn beats_claim(
         .iter()
         .filter(|s| {
             (s.method == method || s.method == than)
-                && find(stats, method, s.maze).is_some()
-                && find(stats, than, s.maze).is_some()
+                && find(stats, method, s.site).is_some()
+                && find(stats, than, s.site).is_some()
         })
         .cloned()
         .collect();

@@ -9,7 +9,7 @@ fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
         cell: format!("{method}-maze{maze}"),
         method: method.into(),
         label: method.into(),
-        maze,
+        site: crate::experiment::Site::Maze(maze),
         n: 0,
         successes: 0,
         success_rate: 0.0,

@@ -1,15 +1,16 @@
-//! Experiments as data: one TOML file per paper artifact, a grid of cells (maze × method)
-//! run over a range of seeds, each (cell, seed) an independent deterministic run that writes
+//! Experiments as data: one TOML file per paper artifact, a grid of cells (site × method: a
+//! [`Site`] is a maze size or another environment of the registry) run over a range of seeds, each (cell, seed) an independent deterministic run that writes
 //! its own raw CSV row.
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
 //! baselines, a [`PbcsJob`] for PBCS), the fields each method changes (`set`, and `by_maze`
-//! for one size), the mazes, the seeds, and named profiles (`smoke` for CI, or any a user adds)
+//! for one size or environment), the mazes and other environments (`envs = ["rooms"]`), the
+//! seeds, and named profiles (`smoke` for CI, or any a user adds)
 //! that override seeds, mazes and fields. Resolving a cell is
 //! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
 //! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
-//! `by_maze`; then `maze.size` and `seed` are set (a profile overrides everything the file
-//! sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
+//! `by_maze`; then `maze.size` (or `env`) and `seed` are set (a profile overrides everything
+//! the file sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
 //! parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
@@ -33,6 +34,7 @@
 mod declared;
 mod layout;
 mod row;
+mod site;
 mod spec;
 mod sweep;
 
@@ -43,6 +45,7 @@ pub use layout::{
     read_wall_seconds,
 };
 pub use row::{read_row, read_run_row, RawRow};
+pub use site::Site;
 pub use spec::paper_run;
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
@@ -113,23 +116,42 @@ impl Job {
     }
 }
 
-/// One cell of the grid: a method on a maze.
+/// One cell of the grid: a method on a site.
 #[derive(Debug, Clone)]
 pub struct Cell {
-    /// `<method>-maze<N>`: the cell's folder name and its name on the command line.
+    /// `<method>-<site id>` (`pbcs-maze5`, `pbcs-rooms`): the cell's folder name and its name
+    /// on the command line.
     pub id: String,
     /// Method name.
     pub method: String,
     /// Method label for figures and tables.
     pub label: String,
-    /// Maze size N.
-    pub maze: usize,
+    /// Where it runs: a maze size or another environment.
+    pub site: Site,
     /// The resolved job (run seed 0; [`Job::with_seed`] gives the others).
     pub job: Job,
     /// The paper's environment steps for this cell, if it reports them.
     pub paper_steps: Option<u64>,
     /// Whether the paper's run solved this cell, if it reports it.
     pub paper_solved: Option<bool>,
+}
+
+impl Cell {
+    /// What a picture of the cell draws its runs over: its environment's scene.
+    pub fn scene(&self) -> Result<crate::env::Scene> {
+        /// The scene of whichever environment the job names.
+        struct SceneOf;
+        impl crate::envs::Visit for SceneOf {
+            type Output = crate::env::Scene;
+            fn on<E: crate::env::Planar>(self, env: E) -> Result<crate::env::Scene> {
+                Ok(env.scene())
+            }
+        }
+        match &self.job {
+            Job::Vanilla(j) => Ok(crate::env::Planar::scene(&crate::maze::Maze::new(&j.maze)?)),
+            Job::Pbcs(j) => j.env.visit(&j.maze, SceneOf),
+        }
+    }
 }
 
 /// A resolved experiment: every cell's job, the seeds, the profile.
@@ -146,19 +168,19 @@ pub struct Experiment {
     pub profile: Option<String>,
     /// First run seed.
     pub first_seed: u64,
-    /// Number of seeds (of every maze but those of `seeds_by_maze`).
+    /// Number of seeds (of every site but those of `seeds_by_maze`).
     pub seed_count: u64,
-    /// Fewer seeds on some maze sizes (`seeds_by_maze = { "32" = 3 }`): size → seed count.
-    pub seeds_by_maze: std::collections::BTreeMap<usize, u64>,
+    /// Fewer seeds on some sites (`seeds_by_maze = { "32" = 3 }`): site → seed count.
+    pub seeds_by_maze: std::collections::BTreeMap<Site, u64>,
     /// Seeds whose runs also keep the picture data.
     pub picture_seeds: Vec<u64>,
     /// For a pre-registered grid, what was registered (`[registered]`).
     pub registered: Option<Registration>,
-    /// Maze sizes, in order.
-    pub mazes: Vec<usize>,
+    /// The grid's rows: its maze sizes, then its other environments, in the file's order.
+    pub sites: Vec<Site>,
     /// Methods (name, label), in order.
     pub methods: Vec<(String, String)>,
-    /// Cells, maze-major in the file's order of mazes and methods.
+    /// Cells, site-major in the file's order of sites and methods.
     pub cells: Vec<Cell>,
     /// The figures it declares, in order.
     pub figures: Vec<FigureSpec>,
@@ -187,11 +209,11 @@ impl Experiment {
         (self.first_seed..self.first_seed + self.seed_count).collect()
     }
 
-    /// The run seeds of `cell`: [`Self::seeds`], or the first `seeds_by_maze[maze]` of them.
+    /// The run seeds of `cell`: [`Self::seeds`], or the first `seeds_by_maze[site]` of them.
     pub fn seeds_of(&self, cell: &Cell) -> Vec<u64> {
         let n = self
             .seeds_by_maze
-            .get(&cell.maze)
+            .get(&cell.site)
             .map_or(self.seed_count, |&n| n.min(self.seed_count));
         (self.first_seed..self.first_seed + n).collect()
     }

@@ -1,6 +1,6 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
-use super::{Cell, Experiment, Job, Kind};
+use super::{Cell, Experiment, Job, Kind, Site};
 use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
@@ -14,15 +14,16 @@ use std::path::Path;
 pub struct RawRow {
     /// Experiment name.
     pub experiment: String,
-    /// Cell id (`<method>-maze<N>`).
+    /// Cell id (`<method>-maze<N>`, `<method>-rooms`).
     pub cell: String,
     /// Method name.
     pub method: String,
     /// `vanilla` or `pbcs`.
     pub kind: Kind,
-    /// Maze size N.
-    pub maze: usize,
-    /// Maze layout seed.
+    /// Where it ran: the maze size N, or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: Site,
+    /// Maze layout seed (0 for another environment).
     pub maze_seed: u64,
     /// Run seed.
     pub seed: u64,
@@ -81,7 +82,7 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Vanilla,
-            maze: s.maze,
+            site: Site::Maze(s.maze),
             maze_seed: s.maze_seed,
             seed: job.seed,
             learner: job.learner.record_name(),
@@ -110,8 +111,8 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Pbcs,
-            maze: job.maze.size,
-            maze_seed: job.maze.seed,
+            site: pbcs_site(job),
+            maze_seed: layout_seed(job),
             seed: r.seed,
             learner: r.learner,
             gamma: r.gamma,
@@ -128,6 +129,23 @@ impl RawRow {
             skills: r.skills,
             failure: r.failure,
         }
+    }
+}
+
+/// Where a PBCS job runs.
+fn pbcs_site(job: &PbcsJob) -> Site {
+    match job.env {
+        crate::envs::EnvName::Maze => Site::Maze(job.maze.size),
+        other => Site::Env(other),
+    }
+}
+
+/// The maze layout seed of a PBCS job; 0 for another environment.
+fn layout_seed(job: &PbcsJob) -> u64 {
+    if job.env.is_maze() {
+        job.maze.seed
+    } else {
+        0
     }
 }
 
@@ -161,7 +179,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ),
         Job::Pbcs(j) => (
             Kind::Pbcs,
-            j.maze.seed,
+            layout_seed(j),
             j.learner.record_name(),
             j.learner.gamma,
             j.phase2.chaining,
@@ -174,7 +192,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ("cell", row.cell.clone(), cell.id.clone()),
         ("method", row.method.clone(), cell.method.clone()),
         ("kind", row.kind.name().into(), kind.name().into()),
-        ("maze", row.maze.to_string(), cell.maze.to_string()),
+        ("maze", row.site.to_string(), cell.site.to_string()),
         (
             "maze_seed",
             row.maze_seed.to_string(),

@@ -2,8 +2,9 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::declared::{check_figures, check_report};
-use super::{Cell, Experiment, FigureSpec, Job, Kind, ReportSpec};
+use super::{Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
 use crate::config::{PbcsJob, TrainJob};
+use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::phase2::Variant;
 use crate::validate::Check;
@@ -31,7 +32,7 @@ pub(crate) struct MethodSpec {
     paper_solved: BTreeMap<String, bool>,
     /// The maze sizes this method runs, a subset of the experiment's (default: all of them):
     /// a grid whose rows ask different questions (the ablations) need not run every method
-    /// on every size.
+    /// on every size. Every method runs on every environment of `envs`.
     #[serde(default)]
     mazes: Option<Vec<usize>>,
 }
@@ -92,18 +93,26 @@ pub(crate) struct ExperimentSpec {
     #[serde(default)]
     description: String,
     seeds: u64,
-    /// Fewer seeds on some sizes (`seeds_by_maze = { "32" = 3 }`), at most `seeds`.
+    /// Fewer seeds on some sizes or environments (`seeds_by_maze = { "32" = 3 }`), at most
+    /// `seeds`.
     #[serde(default)]
     seeds_by_maze: BTreeMap<String, u64>,
     #[serde(default)]
     first_seed: u64,
     #[serde(default = "default_picture_seeds")]
     picture_seeds: Vec<u64>,
+    /// Maze sizes, the grid's first rows.
+    #[serde(default)]
     mazes: Vec<usize>,
+    /// Other environments of the registry (`envs = ["rooms"]`), the rows after the mazes:
+    /// every PBCS method runs on each, its job's `env` set to it.
+    #[serde(default)]
+    envs: Vec<EnvName>,
     #[serde(rename = "method")]
     methods: Vec<MethodSpec>,
-    /// Fields set on one maze size only (`[by_maze."15"]`, e.g. a budget per size), applied
-    /// after the methods' own tables and before the profile's.
+    /// Fields set on one maze size or environment only (`[by_maze."15"]`, e.g. a budget per
+    /// size; `[by_maze.rooms]`), applied after the methods' own tables and before the
+    /// profile's.
     #[serde(default)]
     by_maze: BTreeMap<String, KindTables>,
     #[serde(default, rename = "profile")]
@@ -132,15 +141,27 @@ pub(crate) fn located(e: Error, where_: &str) -> Error {
     }
 }
 
-/// Maze sizes of a grid: at least one, each once.
-pub(crate) fn check_mazes(mazes: &[usize]) -> Result<()> {
-    if mazes.is_empty() {
-        return Err(Error::invalid("mazes", "must name at least one maze size"));
+/// Sites of a grid: at least one, each once.
+pub(crate) fn check_sites(sites: &[Site]) -> Result<()> {
+    if sites.is_empty() {
+        return Err(Error::invalid(
+            "mazes",
+            "must name at least one maze size (or an environment in `envs`)",
+        ));
     }
-    if mazes.iter().collect::<BTreeSet<_>>().len() != mazes.len() {
-        return Err(Error::invalid("mazes", "maze sizes must be unique"));
+    if sites.iter().collect::<BTreeSet<_>>().len() != sites.len() {
+        return Err(Error::invalid(
+            "mazes",
+            "maze sizes and environments must be unique",
+        ));
     }
     Ok(())
+}
+
+/// A key of `seeds_by_maze`, `by_maze` or `paper_steps` read as one of `sites` (its size or
+/// name), or None.
+fn site_key(key: &str, sites: &[Site]) -> Option<Site> {
+    key.parse::<Site>().ok().filter(|s| sites.contains(s))
 }
 
 /// A method name is a folder name and part of cell ids: letters, digits and `_` only.
@@ -188,21 +209,31 @@ impl ExperimentSpec {
         }
     }
 
-    /// `seeds_by_maze`, its keys read as maze sizes of the file, each count 1 to `seeds`.
-    fn seeds_by_maze(&self) -> Result<BTreeMap<usize, u64>> {
+    /// The file's own sites: its maze sizes, then its environments.
+    fn sites(&self) -> Vec<Site> {
+        let mazes = self.mazes.iter().map(|&n| Site::Maze(n));
+        mazes
+            .chain(self.envs.iter().map(|&e| Site::Env(e)))
+            .collect()
+    }
+
+    /// `seeds_by_maze`, its keys read as sites of the file, each count 1 to `seeds`.
+    fn seeds_by_maze(&self) -> Result<BTreeMap<Site, u64>> {
+        let sites = self.sites();
         let mut out = BTreeMap::new();
-        for (size, &n) in &self.seeds_by_maze {
-            match size.parse::<usize>() {
-                Ok(m) if self.mazes.contains(&m) && (1..=self.seeds).contains(&n) => {
-                    out.insert(m, n);
+        for (key, &n) in &self.seeds_by_maze {
+            match site_key(key, &sites) {
+                Some(site) if (1..=self.seeds).contains(&n) => {
+                    out.insert(site, n);
                 }
                 _ => {
                     return Err(Error::invalid(
                         "seeds_by_maze",
                         format!(
-                            "\"{size}\" = {n}: needs a maze size of the file ({:?}) and 1 to \
-                             `seeds` ({}) seeds",
-                            self.mazes, self.seeds
+                            "\"{key}\" = {n}: needs a maze size or environment of the file \
+                             ({}) and 1 to `seeds` ({}) seeds",
+                            fmt_sites(&sites),
+                            self.seeds
                         ),
                     ))
                 }
@@ -211,23 +242,26 @@ impl ExperimentSpec {
         Ok(out)
     }
 
-    /// The file's `by_maze` may name any size the file or one of its profiles runs (a profile
-    /// narrows the sizes); the profile's `prof`, only the sizes it runs (`mazes`).
-    fn check_by_maze(&self, path: &Path, prof: &ProfileSpec, mazes: &[usize]) -> Result<()> {
-        let mut file_mazes: BTreeSet<usize> = self.mazes.iter().copied().collect();
+    /// The file's `by_maze` may name any site the file or one of its profiles runs (a profile
+    /// narrows the sizes); the profile's `prof`, only the sites it runs (`sites`).
+    fn check_by_maze(&self, path: &Path, prof: &ProfileSpec, sites: &[Site]) -> Result<()> {
+        let mut file_sites: BTreeSet<Site> = self.sites().into_iter().collect();
         for p in self.profiles.values() {
-            file_mazes.extend(p.mazes.iter().flatten());
+            file_sites.extend(p.mazes.iter().flatten().map(|&n| Site::Maze(n)));
         }
-        let file_mazes: Vec<usize> = file_mazes.into_iter().collect();
-        for (field, by_maze, sizes) in [
-            ("by_maze", &self.by_maze, file_mazes.as_slice()),
-            ("profile.by_maze", &prof.by_maze, mazes),
+        let file_sites: Vec<Site> = file_sites.into_iter().collect();
+        for (field, by_maze, sites) in [
+            ("by_maze", &self.by_maze, file_sites.as_slice()),
+            ("profile.by_maze", &prof.by_maze, sites),
         ] {
             for key in by_maze.keys() {
-                if !key.parse::<usize>().is_ok_and(|n| sizes.contains(&n)) {
+                if site_key(key, sites).is_none() {
                     return Err(Error::invalid(
                         format!("{field} in {}", path.display()),
-                        format!("`{key}` is not one of the maze sizes {sizes:?}"),
+                        format!(
+                            "`{key}` is not one of the maze sizes or environments ({})",
+                            fmt_sites(sites)
+                        ),
                     ));
                 }
             }
@@ -259,7 +293,7 @@ impl ExperimentSpec {
                 }
             }
             for key in m.paper_steps.keys().chain(m.paper_solved.keys()) {
-                if !key.parse::<usize>().is_ok_and(|n| self.mazes.contains(&n)) {
+                if site_key(key, &self.sites()).is_none() {
                     return Err(Error::invalid(
                         "method.paper_steps",
                         format!("method `{}`: `{key}` is not one of `mazes`", m.name),
@@ -278,7 +312,7 @@ impl ExperimentSpec {
         path: &Path,
         prof: &ProfileSpec,
         all_methods: &[&MethodSpec],
-        mazes: &[usize],
+        sites: &[Site],
     ) -> Result<(Vec<MethodLabel>, Vec<Cell>)> {
         let folder = path.parent().unwrap_or(Path::new("."));
         let mut methods = Vec::new();
@@ -291,10 +325,11 @@ impl ExperimentSpec {
             resolved.push((m, label, table));
         }
         let mut cells = Vec::new();
-        for &n in mazes {
-            let key = n.to_string();
+        for &site in sites {
+            let key = site.to_string();
             for (m, label, table) in &resolved {
-                if m.mazes.as_ref().is_some_and(|own| !own.contains(&n)) {
+                let own = |n| m.mazes.as_ref().is_none_or(|own| own.contains(&n));
+                if site.size().is_some_and(|n| !own(n)) {
                     continue;
                 }
                 let mut table = table.clone();
@@ -306,11 +341,11 @@ impl ExperimentSpec {
                     merge(&mut table, t.of(m.kind));
                 }
                 cells.push(Cell {
-                    id: format!("{}-maze{n}", m.name),
+                    id: format!("{}-{}", m.name, site.id()),
                     method: m.name.clone(),
                     label: label.clone(),
-                    maze: n,
-                    job: cell_job(path, m, table, n)?,
+                    site,
+                    job: cell_job(path, m, table, site)?,
                     paper_steps: m.paper_steps.get(&key).copied(),
                     paper_solved: m.paper_solved.get(&key).copied(),
                 });
@@ -320,47 +355,72 @@ impl ExperimentSpec {
     }
 }
 
-/// Experiments are grids of maze sizes so far: a PBCS job naming another environment is
-/// refused, naming `env` and `what` (the method).
-fn refuse_other_env(job: &PbcsJob, what: &str) -> Result<()> {
-    if job.env.is_maze() {
-        return Ok(());
+/// A PBCS job of a grid runs where its site says: the site sets `env` (and the maze's size),
+/// so a job that names an environment itself is refused, naming `env` and `what` (the
+/// method).
+fn place(job: &mut PbcsJob, site: Site, what: &str) -> Result<()> {
+    if !job.env.is_maze() {
+        return Err(Error::invalid(
+            "env",
+            format!(
+                "{what}: \"{}\" — a grid's rows say where its methods run: list the \
+                 environment in the experiment's `envs` instead",
+                job.env.name()
+            ),
+        ));
     }
-    Err(Error::invalid(
-        "env",
-        format!(
-            "{what}: \"{}\" — experiments run the maze so far (`pbcs run --env {0}` runs it)",
-            job.env.name()
-        ),
-    ))
+    match site {
+        Site::Maze(n) => job.maze.size = n,
+        Site::Env(e) => job.env = e,
+    }
+    job.seed = 0;
+    Ok(())
 }
 
-/// The validated job of method `m` on maze size `n` from its merged `table` (seed 0).
-fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, n: usize) -> Result<Job> {
+/// The validated job of method `m` on `site` from its merged `table` (seed 0).
+fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, site: Site) -> Result<Job> {
+    let where_ = format!("method `{}`, {}", m.name, site.title());
     let what = |e: toml::de::Error| {
         Error::parse(
             path,
-            format!("method `{}` ({} job, maze {n}): {e}", m.name, m.kind.name()),
+            format!(
+                "method `{}` ({} job, {}): {e}",
+                m.name,
+                m.kind.name(),
+                site.title()
+            ),
         )
     };
-    let job = match m.kind {
-        Kind::Vanilla => {
+    let job = match (m.kind, site) {
+        (Kind::Vanilla, Site::Maze(n)) => {
             let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
             j.maze.size = n;
             j.seed = 0;
             Job::Vanilla(j)
         }
-        Kind::Pbcs => {
+        (Kind::Vanilla, Site::Env(e)) => {
+            return Err(Error::invalid(
+                "envs",
+                format!(
+                    "{where_}: vanilla baselines run on the maze only, not `{}`",
+                    e.name()
+                ),
+            ))
+        }
+        (Kind::Pbcs, _) => {
             let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
-            refuse_other_env(&j, &format!("method `{}`", m.name))?;
-            j.maze.size = n;
-            j.seed = 0;
+            place(&mut j, site, &format!("method `{}`", m.name))?;
             Job::Pbcs(j)
         }
     };
-    job.check()
-        .map_err(|e| located(e, &format!("method `{}`, maze {n}", m.name)))?;
+    job.check().map_err(|e| located(e, &where_))?;
     Ok(job)
+}
+
+/// Sites as a file writes them: `2, 5, rooms`.
+fn fmt_sites(sites: &[Site]) -> String {
+    let names: Vec<String> = sites.iter().map(Site::to_string).collect();
+    names.join(", ")
 }
 
 impl Experiment {
@@ -379,15 +439,18 @@ impl Experiment {
             return Err(Error::invalid("seeds", "must be at least 1"));
         }
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
-        check_mazes(&mazes)?;
+        let sites: Vec<Site> = (mazes.iter().map(|&n| Site::Maze(n)))
+            .chain(spec.envs.iter().map(|&e| Site::Env(e)))
+            .collect();
+        check_sites(&sites)?;
         let seeds_by_maze = spec.seeds_by_maze()?;
         let all_methods: Vec<&MethodSpec> = spec.methods.iter().chain(&prof.methods).collect();
         if all_methods.is_empty() {
             return Err(Error::invalid("method", "an experiment needs a [[method]]"));
         }
-        spec.check_by_maze(path, &prof, &mazes)?;
+        spec.check_by_maze(path, &prof, &sites)?;
         spec.check_methods(&all_methods)?;
-        let (methods, cells) = spec.cells(path, &prof, &all_methods, &mazes)?;
+        let (methods, cells) = spec.cells(path, &prof, &all_methods, &sites)?;
         check_figures(path, &spec.figures, &methods)?;
         check_report(path, &spec.report, &cells)?;
         Ok(Experiment {
@@ -413,7 +476,7 @@ impl Experiment {
                 spec.figures
             },
             name,
-            mazes,
+            sites,
             methods,
             cells,
         })
@@ -434,24 +497,23 @@ impl Experiment {
     /// ```
     pub fn of_job(name: &str, job: &PbcsJob, sizes: &[usize], seeds: u64) -> Result<Experiment> {
         check_method_name(name)?;
-        check_mazes(sizes)?;
+        let sites: Vec<Site> = sizes.iter().map(|&n| Site::Maze(n)).collect();
+        check_sites(&sites)?;
         if seeds == 0 {
             return Err(Error::invalid("seeds", "must be at least 1"));
         }
-        let cells = sizes
+        let cells = sites
             .iter()
-            .map(|&n| {
+            .map(|&site| {
                 let mut j = job.clone();
-                refuse_other_env(&j, &format!("method `{name}`"))?;
-                j.maze.size = n;
-                j.seed = 0;
-                j.check().map_err(|e| located(e, &format!("maze {n}")))?;
-                let (paper_steps, paper_solved) = paper_run(job.phase2.variant(), n);
+                place(&mut j, site, &format!("method `{name}`"))?;
+                j.check().map_err(|e| located(e, &site.title()))?;
+                let (paper_steps, paper_solved) = paper_run(job.phase2.variant(), site);
                 Ok(Cell {
-                    id: format!("{name}-maze{n}"),
+                    id: format!("{name}-{}", site.id()),
                     method: name.to_string(),
                     label: name.to_string(),
-                    maze: n,
+                    site,
                     job: Job::Pbcs(j),
                     paper_steps,
                     paper_solved,
@@ -468,7 +530,7 @@ impl Experiment {
             seeds_by_maze: BTreeMap::new(),
             picture_seeds: default_picture_seeds(),
             registered: None,
-            mazes: sizes.to_vec(),
+            sites,
             methods: vec![(name.to_string(), name.to_string())],
             cells,
             figures: vec![FigureSpec::Bars {
@@ -480,27 +542,29 @@ impl Experiment {
     }
 }
 
-/// The paper's single run of `variant` on a maze (results table, one seed each): its
+/// The paper's single run of `variant` on a site (results table, one seed each): its
 /// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
 /// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at
 /// compile time, so the binary needs no experiments folder). `(None, None)` for a size the
-/// paper did not run.
+/// paper did not run (and any environment but its maze).
 ///
 /// ```
 /// use pbcs::experiment::paper_run;
 /// use pbcs::phase2::Variant;
-/// assert_eq!(paper_run(Variant::Pbcs, 2), (Some(321_000), Some(true)));
-/// assert_eq!(paper_run(Variant::PbcsNoChaining, 2), (Some(146_000), Some(false)));
-/// assert_eq!(paper_run(Variant::Pbcs, 3), (None, None));
+/// use pbcs::experiment::Site;
+/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(2)), (Some(321_000), Some(true)));
+/// assert_eq!(paper_run(Variant::PbcsNoChaining, Site::Maze(2)), (Some(146_000), Some(false)));
+/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(3)), (None, None));
+/// assert_eq!(paper_run(Variant::Pbcs, "rooms".parse().unwrap()), (None, None));
 /// ```
-pub fn paper_run(variant: Variant, maze: usize) -> (Option<u64>, Option<bool>) {
+pub fn paper_run(variant: Variant, site: Site) -> (Option<u64>, Option<bool>) {
     let path = Path::new("experiments/table.toml");
     let spec: Option<ExperimentSpec> =
         crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();
     let method = spec
         .as_ref()
         .and_then(|s| s.methods.iter().find(|m| m.name == variant.name()));
-    let key = maze.to_string();
+    let key = site.to_string();
     (
         method.and_then(|m| m.paper_steps.get(&key).copied()),
         method.and_then(|m| m.paper_solved.get(&key).copied()),

@@ -4,11 +4,11 @@
 use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
-use crate::runs::{PbcsRun, TrainRun};
+use crate::runs::{run_outcome, TrainRun};
 use std::path::Path;
 
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
-/// computed without writing anything ([`TrainRun::compute`], [`PbcsRun::compute`]), then only
+/// computed without writing anything ([`TrainRun::compute`], [`run_outcome`]), then only
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
 /// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS, and vanilla runs judged by
 /// PBCS's protocol), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
@@ -33,7 +33,7 @@ pub fn run_cell_seed(
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
-            let run = PbcsRun::compute(j, kernel, |_, _| {})?;
+            let run = run_outcome(j, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
             let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)

@@ -3,16 +3,16 @@
 
 use super::columns::RunColumns;
 use super::{category_label, DrawResult, PALETTE};
-use crate::experiment::{Baseline, Experiment};
+use crate::experiment::{Baseline, Experiment, Site};
 use crate::plot::Figure;
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Bars of success rate per maze and method with Wilson 95 % error bars (the γ study).
+/// Bars of success rate per site (maze or environment) and method with Wilson 95 % error bars (the γ study).
 pub struct SuccessBars {
     title: String,
-    mazes: Vec<usize>,
+    mazes: Vec<Site>,
     methods: Vec<(String, String)>,
     stats: Vec<CellStats>,
 }
@@ -22,7 +22,7 @@ impl SuccessBars {
     pub fn new(exp: &Experiment, stats: &[CellStats]) -> SuccessBars {
         SuccessBars {
             title: exp.title.clone(),
-            mazes: exp.mazes.clone(),
+            mazes: exp.sites.clone(),
             methods: exp.methods.clone(),
             stats: stats.to_vec(),
         }
@@ -35,7 +35,7 @@ impl SuccessBars {
         self.stats.extend(
             stats
                 .iter()
-                .filter(|s| s.method == baseline.method && self.mazes.contains(&s.maze))
+                .filter(|s| s.method == baseline.method && self.mazes.contains(&s.site))
                 .map(|s| CellStats {
                     method: method.clone(),
                     ..s.clone()
@@ -77,7 +77,7 @@ impl SuccessBars {
                 self.methods
                     .iter()
                     .map(|(name, _)| name.as_str())
-                    .filter(|name| self.stats.iter().any(|s| s.maze == n && s.method == *name))
+                    .filter(|name| self.stats.iter().any(|s| s.site == n && s.method == *name))
                     .collect()
             })
             .collect()
@@ -104,7 +104,7 @@ impl Figure for SuccessBars {
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..groups, 0.0..1.05)?;
-        let labels: Vec<String> = self.mazes.iter().map(|n| format!("maze {n}×{n}")).collect();
+        let labels: Vec<String> = self.mazes.iter().map(|n| n.title()).collect();
         let label = category_label(&labels);
         chart
             .configure_mesh()
@@ -126,7 +126,7 @@ impl Figure for SuccessBars {
                     let width = 0.8 / slots[g].len() as f64;
                     self.stats
                         .iter()
-                        .find(|s| s.maze == n && &s.method == name)
+                        .find(|s| s.site == n && &s.method == name)
                         .map(|s| (g as f64 + 0.1 + rank as f64 * width, width, s))
                 })
                 .collect();
@@ -278,7 +278,7 @@ impl ChainSpread {
         let runs = RunColumns::new(exp, |m, n| {
             chains
                 .iter()
-                .filter(|c| c.method == m && c.maze == n)
+                .filter(|c| c.method == m && c.site == n)
                 .map(|c| (c.seed, c.complete, c.success_rate))
                 .collect()
         });

@@ -9,9 +9,9 @@ use crate::tables::curves::CurvePoint;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// One maze's curve: (maze, [(environment steps, fraction of seeds reaching the target, mean
+/// One maze's curve: (its site, [(environment steps, fraction of seeds reaching the target, mean
 /// greedy return over seeds)]).
-pub(crate) type CurveLine = (usize, Vec<(f64, f64, f64)>);
+pub(crate) type CurveLine = (crate::experiment::Site, Vec<(f64, f64, f64)>);
 
 /// Learning curves of vanilla baselines, one column per method, one line per maze: the
 /// fraction of seeds whose greedy policy reaches the target at each evaluation (top), and the
@@ -52,7 +52,7 @@ impl Curves {
                     hi = hi.max(p.2);
                 }
                 max_steps = max_steps.max(line.last().map_or(1.0, |p| p.0));
-                lines.push((c.maze, line));
+                lines.push((c.site, line));
             }
             if !lines.is_empty() {
                 panels.push((label.clone(), lines));
@@ -102,7 +102,7 @@ impl Figure for Curves {
                     let points = line.iter().map(|p| (p.0, if row == 0 { p.1 } else { p.2 }));
                     chart
                         .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
-                        .label(format!("maze {maze}×{maze}"))
+                        .label(maze.title())
                         .legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
                         });

@@ -1,19 +1,19 @@
-//! The paper's maze pictures: the results grid (Figure 3's layout, one maze per cell with its
-//! τ, chain rollouts and activation balls) and side-by-side panels of two methods.
+//! The paper's maze pictures: the results grid (Figure 3's layout, one maze or other
+//! environment per cell with its τ, chain rollouts and activation balls) and side-by-side
+//! panels of two methods.
 
 use super::{cell_picture, centred_text, stats_of, summary, DrawResult, GREEN_BG, RED_BG};
-use crate::env::Planar;
+use crate::env::Scene;
 use crate::error::Result;
 use crate::experiment::Experiment;
-use crate::maze::Maze;
 use crate::plot::{draw_scene, Figure, PictureData};
-use crate::tables::scaling::cell_maze;
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// The results table as a grid of pictures: rows = maze sizes, columns = methods; each cell
+/// The results table as a grid of pictures: rows = sites (maze sizes, environments), columns =
+/// methods; each cell
 /// shows the first picture seed's run and is labelled with its [`summary`] on a green (more
 /// than half the seeds solved) or red background; a legend under the grid says so.
 pub struct ResultsGrid {
@@ -24,8 +24,8 @@ pub struct ResultsGrid {
     legend: Vec<String>,
 }
 
-/// One drawn cell of the grid: its maze, its picture seed's run and its statistics.
-pub(crate) type GridCell = (Maze, PictureData, CellStats);
+/// One drawn cell of the grid: its scene, its picture seed's run and its statistics.
+pub(crate) type GridCell = (Scene, PictureData, CellStats);
 
 pub(crate) const GRID_CELL: u32 = 280;
 
@@ -41,17 +41,17 @@ impl ResultsGrid {
     /// Collects the grid of `exp` from its table and picture data.
     pub fn new(exp: &Experiment, results: &Path, stats: &[CellStats]) -> Result<ResultsGrid> {
         let mut cells = Vec::new();
-        for &n in &exp.mazes {
+        for &n in &exp.sites {
             let mut row = Vec::new();
             for (m, _) in &exp.methods {
                 let cell = exp
                     .cells
                     .iter()
-                    .find(|c| c.maze == n && &c.method == m)
-                    .expect("every maze × method is a cell");
+                    .find(|c| c.site == n && &c.method == m)
+                    .expect("every site × method is a cell");
                 row.push(
                     match (stats_of(stats, cell), cell_picture(exp, results, cell)?) {
-                        (Some(s), Some(p)) => Some((cell_maze(cell)?, p, s.clone())),
+                        (Some(s), Some(p)) => Some((cell.scene()?, p, s.clone())),
                         _ => None,
                     },
                 );
@@ -61,7 +61,7 @@ impl ResultsGrid {
         let legend = ResultsGrid::legend(exp, &cells);
         Ok(ResultsGrid {
             cells,
-            rows: exp.mazes.iter().map(|n| format!("{n}×{n}")).collect(),
+            rows: exp.sites.iter().map(|n| n.axis()).collect(),
             columns: exp.methods.iter().map(|(_, l)| l.clone()).collect(),
             legend,
         })
@@ -149,7 +149,7 @@ impl Figure for ResultsGrid {
         for (area, cell) in areas.iter().zip(self.cells.iter().flatten()) {
             let (band, picture) = area.split_vertically(GRID_LABEL);
             match cell {
-                Some((maze, data, s)) => {
+                Some((scene, data, s)) => {
                     let colour = if 2 * s.successes > s.n {
                         GREEN_BG
                     } else {
@@ -157,7 +157,7 @@ impl Figure for ResultsGrid {
                     };
                     band.fill(&colour)?;
                     centred_text(&band, &summary(s), 15, &WHITE)?;
-                    draw_scene(picture, &maze.scene(), &data.picture(String::new()))?;
+                    draw_scene(picture, scene, &data.picture(String::new()))?;
                 }
                 None => {
                     band.fill(&RGBColor(150, 150, 150))?;
@@ -169,10 +169,10 @@ impl Figure for ResultsGrid {
     }
 }
 
-/// Maze pictures side by side, each with a title (the unseen-states contrast).
+/// Pictures side by side, each with a title (the unseen-states contrast).
 pub struct Panels {
-    /// (maze, its picture data, panel title), left to right.
-    pub panels: Vec<(Maze, PictureData, String)>,
+    /// (scene, its picture data, panel title), left to right.
+    pub panels: Vec<(Scene, PictureData, String)>,
 }
 
 impl Figure for Panels {
@@ -181,12 +181,12 @@ impl Figure for Panels {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        for (area, (maze, data, title)) in root
+        for (area, (scene, data, title)) in root
             .split_evenly((1, self.panels.len()))
             .iter()
             .zip(&self.panels)
         {
-            draw_scene(area.clone(), &maze.scene(), &data.picture(title.clone()))?;
+            draw_scene(area.clone(), scene, &data.picture(title.clone()))?;
         }
         Ok(())
     }

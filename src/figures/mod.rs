@@ -18,11 +18,11 @@ pub use routes::Routes;
 pub use scaling::Scaling;
 
 use crate::error::Result;
-use crate::experiment::{picture_file, Cell, Experiment, FigureSpec};
+use crate::experiment::{picture_file, Cell, Experiment, FigureSpec, Site};
 use crate::fmt::human_steps;
 use crate::plot::{render_figure, PictureData};
 use crate::tables::curves::{curves_path, read_curves};
-use crate::tables::scaling::{cell_maze, paths_path, read_paths, ScalingData};
+use crate::tables::scaling::{paths_path, read_paths, ScalingData};
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -215,18 +215,17 @@ fn maze_pictures(
         let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?) else {
             continue;
         };
-        let maze = cell_maze(c)?;
         let title = format!(
-            "{0}, maze {1}×{1}, seed {2}: phase-1 τ (red), chain rollouts (green), \
-             activation balls (purple) — {3}",
+            "{}, {}, seed {}: phase-1 τ (red), chain rollouts (green), activation balls \
+             (purple) — {}",
             c.label,
-            c.maze,
+            c.site.title(),
             exp.picture_seeds[0],
             summary(s)
         );
-        let stem = out.join(format!("{name}{}", c.maze));
+        let stem = out.join(format!("{name}{}", c.site));
         crate::plot::render_scene(
-            &crate::env::Planar::scene(&maze),
+            &c.scene()?,
             &data.picture(title),
             &stem.with_extension("png"),
             &stem.with_extension("svg"),
@@ -238,40 +237,41 @@ fn maze_pictures(
     Ok(files)
 }
 
-/// Side-by-side pictures of `methods` on the maze where the first two differ most in solved
-/// runs (the smallest such maze); `None` when no cell has a picture.
+/// Side-by-side pictures of `methods` on the site where the first two differ most in solved
+/// runs (the first such site: the smallest maze); `None` when no cell has a picture.
 fn panels(
     exp: &Experiment,
     results: &Path,
     stats: &[CellStats],
     methods: &[String],
 ) -> Result<Option<Panels>> {
-    let solved = |n: usize, m: &str| {
+    let solved = |n: Site, m: &str| {
         stats
             .iter()
-            .find(|s| s.maze == n && s.method == m)
+            .find(|s| s.site == n && s.method == m)
             .map_or(0, |s| s.successes as i64)
     };
-    let pick = exp.mazes.iter().copied().max_by_key(|&n| {
+    let pick = exp.sites.iter().copied().max_by_key(|&n| {
         (
             (solved(n, &methods[0]) - solved(n, &methods[1])).abs(),
-            -(n as i64),
+            std::cmp::Reverse(n),
         )
     });
     let Some(n) = pick else { return Ok(None) };
     let mut panels = Vec::new();
     for m in methods {
-        let Some(c) = exp.cells.iter().find(|c| c.maze == n && &c.method == m) else {
+        let Some(c) = exp.cells.iter().find(|c| c.site == n && &c.method == m) else {
             continue;
         };
         if let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?) {
             let title = format!(
-                "{}, maze {n}×{n}, seed {}: {}",
+                "{}, {}, seed {}: {}",
                 c.label,
+                n.title(),
                 exp.picture_seeds[0],
                 summary(s)
             );
-            panels.push((cell_maze(c)?, data, title));
+            panels.push((c.scene()?, data, title));
         }
     }
     Ok((!panels.is_empty()).then_some(Panels { panels }))
@@ -287,7 +287,7 @@ mod tests {
             cell: "pbcs-maze5".into(),
             method: "pbcs".into(),
             label: "PBCS".into(),
-            maze: 5,
+            site: crate::experiment::Site::Maze(5),
             n: 10,
             successes,
             success_rate: successes as f64 / 10.0,
@@ -359,8 +359,8 @@ mod tests {
             tau_paths: vec![vec![(0.5, 0.5), (1.0, 1.0)]],
             ..PictureData::default()
         };
-        let maze = cell_maze(&exp.cells[0]).unwrap();
-        let cells = vec![vec![Some((maze, data, stats(1, 1.0, Some(1.0))))]];
+        let scene = exp.cells[0].scene().unwrap();
+        let cells = vec![vec![Some((scene, data, stats(1, 1.0, Some(1.0))))]];
         let legend = ResultsGrid::legend(&exp, &cells);
         assert!(legend[0].contains("more than half the seeds solved"));
         assert!(legend[1].contains("median environment steps of the solved seeds"));

@@ -26,7 +26,7 @@ impl Routes {
         let runs = RunColumns::new(exp, |m, n| {
             routes
                 .iter()
-                .filter(|r| r.method == m && r.maze == n)
+                .filter(|r| r.method == m && r.site == n)
                 .map(|r| {
                     let fewest = r.fewest_steps.max(1) as f64;
                     let tau = r.phase2_tau_steps as f64 / fewest;

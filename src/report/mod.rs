@@ -337,7 +337,7 @@ pub fn scaling_numbers_tex(
 /// in grey; the paper's "steps S/F" in italics.
 pub fn results_table_tex(
     rows: &[CellStats],
-    mazes: &[usize],
+    mazes: &[crate::experiment::Site],
     methods: &[(String, String)],
 ) -> String {
     let mut s = String::from(GENERATED);
@@ -350,7 +350,10 @@ pub fn results_table_tex(
     for &n in mazes {
         let cells: Vec<Option<&CellStats>> =
             methods.iter().map(|(m, _)| find(rows, m, n)).collect();
-        let _ = write!(s, "${n}\\times{n}$");
+        let _ = match n {
+            crate::experiment::Site::Maze(n) => write!(s, "${n}\\times{n}$"),
+            other => write!(s, "{}", tex(&other.to_string())),
+        };
         for c in &cells {
             match c {
                 Some(c) => {
@@ -423,7 +426,7 @@ pub fn criteria_tex(rows: &[crate::criteria::Criteria]) -> String {
             s,
             "{} & {} & {} & {} & {} & {} & \\textbf{{{}}} & {} \\\\",
             tex(&c.label),
-            c.maze,
+            c.site,
             c.n,
             c.complete,
             c.at_0_50,
@@ -450,7 +453,7 @@ pub fn cells_table_tex(rows: &[CellStats]) -> String {
             s,
             "{} & {} & {} & {} & [{:.2}, {:.2}] & {} & [{}, {}] & {}--{} & {} & {} \\\\",
             tex(&c.label),
-            c.maze,
+            c.site,
             c.n,
             c.successes,
             c.wilson_lo,
@@ -513,7 +516,7 @@ pub fn settings_tex(
             tex(&value)
         );
     };
-    for c in exp.cells.iter().filter(|c| c.maze == exp.mazes[0]) {
+    for c in exp.cells.iter().filter(|c| c.site == exp.sites[0]) {
         match &c.job {
             Job::Pbcs(j) if c.method == settings.pbcs => {
                 let (p, l) = (&j.phase2, &j.learner);

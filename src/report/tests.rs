@@ -17,7 +17,7 @@ fn the_results_table_puts_counts_interval_and_paper_on_three_lines() {
         ("pbcs".to_string(), "PBCS".to_string()),
         ("other".to_string(), "Other".to_string()),
     ];
-    let tex = results_table_tex(&[cell], &[2], &methods);
+    let tex = results_table_tex(&[cell], &[crate::experiment::Site::Maze(2)], &methods);
     let lines: Vec<&str> = tex
         .lines()
         .skip_while(|l| !l.starts_with("\\midrule"))
@@ -60,7 +60,7 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
         cell: "m-maze5".into(),
         method: "m".into(),
         label: "m".into(),
-        maze: 5,
+        site: crate::experiment::Site::Maze(5),
         seed,
         complete: rate > 0.0,
         success_rate: rate,
@@ -83,7 +83,7 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
     let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
         cell: "m-maze5".into(),
         method: "m".into(),
-        maze: 5,
+        site: crate::experiment::Site::Maze(5),
         seed,
         solved: true,
         tau_steps: tau,
@@ -136,7 +136,7 @@ fn the_routes_numbers_give_the_spread_over_cells() {
     let route = |cell: &str, chain: Option<f64>, tau: usize, fewest: usize| Route {
         cell: cell.into(),
         method: "m".into(),
-        maze: 5,
+        site: crate::experiment::Site::Maze(5),
         seed: 0,
         solved: chain.is_some(),
         tau_steps: tau,

@@ -18,7 +18,7 @@ use explore::write_trajectory_csv;
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
 use pbcs::ball_circles;
 pub use pbcs::DRAWN_ROLLOUTS;
-pub use pbcs::{run_pbcs, PbcsRun, RunRecord};
+pub use pbcs::{run_outcome, run_pbcs, PbcsRun, RunOutcome, RunRecord};
 pub use train::{run_train, TrainRun, TrainSummary};
 
 use crate::config::{MazeConfig, PbcsJob, Preset, TrainJob};

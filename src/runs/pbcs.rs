@@ -95,9 +95,9 @@ pub struct PbcsRun<E: Planar = Maze> {
 }
 
 impl PbcsRun<Maze> {
-    /// [`PbcsRun::compute_on`] the maze of `job`: what sweeps and tables run. A job naming
-    /// another environment is refused here (experiments are of mazes so far); `pbcs run`
-    /// ([`run_pbcs`]) runs any.
+    /// [`PbcsRun::compute_on`] the maze of `job` (the Python package's run, the benchmarks).
+    /// A job naming another environment is refused here; [`run_outcome`] (sweeps) and
+    /// [`run_pbcs`] (`pbcs run`) run any.
     pub fn compute(
         job: &PbcsJob,
         kernel: Kernel,
@@ -107,8 +107,8 @@ impl PbcsRun<Maze> {
             return Err(Error::invalid(
                 "env",
                 format!(
-                    "\"{}\": experiments and tables run the maze so far (`pbcs run --env {0}` \
-                     runs it)",
+                    "\"{}\": this run is of the maze only (`pbcs run --env {0}` and experiments \
+                     run any environment)",
                     job.env.name()
                 ),
             ));
@@ -311,6 +311,54 @@ pub fn run_pbcs(
             progress,
         },
     )
+}
+
+/// What a sweep keeps of a run ([`run_outcome`]), whatever its environment.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// The `record.csv` row.
+    pub record: RunRecord,
+    /// The chain's evaluation episodes (none when phase 2 failed).
+    pub evaluation: Vec<EvalEpisode>,
+    /// What the run's picture draws.
+    pub picture: PictureData,
+    /// Wall-clock seconds of the run (not deterministic).
+    pub seconds: f64,
+}
+
+/// [`PbcsRun::compute_on`] the environment `job` names, after refusing a setting it lacks a
+/// hook for ([`PbcsRun::require_hooks`]): what an experiment's (cell, seed) runs.
+pub fn run_outcome(
+    job: &PbcsJob,
+    kernel: Kernel,
+    progress: impl FnMut(usize, Progress),
+) -> Result<RunOutcome> {
+    /// [`run_outcome`] on the environment the job names.
+    struct Outcome<'a, P> {
+        job: &'a PbcsJob,
+        kernel: Kernel,
+        progress: P,
+    }
+    impl<P: FnMut(usize, Progress)> Visit for Outcome<'_, P> {
+        type Output = RunOutcome;
+        fn on<E: Planar>(self, env: E) -> Result<RunOutcome> {
+            PbcsRun::require_hooks(&env, self.job)?;
+            let run = PbcsRun::compute_on(env, self.job, self.kernel, self.progress)?;
+            Ok(RunOutcome {
+                record: run.record,
+                evaluation: run.evaluation,
+                picture: run.picture,
+                seconds: run.seconds,
+            })
+        }
+    }
+    job.check()?;
+    let work = Outcome {
+        job,
+        kernel,
+        progress,
+    };
+    job.env.visit(&job.maze, work)
 }
 
 /// [`run_pbcs`] on the environment the job names.

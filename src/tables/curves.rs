@@ -17,8 +17,9 @@ pub struct CurvePoint {
     pub cell: String,
     /// Method name.
     pub method: String,
-    /// Maze size N.
-    pub maze: usize,
+    /// Maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: crate::experiment::Site,
     /// Environment steps of training at this evaluation.
     pub steps: u64,
     /// Seeds evaluated at these steps.
@@ -64,7 +65,7 @@ pub fn curve_points(exp: &Experiment, results: &Path) -> Result<Vec<CurvePoint>>
         out.extend(by_step.into_iter().map(|(steps, (k, n, r))| CurvePoint {
             cell: c.id.clone(),
             method: c.method.clone(),
-            maze: c.maze,
+            site: c.site,
             steps,
             seeds: n,
             solved: k,

@@ -12,7 +12,7 @@ pub mod routes;
 pub mod scaling;
 
 use crate::error::{Error, Result};
-use crate::experiment::{Cell, Experiment, RawRow};
+use crate::experiment::{Cell, Experiment, RawRow, Site};
 use crate::stats::{median, quantile, wilson, Z95};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -28,8 +28,9 @@ pub struct CellStats {
     pub method: String,
     /// Method label.
     pub label: String,
-    /// Maze size N.
-    pub maze: usize,
+    /// Where the cell runs: maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: Site,
     /// Finished runs (seeds).
     pub n: u64,
     /// Runs that solved the maze.
@@ -77,7 +78,7 @@ impl CellStats {
             cell: c.id.clone(),
             method: c.method.clone(),
             label: c.label.clone(),
-            maze: c.maze,
+            site: c.site,
             n: 0,
             successes: 0,
             success_rate: 0.0,
@@ -185,7 +186,7 @@ pub fn grid_markdown(stats: &[CellStats], timings: &[CellTiming]) -> String {
             .map_or("-".into(), |t| format!("{:.0}", t.wall_median_s));
         s.push_str(&format!(
             "| {} | {}/{} | [{:.2}, {:.2}] | {} [{}, {}] | {} | {} | {} | {wall} |\n",
-            c.maze,
+            c.site,
             c.successes,
             c.n,
             c.wilson_lo,
@@ -214,13 +215,13 @@ pub fn methods_by_maze_markdown(
 ) -> String {
     use crate::fmt::human_steps;
     let mut labels: Vec<(&str, &str)> = Vec::new();
-    let mut mazes: Vec<usize> = Vec::new();
+    let mut mazes: Vec<Site> = Vec::new();
     for c in stats {
         if !labels.iter().any(|(m, _)| *m == c.method) {
             labels.push((&c.method, &c.label));
         }
-        if !mazes.contains(&c.maze) {
-            mazes.push(c.maze);
+        if !mazes.contains(&c.site) {
+            mazes.push(c.site);
         }
     }
     let mut s = String::from("| size |");
@@ -237,7 +238,7 @@ pub fn methods_by_maze_markdown(
         for (method, _) in &labels {
             match stats
                 .iter()
-                .find(|c| c.maze == *maze && c.method == *method)
+                .find(|c| c.site == *maze && c.method == *method)
             {
                 Some(c) => {
                     let cell: Vec<_> = runs.iter().filter(|r| r.cell == c.cell).collect();
@@ -264,7 +265,7 @@ pub fn methods_by_maze_markdown(
             format!(
                 "{} size {} seed {} ({:.0} %)",
                 r.label,
-                r.maze,
+                r.site,
                 r.seed,
                 f64::from(r.success_rate) * 100.0
             )
@@ -382,7 +383,7 @@ mod tests {
             cell: c.id.clone(),
             method: c.method.clone(),
             kind: crate::experiment::Kind::Pbcs,
-            maze: c.maze,
+            site: c.site,
             maze_seed: 0,
             seed,
             learner: "ddpg".into(),

@@ -26,8 +26,9 @@ pub struct Route {
     pub cell: String,
     /// Method name.
     pub method: String,
-    /// Maze size N.
-    pub maze: usize,
+    /// Maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: crate::experiment::Site,
     /// Run seed.
     pub seed: u64,
     /// Whether the run counts as solved.
@@ -51,11 +52,13 @@ pub fn routes_path(results: &Path, experiment: &str) -> PathBuf {
         .join(format!("{experiment}.routes.csv"))
 }
 
-/// The route of every PBCS row of `exp` under `results` that has its evaluation episodes
-/// (rows committed before `s<seed>.evaluation.csv` existed are left out), in the rows' order.
+/// The route of every PBCS row of `exp` under `results` that ran on a maze (the fewest steps
+/// are the maze's, [`Maze::fewest_steps`]) and has its evaluation episodes (rows committed
+/// before `s<seed>.evaluation.csv` existed are left out), in the rows' order.
 pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<Route>> {
     let mut out = Vec::new();
-    for r in rows.iter().filter(|r| r.kind == Kind::Pbcs) {
+    let on_maze = |r: &&RawRow| r.kind == Kind::Pbcs && r.site.size().is_some();
+    for r in rows.iter().filter(on_maze) {
         let cell = exp.cell(&r.cell)?;
         let path = evaluation_file(exp, results, cell, r.seed);
         if !path.exists() {
@@ -80,7 +83,7 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
         out.push(Route {
             cell: r.cell.clone(),
             method: r.method.clone(),
-            maze: r.maze,
+            site: r.site,
             seed: r.seed,
             solved: r.solved,
             tau_steps: found.trajectory.states.len() - 1,

@@ -36,14 +36,16 @@ pub fn cell_maze(cell: &Cell) -> Result<Maze> {
     })
 }
 
-/// Each cell's shortest path (cells whose target cannot be reached are left out).
+/// Each maze cell's shortest path (cells of other environments and cells whose target cannot
+/// be reached are left out).
 pub fn path_lengths(exp: &Experiment) -> Result<Vec<PathLength>> {
     let mut out = Vec::new();
     for c in &exp.cells {
+        let Some(n) = c.site.size() else { continue };
         if let Some(l) = cell_maze(c)?.path_cells() {
             out.push(PathLength {
                 cell: c.id.clone(),
-                maze: c.maze,
+                maze: n,
                 path_cells: l,
             });
         }

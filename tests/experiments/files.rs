@@ -2,6 +2,7 @@
 //! figures and launch scripts.
 
 use super::*;
+use pbcs::experiment::Site;
 
 #[test]
 fn every_experiment_file_parses_with_unique_cells() {
@@ -26,11 +27,11 @@ fn every_experiment_file_parses_with_unique_cells() {
             // Every cell is one (method, size) of the grid; the paper's experiments run every
             // method on every size (the ablations choose sizes per method).
             for c in &exp.cells {
-                assert!(exp.mazes.contains(&c.maze), "{}: {}", f.display(), c.id);
+                assert!(exp.sites.contains(&c.site), "{}: {}", f.display(), c.id);
                 assert!(exp.methods.iter().any(|(m, _)| *m == c.method), "{}", c.id);
             }
-            if COMPLETE.contains(&exp.name.as_str()) && exp.name != "ablations" {
-                assert_eq!(exp.cells.len(), exp.mazes.len() * exp.methods.len());
+            if exp.name != "ablations" {
+                assert_eq!(exp.cells.len(), exp.sites.len() * exp.methods.len());
             }
         }
         // The committed grid holds at least 10 seeds per cell.
@@ -46,7 +47,7 @@ fn every_experiment_file_parses_with_unique_cells() {
 fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
     use pbcs::experiment::Job;
     let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
-    assert_eq!(exp.mazes, [2, 5, 7, 10, 15]);
+    assert_eq!(exp.sites, [2, 5, 7, 10, 15].map(Site::Maze));
     let methods: Vec<&str> = exp.methods.iter().map(|(m, _)| m.as_str()).collect();
     assert_eq!(
         methods,
@@ -61,14 +62,14 @@ fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
         match &c.job {
             Job::Vanilla(j) => assert_eq!(j.train.steps, 1_000_000, "{}", c.id),
             Job::Pbcs(j) => {
-                let pbcs = exp.cell(&format!("pbcs-maze{}", c.maze)).unwrap();
+                let pbcs = exp.cell(&format!("pbcs-{}", c.site.id())).unwrap();
                 assert_eq!(
                     j.phase2.max_env_steps,
                     2 * pbcs.paper_steps.unwrap(),
                     "{}",
                     c.id
                 );
-                assert_eq!(j.maze.size, c.maze);
+                assert_eq!(Some(j.maze.size), c.site.size());
             }
         }
     }
@@ -80,7 +81,7 @@ fn the_table_has_the_papers_columns_sizes_and_budgets_and_the_fast_column() {
     ] {
         let preset: pbcs::config::PbcsJob =
             toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
-        for &n in &exp.mazes {
+        for n in exp.sites.iter().filter_map(|s| s.size()) {
             let mut want = preset.clone();
             want.seed = 0;
             want.maze.size = n;
@@ -175,7 +176,7 @@ fn bad_experiment_files_name_the_problem() {
                 "{head}{}[by_maze]\n\"3\" = {{ pbcs = {{ phase2.beta = 5 }} }}\n",
                 method("a", "")
             ),
-            "`3` is not one of the maze sizes",
+            "`3` is not one of the maze sizes or environments (2)",
         ),
         (
             format!(
@@ -183,6 +184,45 @@ fn bad_experiment_files_name_the_problem() {
                 method("a", "")
             ),
             "maze 2",
+        ),
+        // Environments of the registry as a grid's rows.
+        (
+            format!(
+                "title = \"t\"\nseeds = 1\nenvs = [\"hall\"]\n{}",
+                method("a", "")
+            ),
+            "hall",
+        ),
+        (
+            format!("title = \"t\"\nseeds = 1\n{}", method("a", "")),
+            "at least one maze size (or an environment in `envs`)",
+        ),
+        (
+            format!(
+                "title = \"t\"\nseeds = 1\nenvs = [\"rooms\", \"rooms\"]\n{}",
+                method("a", "")
+            ),
+            "must be unique",
+        ),
+        (
+            format!(
+                "{head}envs = [\"rooms\"]\n{}",
+                method("a", "env = \"rooms\"")
+            ),
+            "list the environment in the experiment's `envs`",
+        ),
+        (
+            format!(
+                "{head}{}[by_maze]\nrooms = {{ pbcs = {{ phase2.beta = 5 }} }}\n",
+                method("a", "")
+            ),
+            "`rooms` is not one of the maze sizes or environments (2)",
+        ),
+        (
+            "title = \"t\"\nseeds = 1\nenvs = [\"rooms\"]\n[[method]]\nname = \"v\"\n\
+             kind = \"vanilla\"\nbase = \"base.toml\"\n"
+                .to_string(),
+            "vanilla baselines run on the maze only, not `rooms`",
         ),
     ];
     let figure = |body: &str| format!("{head}{}[[figure]]\n{body}\n", method("a", ""));
@@ -305,7 +345,7 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
     use pbcs::phase2::Variant;
     let steps: Vec<Option<u64>> = [2, 5, 7, 10, 15, 3]
         .iter()
-        .map(|&n| paper_run(Variant::Pbcs, n).0)
+        .map(|&n| paper_run(Variant::Pbcs, Site::Maze(n)).0)
         .collect();
     assert_eq!(
         steps,
@@ -318,9 +358,9 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
             None
         ]
     );
-    assert_eq!(paper_run(Variant::Pbcs, 15).1, Some(true));
+    assert_eq!(paper_run(Variant::Pbcs, Site::Maze(15)).1, Some(true));
     assert_eq!(
-        paper_run(Variant::PbcsNoChaining, 10),
+        paper_run(Variant::PbcsNoChaining, Site::Maze(10)),
         (Some(694_000), Some(false))
     );
     let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
@@ -335,7 +375,7 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
             Variant::PbcsNoChaining
         };
         assert_eq!(
-            paper_run(variant, c.maze),
+            paper_run(variant, c.site),
             (c.paper_steps, c.paper_solved),
             "{}",
             c.id
@@ -467,14 +507,29 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
     }
 }
 
-/// `COMPLETE` names exactly the experiment files: a new experiment is checked for committed
-/// rows like the others once it is added there.
+/// The Makefile's grids are the experiment files: `make results` runs each of them, and a new
+/// file joins without an edit elsewhere.
 #[test]
-fn every_experiment_with_cells_is_complete() {
+fn the_makefile_runs_every_experiment_file() {
     let names: BTreeSet<String> = files()
         .iter()
         .map(|f| Experiment::load(f, None).unwrap().name)
         .collect();
-    let complete: BTreeSet<String> = COMPLETE.iter().map(|s| s.to_string()).collect();
-    assert_eq!(names, complete);
+    let Ok(out) = std::process::Command::new("make")
+        .args(["--no-print-directory", "-s", "experiments"])
+        .output()
+    else {
+        eprintln!("skipped: no `make` on this machine");
+        return;
+    };
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let listed: BTreeSet<String> = String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .map(String::from)
+        .collect();
+    assert_eq!(listed, names);
 }

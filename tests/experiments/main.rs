@@ -11,19 +11,6 @@ fn files() -> Vec<std::path::PathBuf> {
     experiment_files(Path::new("experiments")).unwrap()
 }
 
-/// The experiments whose every (cell, seed) is committed: every experiment file that declares
-/// cells (`files::every_experiment_with_cells_is_complete` holds the list to the files).
-const COMPLETE: [&str; 8] = [
-    "table",
-    "gamma",
-    "unseen",
-    "beyond",
-    "ablations",
-    "protocol",
-    "switches",
-    "heldout",
-];
-
 mod committed;
 mod files;
 mod locks;

@@ -25,7 +25,7 @@ fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBu
         cell: cell.id.clone(),
         method: cell.method.clone(),
         kind: Kind::Pbcs,
-        maze: cell.maze,
+        site: cell.site,
         maze_seed: j.maze.seed,
         seed,
         learner: j.learner.record_name(),

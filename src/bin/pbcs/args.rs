@@ -283,7 +283,7 @@ pub enum ExpCommand {
     Run {
         #[command(flatten)]
         exp: ExpArgs,
-        /// Only this cell (`<method>-maze<N>`, see `pbcs exp list`).
+        /// Only this cell (`<method>-maze<N>`, `<method>-rooms`, see `pbcs exp list`).
         #[arg(long)]
         cell: Option<String>,
         /// Only this seed.
@@ -314,7 +314,7 @@ pub enum ExpCommand {
     Check {
         #[command(flatten)]
         exp: ExpArgs,
-        /// The cell (`<method>-maze<N>`).
+        /// The cell (`<method>-maze<N>`, `<method>-rooms`).
         #[arg(long)]
         cell: String,
         /// Only this seed.

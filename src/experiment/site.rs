@@ -1,0 +1,188 @@
+//! Where a cell runs: the paper's maze of one size, or another environment of the registry by
+//! name ([`crate::envs::EnvName`]). A grid's columns are methods and its rows are sites.
+//!
+//! A site is written in three ways, each in one place here: as a cell id's suffix
+//! ([`Site::id`]: `maze5`, `rooms`), as a table's value and a TOML key ([`std::fmt::Display`],
+//! [`std::str::FromStr`]: `5`, `rooms`), and as a figure's label ([`Site::title`]: `maze 5×5`,
+//! `rooms`). In a CSV it is the `maze` column, a size or a name, so every row and table
+//! written before other environments existed reads as it did.
+//!
+//! ```
+//! use pbcs::envs::EnvName;
+//! use pbcs::experiment::Site;
+//!
+//! let rooms: Site = "rooms".parse().unwrap();
+//! assert_eq!(rooms, Site::Env(EnvName::Rooms));
+//! assert_eq!(("5".parse::<Site>().unwrap().id(), rooms.id()), ("maze5".into(), "rooms".into()));
+//! assert_eq!(Site::Maze(5).title(), "maze 5×5");
+//! assert!("maze".parse::<Site>().is_err()); // the maze is written by its size
+//! ```
+
+use crate::envs::EnvName;
+use crate::error::{Error, Result};
+use serde::de::{self, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// The environment of a cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Site {
+    /// The paper's maze of size N (its layout is the job's `maze.seed`).
+    Maze(usize),
+    /// Another environment of the registry, which has no size (never [`EnvName::Maze`]).
+    Env(EnvName),
+}
+
+impl Site {
+    /// The cell id's suffix: `maze<N>` or the environment's name.
+    pub fn id(self) -> String {
+        match self {
+            Site::Maze(n) => format!("maze{n}"),
+            Site::Env(e) => e.name().to_string(),
+        }
+    }
+
+    /// How figures name it: `maze N×N` or the environment's name.
+    pub fn title(self) -> String {
+        match self {
+            Site::Maze(n) => format!("maze {n}×{n}"),
+            Site::Env(e) => e.name().to_string(),
+        }
+    }
+
+    /// A grid row's or an axis' label: `N×N` or the environment's name.
+    pub fn axis(self) -> String {
+        match self {
+            Site::Maze(n) => format!("{n}×{n}"),
+            Site::Env(e) => e.name().to_string(),
+        }
+    }
+
+    /// How sentences name it: `maze N` or the environment's name.
+    pub fn named(self) -> String {
+        match self {
+            Site::Maze(n) => format!("maze {n}"),
+            Site::Env(e) => e.name().to_string(),
+        }
+    }
+
+    /// The maze size, for a maze.
+    pub fn size(self) -> Option<usize> {
+        match self {
+            Site::Maze(n) => Some(n),
+            Site::Env(_) => None,
+        }
+    }
+
+    /// The environment's name.
+    pub fn env(self) -> EnvName {
+        match self {
+            Site::Maze(_) => EnvName::Maze,
+            Site::Env(e) => e,
+        }
+    }
+}
+
+impl std::fmt::Display for Site {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Site::Maze(n) => write!(f, "{n}"),
+            Site::Env(e) => f.write_str(e.name()),
+        }
+    }
+}
+
+impl std::str::FromStr for Site {
+    type Err = Error;
+
+    /// A maze size (`15`) or an environment's name other than the maze (`rooms`).
+    fn from_str(s: &str) -> Result<Site> {
+        if let Ok(n) = s.parse::<usize>() {
+            return Ok(Site::Maze(n));
+        }
+        match s.parse::<EnvName>() {
+            Ok(EnvName::Maze) | Err(_) => Err(Error::invalid(
+                "maze",
+                format!(
+                    "`{s}` is neither a maze size nor an environment ({})",
+                    EnvName::others()
+                ),
+            )),
+            Ok(e) => Ok(Site::Env(e)),
+        }
+    }
+}
+
+impl Serialize for Site {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Site::Maze(n) => s.serialize_u64(*n as u64),
+            Site::Env(e) => s.serialize_str(e.name()),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Site {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Site, D::Error> {
+        struct SiteVisitor;
+        impl Visitor<'_> for SiteVisitor {
+            type Value = Site;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a maze size or an environment's name")
+            }
+            fn visit_u64<E: de::Error>(self, n: u64) -> std::result::Result<Site, E> {
+                usize::try_from(n).map(Site::Maze).map_err(E::custom)
+            }
+            fn visit_i64<E: de::Error>(self, n: i64) -> std::result::Result<Site, E> {
+                usize::try_from(n).map(Site::Maze).map_err(E::custom)
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> std::result::Result<Site, E> {
+                s.parse().map_err(E::custom)
+            }
+        }
+        d.deserialize_any(SiteVisitor)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    struct Row {
+        cell: String,
+        maze: Site,
+    }
+
+    #[test]
+    fn a_site_is_the_maze_column_a_size_or_a_name() {
+        for (site, csv) in [
+            (Site::Maze(15), "cell,maze\nc,15\n"),
+            (Site::Env(EnvName::Rooms), "cell,maze\nc,rooms\n"),
+        ] {
+            let row = Row {
+                cell: "c".into(),
+                maze: site,
+            };
+            let mut w = csv::Writer::from_writer(Vec::new());
+            w.serialize(&row).unwrap();
+            assert_eq!(String::from_utf8(w.into_inner().unwrap()).unwrap(), csv);
+            let back: Row = csv::Reader::from_reader(csv.as_bytes())
+                .deserialize()
+                .next()
+                .unwrap()
+                .unwrap();
+            assert_eq!(back, row);
+        }
+        for bad in [
+            "cell,maze\nc,maze\n",
+            "cell,maze\nc,-3\n",
+            "cell,maze\nc,hall\n",
+        ] {
+            let got: std::result::Result<Row, _> = csv::Reader::from_reader(bad.as_bytes())
+                .deserialize()
+                .next()
+                .unwrap();
+            assert!(got.is_err(), "{bad:?} read as {got:?}");
+        }
+    }
+}
