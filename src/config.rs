@@ -161,6 +161,27 @@ impl Preset {
         self.into()
     }
 
+    /// The preset called `name` (`fast`, `paper`), or an error listing the presets.
+    ///
+    /// ```
+    /// use pbcs::config::Preset;
+    /// assert_eq!(Preset::named("paper").unwrap(), Preset::Paper);
+    /// assert!(Preset::named("slow").unwrap_err().to_string().contains("`paper`, `fast`"));
+    /// ```
+    pub fn named(name: &str) -> Result<Preset> {
+        let all = <Preset as clap::ValueEnum>::value_variants();
+        all.iter()
+            .copied()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| {
+                let names: Vec<String> = all.iter().map(|p| format!("`{}`", p.name())).collect();
+                crate::Error::invalid(
+                    "preset",
+                    format!("must be one of {}, got `{name}`", names.join(", ")),
+                )
+            })
+    }
+
     /// The preset's file name in `experiments/`.
     pub fn file_name(self) -> &'static str {
         match self {

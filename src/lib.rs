@@ -69,6 +69,7 @@ pub mod record;
 pub mod report;
 pub mod reproduce;
 pub mod rng;
+pub mod rollout;
 pub mod rooms;
 pub mod runs;
 pub mod stats;

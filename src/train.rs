@@ -10,6 +10,7 @@ use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
 use crate::rng::{Seeds, Stream};
+use crate::rollout::{scale, Greedy};
 use crate::validate::Check;
 use rustc_hash::FxHashSet;
 use serde::{Deserialize, Serialize};
@@ -135,15 +136,9 @@ pub struct TrainOutcome {
     pub final_eval: Vec<EvalEpisode>,
 }
 
-/// Scales a learner action in [−1, 1]ᵈ to the environment's bounds.
-pub fn to_env_action<E: Env + ?Sized>(env: &E, a: &[f32], out: &mut [f32]) {
-    for (i, (o, x)) in out.iter_mut().zip(a).enumerate() {
-        *o = x * env.action_bound(i);
-    }
-}
-
 /// Runs the greedy policy for `episodes` episodes from [`Env::sample_start`] (stream
-/// [`Stream::Eval`], so evaluation never shifts training's randomness).
+/// [`Stream::Eval`], so evaluation never shifts training's randomness): the fraction that
+/// reached a positive terminal reward, and the mean return and length per episode.
 pub fn evaluate<E: Env>(
     env: &E,
     learner: &mut Learner,
@@ -153,26 +148,14 @@ pub fn evaluate<E: Env>(
     round: u32,
 ) -> (f32, f32, f32) {
     let mut rng = seeds.substream(Stream::Eval, round);
-    let mut obs = vec![0.0; env.obs_dim()];
-    let mut action = vec![0.0; env.action_dim()];
-    let (mut wins, mut ret, mut len) = (0usize, 0.0f32, 0usize);
+    let mut greedy = Greedy::new(env, learner);
+    let mut wins = 0usize;
     for _ in 0..episodes {
-        let mut s = env.sample_start(&mut rng);
-        for _ in 0..max_steps {
-            env.observe(&s, &mut obs);
-            to_env_action(env, learner.act(&obs, 1), &mut action);
-            let step = env.step(&s, &action);
-            ret += step.reward;
-            len += 1;
-            s = step.state;
-            if step.terminal {
-                wins += usize::from(step.reward > 0.0);
-                break;
-            }
-        }
+        let start = env.sample_start(&mut rng);
+        wins += usize::from(greedy.episode(env, start, max_steps));
     }
     let e = episodes as f32;
-    (wins as f32 / e, ret / e, len as f32 / e)
+    (wins as f32 / e, greedy.reward / e, greedy.steps as f32 / e)
 }
 
 /// The greedy policy of `learner` from each of `starts`, each episode at most `max_steps`
@@ -183,27 +166,16 @@ pub fn greedy_episodes<E: Env>(
     starts: Vec<E::State>,
     max_steps: usize,
 ) -> Vec<EvalEpisode> {
-    let mut obs = vec![0.0; env.obs_dim()];
-    let mut action = vec![0.0; env.action_dim()];
+    let mut greedy = Greedy::new(env, learner);
     starts
         .into_iter()
-        .map(|mut s| {
-            let mut episode = EvalEpisode {
-                success: false,
-                steps: 0,
-            };
-            while episode.steps < max_steps {
-                env.observe(&s, &mut obs);
-                to_env_action(env, learner.act(&obs, 1), &mut action);
-                let step = env.step(&s, &action);
-                episode.steps += 1;
-                s = step.state;
-                if step.terminal {
-                    episode.success = step.reward > 0.0;
-                    break;
-                }
+        .map(|start| {
+            let before = greedy.steps;
+            let success = greedy.episode(env, start, max_steps);
+            EvalEpisode {
+                success,
+                steps: greedy.steps - before,
             }
-            episode
         })
         .collect()
 }
@@ -219,124 +191,227 @@ pub fn train_vanilla<E: Env>(
     mut progress: impl FnMut(u64, f32),
 ) -> Result<TrainOutcome> {
     train.check()?;
-    // The learner acts in [−1, 1]ᵈ (Stable-Baselines3's convention); the environment gets
-    // a_i · b_i. Exploration noise σ lives in the learner's space.
-    let unit = vec![1.0; env.action_dim()];
-    let mut learner = Learner::new(learner_config, env.obs_dim(), &unit, seeds, kernel)?;
-    let lc = learner_config;
-    let mut replay = Replay::new(lc.replay_size, env.obs_dim(), env.action_dim());
-    let mut noise = Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, env.action_dim());
-    let (mut rng_start, mut rng_noise, mut rng_replay) = (
-        seeds.stream(Stream::Start),
-        seeds.stream(Stream::Noise),
-        seeds.stream(Stream::Replay),
-    );
-    let (mut obs, mut next_obs) = (vec![0.0; env.obs_dim()], vec![0.0; env.obs_dim()]);
-    // The learner's action (in [−1, 1]ᵈ) and the environment's.
-    let (mut action, mut env_action) = (vec![0.0; env.action_dim()], vec![0.0; env.action_dim()]);
-    let mut batch = Batch::default();
-    let mut visited: FxHashSet<Vec<i32>> = FxHashSet::default();
-    let bin = |o: &[f32]| -> Vec<i32> {
-        o.iter()
-            .map(|x| (x / train.visit_bin).floor() as i32)
-            .collect()
-    };
-    let mut evals = Vec::new();
-    let (mut episodes, mut terminal_transitions, mut truncated_episodes) = (1u64, 0u64, 0u64);
-    let mut state = env.sample_start(&mut rng_start);
-    let mut t_episode = 0usize;
-    noise.reset();
-    env.observe(&state, &mut obs);
-    visited.insert(bin(&obs));
+    let mut run = Vanilla::new(env, learner_config, train, seeds, kernel)?;
     for step_i in 1..=train.steps {
-        if step_i <= train.learning_starts {
-            random_action(env, &mut rng_noise, &mut env_action);
-            for (i, (a, e)) in action.iter_mut().zip(&env_action).enumerate() {
-                *a = e / env.action_bound(i);
-            }
-        } else {
-            action.copy_from_slice(learner.act(&obs, 1));
-            noise.add(&mut rng_noise, &mut action);
-            for a in action.iter_mut() {
-                *a = a.clamp(-1.0, 1.0);
-            }
-        }
-        to_env_action(env, &action, &mut env_action);
-        let step = env.step(&state, &env_action);
-        env.observe(&step.state, &mut next_obs);
-        visited.insert(bin(&next_obs));
-        // Only true terminal states stop bootstrapping; the time limit below does not.
-        replay.push(&obs, &action, step.reward, &next_obs, step.terminal);
-        terminal_transitions += u64::from(step.terminal);
-        let learning = step_i > train.learning_starts;
-        if learning && train.updates == Updates::Step && replay.len() >= lc.batch_size {
-            replay.sample(lc.batch_size, &mut rng_replay, &mut batch);
-            learner.update(&batch);
-        }
-        t_episode += 1;
-        let truncated = t_episode >= train.max_episode_steps;
-        if step.terminal || truncated {
-            if learning && train.updates == Updates::Episode {
-                for _ in 0..t_episode {
-                    if replay.len() >= lc.batch_size {
-                        replay.sample(lc.batch_size, &mut rng_replay, &mut batch);
-                        learner.update(&batch);
-                    }
-                }
-            }
-            truncated_episodes += u64::from(truncated && !step.terminal);
-            state = env.sample_start(&mut rng_start);
-            t_episode = 0;
-            episodes += 1;
-            noise.reset();
-            env.observe(&state, &mut obs);
-            visited.insert(bin(&obs));
-        } else {
-            state = step.state;
-            obs.copy_from_slice(&next_obs);
-        }
+        run.step(step_i);
         if step_i % train.eval_every == 0 {
-            let round = evals.len() as u32;
-            let (success, mean_return, mean_length) = evaluate(
-                env,
-                &mut learner,
-                train.eval_episodes,
-                train.max_episode_steps,
-                seeds,
-                round,
-            );
-            evals.push(EvalRow {
-                steps: step_i,
-                episodes,
-                success,
-                mean_return,
-                mean_length,
-            });
+            let success = run.evaluate(step_i);
             progress(step_i, success);
         }
     }
-    let mut visited: Vec<Vec<i32>> = visited.into_iter().collect();
-    visited.sort();
-    // PBCS's protocol, after training: it reads only the Eval stream, so it changes nothing
-    // above (a run with it and one without train the same bytes).
-    let final_eval = if train.final_eval_episodes > 0 {
-        let starts = evaluation_starts(
+    run.finish()
+}
+
+/// A vanilla training run between two environment steps: one episode at a time, each step's
+/// transition stored, the learner updated every step (or every episode's end, as many times
+/// as it had steps), an episode ended by a terminal step or the step limit.
+struct Vanilla<'a, E: Env> {
+    env: &'a E,
+    train: &'a TrainConfig,
+    seeds: &'a Seeds,
+    learner: Learner,
+    replay: Replay,
+    batch: Batch,
+    noise: Noise,
+    rng_start: crate::rng::Rng,
+    rng_noise: crate::rng::Rng,
+    rng_replay: crate::rng::Rng,
+    /// The environment's action bounds b: the learner acts in [−1, 1]ᵈ (Stable-Baselines3's
+    /// convention), the environment gets a_i · b_i; exploration noise σ lives in the
+    /// learner's space.
+    bounds: Vec<f32>,
+    state: E::State,
+    obs: Vec<f32>,
+    next_obs: Vec<f32>,
+    /// The learner's action (in [−1, 1]ᵈ) and the environment's.
+    action: Vec<f32>,
+    env_action: Vec<f32>,
+    /// Bins of every observation met.
+    visited: FxHashSet<Vec<i32>>,
+    /// Steps of the current episode.
+    t_episode: usize,
+    episodes: u64,
+    terminal_transitions: u64,
+    truncated_episodes: u64,
+    evals: Vec<EvalRow>,
+}
+
+impl<'a, E: Env> Vanilla<'a, E> {
+    /// A fresh learner and the first episode's start.
+    fn new(
+        env: &'a E,
+        lc: &LearnerConfig,
+        train: &'a TrainConfig,
+        seeds: &'a Seeds,
+        kernel: Kernel,
+    ) -> Result<Self> {
+        let (obs_dim, act_dim) = (env.obs_dim(), env.action_dim());
+        let learner = Learner::new(lc, obs_dim, &vec![1.0; act_dim], seeds, kernel)?;
+        let replay = Replay::new(lc.replay_size, obs_dim, act_dim);
+        let noise = Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, act_dim);
+        let mut rng_start = seeds.stream(Stream::Start);
+        let state = env.sample_start(&mut rng_start);
+        let mut run = Vanilla {
             env,
-            train.final_eval_epsilon,
-            train.final_eval_episodes,
+            train,
             seeds,
-        )?;
-        greedy_episodes(env, &mut learner, starts, train.final_eval_max_steps)
-    } else {
-        Vec::new()
-    };
-    Ok(TrainOutcome {
-        final_eval,
-        evals,
-        visited,
-        episodes,
-        terminal_transitions,
-        truncated_episodes,
-        learner,
-    })
+            learner,
+            replay,
+            batch: Batch::default(),
+            noise,
+            rng_start,
+            rng_noise: seeds.stream(Stream::Noise),
+            rng_replay: seeds.stream(Stream::Replay),
+            bounds: (0..act_dim).map(|i| env.action_bound(i)).collect(),
+            state,
+            obs: vec![0.0; obs_dim],
+            next_obs: vec![0.0; obs_dim],
+            action: vec![0.0; act_dim],
+            env_action: vec![0.0; act_dim],
+            visited: FxHashSet::default(),
+            t_episode: 0,
+            episodes: 1,
+            terminal_transitions: 0,
+            truncated_episodes: 0,
+            evals: Vec::new(),
+        };
+        run.begin_episode();
+        Ok(run)
+    }
+
+    /// The bin of side `train.visit_bin` of an observation.
+    fn visit(&mut self, next: bool) {
+        let o = if next { &self.next_obs } else { &self.obs };
+        let side = self.train.visit_bin;
+        let bin = o.iter().map(|x| (x / side).floor() as i32).collect();
+        self.visited.insert(bin);
+    }
+
+    /// The noise restarts and the episode's first state is observed.
+    fn begin_episode(&mut self) {
+        self.noise.reset();
+        self.env.observe(&self.state, &mut self.obs);
+        self.visit(false);
+    }
+
+    /// Step `step_i`'s action: uniformly random during `learning_starts`, else the policy's
+    /// with noise, clipped to [−1, 1]ᵈ; then scaled to the environment's bounds.
+    fn choose_action(&mut self, step_i: u64) {
+        if step_i <= self.train.learning_starts {
+            random_action(self.env, &mut self.rng_noise, &mut self.env_action);
+            for ((a, e), b) in self
+                .action
+                .iter_mut()
+                .zip(&self.env_action)
+                .zip(&self.bounds)
+            {
+                *a = e / b;
+            }
+        } else {
+            self.action.copy_from_slice(self.learner.act(&self.obs, 1));
+            self.noise.add(&mut self.rng_noise, &mut self.action);
+            for a in self.action.iter_mut() {
+                *a = a.clamp(-1.0, 1.0);
+            }
+        }
+        scale(&self.action, &self.bounds, &mut self.env_action);
+    }
+
+    /// One learner update from a sampled batch, once the replay holds a batch.
+    fn update(&mut self) {
+        let batch_size = self.learner.config().batch_size;
+        if self.replay.len() >= batch_size {
+            self.replay
+                .sample(batch_size, &mut self.rng_replay, &mut self.batch);
+            self.learner.update(&self.batch);
+        }
+    }
+
+    /// Environment step `step_i` (counted from 1): act, store the transition (only a true
+    /// terminal stops bootstrapping; the step limit does not), learn, and end the episode at
+    /// a terminal step or the step limit.
+    fn step(&mut self, step_i: u64) {
+        self.choose_action(step_i);
+        let step = self.env.step(&self.state, &self.env_action);
+        self.env.observe(&step.state, &mut self.next_obs);
+        self.visit(true);
+        self.replay.push(
+            &self.obs,
+            &self.action,
+            step.reward,
+            &self.next_obs,
+            step.terminal,
+        );
+        self.terminal_transitions += u64::from(step.terminal);
+        let learning = step_i > self.train.learning_starts;
+        if learning && self.train.updates == Updates::Step {
+            self.update();
+        }
+        self.t_episode += 1;
+        let truncated = self.t_episode >= self.train.max_episode_steps;
+        if step.terminal || truncated {
+            if learning && self.train.updates == Updates::Episode {
+                for _ in 0..self.t_episode {
+                    self.update();
+                }
+            }
+            self.truncated_episodes += u64::from(truncated && !step.terminal);
+            self.state = self.env.sample_start(&mut self.rng_start);
+            self.t_episode = 0;
+            self.episodes += 1;
+            self.begin_episode();
+        } else {
+            self.state = step.state;
+            self.obs.copy_from_slice(&self.next_obs);
+        }
+    }
+
+    /// The greedy evaluation after step `step_i`, kept as a row; its success rate.
+    fn evaluate(&mut self, step_i: u64) -> f32 {
+        let round = self.evals.len() as u32;
+        let (success, mean_return, mean_length) = evaluate(
+            self.env,
+            &mut self.learner,
+            self.train.eval_episodes,
+            self.train.max_episode_steps,
+            self.seeds,
+            round,
+        );
+        self.evals.push(EvalRow {
+            steps: step_i,
+            episodes: self.episodes,
+            success,
+            mean_return,
+            mean_length,
+        });
+        success
+    }
+
+    /// The outcome, after PBCS's protocol if it is on (it reads only the Eval stream, so it
+    /// changes nothing of the training: a run with it and one without train the same bytes).
+    fn finish(mut self) -> Result<TrainOutcome> {
+        let mut visited: Vec<Vec<i32>> = self.visited.into_iter().collect();
+        visited.sort();
+        let t = self.train;
+        let final_eval = if t.final_eval_episodes > 0 {
+            let starts = evaluation_starts(
+                self.env,
+                t.final_eval_epsilon,
+                t.final_eval_episodes,
+                self.seeds,
+            )?;
+            greedy_episodes(self.env, &mut self.learner, starts, t.final_eval_max_steps)
+        } else {
+            Vec::new()
+        };
+        Ok(TrainOutcome {
+            final_eval,
+            evals: self.evals,
+            visited,
+            episodes: self.episodes,
+            terminal_transitions: self.terminal_transitions,
+            truncated_episodes: self.truncated_episodes,
+            learner: self.learner,
+        })
+    }
 }

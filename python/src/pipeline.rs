@@ -4,11 +4,14 @@ use crate::{count, invalid, maze_of, py_err};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pbcs::config::{ExploreJob, PbcsJob, Preset};
+use pbcs::env::{EvalEpisode, Planar};
+use pbcs::envs::{EnvName, Visit};
 use pbcs::nn::kernel::Kernel;
+use pbcs::runs::{PbcsRun, RunRecord};
 use pbcs::validate::Check;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Phase 1 on the maze `size` of layout `layout` with run seed `seed`: τ (from s_0 to the
 /// first rewarded state) as an array of shape (len, 2), the actions between its states
@@ -33,7 +36,14 @@ pub(crate) fn explore<'py>(
     if let Some(b) = budget {
         job.explore.budget = count("explore.budget", b)?;
     }
-    maze_of(size, layout, 0.1, 0.2, 0.1)?;
+    let m = &job.maze;
+    maze_of(
+        size,
+        layout,
+        m.wall_thickness,
+        m.target_radius,
+        m.max_action,
+    )?;
     job.check().map_err(py_err)?;
     let run = py
         .detach(|| pbcs::runs::ExploreRun::compute(&job, |_, _| {}))
@@ -72,7 +82,14 @@ pub(crate) fn evaluation_starts<'py>(
     episodes: i64,
     epsilon: f32,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-    let maze = maze_of(size, layout, 0.1, 0.2, 0.1)?;
+    let m = pbcs::config::MazeConfig::default();
+    let maze = maze_of(
+        size,
+        layout,
+        m.wall_thickness,
+        m.target_radius,
+        m.max_action,
+    )?;
     let n = count("episodes", episodes)? as usize;
     if !(epsilon.is_finite() && epsilon > 0.0) {
         return Err(invalid(
@@ -89,56 +106,71 @@ pub(crate) fn evaluation_starts<'py>(
 }
 
 /// A whole PBCS run (phase 1, phase 2, the chain's evaluation) of a preset (`fast` or `paper`)
-/// or of a config file; with `out`, its files (record, trace, chain/, picture) are written
-/// there, as `pbcs run --out` does. Returns the run's record as a dict, τ as an array, and
-/// the chain folder when one was written.
+/// or of a config file, on the environment it names (`env`, else the config's, else the
+/// maze: of size `size`, else the config's, and layout `layout`); with `out`, its files
+/// (record, trace, chain/, picture) are written there, as `pbcs run --out` does. Returns the
+/// run's record as a dict, τ as an array of points, and the chain folder when one was
+/// written.
 #[pyfunction]
-#[pyo3(signature = (size, layout = 0, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None))]
+#[pyo3(signature = (size = None, layout = 0, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, env = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run<'py>(
     py: Python<'py>,
-    size: i64,
+    size: Option<i64>,
     layout: i64,
     seed: i64,
     preset: &str,
     config: Option<PathBuf>,
     out: Option<PathBuf>,
     max_env_steps: Option<i64>,
+    env: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut job: PbcsJob = match &config {
-        Some(p) => pbcs::config::load(p).map_err(py_err)?,
-        None => match preset {
-            "fast" => Preset::Fast.job(),
-            "paper" => Preset::Paper.job(),
-            other => Err(pbcs::Error::invalid(
-                "preset",
-                format!("must be `fast` or `paper`, got `{other}`"),
-            )),
-        }
-        .map_err(py_err)?,
-    };
-    let maze = maze_of(
-        size,
-        layout,
-        job.maze.wall_thickness,
-        job.maze.target_radius,
-        job.maze.max_action,
-    )?;
-    job.maze = maze.config().clone();
+        Some(p) => pbcs::config::load(p),
+        None => Preset::named(preset).and_then(Preset::job),
+    }
+    .map_err(py_err)?;
+    if let Some(name) = env {
+        job.env = name.parse::<EnvName>().map_err(|_| {
+            invalid(
+                "env",
+                format!(
+                    "`{name}` is not an environment (maze, {})",
+                    EnvName::others()
+                ),
+            )
+        })?;
+    }
+    if !job.env.is_maze() && (size.is_some() || layout != 0) {
+        return Err(invalid(
+            "maze",
+            format!(
+                "`{}` has no maze: leave `size` and `layout` out",
+                job.env.name()
+            ),
+        ));
+    }
+    if let Some(n) = size {
+        job.maze.size = usize::try_from(count("maze.size", n)?).unwrap_or(usize::MAX);
+    }
+    job.maze.seed = count("maze.seed", layout)?;
     job.seed = count("seed", seed)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
     }
     job.check().map_err(py_err)?;
     let kernel = Kernel::from_env().map_err(py_err)?;
+    let work = RunOn {
+        job: &job,
+        kernel,
+        out: out.as_deref(),
+    };
     let done = py
-        .detach(|| pbcs::runs::PbcsRun::compute(&job, kernel, |_, _| {}))
+        .detach(|| job.env.visit(&job.maze, work))
         .map_err(py_err)?;
-    if let Some(dir) = &out {
-        py.detach(|| done.write(&job, dir)).map_err(py_err)?;
-    }
     let r = &done.record;
     let d = PyDict::new(py);
+    d.set_item("env", r.env.name())?;
     d.set_item("maze", r.maze)?;
     d.set_item("maze_seed", r.maze_seed)?;
     d.set_item("seed", r.seed)?;
@@ -154,7 +186,7 @@ pub(crate) fn run<'py>(
     d.set_item("test_steps", r.test_steps)?;
     d.set_item("total_steps", r.total_steps)?;
     d.set_item("seconds", done.seconds)?;
-    let tau: Vec<f32> = done.tau.iter().flat_map(|p| [p.x, p.y]).collect();
+    let tau: Vec<f32> = done.tau.iter().flat_map(|&(x, y)| [x, y]).collect();
     d.set_item(
         "tau",
         Array2::from_shape_vec((done.tau.len(), 2), tau)
@@ -167,4 +199,38 @@ pub(crate) fn run<'py>(
     d.set_item("evaluation_steps", steps.into_pyarray(py))?;
     d.set_item("chain", out.map(|o| o.join("chain")))?;
     Ok(d)
+}
+
+/// What [`run`] returns of a run on any environment: τ as points of its plane.
+struct RunDone {
+    record: RunRecord,
+    seconds: f64,
+    tau: Vec<(f32, f32)>,
+    evaluation: Vec<EvalEpisode>,
+}
+
+/// [`run`] on the environment the job names: refuses a setting it lacks a hook for, runs,
+/// and writes the run's files into `out` if given.
+struct RunOn<'a> {
+    job: &'a PbcsJob,
+    kernel: Kernel,
+    out: Option<&'a Path>,
+}
+
+impl Visit for RunOn<'_> {
+    type Output = RunDone;
+
+    fn on<E: Planar>(self, env: E) -> pbcs::Result<RunDone> {
+        PbcsRun::require_hooks(&env, self.job)?;
+        let run = PbcsRun::compute_on(env, self.job, self.kernel, |_, _| {})?;
+        if let Some(dir) = self.out {
+            run.write(self.job, dir)?;
+        }
+        Ok(RunDone {
+            tau: run.tau.iter().map(|s| run.env.point(s)).collect(),
+            record: run.record,
+            seconds: run.seconds,
+            evaluation: run.evaluation,
+        })
+    }
 }

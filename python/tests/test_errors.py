@@ -41,6 +41,10 @@ def test_bad_arguments_name_what_is_wrong():
         pbcs.ContinuousMazeVec(0, size=2)
     with pytest.raises(ValueError, match="preset"):
         pbcs.run(2, preset="slow")
+    with pytest.raises(ValueError, match="not an environment"):
+        pbcs.run(env="hall")
+    with pytest.raises(ValueError, match="has no maze"):
+        pbcs.run(2, env="rooms")
 
 
 def test_a_missing_or_malformed_chain_folder_is_named(tmp_path):

@@ -9,6 +9,7 @@
 
 pub mod noise;
 pub mod replay;
+mod update;
 
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
@@ -16,7 +17,6 @@ use crate::nn::{Adam, Head, Mlp, Workspace};
 use crate::rng::{Rng, Seeds, Stream};
 use crate::validate::Check;
 use noise::NoiseKind;
-use rand::Rng as _;
 use rand_distr::{Distribution, StandardNormal};
 use replay::Batch;
 use serde::{Deserialize, Serialize};
@@ -409,114 +409,6 @@ impl Learner {
     /// Greedy actions π(s) for a batch of `n` observations (one forward pass).
     pub fn act(&mut self, obs: &[f32], n: usize) -> &[f32] {
         self.actor.forward(obs, n, &mut self.s.ws_act)
-    }
-
-    /// One TD3 update on a mini-batch (DDPG when the knobs say so; argmax actor when
-    /// configured). Returns the losses.
-    pub fn update(&mut self, b: &Batch) -> Losses {
-        let (n, o, a) = (b.len, self.obs_dim, self.bounds.len());
-        let (_, policy_delay, ..) = self.config.knobs();
-
-        // 1. TD target: y = r + γ·(1 − done)·min_i Q'_i(s', clip(π'(s') + clip(ε, −c, c))).
-        self.compute_td_targets(b, true);
-        let s = &mut self.s;
-
-        // 2. Critics: minimise mean (Q_i(s, a) − y)².
-        concat_rows(&b.obs, o, &b.act, a, &mut s.sa);
-        let mut critic_loss = 0.0;
-        for (i, (critic, opt)) in self
-            .critics
-            .iter_mut()
-            .zip(&mut self.critic_opts)
-            .enumerate()
-        {
-            let q = critic.forward(&s.sa, n, &mut s.ws_critic);
-            s.dq.clear();
-            s.dq.extend(q.iter().zip(&s.y).map(|(q, y)| 2.0 * (q - y) / n as f32));
-            if i == 0 {
-                critic_loss = q
-                    .iter()
-                    .zip(&s.y)
-                    .map(|(q, y)| (q - y) * (q - y))
-                    .sum::<f32>()
-                    / n as f32;
-            }
-            s.grad_critic.resize(critic.params.len(), 0.0);
-            critic.backward(&mut s.ws_critic, &s.dq, Some(&mut s.grad_critic), None);
-            opt.step(&mut critic.params, &s.grad_critic);
-        }
-        self.updates += 1;
-        if !self.updates.is_multiple_of(policy_delay as u64) {
-            return Losses {
-                critic: critic_loss,
-                actor: None,
-            };
-        }
-
-        // 3. Actor.
-        s.pi.clear();
-        s.pi.extend_from_slice(self.actor.forward(&b.obs, n, &mut s.ws_actor));
-        s.da.clear();
-        s.da.resize(n * a, 0.0);
-        let actor_loss = match self.config.actor_update {
-            ActorUpdate::Gradient => {
-                // Ascend Q_1(s, π(s)): ∂(−mean Q)/∂π(s) = −(1/n)·∂Q_1/∂a.
-                concat_rows(&b.obs, o, &s.pi, a, &mut s.sa);
-                let q = self.critics[0].forward(&s.sa, n, &mut s.ws_critic);
-                let loss = -q.iter().sum::<f32>() / n as f32;
-                s.dq.clear();
-                s.dq.resize(n, -1.0 / n as f32);
-                s.dsa.resize(n * (o + a), 0.0);
-                self.critics[0].backward(&mut s.ws_critic, &s.dq, None, Some(&mut s.dsa));
-                for (da, row) in s.da.chunks_exact_mut(a).zip(s.dsa.chunks_exact(o + a)) {
-                    da.copy_from_slice(&row[o..]);
-                }
-                loss
-            }
-            ActorUpdate::Argmax => {
-                // a*(s) = argmax over k uniform actions of Q_1(s, a); minimise mean ‖π(s) − a*‖².
-                let k = self.config.argmax_samples;
-                s.sa.clear();
-                for obs in b.obs.chunks_exact(o) {
-                    for _ in 0..k {
-                        s.sa.extend_from_slice(obs);
-                        for &bound in &self.bounds {
-                            s.sa.push(self.rng.random_range(-bound..=bound));
-                        }
-                    }
-                }
-                let q = self.critics[0].forward(&s.sa, n * k, &mut s.ws_critic);
-                let mut loss = 0.0;
-                for i in 0..n {
-                    let best = (0..k)
-                        .max_by(|&x, &y| q[i * k + x].total_cmp(&q[i * k + y]))
-                        .unwrap();
-                    let row = (i * k + best) * (o + a);
-                    for j in 0..a {
-                        let diff = s.pi[i * a + j] - s.sa[row + o + j];
-                        loss += diff * diff / n as f32;
-                        s.da[i * a + j] = 2.0 * diff / n as f32;
-                    }
-                }
-                loss
-            }
-        };
-        s.grad_actor.resize(self.actor.params.len(), 0.0);
-        self.actor
-            .backward(&mut s.ws_actor, &s.da, Some(&mut s.grad_actor), None);
-        self.actor_opt.step(&mut self.actor.params, &s.grad_actor);
-
-        // 4. Targets: θ' ← τ·θ + (1 − τ)·θ'.
-        let tau = self.config.tau;
-        self.actor_target
-            .soft_update_from(&self.actor, tau, self.kernel);
-        for (t, c) in self.critic_targets.iter_mut().zip(&self.critics) {
-            t.soft_update_from(c, tau, self.kernel);
-        }
-        Losses {
-            critic: critic_loss,
-            actor: Some(actor_loss),
-        }
     }
 
     /// TD3's target actions for a batch of next observations: π'(s') plus the smoothing

@@ -185,19 +185,16 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         self.made.set(n + 1);
         let n32 = n as u32;
         let (env, config) = (self.env, self.config);
-        // Warm start: a problem whose target lies before the last one's (the next skill of
-        // the chain) takes over the last learner; a restart (same target) or a repair of a
-        // later section starts fresh.
-        let learner = match self.last.borrow_mut().take() {
-            Some((last_t, learner)) if config.warm_start && last_t > lo + t => learner,
-            _ => Learner::new(
+        let last = self.last.borrow_mut().take();
+        let learner = warm_or_fresh(last, config.warm_start, lo + t, || {
+            Learner::new(
                 self.learner,
                 env.obs_dim(),
                 &config.learner_bounds(env),
                 &self.seeds.skill(n32),
                 self.kernel,
-            )?,
-        };
+            )
+        })?;
         let rngs = [
             self.seeds.substream(Stream::Start, n32),
             self.seeds.substream(Stream::Noise, n32),
@@ -483,6 +480,22 @@ pub fn skill_chaining<B: backplay::Backplayer>(
 
 /// Most balls a moved hand-over tries ([`handover`]).
 pub const MAX_HANDOVER_TRIES: usize = 4;
+
+/// The learner of a new problem whose target is τ_`target`: with `warm_start`, a problem whose
+/// target lies before the `last` one's (the next skill of the chain) takes over the last
+/// learner; a restart (same target), a repair of a later section, and every problem without
+/// the switch start from `fresh()`.
+fn warm_or_fresh(
+    last: Option<(usize, Learner)>,
+    warm_start: bool,
+    target: usize,
+    fresh: impl FnOnce() -> Result<Learner>,
+) -> Result<Learner> {
+    match last {
+        Some((last_t, learner)) if warm_start && last_t > target => Ok(learner),
+        _ => fresh(),
+    }
+}
 
 /// A new start for the skill found last, whose start is τ_t and whose goal is `b`'s (τ_{t_last}):
 /// the indices t + 1 … t + `span` before t_last, those whose ball is clear of obstacles first,

@@ -1,56 +1,40 @@
-//! Unit tests of [`super`] that read the chainer's private state.
+//! Unit tests of [`super`]'s private helpers.
 
 use super::*;
-use crate::toy::Toy1D;
 
 /// With `warm_start`, the problem after a saved skill (an earlier target on τ) takes over
 /// the last learner; a restart (same target) or a repair of a later section starts from
 /// the seeds, as every problem does without the switch.
 #[test]
 fn warm_start_takes_over_the_last_learner_only_for_the_next_skill() {
-    let tau: Vec<f32> = (0..=10).map(|i| 0.9 - 0.08 * i as f32).collect();
     let lc = LearnerConfig::ddpg();
     let seeds = Seeds::new(5);
     let kernel = Kernel::detect();
-    let fresh = |n: u32| {
-        Learner::new(&lc, 1, &[1.0], &seeds.skill(n), kernel)
-            .unwrap()
-            .actor
-            .params
-    };
+    let fresh = || Learner::new(&lc, 1, &[1.0], &seeds.skill(0), kernel);
     // A learner unlike any fresh one: the weights of sub-run 99.
     let trained = Learner::new(&lc, 1, &[1.0], &seeds.skill(99), kernel).unwrap();
+    let fresh_params = fresh().unwrap().actor.params;
+    assert!(fresh_params != trained.actor.params);
     for warm in [false, true] {
-        // The toy makes no ball starts: exact starts (the test reads learners only).
-        let config = Phase2Config {
-            warm_start: warm,
-            start: super::super::StartMode::Exact,
-            ..Phase2Config::default()
-        };
-        let mut progress = |_: usize, _: Progress| {};
-        let c = Chainer::new(&Toy1D, &tau, &lc, &config, &seeds, 0, kernel, &mut progress);
-        // (last target, new target, expected: warm?)
-        for (n, (last_t, t, takes_over)) in [(6, 3, true), (6, 6, false), (6, 8, false)]
-            .into_iter()
-            .enumerate()
-        {
-            *c.last.borrow_mut() = Some((last_t, trained.clone()));
-            let task = c.task(&tau, 0, t, &[]).unwrap();
+        // (last target, new target, whether the last learner is taken over when warm)
+        for (last_t, t, takes_over) in [(6, 3, true), (6, 6, false), (6, 8, false)] {
+            let got = warm_or_fresh(Some((last_t, trained.clone())), warm, t, fresh).unwrap();
             let expected = if warm && takes_over {
-                trained.actor.params.clone()
+                &trained.actor.params
             } else {
-                fresh(n as u32)
+                &fresh_params
             };
-            let got = &task.learner.actor.params;
             assert!(
-                got == &expected,
-                "warm {warm}, T {last_t} → {t}: {} params, first {:?}; expected {} params, \
-                 first {:?}",
-                got.len(),
-                &got[..3],
-                expected.len(),
-                &expected[..3]
+                &got.actor.params == expected,
+                "warm {warm}, T {last_t} → {t}: took over {}",
+                got.actor.params == trained.actor.params
             );
         }
+        // The first problem has no last learner: fresh, warm or not.
+        let first = warm_or_fresh(None, warm, 3, fresh).unwrap();
+        assert!(
+            first.actor.params == fresh_params,
+            "warm {warm}, first problem"
+        );
     }
 }

@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::nn::Mlp;
 use crate::rng::{Seeds, Stream};
+use crate::rollout::{lockstep, Agent, Verdict};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -105,47 +106,25 @@ impl SkillChain {
         max_steps: usize,
         per_skill: Option<usize>,
     ) -> Rollout<E::State> {
-        let mut acted = 0;
-        let mut raw = vec![0.0; env.obs_dim()];
-        let mut obs = vec![0.0; env.obs_dim()];
-        let mut action = vec![0.0; env.action_dim()];
-        let mut ws = crate::nn::Workspace::with_kernel(self.kernel);
-        let mut i = 0;
-        let mut s = start;
-        let mut out = Rollout {
-            states: vec![s.clone()],
-            skill_used: Vec::new(),
-            success: false,
+        let mut run = Execution {
+            chain: self,
+            skill: 0,
+            acted: 0,
+            per_skill,
+            obs: vec![0.0; env.obs_dim()],
+            ws: crate::nn::Workspace::with_kernel(self.kernel),
+            rollout: Rollout {
+                states: vec![start.clone()],
+                skill_used: Vec::new(),
+                success: false,
+            },
         };
-        if self.skills.is_empty() {
-            return out;
+        if self.skills.is_empty() || per_skill == Some(0) {
+            return run.rollout;
         }
-        for _ in 0..max_steps {
-            env.observe(&s, &mut raw);
-            let j = self.active_skill(i, &raw);
-            if j != i {
-                i = j;
-                acted = 0;
-            }
-            if per_skill.is_some_and(|m| acted >= m) {
-                break;
-            }
-            acted += 1;
-            self.act(i, &raw, &mut obs, &mut action, &mut ws);
-            let step = env.step(&s, &action);
-            out.skill_used.push(i);
-            let stuck = per_skill.is_some() && step.state == s;
-            s = step.state;
-            out.states.push(s.clone());
-            if step.reward > 0.0 && step.terminal {
-                out.success = true;
-                break;
-            }
-            if stuck {
-                break;
-            }
-        }
-        out
+        let tally = lockstep(env, &mut run, vec![start], max_steps, |_| false);
+        run.rollout.success = tally.successes == 1;
+        run.rollout
     }
 
     /// The skill that acts at observation `raw` when skill `current` acted last: the last
@@ -419,5 +398,62 @@ impl ManifestSkill {
             ));
         }
         Ok(())
+    }
+}
+
+/// One execution of a chain ([`SkillChain::run_limited`]) as an agent: the active skill acts,
+/// a later skill whose ball the state enters takes over, and the states and the skill of each
+/// step are recorded.
+struct Execution<'c, S> {
+    chain: &'c SkillChain,
+    /// The skill acting, and how many times it has acted since it took over.
+    skill: usize,
+    acted: usize,
+    per_skill: Option<usize>,
+    /// The acting skill's view of the observation.
+    obs: Vec<f32>,
+    ws: crate::nn::Workspace,
+    rollout: Rollout<S>,
+}
+
+impl<E: Env> Agent<E> for Execution<'_, E::State> {
+    fn act(&mut self, _lanes: &[usize], raw: &[f32], action: &mut [f32]) {
+        let j = self.chain.active_skill(self.skill, raw);
+        if j != self.skill {
+            self.skill = j;
+            self.acted = 0;
+        }
+        self.acted += 1;
+        self.chain
+            .act(self.skill, raw, &mut self.obs, action, &mut self.ws);
+    }
+
+    fn after(
+        &mut self,
+        _: usize,
+        _: usize,
+        state: &E::State,
+        _: &[f32],
+        step: &crate::env::Step<E::State>,
+        next_raw: &[f32],
+    ) -> Verdict {
+        self.rollout.skill_used.push(self.skill);
+        self.rollout.states.push(step.state.clone());
+        if step.reward > 0.0 && step.terminal {
+            return Verdict::Success;
+        }
+        let Some(m) = self.per_skill else {
+            return Verdict::Running;
+        };
+        // With a per-skill limit, a step that does not move ends the episode (a greedy chain
+        // on a pure step is stuck for good), and so does a skill about to act an m + 1-th
+        // time without handing over.
+        let stuck = step.state == *state;
+        let spent = self.acted >= m && self.chain.active_skill(self.skill, next_raw) == self.skill;
+        if stuck || spent {
+            Verdict::Failure
+        } else {
+            Verdict::Running
+        }
     }
 }

@@ -12,6 +12,7 @@ use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
 use crate::nn::Mlp;
 use crate::rng::Rng;
+use crate::rollout::{lockstep, Agent, Tally, Verdict};
 
 /// Environment steps spent, by purpose.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -190,24 +191,15 @@ impl<'a, E: Env> SkillTask<'a, E> {
             .collect()
     }
 
-    /// `n` episodes in lockstep from starts around τ_k, at most `max_steps` steps each (fewer
-    /// with [`Phase2Config::path_limit`], and for greedy ones `test_path_limit`); each
-    /// step the actions of all running episodes come from one batched forward pass. With
-    /// `learn`, noise is added, transitions are stored with the shaped reward and every step
-    /// makes one learner update (Algorithm 3); without, the policy is greedy (a test).
-    /// Returns the fraction of episodes that reached the goal (a lower bound for a test cut
-    /// short by [`Phase2Config::fast_tests`]).
+    /// `n` episodes in lockstep ([`crate::rollout::lockstep`]) from starts around τ_k, at
+    /// most `max_steps` steps each (fewer with [`Phase2Config::path_limit`], and for greedy
+    /// ones `test_path_limit`); each step the actions of all running episodes come from one
+    /// batched forward pass. With `learn`, noise is added, transitions are stored with the
+    /// shaped reward and every step makes one learner update (Algorithm 3); without, the
+    /// policy is greedy (a test). Returns the fraction of episodes that reached the goal (a
+    /// lower bound for a test cut short by [`Phase2Config::fast_tests`]).
     fn episodes(&mut self, k: usize, n: usize, learn: bool) -> f32 {
-        let (obs_dim, act_dim) = (self.env.obs_dim(), self.env.action_dim());
-        let mut states = self.starts(k, n);
-        let mut running: Vec<usize> = (0..states.len()).collect();
-        let (mut successes, mut failures) = (0usize, 0usize);
-        let fast = !learn && self.config.fast_tests;
-        // Raw observations of the running states and the networks' view of them; one next
-        // state's raw observation and view.
-        let (mut raw, mut obs) = (Vec::new(), Vec::new());
-        let (mut raw_next, mut next_obs) = (vec![0.0; obs_dim], vec![0.0; obs_dim]);
-        let mut env_action = vec![0.0; act_dim];
+        let starts = self.starts(k, n);
         if learn {
             for noise in &mut self.noise {
                 noise.reset();
@@ -218,76 +210,21 @@ impl<'a, E: Env> SkillTask<'a, E> {
         } else {
             self.test_limits[k]
         };
-        for _ in 0..limit {
-            if running.is_empty() {
-                break;
-            }
-            raw.resize(obs_dim * running.len(), 0.0);
-            obs.resize(obs_dim * running.len(), 0.0);
-            for ((r, o), &lane) in raw
-                .chunks_exact_mut(obs_dim)
-                .zip(obs.chunks_exact_mut(obs_dim))
-                .zip(&running)
-            {
-                self.env.observe(&states[lane], r);
-                self.inputs.observation(r, o);
-            }
-            let mut actions = self.learner.act(&obs, running.len()).to_vec();
-            let mut still = Vec::with_capacity(running.len());
-            for (j, &lane) in running.iter().enumerate() {
-                let a = &mut actions[j * act_dim..(j + 1) * act_dim];
-                if learn {
-                    // σ is a fraction of the bound: noise is added in units of the bound.
-                    for (x, b) in a.iter_mut().zip(&self.bounds) {
-                        *x /= b;
-                    }
-                    self.noise[lane].add(&mut self.rng_noise, a);
-                    for (x, b) in a.iter_mut().zip(&self.bounds) {
-                        *x = x.clamp(-1.0, 1.0) * b;
-                    }
-                }
-                self.inputs.env_action(a, &mut env_action);
-                let raw_s = &raw[j * obs_dim..(j + 1) * obs_dim];
-                let step = self.env.step(&states[lane], &env_action);
-                self.env.observe(&step.state, &mut raw_next);
-                let reached = self.goal.reached(&raw_next, step.terminal, step.reward);
-                if learn {
-                    self.steps.train += 1;
-                    let r = self.goal.reward(raw_s, &raw_next, reached);
-                    self.inputs.observation(&raw_next, &mut next_obs);
-                    let o = &obs[j * obs_dim..(j + 1) * obs_dim];
-                    let done = self.goal.terminal(reached, step.terminal);
-                    self.replay.push(o, a, r, &next_obs, done);
-                    if self.replay.len() >= self.learner.config().batch_size {
-                        self.replay.sample(
-                            self.learner.config().batch_size,
-                            &mut self.rng_replay,
-                            &mut self.batch,
-                        );
-                        self.learner.update(&self.batch);
-                    }
-                } else {
-                    self.steps.test += 1;
-                }
-                // A greedy episode that did not move is stuck for good (deterministic policy,
-                // pure step): with fast tests it ends as a failure now.
-                let stuck = fast && step.state == states[lane];
-                let ended = step.terminal || stuck;
-                states[lane] = step.state;
-                if reached {
-                    successes += 1;
-                } else if ended {
-                    failures += 1;
-                } else {
-                    still.push(lane);
-                }
-            }
-            running = still;
-            if fast && successes > 0 && failures > 0 {
-                break; // neither 0 % nor 100 %: all Backplay needs to know
-            }
-        }
-        successes as f32 / n as f32
+        let fast = !learn && self.config.fast_tests;
+        let env = self.env;
+        let mut agent = Episodes {
+            task: self,
+            learn,
+            fast,
+            view: Vec::new(),
+            actions: Vec::new(),
+            next_view: vec![0.0; env.obs_dim()],
+        };
+        // Neither 0 % nor 100 % is all Backplay needs to know of a fast test.
+        let tally = lockstep(env, &mut agent, starts, limit, |t: Tally| {
+            fast && t.successes > 0 && t.failures > 0
+        });
+        tally.successes as f32 / n as f32
     }
 
     /// `episodes` greedy episodes of a saved `policy` from B_ε(τ_k) (swapped in for π, then
@@ -367,5 +304,91 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         self.env
             .clear_balls()
             .is_some_and(|c| c.ball_is_clear(&self.states[k], self.config.epsilon))
+    }
+}
+
+/// [`SkillTask::episodes`]' agent: the task's learner acting on the skill's view of the
+/// observations ([`Inputs`]), with noise and learning when training, judged by the skill's
+/// goal.
+struct Episodes<'t, 'a, E: Env> {
+    task: &'t mut SkillTask<'a, E>,
+    learn: bool,
+    /// A greedy episode that does not move is stuck for good (deterministic policy, pure
+    /// step): with fast tests it ends as a failure at once.
+    fast: bool,
+    /// The networks' view of this step's observations, and the learner's actions (in its
+    /// bounds, noise added when learning), one row per running episode.
+    view: Vec<f32>,
+    actions: Vec<f32>,
+    next_view: Vec<f32>,
+}
+
+impl<E: Env> Agent<E> for Episodes<'_, '_, E> {
+    fn act(&mut self, lanes: &[usize], obs: &[f32], env_actions: &mut [f32]) {
+        let t = &mut *self.task;
+        let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
+        self.view.resize(obs.len(), 0.0);
+        for (r, o) in obs
+            .chunks_exact(obs_dim)
+            .zip(self.view.chunks_exact_mut(obs_dim))
+        {
+            t.inputs.observation(r, o);
+        }
+        self.actions.clear();
+        self.actions
+            .extend_from_slice(t.learner.act(&self.view, lanes.len()));
+        for (j, &lane) in lanes.iter().enumerate() {
+            let a = &mut self.actions[j * act_dim..(j + 1) * act_dim];
+            if self.learn {
+                // σ is a fraction of the bound: noise is added in units of the bound.
+                for (x, b) in a.iter_mut().zip(&t.bounds) {
+                    *x /= b;
+                }
+                t.noise[lane].add(&mut t.rng_noise, a);
+                for (x, b) in a.iter_mut().zip(&t.bounds) {
+                    *x = x.clamp(-1.0, 1.0) * b;
+                }
+            }
+            t.inputs
+                .env_action(a, &mut env_actions[j * act_dim..(j + 1) * act_dim]);
+        }
+    }
+
+    fn after(
+        &mut self,
+        j: usize,
+        _lane: usize,
+        state: &E::State,
+        obs: &[f32],
+        step: &crate::env::Step<E::State>,
+        next_obs: &[f32],
+    ) -> Verdict {
+        let t = &mut *self.task;
+        let reached = t.goal.reached(next_obs, step.terminal, step.reward);
+        if self.learn {
+            t.steps.train += 1;
+            let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
+            let r = t.goal.reward(obs, next_obs, reached);
+            t.inputs.observation(next_obs, &mut self.next_view);
+            let o = &self.view[j * obs_dim..(j + 1) * obs_dim];
+            let a = &self.actions[j * act_dim..(j + 1) * act_dim];
+            let done = t.goal.terminal(reached, step.terminal);
+            t.replay.push(o, a, r, &self.next_view, done);
+            let batch_size = t.learner.config().batch_size;
+            if t.replay.len() >= batch_size {
+                t.replay.sample(batch_size, &mut t.rng_replay, &mut t.batch);
+                t.learner.update(&t.batch);
+            }
+        } else {
+            t.steps.test += 1;
+        }
+        let stuck = self.fast && step.state == *state;
+        if reached {
+            Verdict::Success
+        } else if step.terminal || stuck {
+            Verdict::Failure
+        } else {
+            Verdict::Running
+        }
     }
 }

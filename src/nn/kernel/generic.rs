@@ -124,50 +124,55 @@ pub(super) unsafe fn gemm_nn<S: Simd>(
                 bias: bias_j,
                 post: post_ij,
             };
-            // A tile whose last vector is full is compiled without masks, so its inner
-            // loop holds no branch on the tail (measured: the AVX2 loop had one per k).
-            let full = tail == S::LANES;
-            macro_rules! pick {
-                ($(($r:literal, $v:literal)),*) => {
-                    match (mr, nv, full) {
-                        $(
-                            ($r, $v, true) => tile::<S, $r, $v, true>(args),
-                            ($r, $v, false) => tile::<S, $r, $v, false>(args),
-                        )*
-                        _ => unreachable!("tile {mr} × {nv} larger than the kernel's"),
-                    }
-                };
-            }
-            pick!(
-                (1, 1),
-                (2, 1),
-                (3, 1),
-                (4, 1),
-                (5, 1),
-                (6, 1),
-                (1, 2),
-                (2, 2),
-                (3, 2),
-                (4, 2),
-                (5, 2),
-                (6, 2),
-                (1, 3),
-                (2, 3),
-                (3, 3),
-                (4, 3),
-                (5, 3),
-                (6, 3),
-                (1, 4),
-                (2, 4),
-                (3, 4),
-                (4, 4),
-                (5, 4),
-                (6, 4)
-            );
+            run_tile::<S>(mr, nv, tail == S::LANES, args);
             i += mr;
         }
         j += width;
     }
+}
+
+/// One `mr` × `nv` register tile of [`gemm_nn`], `full` when its last vector has no tail.
+/// A tile whose last vector is full is compiled without masks, so its inner loop holds no
+/// branch on the tail (measured: the AVX2 loop had one per k).
+#[inline(always)]
+unsafe fn run_tile<S: Simd>(mr: usize, nv: usize, full: bool, args: Tile) {
+    macro_rules! pick {
+        ($(($r:literal, $v:literal)),*) => {
+            match (mr, nv, full) {
+                $(
+                    ($r, $v, true) => tile::<S, $r, $v, true>(args),
+                    ($r, $v, false) => tile::<S, $r, $v, false>(args),
+                )*
+                _ => unreachable!("tile {mr} × {nv} larger than the kernel's"),
+            }
+        };
+    }
+    pick!(
+        (1, 1),
+        (2, 1),
+        (3, 1),
+        (4, 1),
+        (5, 1),
+        (6, 1),
+        (1, 2),
+        (2, 2),
+        (3, 2),
+        (4, 2),
+        (5, 2),
+        (6, 2),
+        (1, 3),
+        (2, 3),
+        (3, 3),
+        (4, 3),
+        (5, 3),
+        (6, 3),
+        (1, 4),
+        (2, 4),
+        (3, 4),
+        (4, 4),
+        (5, 4),
+        (6, 4)
+    );
 }
 
 #[derive(Clone, Copy)]

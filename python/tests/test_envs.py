@@ -1,0 +1,42 @@
+"""Environments by name from Python: ``pbcs.run(env="rooms")`` runs PBCS on the registry's
+two rooms, the same run as the committed row of ``experiments/rooms.toml`` for that seed."""
+
+import csv
+from pathlib import Path
+
+import pbcs
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_a_run_on_the_rooms_is_the_committed_rows_run():
+    record = pbcs.run(env="rooms", seed=0)
+    assert record["env"] == "rooms"
+    assert record["maze"] is None
+    assert record["solved"]
+    tau = record["tau"]
+    assert tau.ndim == 2 and tau.shape[1] == 2 and len(tau) > 2
+    # The rooms are 2 × 1: τ stays in that frame.
+    assert (tau[:, 0] >= 0).all() and (tau[:, 0] <= 2).all()
+    assert (tau[:, 1] >= 0).all() and (tau[:, 1] <= 1).all()
+    row_path = ROOT / "results/raw/rooms/pbcs_fast-rooms/s0.csv"
+    with open(row_path, newline="") as f:
+        row = next(csv.DictReader(f))
+    assert row["maze"] == "rooms"
+    assert record["total_steps"] == int(row["env_steps"])
+    assert record["skills"] == int(row["skills"])
+
+
+def test_a_rooms_run_writes_its_folder_and_its_chain_is_refused_as_a_maze_chain(tmp_path):
+    out = tmp_path / "run"
+    record = pbcs.run(env="rooms", seed=1, out=str(out))
+    assert (out / "record.csv").exists() and (out / "chain" / "manifest.toml").exists()
+    assert 'env = "rooms"' in (out / "chain" / "run.toml").read_text()
+    assert record["chain"] == out / "chain"
+    # Chain (the Python policy) acts on the maze's observations only: refused, naming env.
+    try:
+        pbcs.load_chain(out / "chain")
+    except ValueError as e:
+        assert "rooms" in str(e) and "pbcs eval" in str(e)
+    else:
+        raise AssertionError("a rooms chain loaded as a maze chain")
