@@ -29,13 +29,18 @@ pub use crate::explore::ExploreConfig;
 pub use crate::maze::{MazeConfig, MAX_MAZE_SIZE};
 pub use crate::validate::{load, Check};
 
-/// What `pbcs explore` runs: phase 1 on one maze with one run seed.
+/// What `pbcs explore` runs: phase 1 on one environment (the maze unless `env` names another)
+/// with one run seed.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExploreJob {
     /// The run seed; every random stream of the run derives from it (see [`crate::rng`]).
     pub seed: u64,
-    /// The maze.
+    /// The environment ([`crate::envs::EnvName`]): the maze unless named (and then left out
+    /// of the written job).
+    #[serde(skip_serializing_if = "EnvName::is_maze")]
+    pub env: EnvName,
+    /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
     /// Phase 1 settings.
     pub explore: ExploreConfig,
@@ -43,9 +48,25 @@ pub struct ExploreJob {
 
 impl Check for ExploreJob {
     fn check(&self) -> Result<()> {
+        refuse_maze_of_other_env(self.env, &self.maze)?;
         self.maze.check()?;
         self.explore.check()
     }
+}
+
+/// A job naming an environment other than the maze must leave `[maze]` at its defaults.
+fn refuse_maze_of_other_env(env: EnvName, maze: &MazeConfig) -> Result<()> {
+    if !env.is_maze() && *maze != MazeConfig::default() {
+        return Err(crate::error::Error::invalid(
+            "maze",
+            format!(
+                "sets the maze, but env = \"{}\" runs another environment (leave [maze] \
+                 out, or set env = \"maze\")",
+                env.name()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// What `pbcs train` runs: a vanilla baseline (DDPG, TD3, or the argmax actor) on one maze's
@@ -118,16 +139,7 @@ impl Default for PbcsJob {
 
 impl Check for PbcsJob {
     fn check(&self) -> Result<()> {
-        if !self.env.is_maze() && self.maze != MazeConfig::default() {
-            return Err(crate::error::Error::invalid(
-                "maze",
-                format!(
-                    "sets the maze, but env = \"{}\" runs another environment (leave [maze] \
-                     out, or set env = \"maze\")",
-                    self.env.name()
-                ),
-            ));
-        }
+        refuse_maze_of_other_env(self.env, &self.maze)?;
         self.maze.check()?;
         self.explore.check()?;
         self.learner.check()?;

@@ -168,6 +168,15 @@ pub(crate) fn run<'py>(
     let done = py
         .detach(|| job.env.visit(&job.maze, work))
         .map_err(py_err)?;
+    record_dict(py, &done, out)
+}
+
+/// [`run`]'s answer: the record, τ, the evaluation episodes and the chain's folder.
+fn record_dict<'py>(
+    py: Python<'py>,
+    done: &RunDone,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
     let r = &done.record;
     let d = PyDict::new(py);
     d.set_item("env", r.env.name())?;

@@ -4,14 +4,14 @@ use super::{claim, write_timing};
 use crate::config::ExploreJob;
 use crate::env::Env;
 use crate::env::Planar;
-use crate::error::Result;
+use crate::envs::{EnvName, Visit};
+use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration, NO_PARENT};
 use crate::maze::Maze;
 use crate::plot::{render_scene, MazePicture, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Check;
-use parry2d::math::Point;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -19,10 +19,10 @@ use std::time::Instant;
 /// The one-row summary of a phase-1 run (`summary.csv`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ExploreSummary {
-    /// Maze size N.
-    pub maze: usize,
-    /// Maze layout seed.
-    pub maze_seed: u64,
+    /// Maze size N (empty for another environment).
+    pub maze: Option<usize>,
+    /// Maze layout seed (empty for another environment).
+    pub maze_seed: Option<u64>,
     /// Run seed.
     pub seed: u64,
     /// Environment steps phase 1 used.
@@ -33,43 +33,69 @@ pub struct ExploreSummary {
     pub archive_states: usize,
     /// Non-empty bins of the archive.
     pub archive_bins: usize,
+    /// The environment ([`EnvName`]; the last column, so the others keep their places).
+    pub env: EnvName,
 }
 
-/// One phase-1 run's outcome ([`ExploreRun::compute`]): the summary row, everything
-/// exploration found and the wall-clock seconds; [`ExploreRun::write`] writes it.
+/// One phase-1 run's outcome ([`ExploreRun::compute`] on the maze, [`ExploreRun::compute_on`]
+/// on any planar environment): the summary row, everything exploration found and the
+/// wall-clock seconds; [`ExploreRun::write`] writes it.
 #[derive(Debug, Clone)]
-pub struct ExploreRun {
-    /// The maze explored.
-    pub maze: Maze,
+pub struct ExploreRun<E: Planar = Maze> {
+    /// The environment explored.
+    pub env: E,
     /// The one-row summary.
     pub summary: ExploreSummary,
     /// τ and the archive.
-    pub found: Exploration<Point<f32>>,
+    pub found: Exploration<E::State>,
     /// Wall-clock seconds of the run (not deterministic).
     pub seconds: f64,
 }
 
-impl ExploreRun {
-    /// Runs phase 1 for `job`; `progress(steps, archive_len)` is called during the run.
-    /// Writes nothing.
+impl ExploreRun<Maze> {
+    /// [`ExploreRun::compute_on`] the maze of `job` (the Python package's phase 1); a job
+    /// naming another environment is refused ([`run_explore`] runs any).
     pub fn compute(job: &ExploreJob, progress: impl FnMut(u64, usize)) -> Result<ExploreRun> {
+        if !job.env.is_maze() {
+            return Err(Error::invalid(
+                "env",
+                format!(
+                    "\"{}\": this phase 1 is of the maze only (`pbcs explore --env {0}` runs it)",
+                    job.env.name()
+                ),
+            ));
+        }
         job.check()?;
-        let maze = Maze::new(&job.maze)?;
+        ExploreRun::compute_on(Maze::new(&job.maze)?, job, progress)
+    }
+}
+
+impl<E: Planar> ExploreRun<E> {
+    /// Runs phase 1 of `job` on `env`; `progress(steps, archive_len)` is called during the
+    /// run. Writes nothing.
+    pub fn compute_on(
+        env: E,
+        job: &ExploreJob,
+        progress: impl FnMut(u64, usize),
+    ) -> Result<ExploreRun<E>> {
+        job.check()?;
         let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
         let clock = Instant::now();
-        let found = explore(&maze, &job.explore, &mut rng, progress)?;
+        let found = explore(&env, &job.explore, &mut rng, progress)?;
         let seconds = clock.elapsed().as_secs_f64();
+        let on_maze = job.env.is_maze();
         let summary = ExploreSummary {
-            maze: job.maze.size,
-            maze_seed: job.maze.seed,
+            maze: on_maze.then_some(job.maze.size),
+            maze_seed: on_maze.then_some(job.maze.seed),
             seed: job.seed,
             env_steps: found.env_steps,
             trajectory_len: found.trajectory.len(),
             archive_states: found.archive.len(),
             archive_bins: found.archive.bins(),
+            env: job.env,
         };
         Ok(ExploreRun {
-            maze,
+            env,
             summary,
             found,
             seconds,
@@ -85,7 +111,7 @@ impl ExploreRun {
     }
 
     fn write_files(&self, job: &ExploreJob, out: &Path) -> Result<()> {
-        let (maze, found) = (&self.maze, &self.found);
+        let (maze, found) = (&self.env, &self.found);
         write_record(&out.join("summary.csv"), &self.summary)?;
         write_trajectory_csv(maze, found, &out.join("trajectory.csv"))?;
         write_archive_csv(maze, found, &out.join("archive.csv"))?;
@@ -99,19 +125,32 @@ impl ExploreRun {
     }
 }
 
-/// Runs phase 1 for `job` into `out`: claims the folder (writing `config.toml`, the resolved
-/// job) before any work, then [`ExploreRun::compute`] and [`ExploreRun::write`].
-/// `progress(steps, archive_len)` is called during the run.
+/// Runs phase 1 for `job` into `out` on the environment it names: claims the folder (writing
+/// `config.toml`, the resolved job) before any work, then [`ExploreRun::compute_on`] and
+/// [`ExploreRun::write`]. `progress(steps, archive_len)` is called during the run.
 pub fn run_explore(
     job: &ExploreJob,
     out: &Path,
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
+    /// [`run_explore`] on the environment the job names.
+    struct Into<'a, P> {
+        job: &'a ExploreJob,
+        out: &'a Path,
+        progress: P,
+    }
+    impl<P: FnMut(u64, usize)> Visit for Into<'_, P> {
+        type Output = (ExploreSummary, f64);
+        fn on<E: Planar>(self, env: E) -> Result<(ExploreSummary, f64)> {
+            claim(self.job, self.out)?;
+            let run = ExploreRun::compute_on(env, self.job, self.progress)?;
+            run.write(self.job, self.out)?;
+            Ok((run.summary, run.seconds))
+        }
+    }
     job.check()?;
-    claim(job, out)?;
-    let run = ExploreRun::compute(job, progress)?;
-    run.write(job, out)?;
-    Ok((run.summary, run.seconds))
+    let work = Into { job, out, progress };
+    job.env.visit(&job.maze, work)
 }
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
@@ -139,22 +178,23 @@ pub(crate) fn write_trajectory_csv<E: Env>(
     write_csv(path, &header, rows)
 }
 
-/// `archive.csv`: `id, parent, state_usage, bin_usage, x, y` (parent empty for s_0).
-pub(crate) fn write_archive_csv(
-    maze: &Maze,
-    found: &Exploration<Point<f32>>,
+/// `archive.csv`: `id, parent, state_usage, bin_usage` and the state's observation (`x, y`
+/// for the maze; parent empty for s_0).
+pub(crate) fn write_archive_csv<E: Env>(
+    env: &E,
+    found: &Exploration<E::State>,
     path: &Path,
 ) -> Result<()> {
     let mut header: Vec<String> = ["id", "parent", "state_usage", "bin_usage"]
         .map(String::from)
         .to_vec();
-    header.extend(maze.obs_names());
+    header.extend(env.obs_names());
     let archive = &found.archive;
+    let mut obs = vec![0.0; env.obs_dim()];
     let rows = (0..archive.len() as u32).map(|id| {
-        let s = archive.state(id);
         let parent = archive.parent(id);
         let (cs, cb) = archive.usage(id);
-        [
+        let mut row = vec![
             id.to_string(),
             if parent == NO_PARENT {
                 String::new()
@@ -163,31 +203,33 @@ pub(crate) fn write_archive_csv(
             },
             cs.to_string(),
             cb.to_string(),
-            s.x.to_string(),
-            s.y.to_string(),
-        ]
+        ];
+        env.observe(archive.state(id), &mut obs);
+        row.extend(obs.iter().map(f32::to_string));
+        row
     });
     write_csv(path, &header, rows)
 }
 
-pub(crate) fn render_exploration(
-    maze: &Maze,
-    found: &Exploration<Point<f32>>,
+pub(crate) fn render_exploration<E: Planar>(
+    env: &E,
+    found: &Exploration<E::State>,
     job: &ExploreJob,
     out: &Path,
 ) -> Result<()> {
     let points: Vec<(f32, f32)> = (0..found.archive.len() as u32)
-        .map(|i| {
-            let s = found.archive.state(i);
-            (s.x, s.y)
-        })
+        .map(|i| env.point(found.archive.state(i)))
         .collect();
-    let path: Vec<(f32, f32)> = found.trajectory.states.iter().map(|s| (s.x, s.y)).collect();
+    let path: Vec<(f32, f32)> = found
+        .trajectory
+        .states
+        .iter()
+        .map(|s| env.point(s))
+        .collect();
     let picture = MazePicture {
         title: format!(
-            "phase 1, maze {} (layout {}), seed {}: {} steps, |τ| = {}",
-            job.maze.size,
-            job.maze.seed,
+            "phase 1, {}, seed {}: {} steps, |τ| = {}",
+            job.env.label(&job.maze),
             job.seed,
             found.env_steps,
             found.trajectory.len()
@@ -197,7 +239,7 @@ pub(crate) fn render_exploration(
         ..MazePicture::default()
     };
     render_scene(
-        &maze.scene(),
+        &env.scene(),
         &picture,
         &out.join("explore.png"),
         &out.join("explore.svg"),
@@ -209,11 +251,12 @@ impl ExploreSummary {
     /// What `pbcs explore` prints, with the wall clock `seconds` and the archive's bin side.
     pub fn summary(&self, seconds: f64, bin_side: f32) -> String {
         format!(
-            "maze {} (layout seed {}), run seed {}: target reached after {} env steps \
-             ({:.3} s, {:.2} M steps/s)\ntrajectory τ: {} states; archive: {} states in {} bins \
-             of side {}",
-            self.maze,
-            self.maze_seed,
+            "{}, run seed {}: target reached after {} env steps ({:.3} s, {:.2} M steps/s)\n\
+             trajectory τ: {} states; archive: {} states in {} bins of side {}",
+            match (self.maze, self.maze_seed) {
+                (Some(n), Some(m)) => format!("maze {n} (layout seed {m})"),
+                _ => self.env.name().to_string(),
+            },
             self.seed,
             self.env_steps,
             seconds,

@@ -1,6 +1,7 @@
 //! Environments by name on the command line: `pbcs run --env rooms` runs PBCS on the two
 //! rooms (`src/rooms.rs`) and `pbcs eval` re-runs its chain, both knowing the environment from
-//! the job alone; maze settings given to another environment are refused.
+//! the job alone; `pbcs explore --env rooms` runs phase 1 there; maze settings given to
+//! another environment are refused.
 
 use super::{path, pbcs, stderr};
 
@@ -95,6 +96,60 @@ fn maze_settings_for_another_environment_are_refused() {
     assert!(!o.status.success());
     assert!(
         stderr(&o).contains("maze") && stderr(&o).contains("rooms"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn pbcs_explore_env_rooms_explores_the_rooms() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("explore");
+    let o = pbcs(&[
+        "explore",
+        "--env",
+        "rooms",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("rooms, run seed 0: target reached"));
+    let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert_eq!(field(&summary, "env"), "rooms");
+    assert_eq!(field(&summary, "maze"), "");
+    // The archive holds the rooms' observations, inside their 2 × 1 frame.
+    let archive = std::fs::read_to_string(out.join("archive.csv")).unwrap();
+    assert!(archive.starts_with("id,parent,state_usage,bin_usage,x,y\n"));
+    for line in archive.lines().skip(1) {
+        let v: Vec<f32> = line
+            .rsplit(',')
+            .take(2)
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let (y, x) = (v[0], v[1]);
+        assert!(
+            (0.0..=2.0).contains(&x) && (0.0..=1.0).contains(&y),
+            "{line}"
+        );
+    }
+    assert!(std::fs::read_to_string(out.join("config.toml"))
+        .unwrap()
+        .contains("env = \"rooms\""));
+    let o = pbcs(&[
+        "explore",
+        "--env",
+        "rooms",
+        "--maze-seed",
+        "3",
+        "--out",
+        path(&dir.path().join("x")),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--maze-seed") || stderr(&o).contains("--maze"),
         "{}",
         stderr(&o)
     );

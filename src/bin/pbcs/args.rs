@@ -126,6 +126,10 @@ pub enum Command {
     Explore {
         #[command(flatten)]
         run: RunArgs,
+        /// The environment (`pbcs::envs`); overrides `env` [default: the config's, else the
+        /// maze]. --maze and --maze-seed apply to the maze only.
+        #[arg(long, value_enum)]
+        env: Option<EnvName>,
     },
     /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on the maze's own
     /// reward; write evaluations, visited states, the actor and a picture.

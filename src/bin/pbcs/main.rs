@@ -46,7 +46,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     // bad name is an error here, before any work.
     let kernel = Kernel::from_env()?;
     match cli.command {
-        Command::Explore { run } => explore(&run),
+        Command::Explore { run, env } => explore(&run, env),
         Command::Train {
             run,
             learner,
@@ -63,12 +63,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let preset = preset.unwrap_or(Preset::Fast);
             let mut job = pbcs_job(&run, preset, &learner, no_chaining, exact_starts)?;
             job.env = env.unwrap_or(job.env);
-            if !job.env.is_maze() && (run.maze.is_some() || run.maze_seed.is_some()) {
-                anyhow::bail!(
-                    "--maze and --maze-seed set the maze, but the run's environment is `{}`",
-                    job.env.name()
-                );
-            }
+            refuse_maze_flags(&run, job.env)?;
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
             let label = runs::method_name(run.config.as_deref(), preset);
@@ -425,20 +420,37 @@ fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow
     Ok(())
 }
 
-fn explore(run: &RunArgs) -> anyhow::Result<()> {
-    let job = run.load(
+/// --maze and --maze-seed name the maze: refused for a job on another environment.
+fn refuse_maze_flags(run: &RunArgs, env: EnvName) -> anyhow::Result<()> {
+    if !env.is_maze() && (run.maze.is_some() || run.maze_seed.is_some()) {
+        anyhow::bail!(
+            "--maze and --maze-seed set the maze, but the run's environment is `{}`",
+            env.name()
+        );
+    }
+    Ok(())
+}
+
+fn explore(run: &RunArgs, env: Option<EnvName>) -> anyhow::Result<()> {
+    let mut job = run.load(
         || Ok(ExploreJob::default()),
         |j: &mut ExploreJob| (&mut j.maze, &mut j.seed),
     )?;
+    job.env = env.unwrap_or(job.env);
+    refuse_maze_flags(run, job.env)?;
     job.check()?;
-    let out = run.out_dir("explore", &job.maze, job.seed, "");
+    let out = match job.env {
+        EnvName::Maze => run.out_dir("explore", &job.maze, job.seed, ""),
+        other => (run.out.clone())
+            .unwrap_or_else(|| format!("out/explore/{}-s{}", other.name(), job.seed).into()),
+    };
     let template = "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]";
     let bar = run.bar(template, None);
     let (summary, seconds) = runs::run_explore(&job, &out, |steps, states| {
         bar.set_position(steps);
         bar.set_message(format!("{states} archived states"));
     })
-    .with_context(|| format!("explore maze {} seed {}", job.maze.size, job.seed))?;
+    .with_context(|| format!("explore {} seed {}", job.env.label(&job.maze), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.explore.bin_side));
     let wrote = "{summary,trajectory,archive}.csv, explore.png, explore.svg";
