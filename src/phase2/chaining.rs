@@ -416,10 +416,7 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     while t > 0 {
         let mut b = next(made, t)?;
         made += 1;
-        let walk = backplay::Walk {
-            give_up_when_dead: restarts < config.restarts,
-            ..config.walk()
-        };
+        let walk = config.walk(restarts < config.restarts);
         let candidates = backplay::backplay_candidates(&mut b, t, &walk);
         let found = verified(&mut b, candidates, config.verify_episodes);
         let exhausted = b.exhausted();

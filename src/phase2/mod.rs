@@ -393,8 +393,9 @@ impl Phase2Config {
         }
     }
 
-    /// Backplay's walk from these settings.
-    pub fn walk(&self) -> backplay::Walk {
+    /// Backplay's walk from these settings, for a skill that has restarts left or not (a walk
+    /// that may restart gives up when dead: [`backplay::Walk::give_up_when_dead`]).
+    pub fn walk(&self, restarts_left: bool) -> backplay::Walk {
         backplay::Walk {
             alpha: self.alpha,
             max_rounds: self.max_rounds,
@@ -402,7 +403,7 @@ impl Phase2Config {
             early_stop: self.early_stop,
             adaptive: self.adaptive_k,
             stop_at_failure: self.stop_at_failure,
-            give_up_when_dead: false,
+            give_up_when_dead: restarts_left,
             dead_walk: (self.dead_walk > 0).then_some(self.dead_walk),
         }
     }
