@@ -1,6 +1,6 @@
 //! Experiments as data: one TOML file per paper artifact, a grid of cells (site × method: a
-//! [`Site`] is a maze size or another environment of the registry) run over a range of seeds, each (cell, seed) an independent deterministic run that writes
-//! its own raw CSV row.
+//! [`Site`] is a maze size or another environment of the registry) run over a range of
+//! seeds, each (cell, seed) an independent deterministic run that writes its own raw CSV row.
 //!
 //! An experiment file names a base config per method (a [`TrainJob`] for the vanilla
 //! baselines, a [`PbcsJob`] for PBCS), the fields each method changes (`set`, and `by_maze`

@@ -9,7 +9,8 @@ use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Bars of success rate per site (maze or environment) and method with Wilson 95 % error bars (the γ study).
+/// Bars of success rate per site (maze or environment) and method with Wilson 95 % error
+/// bars (the γ study).
 pub struct SuccessBars {
     title: String,
     mazes: Vec<Site>,
