@@ -4,7 +4,8 @@
 //! (`phase2::SkillChain::run`), the vanilla baselines' greedy evaluations and PBCS's
 //! evaluation protocol all run through [`lockstep`]. Only the vanilla training loop keeps its
 //! own: it runs a step budget across episodes (resets and evaluations between two steps of
-//! one episode), not a set of episodes.
+//! one episode), not a set of episodes. (Phase 1 steps the environment too, with no policy:
+//! random actions from archived states, and the straightening of τ.)
 //!
 //! An agent is the policy and whatever it does with what it meets: [`Agent::act`] gives the
 //! actions of every running episode at once, [`Agent::after`] sees each step and says how its

@@ -48,12 +48,12 @@ def explore(size, layout=0, seed=0, bin_side=None, budget=None):
     return _pbcs.explore(size, layout, seed, bin_side, budget)
 
 
-def run(size=None, layout=0, seed=0, preset="fast", config=None, out=None, max_env_steps=None,
-        env=None):
+def run(size=None, layout=None, seed=0, preset="fast", config=None, out=None,
+        max_env_steps=None, env=None):
     """A whole PBCS run (phase 1, phase 2, the chain's evaluation from B_ε(s_0)), run seed
     ``seed``, with the preset ``fast`` or ``paper``, or the job in the TOML file ``config``, on
     the environment ``env`` names (``"maze"`` or ``"rooms"``; default: the config's, else the
-    maze), the maze of ``size`` (default: the config's, else 5) and layout ``layout``. With
+    maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0). With
     ``out`` (a folder), the run's files are written there as ``pbcs run --out`` writes them,
     the chain in ``out/chain`` (load it with :func:`load_chain`). Returns the run's record as a
     dict (``env``, ``solved``, ``success_rate``, ``skills``, step counts, ``tau`` as points of

@@ -107,17 +107,17 @@ pub(crate) fn evaluation_starts<'py>(
 
 /// A whole PBCS run (phase 1, phase 2, the chain's evaluation) of a preset (`fast` or `paper`)
 /// or of a config file, on the environment it names (`env`, else the config's, else the
-/// maze: of size `size`, else the config's, and layout `layout`); with `out`, its files
+/// maze: of size `size` and layout `layout`, else the config's); with `out`, its files
 /// (record, trace, chain/, picture) are written there, as `pbcs run --out` does. Returns the
 /// run's record as a dict, τ as an array of points, and the chain folder when one was
 /// written.
 #[pyfunction]
-#[pyo3(signature = (size = None, layout = 0, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, env = None))]
+#[pyo3(signature = (size = None, layout = None, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, env = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run<'py>(
     py: Python<'py>,
     size: Option<i64>,
-    layout: i64,
+    layout: Option<i64>,
     seed: i64,
     preset: &str,
     config: Option<PathBuf>,
@@ -141,7 +141,7 @@ pub(crate) fn run<'py>(
             )
         })?;
     }
-    if !job.env.is_maze() && (size.is_some() || layout != 0) {
+    if !job.env.is_maze() && (size.is_some() || layout.is_some()) {
         return Err(invalid(
             "maze",
             format!(
@@ -153,7 +153,9 @@ pub(crate) fn run<'py>(
     if let Some(n) = size {
         job.maze.size = usize::try_from(count("maze.size", n)?).unwrap_or(usize::MAX);
     }
-    job.maze.seed = count("maze.seed", layout)?;
+    if let Some(m) = layout {
+        job.maze.seed = count("maze.seed", m)?;
+    }
     job.seed = count("seed", seed)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;

@@ -40,3 +40,13 @@ def test_a_rooms_run_writes_its_folder_and_its_chain_is_refused_as_a_maze_chain(
         assert "rooms" in str(e) and "pbcs eval" in str(e)
     else:
         raise AssertionError("a rooms chain loaded as a maze chain")
+
+
+def test_a_configs_maze_is_kept_unless_size_or_layout_is_given(tmp_path):
+    text = (ROOT / "experiments/pbcs_fast.toml").read_text()
+    text = text.replace("size = 5\nseed = 0\n", "size = 2\nseed = 3\n", 1)
+    assert "size = 2\nseed = 3\n" in text
+    config = tmp_path / "mine.toml"
+    config.write_text(text)
+    record = pbcs.run(config=str(config), max_env_steps=30_000)
+    assert (record["maze"], record["maze_seed"]) == (2, 3)

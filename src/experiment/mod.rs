@@ -45,8 +45,7 @@ pub use layout::{
     read_wall_seconds,
 };
 pub use row::{read_row, read_run_row, RawRow};
-pub use site::Site;
-pub use spec::paper_run;
+pub use site::{paper_run, Site};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 
 use crate::config::{PbcsJob, TrainJob};

@@ -20,6 +20,7 @@
 
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
+use crate::phase2::Variant;
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
@@ -141,6 +142,34 @@ impl<'de> Deserialize<'de> for Site {
         }
         d.deserialize_any(SiteVisitor)
     }
+}
+
+/// The paper's single run of `variant` on a site (results table, one seed each): its
+/// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
+/// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at
+/// compile time, so the binary needs no experiments folder). `(None, None)` for a size the
+/// paper did not run (and any environment but its maze).
+///
+/// ```
+/// use pbcs::experiment::{paper_run, Site};
+/// use pbcs::phase2::Variant;
+/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(2)), (Some(321_000), Some(true)));
+/// assert_eq!(paper_run(Variant::PbcsNoChaining, Site::Maze(2)), (Some(146_000), Some(false)));
+/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(3)), (None, None));
+/// assert_eq!(paper_run(Variant::Pbcs, "rooms".parse().unwrap()), (None, None));
+/// ```
+pub fn paper_run(variant: Variant, site: Site) -> (Option<u64>, Option<bool>) {
+    let path = std::path::Path::new("experiments/table.toml");
+    let spec: Option<super::spec::ExperimentSpec> =
+        crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();
+    let method = spec
+        .as_ref()
+        .and_then(|s| s.methods.iter().find(|m| m.name == variant.name()));
+    let key = site.to_string();
+    (
+        method.and_then(|m| m.paper_steps.get(&key).copied()),
+        method.and_then(|m| m.paper_solved.get(&key).copied()),
+    )
 }
 
 #[cfg(test)]

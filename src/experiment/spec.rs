@@ -2,11 +2,11 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::declared::{check_figures, check_report};
+use super::site::paper_run;
 use super::{Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
 use crate::config::{PbcsJob, TrainJob};
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
-use crate::phase2::Variant;
 use crate::validate::Check;
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MethodSpec {
-    name: String,
+    pub(super) name: String,
     #[serde(default)]
     label: Option<String>,
     kind: Kind,
@@ -26,15 +26,19 @@ pub(crate) struct MethodSpec {
     set: toml::Table,
     /// The paper's environment steps for this method, by maze size (as a string key).
     #[serde(default)]
-    paper_steps: BTreeMap<String, u64>,
+    pub(super) paper_steps: BTreeMap<String, u64>,
     /// Whether the paper's run solved the maze, by maze size.
     #[serde(default)]
-    paper_solved: BTreeMap<String, bool>,
+    pub(super) paper_solved: BTreeMap<String, bool>,
     /// The maze sizes this method runs, a subset of the experiment's (default: all of them):
     /// a grid whose rows ask different questions (the ablations) need not run every method
-    /// on every size. Every method runs on every environment of `envs`.
+    /// on every size.
     #[serde(default)]
     mazes: Option<Vec<usize>>,
+    /// The environments of the file's `envs` this method runs (default: all of them; `[]`
+    /// for none, as a vanilla method must, the baselines running on the maze only).
+    #[serde(default)]
+    envs: Option<Vec<EnvName>>,
 }
 
 /// Fields set on every method of one kind: `vanilla = { … }` changes the [`TrainJob`]s,
@@ -73,6 +77,8 @@ pub(crate) struct ProfileSpec {
     description: String,
     seeds: Option<u64>,
     mazes: Option<Vec<usize>>,
+    /// The environments this profile runs, instead of the file's `envs`.
+    envs: Option<Vec<EnvName>>,
     picture_seeds: Option<Vec<u64>>,
     #[serde(default)]
     vanilla: toml::Table,
@@ -109,7 +115,7 @@ pub(crate) struct ExperimentSpec {
     #[serde(default)]
     envs: Vec<EnvName>,
     #[serde(rename = "method")]
-    methods: Vec<MethodSpec>,
+    pub(super) methods: Vec<MethodSpec>,
     /// Fields set on one maze size or environment only (`[by_maze."15"]`, e.g. a budget per
     /// size; `[by_maze.rooms]`), applied after the methods' own tables and before the
     /// profile's.
@@ -141,8 +147,15 @@ pub(crate) fn located(e: Error, where_: &str) -> Error {
     }
 }
 
-/// Sites of a grid: at least one, each once.
+/// Sites of a grid: at least one, each once, the maze written by its sizes (`mazes`), never
+/// as `envs = ["maze"]`.
 pub(crate) fn check_sites(sites: &[Site]) -> Result<()> {
+    if sites.contains(&Site::Env(EnvName::Maze)) {
+        return Err(Error::invalid(
+            "envs",
+            "`maze` is not one of `envs`: list its sizes in `mazes`",
+        ));
+    }
     if sites.is_empty() {
         return Err(Error::invalid(
             "mazes",
@@ -269,8 +282,8 @@ impl ExperimentSpec {
         Ok(())
     }
 
-    /// Each method's name is valid and unique, its own `mazes` a subset of the file's, its
-    /// paper numbers keyed by maze sizes of the file.
+    /// Each method's name is valid and unique, its own `mazes` a non-empty subset of the
+    /// file's and its own `envs` a subset, its paper numbers keyed by sites of the file.
     fn check_methods(&self, all_methods: &[&MethodSpec]) -> Result<()> {
         let mut names = BTreeSet::new();
         for m in all_methods.iter().copied() {
@@ -292,11 +305,22 @@ impl ExperimentSpec {
                     ));
                 }
             }
+            if let Some(own) = &m.envs {
+                if own.iter().any(|e| !self.envs.contains(e)) {
+                    return Err(Error::invalid(
+                        "method.envs",
+                        format!("method `{}`: {own:?} must be a subset of `envs`", m.name),
+                    ));
+                }
+            }
             for key in m.paper_steps.keys().chain(m.paper_solved.keys()) {
                 if site_key(key, &self.sites()).is_none() {
                     return Err(Error::invalid(
                         "method.paper_steps",
-                        format!("method `{}`: `{key}` is not one of `mazes`", m.name),
+                        format!(
+                            "method `{}`: `{key}` is not one of the maze sizes or environments",
+                            m.name
+                        ),
                     ));
                 }
             }
@@ -328,8 +352,11 @@ impl ExperimentSpec {
         for &site in sites {
             let key = site.to_string();
             for (m, label, table) in &resolved {
-                let own = |n| m.mazes.as_ref().is_none_or(|own| own.contains(&n));
-                if site.size().is_some_and(|n| !own(n)) {
+                let runs_here = match site {
+                    Site::Maze(n) => m.mazes.as_ref().is_none_or(|own| own.contains(&n)),
+                    Site::Env(e) => m.envs.as_ref().is_none_or(|own| own.contains(&e)),
+                };
+                if !runs_here {
                     continue;
                 }
                 let mut table = table.clone();
@@ -402,7 +429,8 @@ fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, site: Site) -> Resu
             return Err(Error::invalid(
                 "envs",
                 format!(
-                    "{where_}: vanilla baselines run on the maze only, not `{}`",
+                    "{where_}: vanilla baselines run on the maze only, not `{}` (give the \
+                     method `envs = []`)",
                     e.name()
                 ),
             ))
@@ -439,8 +467,9 @@ impl Experiment {
             return Err(Error::invalid("seeds", "must be at least 1"));
         }
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
+        let envs = prof.envs.clone().unwrap_or(spec.envs.clone());
         let sites: Vec<Site> = (mazes.iter().map(|&n| Site::Maze(n)))
-            .chain(spec.envs.iter().map(|&e| Site::Env(e)))
+            .chain(envs.iter().map(|&e| Site::Env(e)))
             .collect();
         check_sites(&sites)?;
         let seeds_by_maze = spec.seeds_by_maze()?;
@@ -540,33 +569,4 @@ impl Experiment {
             report: ReportSpec::default(),
         })
     }
-}
-
-/// The paper's single run of `variant` on a site (results table, one seed each): its
-/// environment steps and whether it solved the maze, from the method of that name (`pbcs`,
-/// `pbcs_no_chaining`) in `experiments/table.toml`, the one place they are written (read at
-/// compile time, so the binary needs no experiments folder). `(None, None)` for a size the
-/// paper did not run (and any environment but its maze).
-///
-/// ```
-/// use pbcs::experiment::paper_run;
-/// use pbcs::phase2::Variant;
-/// use pbcs::experiment::Site;
-/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(2)), (Some(321_000), Some(true)));
-/// assert_eq!(paper_run(Variant::PbcsNoChaining, Site::Maze(2)), (Some(146_000), Some(false)));
-/// assert_eq!(paper_run(Variant::Pbcs, Site::Maze(3)), (None, None));
-/// assert_eq!(paper_run(Variant::Pbcs, "rooms".parse().unwrap()), (None, None));
-/// ```
-pub fn paper_run(variant: Variant, site: Site) -> (Option<u64>, Option<bool>) {
-    let path = Path::new("experiments/table.toml");
-    let spec: Option<ExperimentSpec> =
-        crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();
-    let method = spec
-        .as_ref()
-        .and_then(|s| s.methods.iter().find(|m| m.name == variant.name()));
-    let key = site.to_string();
-    (
-        method.and_then(|m| m.paper_steps.get(&key).copied()),
-        method.and_then(|m| m.paper_solved.get(&key).copied()),
-    )
 }

@@ -95,7 +95,7 @@ pub struct PbcsRun<E: Planar = Maze> {
 }
 
 impl PbcsRun<Maze> {
-    /// [`PbcsRun::compute_on`] the maze of `job` (the Python package's run, the benchmarks).
+    /// [`PbcsRun::compute_on`] the maze of `job` (the benchmarks and tests).
     /// A job naming another environment is refused here; [`run_outcome`] (sweeps) and
     /// [`run_pbcs`] (`pbcs run`) run any.
     pub fn compute(

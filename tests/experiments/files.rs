@@ -205,6 +205,10 @@ fn bad_experiment_files_name_the_problem() {
             "must be unique",
         ),
         (
+            format!("{head}envs = [\"maze\"]\n{}", method("a", "")),
+            "`maze` is not one of `envs`: list its sizes in `mazes`",
+        ),
+        (
             format!(
                 "{head}envs = [\"rooms\"]\n{}",
                 method("a", "env = \"rooms\"")
@@ -222,7 +226,7 @@ fn bad_experiment_files_name_the_problem() {
             "title = \"t\"\nseeds = 1\nenvs = [\"rooms\"]\n[[method]]\nname = \"v\"\n\
              kind = \"vanilla\"\nbase = \"base.toml\"\n"
                 .to_string(),
-            "vanilla baselines run on the maze only, not `rooms`",
+            "vanilla baselines run on the maze only, not `rooms` (give the method `envs = []`)",
         ),
     ];
     let figure = |body: &str| format!("{head}{}[[figure]]\n{body}\n", method("a", ""));
@@ -532,4 +536,32 @@ fn the_makefile_runs_every_experiment_file() {
         .map(String::from)
         .collect();
     assert_eq!(listed, names);
+}
+
+/// A grid of maze sizes and environments: a method's `envs` chooses the environments it runs
+/// (a vanilla method, which runs the maze only, says `envs = []`), and a profile's `envs`
+/// replaces the file's.
+#[test]
+fn methods_and_profiles_choose_their_environments() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy("experiments/pbcs_paper.toml", dir.path().join("base.toml")).unwrap();
+    std::fs::copy("experiments/baseline.toml", dir.path().join("vanilla.toml")).unwrap();
+    let text = "title = \"t\"\nseeds = 1\nmazes = [2]\nenvs = [\"rooms\"]\n\
+        [[method]]\nname = \"p\"\nkind = \"pbcs\"\nbase = \"base.toml\"\n\
+        [[method]]\nname = \"v\"\nkind = \"vanilla\"\nbase = \"vanilla.toml\"\nenvs = []\n\
+        [profile.mazes_only]\nenvs = []\n";
+    let path = write(dir.path(), "mixed.toml", text);
+    let ids = |profile| -> Vec<String> {
+        let exp = Experiment::load(&path, profile).unwrap();
+        exp.cells.iter().map(|c| c.id.clone()).collect()
+    };
+    assert_eq!(ids(None), ["p-maze2", "v-maze2", "p-rooms"]);
+    assert_eq!(ids(Some("mazes_only")), ["p-maze2", "v-maze2"]);
+    let bad = write(
+        dir.path(),
+        "bad.toml",
+        &text.replace("envs = []\n[profile", "envs = [\"rooms\"]\n[profile"),
+    );
+    let err = Experiment::load(&bad, None).unwrap_err().to_string();
+    assert!(err.contains("give the method `envs = []`"), "{err}");
 }
