@@ -188,12 +188,22 @@ fn presets_are_the_experiment_files_and_paper_is_the_library_default() {
     let mut default = PbcsJob::default();
     default.maze.size = 5;
     assert_eq!(Preset::Paper.job().unwrap(), default);
-    // The fast preset differs only in the switches of ours.
-    let fast = Preset::Fast.job().unwrap().phase2;
-    assert!(fast.shorten && fast.early_stop && fast.adaptive_k && fast.verify_episodes > 0);
+    // The paper preset is the paper's procedure: none of our ideas. The fast preset differs
+    // only in its ideas (and its budget).
     let paper = Preset::Paper.job().unwrap().phase2;
-    assert!(!paper.shorten && !paper.early_stop && !paper.adaptive_k);
-    assert_eq!(paper.verify_episodes, 0);
+    assert_eq!(paper.ideas, pbcs::phase2::Ideas::NONE);
+    let fast = Preset::Fast.job().unwrap().phase2;
+    let i = fast.ideas;
+    assert!(i.shorten && i.stopping.early_stop && i.verify_skills.is_some());
+    assert!(matches!(
+        i.k_walk,
+        pbcs::phase2::KWalk::Adaptive { first: 1 }
+    ));
+    let mut fast_without_ideas = fast.clone();
+    fast_without_ideas.ideas = pbcs::phase2::Ideas::NONE;
+    fast_without_ideas.inputs = paper.inputs;
+    fast_without_ideas.max_env_steps = paper.max_env_steps;
+    assert_eq!(fast_without_ideas, paper);
     // --preset and --config exclude each other; an unknown preset is refused by name.
     let (code, err) = pbcs(&["run", "--preset", "paper", "--config", "x.toml"]);
     assert!(code != 0 && err.contains("--config"), "{code} {err}");
@@ -336,4 +346,33 @@ fn switches_that_cannot_combine_are_refused_naming_both_fields() {
             "{base} with {set:?}: {msg}"
         );
     }
+}
+
+/// The typed phase-2 procedure is read from, and written back to, the flat `[phase2]` table
+/// field for field: every committed file that holds one (presets, experiment bases, run
+/// folders, 1 000 and more) converts to `Phase2Config` and back to the very table it held, so
+/// committed bytes and the jobs compared against them stay as they were.
+#[test]
+fn every_committed_phase2_table_reads_into_the_procedure_and_back_unchanged() {
+    use pbcs::phase2::{flat::FlatPhase2, Phase2Config};
+    let files = std::process::Command::new("git")
+        .args(["ls-files", "*.toml"])
+        .output()
+        .unwrap();
+    let mut checked = 0;
+    for path in String::from_utf8(files.stdout).unwrap().lines() {
+        let text = std::fs::read_to_string(path).unwrap();
+        let value: toml::Table = toml::from_str(&text).unwrap();
+        let Some(table) = value.get("phase2").and_then(|v| v.as_table()) else {
+            continue;
+        };
+        let flat: FlatPhase2 = table.clone().try_into().unwrap();
+        let typed = Phase2Config::try_from(flat.clone()).unwrap_or_else(|e| panic!("{path}: {e}"));
+        assert_eq!(FlatPhase2::from(typed.clone()), flat, "{path}");
+        // And through serde, as jobs are read and written.
+        let back: Phase2Config = toml::from_str(&toml::to_string(&typed).unwrap()).unwrap();
+        assert_eq!(back, typed, "{path}");
+        checked += 1;
+    }
+    assert!(checked > 1000, "{checked} tables");
 }

@@ -1,6 +1,8 @@
 //! Backplay (the paper's Algorithm 2), written against a small interface so that its control
 //! flow can be read, and tested, apart from any learner.
 
+pub use super::procedure::{KWalk, Stopping};
+
 /// What Backplay needs from "a DDPG architecture with policy π" on a trajectory section
 /// τ_0 … τ_T.
 pub trait Backplayer {
@@ -40,22 +42,16 @@ pub trait Backplayer {
     }
 }
 
-/// How Backplay walks K and when it stops training (validated as part of
-/// [`super::Phase2Config`]).
+/// What Backplay needs of the procedure ([`super::Phase2Config::walk`]): α, how K walks and
+/// when training at one K stops, and when a walk gives up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Walk {
     /// α: consecutive non-improvements of the training success that end training at one K.
     pub alpha: usize,
-    /// At most this many training rounds at one K (ours; 0: no cap, the paper).
-    pub max_rounds: usize,
-    /// How far K moves back after each K (1: the paper).
-    pub k_step: usize,
-    /// End training at K once a 100 % round is confirmed by a 100 % test (ours).
-    pub early_stop: bool,
-    /// Adaptive K steps (ours): the step doubles after each K that ends at 100 % (up to
-    /// [`MAX_ADAPTIVE_STEP`]); a jump whose first test fails is not trained but halved, K
-    /// going back halfway towards the last saved K; at step 1 the walk is the paper's.
-    pub adaptive: bool,
+    /// How K moves back after each K ([`KWalk::Fixed`] by 1: the paper).
+    pub k_walk: KWalk,
+    /// When training at one K ends ([`Stopping::UNTIL_STABLE`]: the paper).
+    pub stopping: Stopping,
     /// End the walk at the first K that fails after training, once a skill is saved, when
     /// B_ε(τ_K) is clear of obstacles (ours): the paper goes on because a ball overlapping a
     /// wall can fail partly whatever the policy, which a clear ball cannot.
@@ -69,23 +65,42 @@ pub struct Walk {
     pub dead_walk: Option<usize>,
 }
 
+impl Walk {
+    /// The paper's walk: K back one index at a time, training until α misses in a row, never
+    /// giving up before K = 0.
+    pub fn paper(alpha: usize) -> Walk {
+        Walk {
+            alpha,
+            k_walk: KWalk::Fixed { step: 1 },
+            stopping: Stopping::UNTIL_STABLE,
+            stop_at_failure: false,
+            give_up_when_dead: false,
+            dead_walk: None,
+        }
+    }
+}
+
 /// The largest K step of the adaptive walk.
 pub const MAX_ADAPTIVE_STEP: usize = 16;
 
 /// Runs Algorithm 3 ([`Backplayer::train`]) from τ_k until its success fails to beat its best
 /// `walk.alpha` times in a row ("until performance stabilizes"). Returns (rounds, best).
 ///
-/// With `walk.early_stop` (an option of ours, off in the paper's procedure), a round at 100 %
+/// With [`Stopping::early_stop`] (an option of ours, off in the paper's procedure), a round at 100 %
 /// is followed by a greedy test, and a 100 % test ends training at once: DDPG trained on past
-/// success tends to drift away from it during the α further rounds. With `walk.max_rounds`
+/// success tends to drift away from it during the α further rounds. With `max_rounds`
 /// (ours), training also ends after that many rounds: a K that needs more is rarely solved at
 /// all, and the rounds spent there before α misses are most of a skill's training.
 pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (usize, f32) {
     let (mut best, mut misses, mut rounds) = (f32::NEG_INFINITY, 0, 0);
-    while misses < walk.alpha && (walk.max_rounds == 0 || rounds < walk.max_rounds) {
+    let Stopping {
+        early_stop,
+        max_rounds,
+    } = walk.stopping;
+    while misses < walk.alpha && max_rounds.is_none_or(|m| rounds < m) {
         let p = b.train(k);
         rounds += 1;
-        if walk.early_stop && p >= 1.0 && b.test(k) >= 1.0 {
+        if early_stop && p >= 1.0 && b.test(k) >= 1.0 {
             return (rounds, p);
         }
         if p > best {
@@ -118,7 +133,7 @@ pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (u
 /// The paper loops `while K > 0`; then K_s ≥ 1 always and Algorithm 1 (`while T > 0`) would
 /// never end, so we let K reach 0 (the start τ_0). [`Walk`] holds our options (larger or
 /// adaptive K steps, early stopping, a bound on a walk without any success); the pseudo-code
-/// above is the walk with K − 1 steps (`k_step = 1`) and every switch off.
+/// above is [`Walk::paper`].
 pub fn backplay<B: Backplayer>(b: &mut B, t: usize, walk: &Walk) -> Option<(usize, B::Policy)> {
     backplay_candidates(b, t, walk).pop()
 }
@@ -131,9 +146,10 @@ pub fn backplay_candidates<B: Backplayer>(
     t: usize,
     walk: &Walk,
 ) -> Vec<(usize, B::Policy)> {
-    assert!(t >= 1 && walk.k_step >= 1);
+    let adaptive = matches!(walk.k_walk, KWalk::Adaptive { .. });
+    let mut step = walk.k_walk.first_step();
+    assert!(t >= 1 && step >= 1);
     let mut kept: Vec<(usize, B::Policy)> = Vec::new();
-    let mut step = walk.k_step;
     let mut k = t - 1;
     // Whether any test or training round of this walk has reached the goal once.
     let mut any_success = false;
@@ -141,7 +157,7 @@ pub fn backplay_candidates<B: Backplayer>(
         let first = b.test(k);
         any_success |= first > 0.0;
         let mut solved = first >= 1.0;
-        if !solved && walk.adaptive && step > 1 {
+        if !solved && adaptive && step > 1 {
             // A jump too far: back halfway towards the last saved K (T if none), testing
             // before any training; once the step is 1, K is trained as the paper does.
             let last = kept.last().map_or(t, |(ks, _)| *ks);
@@ -164,7 +180,7 @@ pub fn backplay_candidates<B: Backplayer>(
         }
         if solved {
             kept.push((k, b.policy()));
-            if walk.adaptive {
+            if adaptive {
                 step = (step * 2).min(MAX_ADAPTIVE_STEP);
             }
         }

@@ -57,8 +57,8 @@ pub fn chain_skills<E: Env>(
     );
     let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
     let mut chain = SkillChain { skills, kernel };
-    if failure.is_none() && config.chain_verify_episodes > 0 {
-        failure = repair_chain(&chainer, &mut chain)?;
+    if let (None, Some(check)) = (failure, config.ideas.chain_check) {
+        failure = repair_chain(&chainer, &mut chain, check)?;
     }
     Ok(Phase2Outcome {
         chain,
@@ -149,7 +149,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                 self.steps.set(steps);
                 self.spent
                     .set(self.spent.get() + task.steps.train + task.steps.test);
-                if self.config.warm_start {
+                if self.config.warm_start() {
                     *self.last.borrow_mut() = Some((lo + task.target(), task.learner));
                 }
             },
@@ -186,7 +186,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let n32 = n as u32;
         let (env, config) = (self.env, self.config);
         let last = self.last.borrow_mut().take();
-        let learner = warm_or_fresh(last, config.warm_start, lo + t, || {
+        let learner = warm_or_fresh(last, config.warm_start(), lo + t, || {
             Learner::new(
                 self.learner,
                 env.obs_dim(),
@@ -238,7 +238,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
 }
 
 /// What one verification of a chain found.
-struct ChainCheck<S> {
+struct ChainTrial<S> {
     /// Episodes that reached the target.
     successes: usize,
     /// Failed episodes by the chain position of the skill in use when they stopped.
@@ -254,16 +254,17 @@ fn check_chain<E: Env, P: FnMut(usize, Progress)>(
     c: &Chainer<'_, E, P>,
     chain: &SkillChain,
     ball: &dyn SampleBall<E::State>,
+    episodes: usize,
     rng: &mut Rng,
-) -> ChainCheck<E::State> {
+) -> ChainTrial<E::State> {
     let n = chain.skills.len();
-    let mut out = ChainCheck {
+    let mut out = ChainTrial {
         successes: 0,
         stalled: vec![0; n],
         entries: vec![Vec::new(); n],
     };
     let mut spent = 0;
-    for _ in 0..c.config.chain_verify_episodes {
+    for _ in 0..episodes {
         let start = ball.sample_ball(&c.tau[0], c.config.epsilon, rng);
         let r = chain.run_limited(
             c.env,
@@ -314,6 +315,7 @@ fn check_chain<E: Env, P: FnMut(usize, Progress)>(
 pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
     c: &Chainer<'_, E, P>,
     chain: &mut SkillChain,
+    spec: super::ChainCheck,
 ) -> Result<Option<Failure>> {
     let setting = "phase2.chain_verify_episodes";
     let ball = c
@@ -326,9 +328,8 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
         if c.exhausted() {
             return Ok(Some(Failure::Budget));
         }
-        let check = check_chain(c, chain, ball, &mut rng);
-        let episodes = c.config.chain_verify_episodes;
-        let success = check.successes as f32 / episodes as f32;
+        let check = check_chain(c, chain, ball, spec.episodes, &mut rng);
+        let success = check.successes as f32 / spec.episodes as f32;
         // The skill where the most failed episodes stopped (the first among ties).
         let blamed = (0..chain.skills.len())
             .filter(|&i| check.stalled[i] > 0)
@@ -367,7 +368,7 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
         let Some(i) = blamed else {
             return Ok(None);
         };
-        if repairs == c.config.chain_repairs {
+        if repairs == spec.repairs {
             return Ok(None);
         }
         repairs += 1;
@@ -413,12 +414,17 @@ pub fn skill_chaining<B: backplay::Backplayer>(
     // Learning problems made so far (skills, restarts, hand-over tries), restarts of the
     // current skill and moves of its hand-over.
     let (mut made, mut restarts, mut moves) = (0, 0, 0);
+    // Hand-over moves follow a dead walk (`phase2.dead_walk`, `phase2.retargets`).
+    let (dead_walk, retargets) = config
+        .ideas
+        .dead_walk
+        .map_or((0, 0), |d| (d.after, d.retargets));
     while t > 0 {
         let mut b = next(made, t)?;
         made += 1;
-        let walk = config.walk(restarts < config.restarts);
+        let walk = config.walk(restarts < config.ideas.restarts);
         let candidates = backplay::backplay_candidates(&mut b, t, &walk);
-        let found = verified(&mut b, candidates, config.verify_episodes);
+        let found = verified(&mut b, candidates, config.ideas.verify_skills);
         let exhausted = b.exhausted();
         finished(b);
         match found {
@@ -426,18 +432,15 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                 failure = Some(Failure::Budget);
                 break;
             }
-            None if restarts < config.restarts => restarts += 1,
-            None if moves < config.retargets && !skills.is_empty() => {
+            None if restarts < config.ideas.restarts => restarts += 1,
+            None if moves < retargets && !skills.is_empty() => {
                 // No attempt found any K towards τ_T: move the hand-over of the skill found
                 // last (start T, target T′) to a later index of τ, if it passes from there.
                 let (_, t_last, policy) = skills.last().expect("not empty");
                 let mut b = next(made, *t_last)?;
                 made += 1;
-                let episodes = match config.verify_episodes {
-                    0 => config.beta,
-                    e => e,
-                };
-                let moved = handover(&mut b, t, *t_last, policy, episodes, config.dead_walk);
+                let episodes = config.handover_episodes();
+                let moved = handover(&mut b, t, *t_last, policy, episodes, dead_walk);
                 let exhausted = b.exhausted();
                 finished(b);
                 match moved {
@@ -524,18 +527,18 @@ pub fn handover<B: backplay::Backplayer>(
 pub const MAX_VERIFIED_CANDIDATES: usize = 4;
 
 /// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
-/// Without verification (`episodes` = 0) the last one, as in the paper. With it, the last
+/// Without verification (`episodes` = `None`) the last one, as in the paper. With it, the last
 /// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
 /// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
 /// verified success (the farthest-reaching among ties).
 pub fn verified<B: backplay::Backplayer>(
     b: &mut B,
     mut candidates: Vec<(usize, B::Policy)>,
-    episodes: usize,
+    episodes: Option<usize>,
 ) -> Option<(usize, B::Policy)> {
-    if episodes == 0 {
+    let Some(episodes) = episodes else {
         return candidates.pop();
-    }
+    };
     let mut best: Option<(f32, usize)> = None;
     let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
     for i in (first..candidates.len()).rev() {

@@ -42,12 +42,17 @@ fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
 
 /// The step limit of an episode from each τ_k towards the goal of τ_T, given L_k
 /// ([`lengths_to_goal`]): `max_steps`, or with a path limit p > 0
-/// ([`Phase2Config::path_limit`], [`Phase2Config::greedy_path_limit`]) at most
+/// ([`crate::phase2::EpisodeLimit`], [`Phase2Config::path_limits`]) at most
 /// ⌈p (L_k + 2ε) / a⌉, a being the smallest action bound.
-fn episode_limits<E: Env>(env: &E, config: &Phase2Config, p: f32, lengths: &[f32]) -> Vec<usize> {
-    if p <= 0.0 {
+fn episode_limits<E: Env>(
+    env: &E,
+    config: &Phase2Config,
+    p: Option<f32>,
+    lengths: &[f32],
+) -> Vec<usize> {
+    let Some(p) = p else {
         return vec![config.max_steps; lengths.len()];
-    }
+    };
     let a = (0..env.action_dim())
         .map(|i| env.action_bound(i))
         .fold(f32::INFINITY, f32::min);
@@ -75,7 +80,7 @@ pub struct SkillTask<'a, E: Env> {
     /// What the networks see and emit.
     pub inputs: Inputs,
     /// The learner being trained: a fresh one for each skill, as in the paper, or the previous
-    /// problem's with `phase2.warm_start`.
+    /// problem's with a warm start ([`crate::phase2::SkillInit::Warm`]).
     pub learner: Learner,
     replay: Replay,
     batch: Batch,
@@ -94,7 +99,7 @@ pub struct SkillTask<'a, E: Env> {
     /// the starts at K = 0 are drawn from them, half uniformly in B_ε(τ_0). Empty otherwise.
     entries: Vec<E::State>,
     /// The step limit of a training episode from each τ_k (`max_steps`, or less with
-    /// [`Phase2Config::path_limit`]), and of a greedy one (tests, verification; less also
+    /// [`crate::phase2::EpisodeLimit`]), and of a greedy one (tests, verification; less also
     /// with [`Phase2Config::test_path_limit`]).
     limits: Vec<usize>,
     test_limits: Vec<usize>,
@@ -122,6 +127,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
         let lengths = lengths_to_goal(env, &states[..=t]);
+        let (train_limit, greedy_limit) = config.path_limits();
         Ok(SkillTask {
             env,
             ball: match config.start {
@@ -149,8 +155,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
             budget,
             bounds: config.learner_bounds(env),
             entries: Vec::new(),
-            limits: episode_limits(env, config, config.path_limit, &lengths),
-            test_limits: episode_limits(env, config, config.greedy_path_limit(), &lengths),
+            limits: episode_limits(env, config, train_limit, &lengths),
+            test_limits: episode_limits(env, config, greedy_limit, &lengths),
             on_event: None,
         })
     }
@@ -192,7 +198,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     }
 
     /// `n` episodes in lockstep ([`crate::rollout::lockstep`]) from starts around τ_k, at
-    /// most `max_steps` steps each (fewer with [`Phase2Config::path_limit`], and for greedy
+    /// most `max_steps` steps each (fewer with an [`crate::phase2::EpisodeLimit`], and for greedy
     /// ones `test_path_limit`); each step the actions of all running episodes come from one
     /// batched forward pass. With `learn`, noise is added, transitions are stored with the
     /// shaped reward and every step makes one learner update (Algorithm 3); without, the
@@ -210,7 +216,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         } else {
             self.test_limits[k]
         };
-        let fast = !learn && self.config.fast_tests;
+        let fast = !learn && self.config.ideas.fast_tests;
         let env = self.env;
         let mut agent = Episodes {
             task: self,

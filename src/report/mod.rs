@@ -524,7 +524,7 @@ pub fn settings_tex(
                 put("beta", p.beta.to_string());
                 put("epsilon", p.epsilon.to_string());
                 put("maxsteps", p.max_steps.to_string());
-                put("kstep", p.k_step.to_string());
+                put("kstep", p.ideas.k_walk.first_step().to_string());
                 put("pbcsbudget", human_steps(p.max_env_steps as f64));
                 put("evalepisodes", p.eval_episodes.to_string());
                 put("evalmaxsteps", p.eval_max_steps.to_string());

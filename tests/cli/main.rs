@@ -499,5 +499,8 @@ fn no_chaining_on_the_default_preset_turns_off_what_acts_between_skills() {
     );
     let config = std::fs::read_to_string(out.join("config.toml")).unwrap();
     let job: pbcs::config::PbcsJob = toml::from_str(&config).unwrap();
-    assert!(!job.phase2.chaining && job.phase2.retargets == 0 && job.phase2.chain_repairs == 0);
+    let ideas = job.phase2.ideas;
+    assert!(!job.phase2.chaining);
+    assert!(ideas.dead_walk.is_some_and(|d| d.retargets == 0));
+    assert!(ideas.chain_check.is_some_and(|c| c.repairs == 0));
 }

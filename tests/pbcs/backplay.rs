@@ -2,6 +2,7 @@
 //! control flow of the pseudo-code, checked call by call.
 
 use super::*;
+use pbcs::phase2::{DeadWalk, Ideas};
 
 /// A learner whose results are dictated: `tests[k]` is the list of successive test results at
 /// K (the last one repeats), `train` the successive training results. The policy is the
@@ -48,14 +49,12 @@ impl Backplayer for Scripted {
 /// Backplay's walk: α, K step, early stop; the paper's fixed step.
 pub fn walk(alpha: usize, k_step: usize, early_stop: bool) -> Walk {
     Walk {
-        alpha,
-        max_rounds: 0,
-        k_step,
-        early_stop,
-        adaptive: false,
-        stop_at_failure: false,
-        give_up_when_dead: false,
-        dead_walk: None,
+        k_walk: KWalk::Fixed { step: k_step },
+        stopping: Stopping {
+            early_stop,
+            max_rounds: None,
+        },
+        ..Walk::paper(alpha)
     }
 }
 
@@ -88,7 +87,10 @@ fn training_stops_after_max_rounds_even_while_improving() {
         ..Default::default()
     };
     let capped = Walk {
-        max_rounds: 2,
+        stopping: Stopping {
+            early_stop: false,
+            max_rounds: Some(2),
+        },
         ..walk(3, 1, false)
     };
     assert_eq!(backplay(&mut b, 3, &capped), Some((0, 2)));
@@ -216,7 +218,7 @@ fn adaptive_walk_doubles_its_step_after_successes() {
         ..Default::default()
     };
     let adaptive = Walk {
-        adaptive: true,
+        k_walk: KWalk::Adaptive { first: 1 },
         ..walk(10, 1, false)
     };
     assert_eq!(backplay(&mut b, 40, &adaptive), Some((0, 0)));
@@ -245,7 +247,7 @@ fn adaptive_walk_bisects_a_failed_jump_without_training_it() {
         ..Default::default()
     };
     let adaptive = Walk {
-        adaptive: true,
+        k_walk: KWalk::Adaptive { first: 1 },
         ..walk(2, 1, false)
     };
     // The paper's answer: the last K that holds.
@@ -298,7 +300,7 @@ fn verification_falls_back_to_a_shorter_reach() {
         verified: HashMap::from([((1, 3), 0.98)]),
         ..Default::default()
     };
-    let found = verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 500);
+    let found = verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], Some(500));
     assert_eq!(found, Some((2, 0)));
     assert_eq!(
         b.calls,
@@ -309,7 +311,7 @@ fn verification_falls_back_to_a_shorter_reach() {
     );
     // Without verification: the paper's (K_s, π_s), the last saved, untested.
     let mut b = Scripted::default();
-    assert_eq!(verified(&mut b, vec![(3, 0), (1, 3)], 0), Some((1, 3)));
+    assert_eq!(verified(&mut b, vec![(3, 0), (1, 3)], None), Some((1, 3)));
     assert!(b.calls.is_empty());
     // None passes: the best verified success, the farthest reach among ties.
     let mut b = Scripted {
@@ -317,7 +319,7 @@ fn verification_falls_back_to_a_shorter_reach() {
         ..Default::default()
     };
     assert_eq!(
-        verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], 100),
+        verified(&mut b, vec![(3, 0), (2, 0), (1, 3)], Some(100)),
         Some((1, 3))
     );
 }
@@ -477,9 +479,14 @@ impl Backplayer for DeadTarget {
 fn a_dead_walk_moves_the_hand_over_to_a_later_clear_ball() {
     let config = Phase2Config {
         alpha: 2,
-        dead_walk: 5,
-        retargets: 1,
-        verify_episodes: 100,
+        ideas: Ideas {
+            dead_walk: Some(DeadWalk {
+                after: 5,
+                retargets: 1,
+            }),
+            verify_skills: Some(100),
+            ..Ideas::NONE
+        },
         ..Phase2Config::default()
     };
     let calls = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
@@ -514,10 +521,11 @@ fn a_dead_walk_moves_the_hand_over_to_a_later_clear_ball() {
     let spans: Vec<(usize, usize)> = skills.iter().map(|(k, t, _)| (*k, *t)).collect();
     assert_eq!(spans, [(0, 10), (10, 20), (20, 30), (30, 35)]);
     // The paper: no move, the run fails at the dead target.
-    let paper = Phase2Config {
+    let mut paper = config.clone();
+    paper.ideas.dead_walk = Some(DeadWalk {
+        after: 5,
         retargets: 0,
-        ..config.clone()
-    };
+    });
     let (skills, failure) = skill_chaining(
         35,
         &paper,

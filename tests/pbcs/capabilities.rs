@@ -52,13 +52,13 @@ fn each_setting_that_needs_a_missing_hook_is_refused_naming_both() {
         "phase2.chain_verify_episodes",
         "Env::ball_starts",
     );
-    (c.chain_verify_episodes, c.chain_repairs) = (0, 0);
+    c.ideas.chain_check = None;
     says(&refusal(&c), "phase2.stop_at_failure", "Env::clear_balls");
-    c.stop_at_failure = false;
+    c.ideas.stop_at_failure = false;
     says(&refusal(&c), "phase2.retargets", "Env::clear_balls");
-    c.retargets = 0;
+    c.ideas.dead_walk = None;
     says(&refusal(&c), "phase2.shorten", "Env::connector");
-    c.shorten = false;
+    c.ideas.shorten = false;
     c.require_hooks(&Plane).unwrap();
     // `shorten` itself, called on τ.
     let tau = Trajectory {
@@ -66,7 +66,7 @@ fn each_setting_that_needs_a_missing_hook_is_refused_naming_both() {
         actions: vec![vec![0.1, 0.0]],
     };
     let mut s = c.clone();
-    s.shorten = true;
+    s.ideas.shorten = true;
     says(
         &phase2_trajectory(&Plane, &tau, &s).unwrap_err(),
         "phase2.shorten",

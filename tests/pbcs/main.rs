@@ -3,7 +3,7 @@
 
 use pbcs::env::{Env, Step};
 use pbcs::nn::{Head, Mlp};
-use pbcs::phase2::backplay::{backplay, backplay_candidates, Backplayer, Walk};
+use pbcs::phase2::backplay::{backplay, backplay_candidates, Backplayer, KWalk, Stopping, Walk};
 use pbcs::phase2::goal::Inputs;
 use pbcs::phase2::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
@@ -203,7 +203,10 @@ fn a_collapsed_skill_restarts_with_a_fresh_learner_while_restarts_are_left() {
     let run = |restarts: usize| {
         let config = Phase2Config {
             alpha: 1,
-            restarts,
+            ideas: pbcs::phase2::Ideas {
+                restarts,
+                ..pbcs::phase2::Ideas::NONE
+            },
             ..Phase2Config::default()
         };
         let mut made = Vec::new();

@@ -1,12 +1,13 @@
 use super::{constant_policy, Head, Mlp, Phase2Config, Seeds, Stream};
 use parry2d::math::Point;
 use pbcs::config::MazeConfig;
+use pbcs::config::PbcsJob;
 use pbcs::env::Env;
 use pbcs::learner::{Learner, LearnerConfig};
 use pbcs::maze::Maze;
 use pbcs::phase2::backplay::Backplayer;
 use pbcs::phase2::task::SkillTask;
-use pbcs::phase2::StartMode;
+use pbcs::phase2::{EpisodeLimit, Ideas, StartMode};
 
 fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {
     let maze = Maze::new(&MazeConfig {
@@ -85,7 +86,10 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
     let (maze, states, obs) = setup();
     let run = |fast: bool| {
         let config = Phase2Config {
-            fast_tests: fast,
+            ideas: Ideas {
+                fast_tests: fast,
+                ..Ideas::NONE
+            },
             ..Phase2Config::default()
         };
         let up = unit_policy([0.0, 1.0]);
@@ -110,10 +114,14 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
 #[test]
 fn path_limits_shorten_episodes_near_the_goal() {
     let (maze, states, obs) = setup();
-    let config = Phase2Config {
-        path_limit: 1.5,
+    let limited = |limit| Phase2Config {
+        ideas: Ideas {
+            episode_limit: Some(limit),
+            ..Ideas::NONE
+        },
         ..Phase2Config::default()
     };
+    let config = limited(EpisodeLimit::Every(1.5));
     // Moving along −x, away from τ_5 (slow tests: no episode ends before its limit).
     let away = unit_policy([-1.0, 0.0]);
     let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
@@ -123,34 +131,25 @@ fn path_limits_shorten_episodes_near_the_goal() {
     assert_eq!(t.steps.test, 50 * 11 + 50 * 5);
     let mut t = task(&maze, &config, &states, &obs, 1_000_000);
     assert_eq!(t.test(0), 1.0);
-    // `test_path_limit` limits greedy episodes the same way; both at once are refused.
-    let both = Phase2Config {
-        path_limit: 3.0,
-        test_path_limit: 1.5,
-        ..Phase2Config::default()
-    };
-    let msg = pbcs::validate::Check::check(&both).unwrap_err().to_string();
+    // `test_path_limit` limits greedy episodes the same way. Both at once cannot be written
+    // (one `EpisodeLimit`); in a file they are refused naming both.
+    let both: Result<PbcsJob, _> =
+        toml::from_str("[phase2]\npath_limit = 3.0\ntest_path_limit = 1.5\n");
+    let msg = both.unwrap_err().to_string();
     assert!(msg.contains("phase2.test_path_limit") && msg.contains("phase2.path_limit"));
-    let config = Phase2Config {
-        test_path_limit: 1.5,
-        ..Phase2Config::default()
-    };
+    let config = limited(EpisodeLimit::Greedy(1.5));
     let away = unit_policy([-1.0, 0.0]);
     let mut t = task_with(&maze, &config, &states, &obs, away, 5, 1_000_000);
     assert_eq!(t.test(0), 0.0);
     assert_eq!(t.steps.test, 50 * 11, "test_path_limit 1.5");
-    let bad = Phase2Config {
-        test_path_limit: f32::NAN,
-        ..Phase2Config::default()
-    };
+    let bad = limited(EpisodeLimit::Greedy(f32::NAN));
     let err = pbcs::validate::Check::check(&bad).unwrap_err().to_string();
     assert!(err.contains("phase2.test_path_limit"), "{err}");
-    let bad = Phase2Config {
-        path_limit: -1.0,
-        ..Phase2Config::default()
-    };
+    let bad = limited(EpisodeLimit::Every(0.0));
     let err = pbcs::validate::Check::check(&bad).unwrap_err().to_string();
     assert!(err.contains("phase2.path_limit"), "{err}");
+    let bad: Result<PbcsJob, _> = toml::from_str("[phase2]\npath_limit = -1.0\n");
+    assert!(bad.unwrap_err().to_string().contains("phase2.path_limit"));
 }
 
 #[test]

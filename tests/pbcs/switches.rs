@@ -42,12 +42,25 @@ fn the_paper_as_written_aims_at_the_ball_with_raw_inputs() {
 
 #[test]
 fn chain_repairs_need_a_chain_verification() {
-    let mut job = PbcsJob::default();
-    job.phase2.chain_repairs = 2;
-    let err = job.check().unwrap_err().to_string();
-    assert!(err.contains("phase2.chain_repairs"), "{err}");
-    job.phase2.chain_verify_episodes = 50;
-    job.check().unwrap();
+    // Repairs live in the chain's check (`ChainCheck`); a file with repairs and no
+    // verification is refused naming both.
+    let bad: Result<PbcsJob, _> = toml::from_str("[phase2]\nchain_repairs = 2\n");
+    let err = bad.unwrap_err().to_string();
+    assert!(
+        err.contains("phase2.chain_repairs") && err.contains("phase2.chain_verify_episodes"),
+        "{err}"
+    );
+    let good: PbcsJob =
+        toml::from_str("[phase2]\nchain_repairs = 2\nchain_verify_episodes = 50\n").unwrap();
+    let check = good.phase2.ideas.chain_check;
+    assert_eq!(
+        check,
+        Some(pbcs::phase2::ChainCheck {
+            episodes: 50,
+            repairs: 2
+        })
+    );
+    good.check().unwrap();
     let bad: Result<PbcsJob, _> = toml::from_str("[phase2]\ninputs = \"pixels\"\n");
     assert!(bad.unwrap_err().to_string().contains("pixels"));
 }
@@ -69,7 +82,10 @@ fn a_chain_verification_past_the_budget_is_a_budget_failure() {
     );
     let budget = complete.record.total_steps + 10;
     job.phase2.max_env_steps = budget;
-    job.phase2.chain_verify_episodes = 100;
+    job.phase2.ideas.chain_check = Some(pbcs::phase2::ChainCheck {
+        episodes: 100,
+        repairs: 0,
+    });
     let run = PbcsRun::compute(&job, kernel, |_, _| {}).unwrap();
     assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
     assert!(!run.record.solved && run.record.total_steps > budget);
@@ -87,8 +103,10 @@ fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
     job.phase2.max_env_steps = 642_000;
-    job.phase2.chain_verify_episodes = 100;
-    job.phase2.chain_repairs = 5;
+    job.phase2.ideas.chain_check = Some(pbcs::phase2::ChainCheck {
+        episodes: 100,
+        repairs: 5,
+    });
     let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
     let checks: Vec<_> = run
         .phase2

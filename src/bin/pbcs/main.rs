@@ -131,13 +131,20 @@ fn pbcs_job(
     learner.apply(&mut job.learner);
     if no_chaining {
         // PBCS without chaining has one skill: what acts between skills goes with it.
-        let p = &mut job.phase2;
-        p.chaining = false;
+        let ideas = &mut job.phase2.ideas;
+        job.phase2.chaining = false;
         let between = [
-            ("phase2.retargets", &mut p.retargets),
-            ("phase2.chain_repairs", &mut p.chain_repairs),
+            (
+                "phase2.retargets",
+                ideas.dead_walk.as_mut().map(|d| &mut d.retargets),
+            ),
+            (
+                "phase2.chain_repairs",
+                ideas.chain_check.as_mut().map(|c| &mut c.repairs),
+            ),
         ];
         for (field, value) in between {
+            let Some(value) = value else { continue };
             if *value > 0 {
                 eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
                 *value = 0;

@@ -1,0 +1,597 @@
+//! Phase 2 as a typed procedure: the paper's settings (α, β, ε, the episode limit, where
+//! episodes start, the last skill's goal, what the networks see, chaining on or off), and
+//! each idea of ours as an `Option` or an enum of its own in [`Ideas`], so that the paper's
+//! procedure is its settings with [`Ideas::NONE`], and a new Backplay idea is one variant.
+//!
+//! Combinations that make no sense cannot be written: a warm start lives in
+//! [`InputMode::GoalRelative`] (raw inputs have none), moves of a hand-over in the
+//! [`DeadWalk`] they follow, repairs of the chain in the [`ChainCheck`] whose failures they
+//! answer, and the two episode limits are one [`EpisodeLimit`]. What still involves two parts
+//! (repairs and hand-over moves act between skills, so they need chaining) is refused by
+//! [`Check::check`] naming both fields, and a part that needs a hook the environment lacks by
+//! [`Phase2Config::require_hooks`].
+//!
+//! Files hold the flat form ([`FlatPhase2`], today's `[phase2]` table): reading one converts
+//! it, refusing what the typed form cannot hold with a message naming the fields; writing
+//! one converts back field for field, so committed presets, rows and run folders read and
+//! write the same bytes.
+//!
+//! ```
+//! use pbcs::config::Preset;
+//! use pbcs::phase2::{Ideas, InputMode, KWalk, SkillInit};
+//!
+//! // The paper's procedure: its settings, and none of our ideas.
+//! let paper = Preset::Paper.job().unwrap().phase2;
+//! assert_eq!(paper.ideas, Ideas::NONE);
+//! assert_eq!(paper.ideas.k_walk, KWalk::Fixed { step: 1 });
+//! // `fast` warms each skill from the one before: only goal-relative inputs can say so.
+//! let fast = Preset::Fast.job().unwrap().phase2;
+//! assert_eq!(fast.inputs, InputMode::GoalRelative { init: SkillInit::Warm });
+//! ```
+
+use super::backplay::Walk;
+use super::flat::{FlatInputs, FlatPhase2};
+use super::goal::{Goal, Inputs};
+use super::{LastGoal, StartMode};
+use crate::env::Env;
+use crate::error::{Error, Result};
+use crate::validate::Check;
+use serde::{Deserialize, Serialize};
+
+/// Phase-2 settings: the paper's procedure and our [`Ideas`], validated by [`Check::check`].
+/// Read from and written to files in the flat form ([`FlatPhase2`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "FlatPhase2", into = "FlatPhase2")]
+pub struct Phase2Config {
+    /// α: consecutive non-improvements of the training success that end training at one K.
+    pub alpha: usize,
+    /// β: episodes per test and per training round.
+    pub beta: usize,
+    /// ε: radius of the start balls, target balls and activation balls.
+    pub epsilon: f32,
+    /// Step limit of a training or test episode.
+    pub max_steps: usize,
+    /// Skill chaining on (PBCS) or off (PBCS without skill chaining: fail when a second skill
+    /// would be needed).
+    pub chaining: bool,
+    /// Starts in B_ε(τ_K) (the paper) or exactly at τ_K.
+    pub start: StartMode,
+    /// The last skill's goal: the environment's success region (our correction, the default)
+    /// or B_ε(τ_N) (the paper as written).
+    pub last_goal: LastGoal,
+    /// What the networks see, and, with goal-relative inputs, how a skill's learner starts.
+    pub inputs: InputMode,
+    /// Budget of environment steps for the whole run (phase 1 included); the run fails when
+    /// it is exceeded.
+    pub max_env_steps: u64,
+    /// Episodes of the final evaluation of the chain (from starts uniform in B_ε(s_0)).
+    pub eval_episodes: usize,
+    /// Step limit of an evaluation episode of the chain.
+    pub eval_max_steps: usize,
+    /// Our ideas, each off ([`Ideas::NONE`]) in the paper's procedure.
+    pub ideas: Ideas,
+}
+
+/// What a skill's networks see and emit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputMode {
+    /// Our correction: observations relative to the centre of the skill's goal, actions in
+    /// [−1, 1]ᵈ scaled to the environment's bounds ([`Inputs::for_goal`]); a skill's learner
+    /// starts as `init` says.
+    GoalRelative {
+        /// Fresh networks per skill (the paper) or the previous skill's (ours).
+        init: SkillInit,
+    },
+    /// The paper as written: raw observations (maze coordinates in [0, N]²) and actions in the
+    /// environment's own bounds (±0.1); exploration noise σ is still a fraction of the bound.
+    /// Every skill starts fresh (another goal's learner would see another problem).
+    Raw,
+}
+
+/// How the learner of a new skill starts (goal-relative inputs only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SkillInit {
+    /// "A new DDPG" per skill, as in the paper.
+    Fresh,
+    /// Warm start (ours): a learning problem whose target lies before the last problem's on
+    /// τ — in Algorithm 1, the skill after a saved one — starts from the last problem's
+    /// learner (actor, critic, their targets and optimiser state; the replay starts empty, its
+    /// rewards being the previous goal's). With goal-relative inputs "reach the goal from just
+    /// behind τ_T" is the problem the previous skill solved from B_ε(τ_T). A restart (same
+    /// target) starts fresh, and so does a chain repair whose section does not end before the
+    /// last problem's target (always the first repair: the last problem was skill 0's). The
+    /// learner's own update noise stream and update count carry over with it.
+    Warm,
+}
+
+/// Our ideas, each an `Option` or an enum whose first variant is the paper's procedure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ideas {
+    /// How K walks back from T.
+    pub k_walk: KWalk,
+    /// When training at one K ends.
+    pub stopping: Stopping,
+    /// End a skill at the first K that fails after training when its ball is clear of walls
+    /// ([`Walk::stop_at_failure`]; needs [`crate::env::Env::clear_balls`]).
+    pub stop_at_failure: bool,
+    /// Restarts of a skill with a fresh learner (0: the paper): while a skill has restarts
+    /// left, a Backplay whose test after training fails before any K was saved gives up — at
+    /// 0 %, or, with `stop_at_failure`, below 100 % from a ball clear of walls (its DDPG
+    /// collapsed: walking K further from the goal cannot help) — and the skill starts again at
+    /// T − 1 with new weights and an empty replay.
+    pub restarts: usize,
+    /// A bound on a walk without any success, and what follows it.
+    pub dead_walk: Option<DeadWalk>,
+    /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
+    /// deterministic policy and a pure step it never will), and stop the whole test once it
+    /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
+    /// fraction reported for such a test is then a lower bound). The paper counts every step
+    /// of every test.
+    pub fast_tests: bool,
+    /// Verification of each finished skill: its policy must reach its goal in all of these
+    /// greedy episodes from its activation ball, else Backplay's previous saved (K, π) — a
+    /// shorter reach — is verified in its place. A skill that passes n of n episodes fails at
+    /// most 3/n of the time (95 % confidence, the rule of three): β = 50 bounds it by 6 %, 500
+    /// episodes by 0.6 %.
+    pub verify_skills: Option<usize>,
+    /// Episode limits scaled by the path left to the goal (the paper: `max_steps` for every
+    /// episode).
+    pub episode_limit: Option<EpisodeLimit>,
+    /// Verification, and repair, of the finished chain.
+    pub chain_check: Option<ChainCheck>,
+    /// Shorten τ before phase 2 by cutting the random walk's detours
+    /// ([`crate::explore::shorten`]; needs [`crate::env::Env::connector`]).
+    pub shorten: bool,
+}
+
+impl Ideas {
+    /// None of our ideas: the paper's procedure.
+    pub const NONE: Ideas = Ideas {
+        k_walk: KWalk::Fixed { step: 1 },
+        stopping: Stopping::UNTIL_STABLE,
+        stop_at_failure: false,
+        restarts: 0,
+        dead_walk: None,
+        fast_tests: false,
+        verify_skills: None,
+        episode_limit: None,
+        chain_check: None,
+        shorten: false,
+    };
+}
+
+/// How Backplay's K walks back from T.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KWalk {
+    /// K moves back `step` indices after each K (1: the paper).
+    Fixed {
+        /// Indices per move.
+        step: usize,
+    },
+    /// Adaptive steps (ours), starting at `first`: the step doubles after each K that ends at
+    /// 100 % (up to [`super::backplay::MAX_ADAPTIVE_STEP`]); a jump whose first test fails is
+    /// not trained but halved, K going back halfway towards the last saved K; at step 1 the
+    /// walk is the paper's.
+    Adaptive {
+        /// The first step.
+        first: usize,
+    },
+}
+
+impl KWalk {
+    /// The first step of the walk.
+    pub fn first_step(self) -> usize {
+        match self {
+            KWalk::Fixed { step } => step,
+            KWalk::Adaptive { first } => first,
+        }
+    }
+}
+
+/// When training at one K ends: the paper's "until performance stabilizes" (α misses in a
+/// row), and our two ways to end it sooner.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stopping {
+    /// End as soon as a round at 100 % is confirmed by a 100 % greedy test (ours): DDPG trained
+    /// on past success tends to drift away from it during the α further rounds
+    /// ([`super::backplay::train_until_stable`]).
+    pub early_stop: bool,
+    /// At most this many rounds (ours): a K that needs more is rarely solved at all.
+    pub max_rounds: Option<usize>,
+}
+
+impl Stopping {
+    /// The paper's: α misses in a row, and nothing else.
+    pub const UNTIL_STABLE: Stopping = Stopping {
+        early_stop: false,
+        max_rounds: None,
+    };
+}
+
+/// A bound on a dead walk (ours; the paper's Backplay walks K down to 0 however long it finds
+/// no success).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeadWalk {
+    /// A Backplay whose K is this many indices below T without a single success in any test
+    /// or training round gives up ([`Walk::dead_walk`]), writing a `dead_walk` trace row. Then
+    /// the skill restarts ([`Ideas::restarts`]), and once no restart is left the hand-over
+    /// moves (`retargets`) or the run fails.
+    pub after: usize,
+    /// Moves of a hand-over (0: none): when no attempt at a skill finds any K, the skill found
+    /// before it (target T′, start K = T) is verified greedily from the balls of the indices
+    /// after T (clear ones first, nearest first, at most
+    /// [`super::chaining::MAX_HANDOVER_TRIES`] of the next `after`), and the first from which
+    /// it passes every episode (`verify_skills`, or β) becomes its start and the new skill's
+    /// target, with fresh learners. At most `retargets` moves between two skills found; a
+    /// `retarget` trace row records each try. Needs [`crate::env::Env::clear_balls`] and
+    /// chaining.
+    pub retargets: usize,
+}
+
+/// Path-scaled episode limits (ours): an episode from B_ε(τ_K) towards the goal of τ_T may
+/// take at most `p × (L + 2ε) / a` steps (and never more than `max_steps`), L being τ's length
+/// from τ_K to τ_T and a the smallest action bound: a start near its goal does not spend
+/// `max_steps` steps to show that it fails.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EpisodeLimit {
+    /// Every training and greedy episode (`phase2.path_limit` in files).
+    Every(f32),
+    /// Greedy episodes only — tests and verifications; training episodes keep `max_steps`
+    /// (`phase2.test_path_limit` in files).
+    Greedy(f32),
+}
+
+/// Verification of the finished chain (ours): the chain runs greedily from `episodes` starts
+/// uniform in B_ε(s_0) (stream `ChainVerify`), each skill allowed `max_steps` steps to hand
+/// over. When an episode fails, the skill in use when it stopped is repaired
+/// ([`super::chaining`]), and the chain is verified again, at most `repairs` times (repairs
+/// need chaining). Needs [`crate::env::Env::ball_starts`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChainCheck {
+    /// Episodes of one verification.
+    pub episodes: usize,
+    /// Repairs after failed verifications.
+    pub repairs: usize,
+}
+
+impl Default for Phase2Config {
+    /// The paper's settings with our corrections (goal-relative inputs, the success region as
+    /// the last goal) and none of our ideas.
+    fn default() -> Self {
+        Phase2Config {
+            alpha: 10,
+            beta: 50,
+            epsilon: 0.1,
+            max_steps: 50,
+            chaining: true,
+            start: StartMode::Ball,
+            last_goal: LastGoal::SuccessRegion,
+            inputs: InputMode::GoalRelative {
+                init: SkillInit::Fresh,
+            },
+            max_env_steps: 50_000_000,
+            eval_episodes: 100,
+            eval_max_steps: 5_000,
+            ideas: Ideas::NONE,
+        }
+    }
+}
+
+/// `0` as "off" in the flat form.
+fn nonzero(n: usize) -> Option<usize> {
+    (n > 0).then_some(n)
+}
+
+/// A positive limit as "on" in the flat form (0: off).
+fn positive(p: f32) -> Option<f32> {
+    (p > 0.0).then_some(p)
+}
+
+impl TryFrom<FlatPhase2> for Phase2Config {
+    type Error = Error;
+
+    /// Reads the flat form, refusing, with both fields named, what the typed form cannot hold;
+    /// then [`Check::check`].
+    fn try_from(f: FlatPhase2) -> Result<Self> {
+        if f.retargets > 0 && f.dead_walk == 0 {
+            return Err(Error::invalid(
+                "phase2.retargets",
+                "a hand-over moves after a walk bounded by phase2.dead_walk: set it too",
+            ));
+        }
+        if f.chain_repairs > 0 && f.chain_verify_episodes == 0 {
+            return Err(Error::invalid(
+                "phase2.chain_repairs",
+                "repairs follow a failed chain verification: set phase2.chain_verify_episodes too",
+            ));
+        }
+        if f.warm_start && f.inputs == FlatInputs::Raw {
+            return Err(Error::invalid(
+                "phase2.warm_start",
+                "hands a skill's learner to the next skill, whose goal lies elsewhere: only \
+                 phase2.inputs = \"goal_relative\" makes that the same problem (with \
+                 phase2.inputs = \"raw\" set phase2.warm_start = false)",
+            ));
+        }
+        for (field, p) in [
+            ("phase2.path_limit", f.path_limit),
+            ("phase2.test_path_limit", f.test_path_limit),
+        ] {
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(Error::invalid(
+                    field,
+                    format!("must be 0 (off) or positive, got {p}"),
+                ));
+            }
+        }
+        let episode_limit = match (positive(f.path_limit), positive(f.test_path_limit)) {
+            (Some(_), Some(_)) => {
+                return Err(Error::invalid(
+                    "phase2.test_path_limit",
+                    "limits greedy episodes only, while phase2.path_limit limits every \
+                     episode: set one of the two (0 turns a limit off)",
+                ))
+            }
+            (Some(p), None) => Some(EpisodeLimit::Every(p)),
+            (None, Some(p)) => Some(EpisodeLimit::Greedy(p)),
+            (None, None) => None,
+        };
+        let config = Phase2Config {
+            alpha: f.alpha,
+            beta: f.beta,
+            epsilon: f.epsilon,
+            max_steps: f.max_steps,
+            chaining: f.chaining,
+            start: f.start,
+            last_goal: f.last_goal,
+            inputs: match (f.inputs, f.warm_start) {
+                (FlatInputs::Raw, _) => InputMode::Raw,
+                (FlatInputs::GoalRelative, warm) => InputMode::GoalRelative {
+                    init: if warm {
+                        SkillInit::Warm
+                    } else {
+                        SkillInit::Fresh
+                    },
+                },
+            },
+            max_env_steps: f.max_env_steps,
+            eval_episodes: f.eval_episodes,
+            eval_max_steps: f.eval_max_steps,
+            ideas: Ideas {
+                k_walk: if f.adaptive_k {
+                    KWalk::Adaptive { first: f.k_step }
+                } else {
+                    KWalk::Fixed { step: f.k_step }
+                },
+                stopping: Stopping {
+                    early_stop: f.early_stop,
+                    max_rounds: nonzero(f.max_rounds),
+                },
+                stop_at_failure: f.stop_at_failure,
+                restarts: f.restarts,
+                dead_walk: nonzero(f.dead_walk).map(|after| DeadWalk {
+                    after,
+                    retargets: f.retargets,
+                }),
+                fast_tests: f.fast_tests,
+                verify_skills: nonzero(f.verify_episodes),
+                episode_limit,
+                chain_check: nonzero(f.chain_verify_episodes).map(|episodes| ChainCheck {
+                    episodes,
+                    repairs: f.chain_repairs,
+                }),
+                shorten: f.shorten,
+            },
+        };
+        config.check()?;
+        Ok(config)
+    }
+}
+
+impl From<Phase2Config> for FlatPhase2 {
+    /// Writes the typed form flat, field for field (an idea that is off as 0 or `false`).
+    fn from(c: Phase2Config) -> Self {
+        let i = c.ideas;
+        let (path_limit, test_path_limit) = match i.episode_limit {
+            None => (0.0, 0.0),
+            Some(EpisodeLimit::Every(p)) => (p, 0.0),
+            Some(EpisodeLimit::Greedy(p)) => (0.0, p),
+        };
+        FlatPhase2 {
+            alpha: c.alpha,
+            max_rounds: i.stopping.max_rounds.unwrap_or(0),
+            beta: c.beta,
+            epsilon: c.epsilon,
+            max_steps: c.max_steps,
+            chaining: c.chaining,
+            start: c.start,
+            k_step: i.k_walk.first_step(),
+            shorten: i.shorten,
+            early_stop: i.stopping.early_stop,
+            adaptive_k: matches!(i.k_walk, KWalk::Adaptive { .. }),
+            stop_at_failure: i.stop_at_failure,
+            restarts: i.restarts,
+            dead_walk: i.dead_walk.map_or(0, |d| d.after),
+            retargets: i.dead_walk.map_or(0, |d| d.retargets),
+            fast_tests: i.fast_tests,
+            verify_episodes: i.verify_skills.unwrap_or(0),
+            warm_start: c.inputs
+                == InputMode::GoalRelative {
+                    init: SkillInit::Warm,
+                },
+            path_limit,
+            test_path_limit,
+            chain_verify_episodes: i.chain_check.map_or(0, |v| v.episodes),
+            chain_repairs: i.chain_check.map_or(0, |v| v.repairs),
+            last_goal: c.last_goal,
+            inputs: match c.inputs {
+                InputMode::GoalRelative { .. } => FlatInputs::GoalRelative,
+                InputMode::Raw => FlatInputs::Raw,
+            },
+            max_env_steps: c.max_env_steps,
+            eval_episodes: c.eval_episodes,
+            eval_max_steps: c.eval_max_steps,
+        }
+    }
+}
+
+impl Check for Phase2Config {
+    /// Every number in range, and the two parts that act between skills only with chaining.
+    fn check(&self) -> Result<()> {
+        let i = &self.ideas;
+        for (field, v) in [
+            ("phase2.alpha", self.alpha),
+            ("phase2.beta", self.beta),
+            ("phase2.max_steps", self.max_steps),
+            ("phase2.k_step", i.k_walk.first_step()),
+            ("phase2.eval_episodes", self.eval_episodes),
+            ("phase2.eval_max_steps", self.eval_max_steps),
+            ("phase2.max_rounds", i.stopping.max_rounds.unwrap_or(1)),
+            ("phase2.dead_walk", i.dead_walk.map_or(1, |d| d.after)),
+            ("phase2.verify_episodes", i.verify_skills.unwrap_or(1)),
+            (
+                "phase2.chain_verify_episodes",
+                i.chain_check.map_or(1, |v| v.episodes),
+            ),
+        ] {
+            if v == 0 {
+                return Err(Error::invalid(field, "must be at least 1"));
+            }
+        }
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!("must be positive, got {}", self.epsilon),
+            ));
+        }
+        if self.epsilon > 1.0 {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!(
+                    "is a radius in the environment's units (the maze's cells are 1 wide), \
+                     at most 1, got {}",
+                    self.epsilon
+                ),
+            ));
+        }
+        let limit = match i.episode_limit {
+            Some(EpisodeLimit::Every(p)) => Some(("phase2.path_limit", p)),
+            Some(EpisodeLimit::Greedy(p)) => Some(("phase2.test_path_limit", p)),
+            None => None,
+        };
+        if let Some((field, p)) = limit {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(Error::invalid(field, format!("must be positive, got {p}")));
+            }
+        }
+        if self.max_env_steps == 0 {
+            return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
+        }
+        if !self.chaining && i.dead_walk.is_some_and(|d| d.retargets > 0) {
+            return Err(Error::invalid(
+                "phase2.retargets",
+                "moves the hand-over between two skills, which needs phase2.chaining = true",
+            ));
+        }
+        if !self.chaining && i.chain_check.is_some_and(|v| v.repairs > 0) {
+            return Err(Error::invalid(
+                "phase2.chain_repairs",
+                "learns a failing skill's section of τ again as a chain of skills, which needs \
+                 phase2.chaining = true (set phase2.chain_repairs = 0 without chaining)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Phase2Config {
+    /// Refuses, naming the setting and the hook, a setting that needs a hook of [`Env`] that
+    /// `env` does not offer: ball starts and the chain's verification need
+    /// [`Env::ball_starts`], `stop_at_failure` and hand-over moves [`Env::clear_balls`],
+    /// `shorten` [`Env::connector`]. (Before, each silently did something else: exact
+    /// starts, no stop, no shortening.)
+    pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
+        use crate::env::Capability;
+        let i = &self.ideas;
+        if self.start == StartMode::Ball {
+            Capability::SampleBall.require(env, "phase2.start = \"ball\"")?;
+        }
+        if i.chain_check.is_some() {
+            Capability::SampleBall.require(env, "phase2.chain_verify_episodes")?;
+        }
+        if i.stop_at_failure {
+            Capability::BallIsClear.require(env, "phase2.stop_at_failure")?;
+        }
+        if i.dead_walk.is_some_and(|d| d.retargets > 0) {
+            // Moved hand-overs try clear balls first.
+            Capability::BallIsClear.require(env, "phase2.retargets")?;
+        }
+        if i.shorten {
+            Capability::Connect.require(env, "phase2.shorten")?;
+        }
+        Ok(())
+    }
+
+    /// Whether a skill's learner starts from the last problem's ([`SkillInit::Warm`]).
+    pub fn warm_start(&self) -> bool {
+        self.inputs
+            == InputMode::GoalRelative {
+                init: SkillInit::Warm,
+            }
+    }
+
+    /// The goal of the skill whose target is τ_t on a trajectory with observations `obs`
+    /// (τ_0 … τ_N): [`Goal::for_target`], or B_ε(τ_N) for the last skill when
+    /// [`LastGoal::Ball`].
+    pub fn goal<E: Env>(&self, env: &E, obs: &[Vec<f32>], t: usize) -> Goal {
+        match self.last_goal {
+            LastGoal::SuccessRegion => Goal::for_target(env, obs, t, self.epsilon),
+            LastGoal::Ball => Goal::ball(obs[t].clone(), self.epsilon),
+        }
+    }
+
+    /// The path limits of (training, greedy) episodes ([`EpisodeLimit`]; `None`: `max_steps`).
+    pub fn path_limits(&self) -> (Option<f32>, Option<f32>) {
+        match self.ideas.episode_limit {
+            None => (None, None),
+            Some(EpisodeLimit::Every(p)) => (Some(p), Some(p)),
+            Some(EpisodeLimit::Greedy(p)) => (None, Some(p)),
+        }
+    }
+
+    /// What the networks of a skill aiming at `goal` see and emit ([`InputMode`]).
+    pub fn inputs<E: Env>(&self, env: &E, goal: &Goal) -> Inputs {
+        match self.inputs {
+            InputMode::GoalRelative { .. } => Inputs::for_goal(env, goal),
+            InputMode::Raw => Inputs::new(vec![0.0; env.obs_dim()], vec![1.0; env.action_dim()]),
+        }
+    }
+
+    /// The bounds of the learner's actions: 1 per component with goal-relative inputs (the
+    /// [`Inputs`] scale them), the environment's bounds with raw ones.
+    pub fn learner_bounds<E: Env>(&self, env: &E) -> Vec<f32> {
+        match self.inputs {
+            InputMode::GoalRelative { .. } => vec![1.0; env.action_dim()],
+            InputMode::Raw => (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
+        }
+    }
+
+    /// Backplay's walk from these settings, for a skill that has restarts left or not (a walk
+    /// that may restart gives up when dead: [`Walk::give_up_when_dead`]).
+    pub fn walk(&self, restarts_left: bool) -> Walk {
+        let i = &self.ideas;
+        Walk {
+            alpha: self.alpha,
+            k_walk: i.k_walk,
+            stopping: i.stopping,
+            stop_at_failure: i.stop_at_failure,
+            give_up_when_dead: restarts_left,
+            dead_walk: i.dead_walk.map(|d| d.after),
+        }
+    }
+
+    /// Greedy episodes of a hand-over try: `verify_skills`, or β.
+    pub fn handover_episodes(&self) -> usize {
+        self.ideas.verify_skills.unwrap_or(self.beta)
+    }
+}
