@@ -18,7 +18,7 @@ TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
 .PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
-        commands paper check-paper smoke python experiments
+        commands paper check-paper smoke python experiments mujoco test-mujoco
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
@@ -35,6 +35,9 @@ help:
 	@echo "make bench     phase-1 speed, and learner update cost (every kernel, candle, end to end)"
 	@echo "make lint      rustfmt and clippy"
 	@echo "make python    the Python package into \$$VENV (default .venv) and its tests"
+	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
+	@echo "make test-mujoco   our PointMaze's tests, and the equality test against"
+	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
 	@echo "make ci        what CI runs (.ci/run)"
 
 build:
@@ -56,6 +59,17 @@ lint:
 
 ci:
 	bash .ci/run
+
+mujoco:
+	bash scripts/fetch-mujoco.sh
+
+test-mujoco: mujoco
+	$(CARGO) test --release --locked --features mujoco --test pointmaze
+	$(CARGO) build --release --locked --features mujoco --example pointmaze_step
+	test -x $(VENV)/bin/python || python3 -m venv $(VENV)
+	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2" pytest
+	PBCS_POINTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/pointmaze_step \
+	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py
 
 # Aggregation with polars, then plotters; trains nothing (about a minute after the build).
 figures:

@@ -85,6 +85,14 @@ pub trait Env {
     /// One step from `state` with `action`. Pure: the same inputs give the same output.
     fn step(&self, state: &Self::State, action: &[f32]) -> Step<Self::State>;
 
+    /// How many leading components of the observation phase 1's archive bins on (all of
+    /// them by default: the maze's and the rooms' observations are positions). An environment
+    /// whose observation also holds velocities bins on its position alone, as the paper bins
+    /// the maze: bins over velocities too would give nearly every state a bin of its own.
+    fn archive_dims(&self) -> usize {
+        self.obs_dim()
+    }
+
     /// Column names of the observation, for CSV headers.
     fn obs_names(&self) -> Vec<String> {
         (0..self.obs_dim()).map(|i| format!("o{i}")).collect()

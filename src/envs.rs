@@ -28,6 +28,7 @@
 use crate::env::Planar;
 use crate::error::Result;
 use crate::maze::{Maze, MazeConfig};
+use crate::pointmaze::MapName;
 use crate::rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
 
@@ -50,12 +51,22 @@ use serde::{Deserialize, Serialize};
 )]
 #[serde(rename_all = "snake_case")]
 #[strum(serialize_all = "snake_case")]
+#[value(rename_all = "snake_case")]
 pub enum EnvName {
     /// The paper's continuous maze (`src/maze/`), sized and laid out by the job's `[maze]`.
     #[default]
     Maze,
     /// Two rooms joined by a door (`src/rooms.rs`); it has no parameters.
     Rooms,
+    /// gymnasium-robotics' `PointMaze_UMaze-v3` (`src/pointmaze/`, feature `mujoco`), from
+    /// one of its two free cells farthest apart to the other.
+    PointmazeUmaze,
+    /// gymnasium-robotics' `PointMaze_Open-v3`, the same way.
+    PointmazeOpen,
+    /// gymnasium-robotics' `PointMaze_Medium-v3`, the same way.
+    PointmazeMedium,
+    /// gymnasium-robotics' `PointMaze_Large-v3`, the same way.
+    PointmazeLarge,
 }
 
 /// Generic work on whichever environment a name stands for ([`EnvName::visit`]).
@@ -101,6 +112,29 @@ impl EnvName {
         match self {
             EnvName::Maze => work.on(Maze::new(maze)?),
             EnvName::Rooms => work.on(TwoRooms),
+            EnvName::PointmazeUmaze => point_maze(MapName::UMaze, work),
+            EnvName::PointmazeOpen => point_maze(MapName::Open, work),
+            EnvName::PointmazeMedium => point_maze(MapName::Medium, work),
+            EnvName::PointmazeLarge => point_maze(MapName::Large, work),
         }
     }
+}
+
+/// A PointMaze task ([`crate::pointmaze::PointMaze::named`]).
+#[cfg(feature = "mujoco")]
+fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
+    work.on(crate::pointmaze::PointMaze::named(map)?)
+}
+
+/// Without MuJoCo: refused, saying how to build with it.
+#[cfg(not(feature = "mujoco"))]
+fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
+    let _ = work;
+    Err(crate::error::Error::invalid(
+        "env",
+        format!(
+            "{} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`",
+            map.gym_id()
+        ),
+    ))
 }

@@ -18,7 +18,8 @@
 //! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
 //! [`rooms`] is a second environment for PBCS (two rooms and a door, every hook offered),
-//! and [`envs`] names the environments jobs and the command run;
+//! [`pointmaze`] is gymnasium-robotics' PointMaze on MuJoCo (feature `mujoco`), and [`envs`]
+//! names the environments jobs and the command run;
 //! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
 //! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
 //! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws planar
@@ -65,6 +66,7 @@ pub mod pendulum;
 pub mod phase2;
 pub mod pipeline;
 pub mod plot;
+pub mod pointmaze;
 pub mod record;
 pub mod report;
 pub mod reproduce;

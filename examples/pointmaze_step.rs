@@ -1,0 +1,79 @@
+//! Steps our PointMaze (`src/pointmaze/`) for an outside program: the equality test
+//! (`python/tests/test_pointmaze.py`) sends the same states and actions to this and to
+//! gymnasium-robotics' `PointMaze_*-v3`, and compares what comes back.
+//!
+//! Each line read is one episode: `<map> x y vx vy w0 w1 a0 a1 [a0 a1 ...]` (map: `umaze`,
+//! `open`, `medium`, `large`; the whole state, warm start included; then the actions). For
+//! each action, one line is written: `x y vx vy w0 w1 reward success terminal`, numbers in
+//! Rust's shortest round-trip form (Python's `float()` reads them back exactly), then an empty
+//! line ends the episode. A line `task <map>` is answered with the task's cells instead:
+//! `start_row start_col goal_row goal_col`. Bad input ends the program with a message naming
+//! the line.
+//!
+//! `cargo run --release --features mujoco --example pointmaze_step < episodes.txt`
+
+use pbcs::env::Env;
+use pbcs::pointmaze::{MapName, PointMaze, PointState};
+use std::io::{BufRead, Write};
+use strum::IntoEnumIterator;
+
+fn main() -> anyhow::Result<()> {
+    let envs: Vec<(String, PointMaze)> = MapName::iter()
+        .map(|m| Ok((<&str>::from(m).to_lowercase(), PointMaze::named(m)?)))
+        .collect::<pbcs::Result<_>>()?;
+    let stdin = std::io::stdin();
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let find = |name: &str, line: usize| {
+        envs.iter()
+            .find(|(m, _)| m == name)
+            .map(|(_, env)| env)
+            .ok_or_else(|| {
+                anyhow::anyhow!("line {line}: unknown map {name:?} (umaze, open, medium, large)")
+            })
+    };
+    for (n, line) in stdin.lock().lines().enumerate() {
+        let line = line?;
+        let mut words = line.split_whitespace();
+        let Some(map) = words.next() else { continue };
+        if map == "task" {
+            let env = find(words.next().unwrap_or(""), n + 1)?;
+            let ((a, b), (c, d)) = env.map().farthest_cells();
+            writeln!(out, "{a} {b} {c} {d}")?;
+            out.flush()?;
+            continue;
+        }
+        let env = find(map, n + 1)?;
+        let numbers: Vec<f64> = words
+            .map(|w| w.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| anyhow::anyhow!("line {}: {e}", n + 1))?;
+        if numbers.len() < 6 || !numbers.len().is_multiple_of(2) {
+            anyhow::bail!("line {}: a state of 6 numbers and pairs of actions", n + 1);
+        }
+        let mut s = PointState {
+            qpos: [numbers[0], numbers[1]],
+            qvel: [numbers[2], numbers[3]],
+            warmstart: [numbers[4], numbers[5]],
+        };
+        for a in numbers[6..].chunks(2) {
+            let step = env.step(&s, &[a[0] as f32, a[1] as f32]);
+            s = step.state;
+            writeln!(
+                out,
+                "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {} {}",
+                s.qpos[0],
+                s.qpos[1],
+                s.qvel[0],
+                s.qvel[1],
+                s.warmstart[0],
+                s.warmstart[1],
+                step.reward,
+                env.success(&s),
+                step.terminal,
+            )?;
+        }
+        writeln!(out)?;
+        out.flush()?;
+    }
+    Ok(())
+}

@@ -1,0 +1,128 @@
+"""The referee: gymnasium-robotics' own PointMaze_*-v3 (MuJoCo 3.17.0) and our Rust PointMaze
+(``src/pointmaze/``, driven through ``examples/pointmaze_step.rs``) are set to the same whole
+states — position, velocity and the solver's warm start — and given the same actions; every
+observation, warm start, reward, success flag and termination must be the same, bit for bit,
+on every map: from random states anywhere in the free space with random actions (some outside
+[-1, 1], some speeds beyond the ±5 clip), runs into walls and corners, and long episodes from
+gymnasium-robotics' own resets, whose warm start our side carries step after step.
+
+Needs gymnasium-robotics and mujoco==3.17.0 (pip) and the example built with the ``mujoco``
+feature: ``$PBCS_POINTMAZE_STEP`` names it (CI sets it); without it the test is skipped."""
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+MAPS = ["UMaze", "Open", "Medium", "Large"]
+
+
+@pytest.fixture(scope="module")
+def ours():
+    path = os.environ.get("PBCS_POINTMAZE_STEP")
+    if not path:
+        pytest.skip("set PBCS_POINTMAZE_STEP to examples/pointmaze_step built with --features mujoco")
+    proc = subprocess.Popen(
+        [path], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1
+    )
+    yield proc
+    proc.stdin.close()
+    assert proc.wait(timeout=30) == 0
+
+
+def ask(proc, line):
+    proc.stdin.write(line + "\n")
+    proc.stdin.flush()
+
+
+def task(proc, name):
+    ask(proc, f"task {name.lower()}")
+    a, b, c, d = map(int, proc.stdout.readline().split())
+    return (a, b), (c, d)
+
+
+def run_ours(proc, name, state, actions):
+    """Our steps from `state` (x, y, vx, vy, w0, w1) under `actions` (float32 pairs)."""
+    numbers = [repr(float(v)) for v in state]
+    numbers += [repr(float(v)) for a in actions for v in a]
+    ask(proc, f"{name.lower()} " + " ".join(numbers))
+    rows = []
+    while (line := proc.stdout.readline().strip()) != "":
+        w = line.split()
+        rows.append(([float(v) for v in w[:6]], float(w[6]), w[7] == "true", w[8] == "true"))
+    assert len(rows) == len(actions)
+    return rows
+
+
+def run_theirs(env, state, actions):
+    """gymnasium-robotics' steps from the same whole state."""
+    point = env.point_env
+    point.set_state(np.array(state[:2]), np.array(state[2:4]))
+    point.data.qacc_warmstart[:] = state[4:6]
+    rows = []
+    for a in actions:
+        obs, reward, terminated, _, info = env.step(a)
+        full = list(obs["observation"]) + list(point.data.qacc_warmstart)
+        rows.append((full, float(reward), bool(info["success"]), bool(terminated)))
+    return rows
+
+
+def same(ours_rows, theirs_rows, what):
+    for t, (o, g) in enumerate(zip(ours_rows, theirs_rows)):
+        bits_o = np.array(o[0], dtype=np.float64).view(np.uint64)
+        bits_g = np.array(g[0], dtype=np.float64).view(np.uint64)
+        assert (bits_o == bits_g).all(), f"{what}, step {t}: ours {o[0]}, theirs {g[0]}"
+        assert o[1:] == g[1:], f"{what}, step {t}: ours {o[1:]}, theirs {g[1:]}"
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
+    gym = pytest.importorskip("gymnasium")
+    gymnasium_robotics = pytest.importorskip("gymnasium_robotics")
+    mujoco = pytest.importorskip("mujoco")
+    assert mujoco.__version__ == "3.17.0"
+    gym.register_envs(gymnasium_robotics)
+    env = gym.make(f"PointMaze_{name}-v3", continuing_task=False).unwrapped
+    start, goal = task(ours, name)
+    maze = env.maze
+    env.reset(seed=0, options={"reset_cell": np.array(start), "goal_cell": np.array(goal)})
+    # The task's goal is the goal cell's centre, by gymnasium-robotics' own conversion.
+    env.goal = maze.cell_rowcol_to_xy(np.array(goal))
+    rng = np.random.default_rng(sum(map(ord, name)))
+    free = [
+        (i, j)
+        for i in range(maze.map_length)
+        for j in range(maze.map_width)
+        if maze.maze_map[i][j] != 1
+    ]
+    checked = 0
+    # Random whole states anywhere in the free cells, random actions.
+    for episode in range(40):
+        cell = free[rng.integers(len(free))]
+        xy = maze.cell_rowcol_to_xy(np.array(cell)) + rng.uniform(-0.5, 0.5, 2)
+        v = rng.uniform(-6, 6, 2)
+        w = rng.uniform(-50, 50, 2) if episode % 2 else np.zeros(2)
+        state = [*xy, *v, *w]
+        actions = rng.uniform(-1.2, 1.2, (40, 2)).astype(np.float32)
+        same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} random {episode}")
+        checked += len(actions)
+    # Into walls and corners: full thrust along each diagonal and axis from the start, at rest.
+    s0 = maze.cell_rowcol_to_xy(np.array(start))
+    for direction in [(1, 1), (-1, 1), (1, -1), (-1, -1), (1, 0), (0, -1)]:
+        state = [*s0, 0.0, 0.0, 0.0, 0.0]
+        actions = np.tile(np.array(direction, dtype=np.float32), (150, 1))
+        same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} push {direction}")
+        checked += len(actions)
+    # gymnasium-robotics' own resets (start and goal ±0.25), then a time limit of random
+    # actions: the warm start is carried by each side from step to step.
+    for seed in range(3):
+        env.reset(seed=seed, options={"reset_cell": np.array(start), "goal_cell": np.array(goal)})
+        point = env.point_env
+        state = [*point.data.qpos, *point.data.qvel, *point.data.qacc_warmstart]
+        env.goal = maze.cell_rowcol_to_xy(np.array(goal))
+        n = {"UMaze": 300, "Open": 300, "Medium": 600, "Large": 800}[name]
+        actions = rng.uniform(-1, 1, (n, 2)).astype(np.float32)
+        same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} reset {seed}")
+        checked += len(actions)
+    assert checked > 3000

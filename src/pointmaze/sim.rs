@@ -1,0 +1,225 @@
+//! The PointMaze environment on MuJoCo (feature `mujoco`): gymnasium-robotics'
+//! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
+
+use super::model::{MapName, PointMap};
+use crate::env::{Env, Planar, Scene, Step};
+use crate::error::{Error, Result};
+use mujoco_rs::prelude::*;
+use std::sync::Mutex;
+
+/// Distance to the goal within which an episode succeeds (`compute_reward`'s 0.45).
+pub const SUCCESS_DISTANCE: f64 = 0.45;
+
+/// Speed limit applied to each velocity component before a step (`PointEnv.step`'s ±5).
+pub const MAX_SPEED: f64 = 5.0;
+
+/// The whole state of the point: position and velocity, and the constraint solver's warm
+/// start, which MuJoCo carries from one step to the next (the ball always touches the floor,
+/// so the solver runs every step and starts from it): a state without it does not replay
+/// exactly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointState {
+    /// Position (x, y), metres (`qpos`).
+    pub qpos: [f64; 2],
+    /// Velocity, metres per second (`qvel`).
+    pub qvel: [f64; 2],
+    /// The solver's warm start (`qacc_warmstart`).
+    pub warmstart: [f64; 2],
+}
+
+impl PointState {
+    /// At rest at `xy`, as a reset leaves the point (`mj_resetData` zeroes the warm start).
+    pub fn at_rest(xy: [f64; 2]) -> PointState {
+        PointState {
+            qpos: xy,
+            qvel: [0.0; 2],
+            warmstart: [0.0; 2],
+        }
+    }
+}
+
+/// gymnasium-robotics' PointMaze with `continuing_task=False`: a point mass pushed by two
+/// motors (actions in [−1, 1]², 0.01 s Euler steps), a sparse reward of 1 and the end of the
+/// episode within [`SUCCESS_DISTANCE`] of the goal. The task is fixed: start at rest at the
+/// centre of one cell, goal at the centre of another.
+pub struct PointMaze {
+    map: PointMap,
+    start: [f64; 2],
+    goal: [f64; 2],
+    /// The simulator the pure step borrows: every step sets the whole state first, so what a
+    /// previous step left in it does not matter.
+    data: Mutex<MjData<Box<MjModel>>>,
+}
+
+impl std::fmt::Debug for PointMaze {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PointMaze")
+            .field("map", &self.map)
+            .field("start", &self.start)
+            .field("goal", &self.goal)
+            .finish()
+    }
+}
+
+impl PointMaze {
+    /// A map's task of this package: from its two free cells farthest apart
+    /// ([`PointMap::farthest_cells`]).
+    pub fn named(name: MapName) -> Result<PointMaze> {
+        let map = PointMap::named(name);
+        let (start, goal) = map.farthest_cells();
+        PointMaze::new(map, start, goal)
+    }
+
+    /// The task from the centre of cell `start` (at rest) to the centre of cell `goal`, both
+    /// free; the model compiled by MuJoCo.
+    pub fn new(map: PointMap, start: (usize, usize), goal: (usize, usize)) -> Result<PointMaze> {
+        for (what, cell) in [("start", start), ("goal", goal)] {
+            if map.is_wall(cell) {
+                return Err(Error::invalid(
+                    "pointmaze task",
+                    format!("the {what} cell {cell:?} is a wall or outside the map"),
+                ));
+            }
+        }
+        let model = MjModel::from_xml_string(&map.xml())
+            .map_err(|e| Error::invalid("pointmaze model", format!("MuJoCo refused it: {e}")))?;
+        let mut data = MjData::new(Box::new(model));
+        let goal_xy = map.cell_xy(goal);
+        if let Some(id) = data.model().name_to_id(MjtObjBase::mjOBJ_SITE, "target") {
+            // Where gymnasium-robotics draws the goal (no effect on the simulation).
+            // SAFETY: the model is owned by this data and not shared.
+            unsafe { data.model_mut() }.site_pos_mut()[id] = [goal_xy[0], goal_xy[1], 0.2];
+        }
+        Ok(PointMaze {
+            start: map.cell_xy(start),
+            goal: goal_xy,
+            map,
+            data: Mutex::new(data),
+        })
+    }
+
+    /// The map.
+    pub fn map(&self) -> &PointMap {
+        &self.map
+    }
+
+    /// The goal's position.
+    pub fn goal(&self) -> [f64; 2] {
+        self.goal
+    }
+
+    /// Distance from the point to the goal.
+    pub fn distance_to_goal(&self, s: &PointState) -> f64 {
+        (s.qpos[0] - self.goal[0]).hypot(s.qpos[1] - self.goal[1])
+    }
+
+    /// Whether the point is within [`SUCCESS_DISTANCE`] of the goal (`info["success"]`).
+    pub fn success(&self, s: &PointState) -> bool {
+        self.distance_to_goal(s) <= SUCCESS_DISTANCE
+    }
+
+    /// One step of `PointEnv.step` from `s`: the action clipped to [−1, 1] (in `f32`, as
+    /// gymnasium keeps it), each velocity clipped to ±[`MAX_SPEED`], the whole state set, the
+    /// action as motor controls, one `mj_step`. gymnasium's `set_state` also runs `mj_forward`
+    /// before the step, and `mj_rnePostConstraint` after it: the first computes again, inside
+    /// `mj_step`, from the same inputs (the solver starts from the warm start, not from what
+    /// the forward pass left), the second computes forces nothing reads; leaving both out
+    /// doubles the speed (`benches/pointmaze.rs`), and the equality test against
+    /// gymnasium-robotics still finds every number the same, bit for bit.
+    pub fn next(&self, s: &PointState, action: [f32; 2]) -> PointState {
+        let mut d = self.data.lock().unwrap_or_else(|e| e.into_inner());
+        d.qpos_mut().copy_from_slice(&s.qpos);
+        d.qvel_mut()
+            .copy_from_slice(&s.qvel.map(|v| v.clamp(-MAX_SPEED, MAX_SPEED)));
+        d.qacc_warmstart_mut().copy_from_slice(&s.warmstart);
+        d.ctrl_mut()
+            .copy_from_slice(&action.map(|a| f64::from(a.clamp(-1.0, 1.0))));
+        d.step();
+        let (q, v, w) = (d.qpos(), d.qvel(), d.qacc_warmstart());
+        PointState {
+            qpos: [q[0], q[1]],
+            qvel: [v[0], v[1]],
+            warmstart: [w[0], w[1]],
+        }
+    }
+}
+
+impl Env for PointMaze {
+    type State = PointState;
+
+    fn obs_dim(&self) -> usize {
+        4
+    }
+
+    fn action_dim(&self) -> usize {
+        2
+    }
+
+    fn action_bound(&self, _i: usize) -> f32 {
+        1.0
+    }
+
+    fn start(&self) -> PointState {
+        PointState::at_rest(self.start)
+    }
+
+    /// `observation` of gymnasium-robotics: [x, y, vx, vy] (in `f32`).
+    fn observe(&self, s: &PointState, out: &mut [f32]) {
+        let o = [s.qpos[0], s.qpos[1], s.qvel[0], s.qvel[1]];
+        for (out, o) in out.iter_mut().zip(o) {
+            *out = o as f32;
+        }
+    }
+
+    /// [`PointMaze::next`]; reward 1 and the end of the episode on success (sparse reward,
+    /// `continuing_task=False`), else 0.
+    fn step(&self, s: &PointState, action: &[f32]) -> Step<PointState> {
+        let state = self.next(s, [action[0], action[1]]);
+        let success = self.success(&state);
+        Step {
+            state,
+            reward: if success { 1.0 } else { 0.0 },
+            terminal: success,
+        }
+    }
+
+    /// Phase 1 bins on the position (x, y) alone: over velocities too, nearly every state had
+    /// a bin of its own (`results/dev/issue35/`).
+    fn archive_dims(&self) -> usize {
+        2
+    }
+
+    fn obs_names(&self) -> Vec<String> {
+        ["x", "y", "vx", "vy"].map(String::from).to_vec()
+    }
+}
+
+impl Planar for PointMaze {
+    /// The position, shifted so that the map spans [0, W] × [0, H].
+    fn point(&self, s: &PointState) -> (f32, f32) {
+        let (w, h) = (self.map.cols() as f64, self.map.rows() as f64);
+        ((s.qpos[0] + w / 2.0) as f32, (s.qpos[1] + h / 2.0) as f32)
+    }
+
+    fn scene(&self) -> Scene {
+        let (w, h) = (self.map.cols() as f32, self.map.rows() as f32);
+        let walls = (0..self.map.rows())
+            .flat_map(|i| (0..self.map.cols()).map(move |j| (i, j)))
+            .filter(|&c| self.map.is_wall(c))
+            .map(|(i, j)| {
+                let (x, y) = (j as f32, h - i as f32 - 1.0);
+                [(x, y), (x + 1.0, y + 1.0)]
+            })
+            .collect();
+        Scene {
+            width: w,
+            height: h,
+            walls,
+            target: (
+                self.point(&PointState::at_rest(self.goal)),
+                SUCCESS_DISTANCE as f32,
+            ),
+            start: self.point(&self.start()),
+        }
+    }
+}
