@@ -287,25 +287,23 @@ fn positive(p: f32) -> Option<f32> {
     (p > 0.0).then_some(p)
 }
 
-impl TryFrom<FlatPhase2> for Phase2Config {
-    type Error = Error;
-
-    /// Reads the flat form, refusing, with both fields named, what the typed form cannot hold;
-    /// then [`Check::check`].
-    fn try_from(f: FlatPhase2) -> Result<Self> {
-        if f.retargets > 0 && f.dead_walk == 0 {
+impl FlatPhase2 {
+    /// The episode limit the flat form writes; refuses, naming both fields, what the typed
+    /// form cannot hold (a setting without the one it needs, or both path limits).
+    fn typed_limit(&self) -> Result<Option<EpisodeLimit>> {
+        if self.retargets > 0 && self.dead_walk == 0 {
             return Err(Error::invalid(
                 "phase2.retargets",
                 "a hand-over moves after a walk bounded by phase2.dead_walk: set it too",
             ));
         }
-        if f.chain_repairs > 0 && f.chain_verify_episodes == 0 {
+        if self.chain_repairs > 0 && self.chain_verify_episodes == 0 {
             return Err(Error::invalid(
                 "phase2.chain_repairs",
                 "repairs follow a failed chain verification: set phase2.chain_verify_episodes too",
             ));
         }
-        if f.warm_start && f.inputs == FlatInputs::Raw {
+        if self.warm_start && self.inputs == FlatInputs::Raw {
             return Err(Error::invalid(
                 "phase2.warm_start",
                 "hands a skill's learner to the next skill, whose goal lies elsewhere: only \
@@ -314,8 +312,8 @@ impl TryFrom<FlatPhase2> for Phase2Config {
             ));
         }
         for (field, p) in [
-            ("phase2.path_limit", f.path_limit),
-            ("phase2.test_path_limit", f.test_path_limit),
+            ("phase2.path_limit", self.path_limit),
+            ("phase2.test_path_limit", self.test_path_limit),
         ] {
             if !(p.is_finite() && p >= 0.0) {
                 return Err(Error::invalid(
@@ -324,18 +322,26 @@ impl TryFrom<FlatPhase2> for Phase2Config {
                 ));
             }
         }
-        let episode_limit = match (positive(f.path_limit), positive(f.test_path_limit)) {
-            (Some(_), Some(_)) => {
-                return Err(Error::invalid(
-                    "phase2.test_path_limit",
-                    "limits greedy episodes only, while phase2.path_limit limits every \
-                     episode: set one of the two (0 turns a limit off)",
-                ))
-            }
-            (Some(p), None) => Some(EpisodeLimit::Every(p)),
-            (None, Some(p)) => Some(EpisodeLimit::Greedy(p)),
-            (None, None) => None,
-        };
+        match (positive(self.path_limit), positive(self.test_path_limit)) {
+            (Some(_), Some(_)) => Err(Error::invalid(
+                "phase2.test_path_limit",
+                "limits greedy episodes only, while phase2.path_limit limits every episode: \
+                 set one of the two (0 turns a limit off)",
+            )),
+            (Some(p), None) => Ok(Some(EpisodeLimit::Every(p))),
+            (None, Some(p)) => Ok(Some(EpisodeLimit::Greedy(p))),
+            (None, None) => Ok(None),
+        }
+    }
+}
+
+impl TryFrom<FlatPhase2> for Phase2Config {
+    type Error = Error;
+
+    /// Reads the flat form, refusing, with both fields named, what the typed form cannot hold;
+    /// then [`Check::check`].
+    fn try_from(f: FlatPhase2) -> Result<Self> {
+        let episode_limit = f.typed_limit()?;
         let config = Phase2Config {
             alpha: f.alpha,
             beta: f.beta,
