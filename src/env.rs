@@ -93,6 +93,25 @@ pub trait Env {
         self.obs_dim()
     }
 
+    /// How many leading components of the observation PBCS's balls measure: the goals
+    /// B_ε(τ_T), the activation sets A_i, the success region, and τ's length for the path
+    /// limits. All of them by default (the maze's and the rooms' observations are positions);
+    /// the position alone for an environment that also observes velocities, whose balls are
+    /// then balls in position, whatever the velocity.
+    fn ball_dims(&self) -> usize {
+        self.obs_dim()
+    }
+
+    /// How far one step can move the observation's ball-measured part ([`Env::ball_dims`]),
+    /// which turns a path length into steps for PBCS's path limits: by default the smallest
+    /// action bound (an action of the maze and the rooms is a displacement); an environment
+    /// whose actions are forces says how far its fastest step goes.
+    fn step_reach(&self) -> f32 {
+        (0..self.action_dim())
+            .map(|i| self.action_bound(i))
+            .fold(f32::INFINITY, f32::min)
+    }
+
     /// Column names of the observation, for CSV headers.
     fn obs_names(&self) -> Vec<String> {
         (0..self.obs_dim()).map(|i| format!("o{i}")).collect()
@@ -202,6 +221,13 @@ pub trait Planar: Env {
 
     /// The picture's frame: extent, walls, target, start.
     fn scene(&self) -> Scene;
+
+    /// Where a ball centred at `center` (the observation components balls measure,
+    /// [`Env::ball_dims`]: an activation set) is drawn: (`center[0]`, `center[1]`) unless the
+    /// environment draws its positions elsewhere.
+    fn ball_point(&self, center: &[f32]) -> (f32, f32) {
+        (center[0], center[1])
+    }
 }
 
 /// Fills `out` with an action drawn uniformly from the action box of `env`.

@@ -161,7 +161,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                 Skill {
                     policy,
                     activation: Ball {
-                        center: self.obs[lo + k].clone(),
+                        center: super::goal::ball_center(self.env, &self.obs[lo + k]),
                         radius: self.config.epsilon,
                     },
                     start_index: lo + k,

@@ -2,9 +2,14 @@
 //! booleans and names, where 0 or `false` turns one of our ideas off. This is the form every
 //! committed preset, experiment and run folder holds; [`super::Phase2Config`] is the typed
 //! procedure read from it (and written back to it, field for field), in which combinations
-//! that make no sense cannot be written.
+//! that make no sense cannot be written. The conversions both ways are here.
 
-use super::{LastGoal, Phase2Config, StartMode};
+use super::{
+    ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, LastGoal, Phase2Config, SkillInit,
+    StartMode, Stopping,
+};
+use crate::error::{Error, Result};
+use crate::validate::Check;
 use serde::{Deserialize, Serialize};
 
 /// The networks' inputs as the file names them (`inputs = "goal_relative"` or `"raw"`);
@@ -83,5 +88,169 @@ impl Default for FlatPhase2 {
     /// The defaults of the typed procedure ([`Phase2Config::default`]), written flat.
     fn default() -> Self {
         Phase2Config::default().into()
+    }
+}
+
+/// `0` as "off" in the flat form.
+fn nonzero(n: usize) -> Option<usize> {
+    (n > 0).then_some(n)
+}
+
+/// A positive limit as "on" in the flat form (0: off).
+fn positive(p: f32) -> Option<f32> {
+    (p > 0.0).then_some(p)
+}
+
+impl FlatPhase2 {
+    /// The episode limit the flat form writes; refuses, naming both fields, what the typed
+    /// form cannot hold (a setting without the one it needs, or both path limits).
+    fn typed_limit(&self) -> Result<Option<EpisodeLimit>> {
+        if self.retargets > 0 && self.dead_walk == 0 {
+            return Err(Error::invalid(
+                "phase2.retargets",
+                "a hand-over moves after a walk bounded by phase2.dead_walk: set it too",
+            ));
+        }
+        if self.chain_repairs > 0 && self.chain_verify_episodes == 0 {
+            return Err(Error::invalid(
+                "phase2.chain_repairs",
+                "repairs follow a failed chain verification: set phase2.chain_verify_episodes too",
+            ));
+        }
+        if self.warm_start && self.inputs == FlatInputs::Raw {
+            return Err(Error::invalid(
+                "phase2.warm_start",
+                "hands a skill's learner to the next skill, whose goal lies elsewhere: only \
+                 phase2.inputs = \"goal_relative\" makes that the same problem (with \
+                 phase2.inputs = \"raw\" set phase2.warm_start = false)",
+            ));
+        }
+        for (field, p) in [
+            ("phase2.path_limit", self.path_limit),
+            ("phase2.test_path_limit", self.test_path_limit),
+        ] {
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(Error::invalid(
+                    field,
+                    format!("must be 0 (off) or positive, got {p}"),
+                ));
+            }
+        }
+        match (positive(self.path_limit), positive(self.test_path_limit)) {
+            (Some(_), Some(_)) => Err(Error::invalid(
+                "phase2.test_path_limit",
+                "limits greedy episodes only, while phase2.path_limit limits every episode: \
+                 set one of the two (0 turns a limit off)",
+            )),
+            (Some(p), None) => Ok(Some(EpisodeLimit::Every(p))),
+            (None, Some(p)) => Ok(Some(EpisodeLimit::Greedy(p))),
+            (None, None) => Ok(None),
+        }
+    }
+}
+
+impl TryFrom<FlatPhase2> for Phase2Config {
+    type Error = Error;
+
+    /// Reads the flat form, refusing, with both fields named, what the typed form cannot hold;
+    /// then [`Check::check`].
+    fn try_from(f: FlatPhase2) -> Result<Self> {
+        let episode_limit = f.typed_limit()?;
+        let config = Phase2Config {
+            alpha: f.alpha,
+            beta: f.beta,
+            epsilon: f.epsilon,
+            max_steps: f.max_steps,
+            chaining: f.chaining,
+            start: f.start,
+            last_goal: f.last_goal,
+            inputs: match (f.inputs, f.warm_start) {
+                (FlatInputs::Raw, _) => InputMode::Raw,
+                (FlatInputs::GoalRelative, warm) => InputMode::GoalRelative {
+                    init: if warm {
+                        SkillInit::Warm
+                    } else {
+                        SkillInit::Fresh
+                    },
+                },
+            },
+            max_env_steps: f.max_env_steps,
+            eval_episodes: f.eval_episodes,
+            eval_max_steps: f.eval_max_steps,
+            ideas: Ideas {
+                k_walk: if f.adaptive_k {
+                    KWalk::Adaptive { first: f.k_step }
+                } else {
+                    KWalk::Fixed { step: f.k_step }
+                },
+                stopping: Stopping {
+                    early_stop: f.early_stop,
+                    max_rounds: nonzero(f.max_rounds),
+                },
+                stop_at_failure: f.stop_at_failure,
+                restarts: f.restarts,
+                dead_walk: nonzero(f.dead_walk).map(|after| DeadWalk {
+                    after,
+                    retargets: f.retargets,
+                }),
+                fast_tests: f.fast_tests,
+                verify_skills: nonzero(f.verify_episodes),
+                episode_limit,
+                chain_check: nonzero(f.chain_verify_episodes).map(|episodes| ChainCheck {
+                    episodes,
+                    repairs: f.chain_repairs,
+                }),
+                shorten: f.shorten,
+            },
+        };
+        config.check()?;
+        Ok(config)
+    }
+}
+
+impl From<Phase2Config> for FlatPhase2 {
+    /// Writes the typed form flat, field for field (an idea that is off as 0 or `false`).
+    fn from(c: Phase2Config) -> Self {
+        let i = c.ideas;
+        let (path_limit, test_path_limit) = match i.episode_limit {
+            None => (0.0, 0.0),
+            Some(EpisodeLimit::Every(p)) => (p, 0.0),
+            Some(EpisodeLimit::Greedy(p)) => (0.0, p),
+        };
+        FlatPhase2 {
+            alpha: c.alpha,
+            max_rounds: i.stopping.max_rounds.unwrap_or(0),
+            beta: c.beta,
+            epsilon: c.epsilon,
+            max_steps: c.max_steps,
+            chaining: c.chaining,
+            start: c.start,
+            k_step: i.k_walk.first_step(),
+            shorten: i.shorten,
+            early_stop: i.stopping.early_stop,
+            adaptive_k: matches!(i.k_walk, KWalk::Adaptive { .. }),
+            stop_at_failure: i.stop_at_failure,
+            restarts: i.restarts,
+            dead_walk: i.dead_walk.map_or(0, |d| d.after),
+            retargets: i.dead_walk.map_or(0, |d| d.retargets),
+            fast_tests: i.fast_tests,
+            verify_episodes: i.verify_skills.unwrap_or(0),
+            warm_start: c.inputs
+                == InputMode::GoalRelative {
+                    init: SkillInit::Warm,
+                },
+            path_limit,
+            test_path_limit,
+            chain_verify_episodes: i.chain_check.map_or(0, |v| v.episodes),
+            chain_repairs: i.chain_check.map_or(0, |v| v.repairs),
+            last_goal: c.last_goal,
+            inputs: match c.inputs {
+                InputMode::GoalRelative { .. } => FlatInputs::GoalRelative,
+                InputMode::Raw => FlatInputs::Raw,
+            },
+            max_env_steps: c.max_env_steps,
+            eval_episodes: c.eval_episodes,
+            eval_max_steps: c.eval_max_steps,
+        }
     }
 }

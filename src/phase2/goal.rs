@@ -45,6 +45,12 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
+/// The part of an observation `obs` of `env` that its balls measure ([`Env::ball_dims`]): a
+/// ball's centre.
+pub fn ball_center<E: Env>(env: &E, obs: &[f32]) -> Vec<f32> {
+    obs[..env.ball_dims().clamp(1, obs.len())].to_vec()
+}
+
 /// The shaped reward of a step that reaches the goal (the paper's 10).
 pub const REACHED_REWARD: f32 = 10.0;
 
@@ -87,7 +93,7 @@ impl Goal {
     pub fn last<E: Env>(env: &E, tau_n: &[f32], epsilon: f32) -> Self {
         let (center, radius) = env
             .success_region()
-            .unwrap_or_else(|| (tau_n.to_vec(), epsilon));
+            .unwrap_or_else(|| (ball_center(env, tau_n), epsilon));
         Goal {
             kind: GoalKind::EnvSuccess,
             center,
@@ -101,7 +107,7 @@ impl Goal {
         if t + 1 == obs.len() {
             Goal::last(env, &obs[t], epsilon)
         } else {
-            Goal::ball(obs[t].clone(), epsilon)
+            Goal::ball(ball_center(env, &obs[t]), epsilon)
         }
     }
 
@@ -161,10 +167,14 @@ impl Inputs {
         }
     }
 
-    /// The inputs of a skill aiming at `goal` in `env`.
+    /// The inputs of a skill aiming at `goal` in `env`: observations relative to the goal's
+    /// centre in the components its balls measure, the others ([`Env::ball_dims`] on: a
+    /// velocity) as they are.
     pub fn for_goal<E: Env>(env: &E, goal: &Goal) -> Self {
+        let mut origin = goal.center.clone();
+        origin.resize(env.obs_dim(), 0.0);
         Inputs::new(
-            goal.center.clone(),
+            origin,
             (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
         )
     }

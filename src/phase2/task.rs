@@ -23,7 +23,8 @@ pub struct StepCounts {
     pub test: u64,
 }
 
-/// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in observations).
+/// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in the observation's
+/// components balls measure, [`Env::ball_dims`]).
 fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
     let obs: Vec<Vec<f32>> = states
         .iter()
@@ -33,9 +34,10 @@ fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
             o
         })
         .collect();
+    let d = env.ball_dims().clamp(1, env.obs_dim());
     let mut lengths = vec![0.0; obs.len()];
     for k in (0..obs.len().saturating_sub(1)).rev() {
-        lengths[k] = lengths[k + 1] + dist(&obs[k], &obs[k + 1]);
+        lengths[k] = lengths[k + 1] + dist(&obs[k][..d], &obs[k + 1][..d]);
     }
     lengths
 }
@@ -43,7 +45,7 @@ fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
 /// The step limit of an episode from each τ_k towards the goal of τ_T, given L_k
 /// ([`lengths_to_goal`]): `max_steps`, or with a path limit p > 0
 /// ([`crate::phase2::EpisodeLimit`], [`Phase2Config::path_limits`]) at most
-/// ⌈p (L_k + 2ε) / a⌉, a being the smallest action bound.
+/// ⌈p (L_k + 2ε) / a⌉, a being how far one step can go ([`Env::step_reach`]).
 fn episode_limits<E: Env>(
     env: &E,
     config: &Phase2Config,
@@ -53,9 +55,7 @@ fn episode_limits<E: Env>(
     let Some(p) = p else {
         return vec![config.max_steps; lengths.len()];
     };
-    let a = (0..env.action_dim())
-        .map(|i| env.action_bound(i))
-        .fold(f32::INFINITY, f32::min);
+    let a = env.step_reach();
     lengths
         .iter()
         .map(|l| {

@@ -196,6 +196,20 @@ impl PointMap {
             .then_some((i as usize, j as usize))
     }
 
+    /// Distance from the point `xy` to the nearest wall cell (0 inside one).
+    pub fn clearance(&self, [x, y]: [f64; 2]) -> f64 {
+        (0..self.rows())
+            .flat_map(|i| (0..self.cols()).map(move |j| (i, j)))
+            .filter(|&c| self.is_wall(c))
+            .map(|c| {
+                let [cx, cy] = self.cell_xy(c);
+                let dx = ((x - cx).abs() - 0.5).max(0.0);
+                let dy = ((y - cy).abs() - 0.5).max(0.0);
+                dx.hypot(dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Steps between every free cell and `from` along the maze (4-neighbour moves), `None`
     /// for walls and cells it cannot reach.
     pub fn cell_distances(&self, from: (usize, usize)) -> Vec<Vec<Option<usize>>> {

@@ -2,7 +2,7 @@
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{MapName, PointMap};
-use crate::env::{Env, Planar, Scene, Step};
+use crate::env::{BallIsClear, Env, Planar, SampleBall, Scene, Step};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Mutex;
@@ -12,6 +12,15 @@ pub const SUCCESS_DISTANCE: f64 = 0.45;
 
 /// Speed limit applied to each velocity component before a step (`PointEnv.step`'s ±5).
 pub const MAX_SPEED: f64 = 5.0;
+
+/// Duration of one step, seconds (`point.xml`'s timestep; one `mj_step` per step).
+pub const TIMESTEP: f64 = 0.01;
+
+/// Radius of the point mass (`particle_geom`'s size in `point.xml`).
+pub const RADIUS: f64 = 0.1;
+
+/// Draws of a start in B_ε(τ_K) before one clear of the walls is taken; then τ_K itself.
+const BALL_DRAWS: usize = 16;
 
 /// The whole state of the point: position and velocity, and the constraint solver's warm
 /// start, which MuJoCo carries from one step to the next (the ball always touches the floor,
@@ -189,8 +198,72 @@ impl Env for PointMaze {
         2
     }
 
+    /// Balls measure the position (x, y) alone: a goal B_ε(τ_T) or an activation set is
+    /// reached at any velocity.
+    fn ball_dims(&self) -> usize {
+        2
+    }
+
+    /// The fastest step: [`MAX_SPEED`] for the model's 0.01 s.
+    fn step_reach(&self) -> f32 {
+        (MAX_SPEED * TIMESTEP) as f32
+    }
+
+    /// The goal and gymnasium-robotics' success distance, in position.
+    fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+        Some((
+            self.goal.map(|g| g as f32).to_vec(),
+            SUCCESS_DISTANCE as f32,
+        ))
+    }
+
+    fn ball_starts(&self) -> Option<&dyn SampleBall<PointState>> {
+        Some(self)
+    }
+
+    fn clear_balls(&self) -> Option<&dyn BallIsClear<PointState>> {
+        Some(self)
+    }
+
     fn obs_names(&self) -> Vec<String> {
         ["x", "y", "vx", "vy"].map(String::from).to_vec()
+    }
+}
+
+impl SampleBall<PointState> for PointMaze {
+    /// A position uniform in the disc of radius `radius` around the centre's (r = radius·√u,
+    /// angle uniform), redrawn while the point would overlap a wall (at most 16 draws, then
+    /// the centre's position); the centre's velocity and warm start. (A first choice, not
+    /// yet measured against random velocities or archived states in the ball.)
+    fn sample_ball(
+        &self,
+        center: &PointState,
+        radius: f32,
+        rng: &mut crate::rng::Rng,
+    ) -> PointState {
+        use rand::Rng as _;
+        for _ in 0..BALL_DRAWS {
+            let r = f64::from(radius) * rng.random::<f64>().sqrt();
+            let phi = std::f64::consts::TAU * rng.random::<f64>();
+            let xy = [
+                center.qpos[0] + r * phi.cos(),
+                center.qpos[1] + r * phi.sin(),
+            ];
+            if self.map.clearance(xy) >= RADIUS {
+                return PointState {
+                    qpos: xy,
+                    ..*center
+                };
+            }
+        }
+        *center
+    }
+}
+
+impl BallIsClear<PointState> for PointMaze {
+    /// No wall within `radius` + the point's radius of the centre's position.
+    fn ball_is_clear(&self, center: &PointState, radius: f32) -> bool {
+        self.map.clearance(center.qpos) >= f64::from(radius) + RADIUS
     }
 }
 
@@ -199,6 +272,12 @@ impl Planar for PointMaze {
     fn point(&self, s: &PointState) -> (f32, f32) {
         let (w, h) = (self.map.cols() as f64, self.map.rows() as f64);
         ((s.qpos[0] + w / 2.0) as f32, (s.qpos[1] + h / 2.0) as f32)
+    }
+
+    /// A ball's centre (x, y), shifted as [`Planar::point`] shifts positions.
+    fn ball_point(&self, center: &[f32]) -> (f32, f32) {
+        let (w, h) = (self.map.cols() as f32, self.map.rows() as f32);
+        (center[0] + w / 2.0, center[1] + h / 2.0)
     }
 
     fn scene(&self) -> Scene {

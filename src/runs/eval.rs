@@ -149,12 +149,12 @@ pub fn eval_chain(
         episodes,
         seed,
     };
-    let (rows, rollout_paths, scene) = job.env.visit(&job.maze, work)?;
+    let (rows, rollout_paths, circles, scene) = job.env.visit(&job.maze, work)?;
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
     let picture = PictureData {
         rollout_paths,
-        circles: ball_circles(&chain),
+        circles,
         ..PictureData::default()
     };
     Ok(ChainEval {
@@ -181,7 +181,12 @@ struct EvalOn<'a> {
 }
 
 impl Visit for EvalOn<'_> {
-    type Output = (Vec<EvalEpisode>, Vec<Vec<(f32, f32)>>, Scene);
+    type Output = (
+        Vec<EvalEpisode>,
+        Vec<Vec<(f32, f32)>>,
+        Vec<((f32, f32), f32)>,
+        Scene,
+    );
 
     fn on<E: Planar>(self, env: E) -> Result<Self::Output> {
         let manifest = self.chain_dir.join("manifest.toml");
@@ -192,7 +197,7 @@ impl Visit for EvalOn<'_> {
             .iter()
             .map(|r| r.iter().map(|s| env.point(s)).collect())
             .collect();
-        Ok((rows, points, env.scene()))
+        Ok((rows, points, ball_circles(&env, self.chain), env.scene()))
     }
 }
 

@@ -169,7 +169,7 @@ impl<E: Planar> PbcsRun<E> {
         let picture = PictureData {
             tau_paths: vec![xy(&tau)],
             rollout_paths: rollouts.iter().map(|r| xy(r)).collect(),
-            circles: ball_circles(&phase2.chain),
+            circles: ball_circles(&env, &phase2.chain),
             ..PictureData::default()
         };
         Ok(PbcsRun {
@@ -277,17 +277,12 @@ impl RunRecord {
     }
 }
 
-/// The activation balls of `chain` as drawn circles.
-pub(crate) fn ball_circles(chain: &SkillChain) -> Vec<((f32, f32), f32)> {
+/// The activation balls of `chain` as drawn over `env` ([`Planar::ball_point`]).
+pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32, f32), f32)> {
     chain
         .skills
         .iter()
-        .map(|s| {
-            (
-                (s.activation.center[0], s.activation.center[1]),
-                s.activation.radius,
-            )
-        })
+        .map(|s| (env.ball_point(&s.activation.center), s.activation.radius))
         .collect()
 }
 
