@@ -85,24 +85,23 @@ pub trait Env {
     /// One step from `state` with `action`. Pure: the same inputs give the same output.
     fn step(&self, state: &Self::State, action: &[f32]) -> Step<Self::State>;
 
-    /// How many leading components of the observation phase 1's archive bins on (all of
-    /// them by default: the maze's and the rooms' observations are positions). An environment
-    /// whose observation also holds velocities bins on its position alone, as the paper bins
-    /// the maze: bins over velocities too would give nearly every state a bin of its own.
-    fn archive_dims(&self) -> usize {
+    /// How many leading components of the observation are the position: all of them by
+    /// default (the maze's and the rooms' observations are positions), fewer for an
+    /// environment that also observes velocities. Phase 1's archive bins on the position
+    /// (over velocities too, nearly every state would have a bin of its own), and PBCS's balls
+    /// measure it: the goals B_ε(τ_T), the activation sets A_i, the success region and τ's
+    /// length for the path limits, reached or measured whatever the velocity.
+    fn position_dims(&self) -> usize {
         self.obs_dim()
     }
 
-    /// How many leading components of the observation PBCS's balls measure: the goals
-    /// B_ε(τ_T), the activation sets A_i, the success region, and τ's length for the path
-    /// limits. All of them by default (the maze's and the rooms' observations are positions);
-    /// the position alone for an environment that also observes velocities, whose balls are
-    /// then balls in position, whatever the velocity.
-    fn ball_dims(&self) -> usize {
-        self.obs_dim()
+    /// The position part of an observation `obs` ([`Env::position_dims`], at least one
+    /// component).
+    fn position<'o>(&self, obs: &'o [f32]) -> &'o [f32] {
+        &obs[..self.position_dims().clamp(1, obs.len())]
     }
 
-    /// How far one step can move the observation's ball-measured part ([`Env::ball_dims`]),
+    /// How far one step can move the position ([`Env::position`]),
     /// which turns a path length into steps for PBCS's path limits: by default the smallest
     /// action bound (an action of the maze and the rooms is a displacement); an environment
     /// whose actions are forces says how far its fastest step goes.
@@ -222,8 +221,8 @@ pub trait Planar: Env {
     /// The picture's frame: extent, walls, target, start.
     fn scene(&self) -> Scene;
 
-    /// Where a ball centred at `center` (the observation components balls measure,
-    /// [`Env::ball_dims`]: an activation set) is drawn: (`center[0]`, `center[1]`) unless the
+    /// Where a ball centred at `center` (a position, [`Env::position`]: an activation set) is
+    /// drawn: (`center[0]`, `center[1]`) unless the
     /// environment draws its positions elsewhere.
     fn ball_point(&self, center: &[f32]) -> (f32, f32) {
         (center[0], center[1])

@@ -1,7 +1,7 @@
 //! Phase 1: explore until solved (the paper's appendix algorithm "Exploration algorithm").
 //!
 //! An [`Archive`] keeps every visited non-terminal state, grouped in square bins of side 0.05
-//! (over the observation's first [`Env::archive_dims`] components: the position).
+//! (over the position part of the observation, [`Env::position`]).
 //! Each bin has a usage counter c_b and each state a usage counter c_s, all starting at 0.
 //! One iteration:
 //!
@@ -329,8 +329,7 @@ pub fn explore<E: Env>(
     let mut action = vec![0.0; env.action_dim()];
     let s0 = env.start();
     env.observe(&s0, &mut obs);
-    let binned = env.archive_dims().clamp(1, obs.len());
-    let mut archive = Archive::new(s0, &obs[..binned], env.action_dim(), config.bin_side);
+    let mut archive = Archive::new(s0, env.position(&obs), env.action_dim(), config.bin_side);
     for steps in 1..=config.budget {
         let chosen = archive.select(rng);
         random_action(env, rng, &mut action);
@@ -350,7 +349,7 @@ pub fn explore<E: Env>(
         }
         if !step.terminal && step.state != *archive.state(chosen) {
             env.observe(&step.state, &mut obs);
-            archive.insert(step.state, &obs[..binned], chosen, &action);
+            archive.insert(step.state, env.position(&obs), chosen, &action);
         }
         if steps % 65_536 == 0 {
             progress(steps, archive.len());

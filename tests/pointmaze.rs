@@ -164,7 +164,7 @@ fn observations_and_pictures_follow_the_state() {
     }
 }
 
-/// Phase 1 bins the point's position alone (`Env::archive_dims`): the archive's bins are the
+/// Phase 1 bins the point's position alone (`Env::position_dims`): the archive's bins are the
 /// distinct 0.05-squares of its states' positions, whatever their velocities; and the
 /// trajectory it returns replays exactly from the start under its actions (the whole state is
 /// what the archive holds).

@@ -235,10 +235,7 @@ impl From<Phase2Config> for FlatPhase2 {
             retargets: i.dead_walk.map_or(0, |d| d.retargets),
             fast_tests: i.fast_tests,
             verify_episodes: i.verify_skills.unwrap_or(0),
-            warm_start: c.inputs
-                == InputMode::GoalRelative {
-                    init: SkillInit::Warm,
-                },
+            warm_start: c.warm_start(),
             path_limit,
             test_path_limit,
             chain_verify_episodes: i.chain_check.map_or(0, |v| v.episodes),

@@ -45,10 +45,9 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
-/// The part of an observation `obs` of `env` that its balls measure ([`Env::ball_dims`]): a
-/// ball's centre.
+/// A ball's centre at the observation `obs` of `env`: its position ([`Env::position`]).
 pub fn ball_center<E: Env>(env: &E, obs: &[f32]) -> Vec<f32> {
-    obs[..env.ball_dims().clamp(1, obs.len())].to_vec()
+    env.position(obs).to_vec()
 }
 
 /// The shaped reward of a step that reaches the goal (the paper's 10).
@@ -168,8 +167,7 @@ impl Inputs {
     }
 
     /// The inputs of a skill aiming at `goal` in `env`: observations relative to the goal's
-    /// centre in the components its balls measure, the others ([`Env::ball_dims`] on: a
-    /// velocity) as they are.
+    /// centre in the position ([`Env::position`]), the rest (a velocity) as it is.
     pub fn for_goal<E: Env>(env: &E, goal: &Goal) -> Self {
         let mut origin = goal.center.clone();
         origin.resize(env.obs_dim(), 0.0);

@@ -23,8 +23,8 @@ pub struct StepCounts {
     pub test: u64,
 }
 
-/// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in the observation's
-/// components balls measure, [`Env::ball_dims`]).
+/// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in position,
+/// [`Env::position`]).
 fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
     let obs: Vec<Vec<f32>> = states
         .iter()
@@ -34,10 +34,9 @@ fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
             o
         })
         .collect();
-    let d = env.ball_dims().clamp(1, env.obs_dim());
     let mut lengths = vec![0.0; obs.len()];
     for k in (0..obs.len().saturating_sub(1)).rev() {
-        lengths[k] = lengths[k + 1] + dist(&obs[k][..d], &obs[k + 1][..d]);
+        lengths[k] = lengths[k + 1] + dist(env.position(&obs[k]), env.position(&obs[k + 1]));
     }
     lengths
 }

@@ -192,15 +192,10 @@ impl Env for PointMaze {
         }
     }
 
-    /// Phase 1 bins on the position (x, y) alone: over velocities too, nearly every state had
-    /// a bin of its own (`results/dev/issue35/`).
-    fn archive_dims(&self) -> usize {
-        2
-    }
-
-    /// Balls measure the position (x, y) alone: a goal B_ε(τ_T) or an activation set is
-    /// reached at any velocity.
-    fn ball_dims(&self) -> usize {
+    /// The position (x, y): phase 1 bins on it (binning the velocity too, nearly every state
+    /// had a bin of its own, `results/dev/issue35/`), and a goal B_ε(τ_T) or an activation
+    /// set is reached at any velocity.
+    fn position_dims(&self) -> usize {
         2
     }
 
