@@ -1,4 +1,6 @@
-"""A chain of skills saved by ``pbcs run``, as a policy for the Python maze."""
+"""A chain of skills saved by ``pbcs run``, as a policy: for the Python maze, or for any
+environment's observations (:mod:`pbcs.pointmaze` runs a PointMaze chain in
+gymnasium-robotics)."""
 
 import numpy as np
 
@@ -35,6 +37,19 @@ class Chain:
         return self._core.maze
 
     @property
+    def env(self):
+        """The environment the chain was built for, by its registry name (``maze``,
+        ``rooms``, ``pointmaze_medium``, ...)."""
+        return self._core.env
+
+    @property
+    def pointmaze(self):
+        """For a chain of PointMaze: ``(gym_id, start_cell, goal_cell, time_limit)`` of its
+        task in gymnasium-robotics (cells as (row, column)); None otherwise. See
+        :mod:`pbcs.pointmaze` to run it there."""
+        return self._core.pointmaze
+
+    @property
     def active_skill(self):
         """The skill that chose the last action."""
         return self._core.active_skill
@@ -44,7 +59,8 @@ class Chain:
         self._core.reset()
 
     def act(self, obs):
-        """The action (float32, the environment's units) at observation ``obs``."""
+        """The action (float32, the environment's units) at observation ``obs`` (the
+        environment's whole observation: (x, y) in the maze, (x, y, vx, vy) in PointMaze)."""
         return self._core.act(obs)
 
     def make_env(self, **kwargs):

@@ -1,6 +1,6 @@
 //! A saved chain of skills as a policy.
 
-use crate::{action_of, count, invalid, py_err, rgb, state_of};
+use crate::{count, invalid, py_err, rgb, state_of};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use pbcs::config::PbcsJob;
@@ -22,10 +22,71 @@ use std::path::PathBuf;
 pub(crate) struct ChainCore {
     chain: SkillChain,
     job: PbcsJob,
-    maze: Maze,
+    /// The maze of a maze chain; None for another environment (acting needs no environment).
+    maze: Option<Maze>,
     dir: PathBuf,
     active: usize,
+    /// The policies' input and output sizes (the environment's observation and action).
+    dims: (usize, usize),
     ws: Workspace,
+}
+
+impl ChainCore {
+    /// The chain's maze, or a `ValueError` naming the environment it was built for.
+    fn the_maze(&self) -> PyResult<&Maze> {
+        self.maze.as_ref().ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "{}: a chain of env = \"{}\", not of the maze (act on observations of that \
+                 environment instead)",
+                self.dir.join("manifest.toml").display(),
+                self.job.env.name()
+            ))
+        })
+    }
+}
+
+/// A PointMaze task as Python sees it: gymnasium-robotics' id, the start and goal cells (row,
+/// column), the time limit.
+type PointTask = (String, (usize, usize), (usize, usize), usize);
+
+/// `value` as `n` finite numbers, or a `ValueError` naming `field` and saying what it is.
+fn finite_floats(
+    value: &Bound<'_, PyAny>,
+    field: &str,
+    n: usize,
+    what: &str,
+) -> PyResult<Vec<f32>> {
+    let v: Vec<f32> = value
+        .extract()
+        .map_err(|_| invalid(field, format!("must be a sequence of {n} numbers ({what})")))?;
+    if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+        return Err(invalid(
+            field,
+            format!("must be {n} finite numbers ({what}), got {v:?}"),
+        ));
+    }
+    Ok(v)
+}
+
+/// The input and output sizes every skill of `chain` shares, or an error naming the skill
+/// that differs.
+fn shared_dims(chain: &SkillChain, manifest: &std::path::Path) -> PyResult<(usize, usize)> {
+    let dims = |i: usize| {
+        let sizes = chain.skills[i].policy.sizes();
+        (sizes[0], sizes[sizes.len() - 1])
+    };
+    let first = dims(0);
+    match (1..chain.skills.len()).find(|&i| dims(i) != first) {
+        Some(i) => Err(PyValueError::new_err(format!(
+            "{}: skill {i} takes {} inputs and gives {} actions, skill 0 {} and {}",
+            manifest.display(),
+            dims(i).0,
+            dims(i).1,
+            first.0,
+            first.1
+        ))),
+        None => Ok(first),
+    }
 }
 
 #[pymethods]
@@ -33,27 +94,28 @@ impl ChainCore {
     #[new]
     fn new(dir: PathBuf) -> PyResult<Self> {
         let kernel = Kernel::from_env().map_err(py_err)?;
-        let (job, maze, chain) = pbcs::runs::load_saved_chain(&dir, kernel).map_err(py_err)?;
+        let (job, chain) = pbcs::runs::load_saved_job(&dir, kernel).map_err(py_err)?;
+        let manifest = dir.join("manifest.toml");
         if chain.skills.is_empty() {
             return Err(PyValueError::new_err(format!(
                 "{}: the chain has no skill",
-                dir.join("manifest.toml").display()
+                manifest.display()
             )));
         }
-        for (i, s) in chain.skills.iter().enumerate() {
-            if s.policy.sizes()[0] != 2 || s.policy.sizes().last() != Some(&2) {
-                return Err(PyValueError::new_err(format!(
-                    "{}: skill {i} is not a maze policy (2 inputs, 2 outputs)",
-                    dir.join("manifest.toml").display()
-                )));
-            }
-        }
+        let maze = if job.env.is_maze() {
+            let (_, maze, _) = pbcs::runs::load_saved_chain(&dir, kernel).map_err(py_err)?;
+            Some(maze)
+        } else {
+            None
+        };
+        let dims = shared_dims(&chain, &manifest)?;
         Ok(ChainCore {
             chain,
             job,
             maze,
             dir,
             active: 0,
+            dims,
             ws: Workspace::with_kernel(kernel),
         })
     }
@@ -70,14 +132,10 @@ impl ChainCore {
         py: Python<'py>,
         obs: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        let raw = action_of(obs).map_err(|_| {
-            invalid(
-                "obs",
-                "must be a sequence of two numbers (the x and y coordinates)",
-            )
-        })?;
+        let (n, m) = self.dims;
+        let raw = finite_floats(obs, "obs", n, "the environment's observation")?;
         self.active = self.chain.active_skill(self.active, &raw);
-        let (mut o, mut a) = ([0.0f32; 2], [0.0f32; 2]);
+        let (mut o, mut a) = (vec![0.0f32; n], vec![0.0f32; m]);
         self.chain
             .act(self.active, &raw, &mut o, &mut a, &mut self.ws);
         Ok(PyArray1::from_slice(py, &a))
@@ -107,8 +165,24 @@ impl ChainCore {
 
     /// The maze the chain was built for: `(size, layout)`.
     #[getter]
-    fn maze(&self) -> (usize, u64) {
-        (self.maze.size(), self.maze.config().seed)
+    fn maze(&self) -> PyResult<(usize, u64)> {
+        let maze = self.the_maze()?;
+        Ok((maze.size(), maze.config().seed))
+    }
+
+    /// The environment's name in the registry (`maze`, `rooms`, `pointmaze_medium`, ...).
+    #[getter]
+    fn env(&self) -> &'static str {
+        self.job.env.name()
+    }
+
+    /// For a chain of PointMaze: gymnasium-robotics' id, the start and goal cells (row,
+    /// column) of the task and the env's time limit; None for another environment.
+    #[getter]
+    fn pointmaze(&self) -> Option<PointTask> {
+        let map = self.job.env.point_map()?;
+        let (start, goal) = pbcs::pointmaze::PointMap::named(map).farthest_cells();
+        Some((map.gym_id(), start, goal, map.time_limit()))
     }
 
     /// The run seed of the job that built the chain.
@@ -144,7 +218,7 @@ impl ChainCore {
             .transpose()?
             .unwrap_or(self.job.seed);
         let starts = pbcs::env::evaluation_starts(
-            &self.maze,
+            self.the_maze()?,
             self.job.phase2.epsilon,
             n,
             &pbcs::rng::Seeds::new(seed),
@@ -166,14 +240,14 @@ impl ChainCore {
         max_steps: Option<i64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let s = match start {
-            Some((x, y)) => state_of(&self.maze, "start", x, y)?,
-            None => self.maze.start(),
+            Some((x, y)) => state_of(self.the_maze()?, "start", x, y)?,
+            None => self.the_maze()?.start(),
         };
         let m = match max_steps {
             Some(m) => count("max_steps", m)? as usize,
             None => self.job.phase2.eval_max_steps,
         };
-        let r = self.chain.run(&self.maze, s, m);
+        let r = self.chain.run(self.the_maze()?, s, m);
         let flat: Vec<f32> = r.states.iter().flat_map(|p| [p.x, p.y]).collect();
         let d = PyDict::new(py);
         d.set_item(
@@ -254,7 +328,7 @@ impl ChainCore {
                 .collect(),
             ..MazePicture::default()
         };
-        rgb(py, &self.maze, &picture, size)
+        rgb(py, self.the_maze()?, &picture, size)
     }
 
     fn __len__(&self) -> usize {

@@ -4,6 +4,8 @@ two rooms, the same run as the committed row of ``experiments/rooms.toml`` for t
 import csv
 from pathlib import Path
 
+import numpy as np
+
 import pbcs
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,19 +29,33 @@ def test_a_run_on_the_rooms_is_the_committed_rows_run():
     assert record["skills"] == int(row["skills"])
 
 
-def test_a_rooms_run_writes_its_folder_and_its_chain_is_refused_as_a_maze_chain(tmp_path):
+def test_a_rooms_run_writes_its_folder_and_its_chain_acts_on_rooms_observations(tmp_path):
     out = tmp_path / "run"
     record = pbcs.run(env="rooms", seed=1, out=str(out))
     assert (out / "record.csv").exists() and (out / "chain" / "manifest.toml").exists()
     assert 'env = "rooms"' in (out / "chain" / "run.toml").read_text()
     assert record["chain"] == out / "chain"
-    # Chain (the Python policy) acts on the maze's observations only: refused, naming env.
-    try:
-        pbcs.load_chain(out / "chain")
-    except ValueError as e:
-        assert "rooms" in str(e) and "pbcs eval" in str(e)
-    else:
-        raise AssertionError("a rooms chain loaded as a maze chain")
+    # Chain acts on any environment's observations; what needs the maze is refused, naming
+    # the environment.
+    chain = pbcs.load_chain(out / "chain")
+    assert chain.env == "rooms" and chain.pointmaze is None
+    chain.reset()
+    action = chain.act([0.5, 0.5])
+    assert action.shape == (2,) and np.all(np.isfinite(action))
+    for call in (lambda: chain.maze, lambda: chain.core_rollout(), lambda: chain.render()):
+        try:
+            call()
+        except ValueError as e:
+            assert "rooms" in str(e) and "not of the maze" in str(e)
+        else:
+            raise AssertionError("a rooms chain answered as a maze chain")
+    for bad in ([0.5], [0.5, float("nan")], "xy"):
+        try:
+            chain.act(bad)
+        except ValueError as e:
+            assert "obs" in str(e)
+        else:
+            raise AssertionError(f"act({bad!r}) was accepted")
 
 
 def test_a_configs_maze_is_kept_unless_size_or_layout_is_given(tmp_path):

@@ -281,6 +281,16 @@ impl SkillChain {
                     ),
                 ));
             }
+            if s.activation.center.len() != env.position_dims() {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "skills[{i}].center: has {} values, the environment's positions {}",
+                        s.activation.center.len(),
+                        env.position_dims()
+                    ),
+                ));
+            }
             if let crate::nn::Head::Tanh(bounds) = s.policy.head() {
                 for (j, (scale, bound)) in s.inputs.action_scale.iter().zip(bounds).enumerate() {
                     let (reach, limit) = (scale * bound, env.action_bound(j));
@@ -358,8 +368,21 @@ impl ManifestSkill {
         }
         let (input, output) = (self.sizes[0], self.sizes[self.sizes.len() - 1]);
         let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);
+        // The activation ball lies in the position part of the observation (its first
+        // `Env::position_dims` values: all of the maze's, x and y of PointMaze's).
+        if self.center.is_empty() || self.center.len() > input {
+            return Err((
+                "center",
+                format!(
+                    "has {} values, the network (sizes {:?}) needs 1 to {input} (the \
+                     observation's position part)",
+                    self.center.len(),
+                    self.sizes
+                ),
+            ));
+        }
         for (field, values, want, positive) in [
-            ("center", Some(&self.center), input, false),
+            ("center", Some(&self.center), self.center.len(), false),
             ("origin", Some(&self.origin), input, false),
             ("action_scale", Some(&self.action_scale), output, true),
             ("action_bounds", bounds, output, true),

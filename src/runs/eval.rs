@@ -94,8 +94,10 @@ pub fn load_saved_chain(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Ma
     Ok((job, maze, chain))
 }
 
-/// A saved chain's job and chain (the checks of [`load_saved_chain`] but the environment's).
-fn load_saved_job(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, SkillChain)> {
+/// A saved chain's job and chain, of any environment: the checks of [`load_saved_chain`] but
+/// the environment's (acting from given observations needs no environment; a chain of
+/// PointMaze loads without MuJoCo).
+pub fn load_saved_job(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, SkillChain)> {
     let run_dir = match chain_dir.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         Some(_) => std::path::PathBuf::from("."),

@@ -13,7 +13,9 @@ mod explore;
 mod pbcs;
 mod train;
 
-pub use eval::{eval_chain, evaluate_chain, load_saved_chain, ChainEval, EvalEpisode, CHAIN_JOB};
+pub use eval::{
+    eval_chain, evaluate_chain, load_saved_chain, load_saved_job, ChainEval, EvalEpisode, CHAIN_JOB,
+};
 use explore::write_trajectory_csv;
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
 use pbcs::ball_circles;

@@ -258,3 +258,37 @@ fn a_freshly_saved_chain_loads_and_policies_must_fit_the_maze() {
         .to_string();
     assert_names(&err, "skills[1].action_scale");
 }
+
+/// A chain of PointMaze's shape: networks of 4 inputs (x, y, vx, vy), activation balls in the
+/// position (2 values). Such a chain saved by `pbcs run --env pointmaze_umaze` did not load
+/// ("center has 2 values, the network needs 4") before the centre was allowed to be the
+/// position part; a centre longer than the input, or empty, is still refused.
+#[test]
+fn a_chain_whose_balls_lie_in_the_position_part_saves_and_loads() {
+    let mut rng = Seeds::new(0).stream(Stream::Init);
+    let chain = SkillChain {
+        skills: vec![Skill {
+            policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
+            activation: Ball {
+                center: vec![-1.0, 1.0],
+                radius: 0.25,
+            },
+            start_index: 0,
+            target_index: 9,
+            inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
+        }],
+        kernel: Kernel::detect(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    chain.save(dir.path()).unwrap();
+    assert_eq!(
+        SkillChain::load(dir.path(), Kernel::detect()).unwrap(),
+        chain
+    );
+    let text = std::fs::read_to_string(dir.path().join("manifest.toml")).unwrap();
+    for bad in ["center = [-1.0, 1.0, 0.0, 0.0, 0.0]", "center = []"] {
+        let err = load_error(dir.path(), &text, "center = [-1.0, 1.0]", bad);
+        assert_names(&err, "skills[0].center");
+        assert!(err.contains("1 to 4"), "{err}");
+    }
+}

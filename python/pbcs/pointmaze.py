@@ -1,0 +1,75 @@
+"""A PBCS chain of PointMaze judged by gymnasium-robotics itself (issue 35's protocol).
+
+The chain (``pbcs run --env pointmaze_<map>``, built with ``--features mujoco``) acts in
+gymnasium-robotics' own ``PointMaze_<Map>-v3`` with ``continuing_task=False``: every episode
+starts from the env's own reset for the task's cells (start and goal drawn within ±0.25 of
+the cells' centres, at rest) and runs within the env's time limit; success is the env's
+``info["success"]`` on the episode's last step. The chain sees ``obs["observation"]`` =
+(x, y, vx, vy) and nothing else: it learned one fixed task, whose success region is the one
+every goal the reset may draw agrees on (``pbcs run --env pointmaze_<map>``: within 0.45 of
+every goal of the square of half-side 0.25 around the goal cell's centre), so it needs no
+goal.
+
+Needs ``gymnasium-robotics`` (and ``mujoco``) beside this package; nothing else here does.
+"""
+
+import numpy as np
+
+import gymnasium as gym
+
+
+class FixedCells(gym.Wrapper):
+    """Every reset asks PointMaze for the same start and goal cells (with its own ±0.25
+    noise)."""
+
+    def __init__(self, env, start, goal):
+        super().__init__(env)
+        self.cells = {"reset_cell": np.array(start), "goal_cell": np.array(goal)}
+
+    def reset(self, *, seed=None, options=None):
+        return self.env.reset(seed=seed, options=dict(self.cells))
+
+
+def make_env(chain, **kwargs):
+    """gymnasium-robotics' PointMaze of ``chain``'s task, ``continuing_task=False``, resetting
+    to its cells (``kwargs`` go to ``gym.make``)."""
+    task = chain.pointmaze
+    if task is None:
+        raise ValueError(f"a chain of env = {chain.env!r}, not of PointMaze")
+    try:
+        import gymnasium_robotics
+    except ImportError as e:
+        raise ImportError(
+            "pbcs.pointmaze needs gymnasium-robotics: pip install gymnasium-robotics==1.4.2"
+        ) from e
+    gym.register_envs(gymnasium_robotics)
+    gym_id, start, goal, _ = task
+    kwargs.setdefault("continuing_task", False)
+    return FixedCells(gym.make(gym_id, **kwargs), start, goal)
+
+
+def evaluate(chain, episodes=100, seed=0, env=None):
+    """``episodes`` episodes of ``chain`` in gymnasium-robotics (:func:`make_env`), the first
+    reset seeded with ``seed``. Returns ``successes``, ``episodes`` and each episode's
+    ``success`` and ``steps``."""
+    if episodes < 1:
+        raise ValueError(f"invalid `episodes`: must be at least 1, got {episodes}")
+    env = env or make_env(chain)
+    success, steps = [], []
+    for e in range(episodes):
+        obs, info = env.reset(seed=seed if e == 0 else None)
+        chain.reset()
+        n = 0
+        while True:
+            obs, _, terminated, truncated, info = env.step(chain.act(obs["observation"]))
+            n += 1
+            if terminated or truncated:
+                break
+        success.append(bool(info["success"]))
+        steps.append(n)
+    return {
+        "successes": int(sum(success)),
+        "episodes": episodes,
+        "success": np.array(success),
+        "steps": np.array(steps),
+    }
