@@ -112,18 +112,34 @@ impl EnvName {
         match self {
             EnvName::Maze => work.on(Maze::new(maze)?),
             EnvName::Rooms => work.on(TwoRooms),
-            EnvName::PointmazeUmaze => point_maze(MapName::UMaze, work),
-            EnvName::PointmazeOpen => point_maze(MapName::Open, work),
-            EnvName::PointmazeMedium => point_maze(MapName::Medium, work),
-            EnvName::PointmazeLarge => point_maze(MapName::Large, work),
+            EnvName::PointmazeUmaze
+            | EnvName::PointmazeOpen
+            | EnvName::PointmazeMedium
+            | EnvName::PointmazeLarge => point_maze(self.point_map().expect("a PointMaze"), work),
+        }
+    }
+
+    /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
+    /// the map, the task's cells and gymnasium-robotics' id and time limit are in
+    /// [`crate::pointmaze::model`].
+    pub fn point_map(self) -> Option<MapName> {
+        match self {
+            EnvName::Maze | EnvName::Rooms => None,
+            EnvName::PointmazeUmaze => Some(MapName::UMaze),
+            EnvName::PointmazeOpen => Some(MapName::Open),
+            EnvName::PointmazeMedium => Some(MapName::Medium),
+            EnvName::PointmazeLarge => Some(MapName::Large),
         }
     }
 }
 
-/// A PointMaze task ([`crate::pointmaze::PointMaze::named`]).
+/// A PointMaze task ([`crate::pointmaze::PointMaze::named`]) whose success holds for every
+/// goal gymnasium-robotics' reset may draw ([`crate::pointmaze::GOAL_NOISE`]): one fixed chain
+/// is judged there from the env's own resets, which move the goal up to 0.25 along each axis.
 #[cfg(feature = "mujoco")]
 fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
-    work.on(crate::pointmaze::PointMaze::named(map)?)
+    use crate::pointmaze::{PointMaze, GOAL_NOISE};
+    work.on(PointMaze::named(map)?.for_goal_noise(GOAL_NOISE)?)
 }
 
 /// Without MuJoCo: refused, saying how to build with it.

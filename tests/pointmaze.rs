@@ -3,7 +3,7 @@
 //! gymnasium-robotics' own environment is `python/tests/test_pointmaze.py`.
 
 use pbcs::env::{Env, Planar};
-use pbcs::pointmaze::{MapName, PointMaze, PointState, SUCCESS_DISTANCE};
+use pbcs::pointmaze::{MapName, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE};
 use strum::IntoEnumIterator;
 
 fn medium() -> PointMaze {
@@ -129,6 +129,62 @@ fn reward_success_and_termination_agree() {
         assert_eq!(step.reward, if expect { 1.0 } else { 0.0 });
     }
     assert_eq!(SUCCESS_DISTANCE, 0.45);
+}
+
+/// With goal noise, success holds exactly where every goal of the reset's square (half-side
+/// 0.25 around the centre) is within 0.45: checked against the goals themselves (a grid of
+/// 41 × 41 goals over the square, corners included), at points around the centre.
+#[test]
+fn success_under_goal_noise_is_success_for_every_goal_of_the_square() {
+    let plain = PointMaze::named(MapName::UMaze).unwrap();
+    let sure = PointMaze::named(MapName::UMaze)
+        .unwrap()
+        .for_goal_noise(GOAL_NOISE)
+        .unwrap();
+    let [gx, gy] = sure.goal();
+    let goals: Vec<[f64; 2]> = (0..=40)
+        .flat_map(|i| (0..=40).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            let (u, v) = (i as f64 / 20.0 - 1.0, j as f64 / 20.0 - 1.0);
+            [gx + u * GOAL_NOISE, gy + v * GOAL_NOISE]
+        })
+        .collect();
+    let (mut inside, mut outside) = (0, 0);
+    for k in 0..400 {
+        let angle = k as f64 * 0.37;
+        let r = 0.002 * (k % 100) as f64;
+        let s = PointState::at_rest([gx + r * angle.cos(), gy + r * angle.sin()]);
+        let every = goals
+            .iter()
+            .all(|g| (s.qpos[0] - g[0]).hypot(s.qpos[1] - g[1]) <= SUCCESS_DISTANCE);
+        assert_eq!(sure.success(&s), every, "at {:?}", s.qpos);
+        assert!(plain.success(&s));
+        let step = sure.step(&s, &[0.0, 0.0]);
+        assert_eq!(
+            (step.terminal, step.reward > 0.0),
+            (sure.success(&step.state), sure.success(&step.state))
+        );
+        if every {
+            inside += 1
+        } else {
+            outside += 1
+        }
+    }
+    assert!(inside > 50 && outside > 50, "{inside} {outside}");
+    // The inscribed disc: 0.45 − 0.25√2 ≈ 0.096.
+    assert!((sure.sure_radius() - 0.0964466).abs() < 1e-6);
+    assert!(PointMaze::named(MapName::UMaze)
+        .unwrap()
+        .for_goal_noise(0.32)
+        .is_err());
+    assert!(PointMaze::named(MapName::UMaze)
+        .unwrap()
+        .for_goal_noise(-0.1)
+        .is_err());
+    assert!(PointMaze::named(MapName::UMaze)
+        .unwrap()
+        .for_goal_noise(f64::NAN)
+        .is_err());
 }
 
 #[test]

@@ -17,4 +17,4 @@ mod sim;
 
 pub use model::{MapName, PointMap};
 #[cfg(feature = "mujoco")]
-pub use sim::{PointMaze, PointState, MAX_SPEED, RADIUS, SUCCESS_DISTANCE};
+pub use sim::{PointMaze, PointState, GOAL_NOISE, MAX_SPEED, RADIUS, SUCCESS_DISTANCE};

@@ -10,6 +10,11 @@ use std::sync::Mutex;
 /// Distance to the goal within which an episode succeeds (`compute_reward`'s 0.45).
 pub const SUCCESS_DISTANCE: f64 = 0.45;
 
+/// How far gymnasium-robotics' reset moves the goal from its cell's centre, along each axis
+/// (`position_noise_range` 0.25 × `maze_size_scaling` 1): the goal is uniform in the square
+/// of half-side 0.25 around the centre.
+pub const GOAL_NOISE: f64 = 0.25;
+
 /// Speed limit applied to each velocity component before a step (`PointEnv.step`'s ±5).
 pub const MAX_SPEED: f64 = 5.0;
 
@@ -51,10 +56,16 @@ impl PointState {
 /// motors (actions in [−1, 1]², 0.01 s Euler steps), a sparse reward of 1 and the end of the
 /// episode within [`SUCCESS_DISTANCE`] of the goal. The task is fixed: start at rest at the
 /// centre of one cell, goal at the centre of another.
+///
+/// [`PointMaze::for_goal_noise`] makes success mean success for every goal the env's reset
+/// may draw around that centre: the task a fixed policy has to solve for gymnasium-robotics
+/// to count its episodes a success wherever the reset put the goal.
 pub struct PointMaze {
     map: PointMap,
     start: [f64; 2],
     goal: [f64; 2],
+    /// Half-side of the square of goals success must hold for (0: the goal itself).
+    goal_noise: f64,
     /// The simulator the pure step borrows: every step sets the whole state first, so what a
     /// previous step left in it does not matter.
     data: Mutex<MjData<Box<MjModel>>>,
@@ -66,6 +77,7 @@ impl std::fmt::Debug for PointMaze {
             .field("map", &self.map)
             .field("start", &self.start)
             .field("goal", &self.goal)
+            .field("goal_noise", &self.goal_noise)
             .finish()
     }
 }
@@ -102,9 +114,37 @@ impl PointMaze {
         Ok(PointMaze {
             start: map.cell_xy(start),
             goal: goal_xy,
+            goal_noise: 0.0,
             map,
             data: Mutex::new(data),
         })
+    }
+
+    /// The same environment whose success (reward, end of episode) holds only where the point
+    /// is within [`SUCCESS_DISTANCE`] of every goal in the square of half-side `noise` around
+    /// the goal: the farthest such goal is a corner, so success is
+    /// ‖(|Δx| + noise, |Δy| + noise)‖ ≤ 0.45. With [`GOAL_NOISE`], the region gymnasium-robotics'
+    /// resets all agree on: within 0.45 − 0.25√2 ≈ 0.096 of the centre diagonally, 0.124 along
+    /// the axes. `noise` = 0 is the environment itself, bit for bit.
+    /// (`tests/pointmaze.rs` checks the region.)
+    pub fn for_goal_noise(mut self, noise: f64) -> Result<PointMaze> {
+        if !(noise >= 0.0 && noise * std::f64::consts::SQRT_2 < SUCCESS_DISTANCE) {
+            return Err(Error::invalid(
+                "goal_noise",
+                format!(
+                    "must be at least 0 and leave a region every goal agrees on (below \
+                     0.45 / √2 ≈ 0.318), got {noise}"
+                ),
+            ));
+        }
+        self.goal_noise = noise;
+        Ok(self)
+    }
+
+    /// The radius of the disc around the goal where success holds for every goal of the
+    /// noise square (the whole region is a little larger along the axes).
+    pub fn sure_radius(&self) -> f64 {
+        SUCCESS_DISTANCE - self.goal_noise * std::f64::consts::SQRT_2
     }
 
     /// The map.
@@ -122,9 +162,12 @@ impl PointMaze {
         (s.qpos[0] - self.goal[0]).hypot(s.qpos[1] - self.goal[1])
     }
 
-    /// Whether the point is within [`SUCCESS_DISTANCE`] of the goal (`info["success"]`).
+    /// Whether the point is within [`SUCCESS_DISTANCE`] of the goal (`info["success"]`), or
+    /// of every goal of the noise square ([`PointMaze::for_goal_noise`]).
     pub fn success(&self, s: &PointState) -> bool {
-        self.distance_to_goal(s) <= SUCCESS_DISTANCE
+        let (dx, dy) = (s.qpos[0] - self.goal[0], s.qpos[1] - self.goal[1]);
+        let n = self.goal_noise;
+        (dx.abs() + n).hypot(dy.abs() + n) <= SUCCESS_DISTANCE
     }
 
     /// One step of `PointEnv.step` from `s`: the action clipped to [−1, 1] (in `f32`, as
@@ -204,11 +247,12 @@ impl Env for PointMaze {
         (MAX_SPEED * TIMESTEP) as f32
     }
 
-    /// The goal and gymnasium-robotics' success distance, in position.
+    /// The goal and gymnasium-robotics' success distance, in position (with goal noise, the
+    /// disc inscribed in the region every goal agrees on, [`PointMaze::sure_radius`]).
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
         Some((
             self.goal.map(|g| g as f32).to_vec(),
-            SUCCESS_DISTANCE as f32,
+            self.sure_radius() as f32,
         ))
     }
 
@@ -291,7 +335,7 @@ impl Planar for PointMaze {
             walls,
             target: (
                 self.point(&PointState::at_rest(self.goal)),
-                SUCCESS_DISTANCE as f32,
+                self.sure_radius() as f32,
             ),
             start: self.point(&self.start()),
         }
