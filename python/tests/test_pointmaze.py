@@ -11,9 +11,12 @@ feature: ``$PBCS_POINTMAZE_STEP`` names it (CI sets it); without it the test is 
 
 import os
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
 
 MAPS = ["UMaze", "Open", "Medium", "Large"]
 
@@ -126,3 +129,33 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
         same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} reset {seed}")
         checked += len(actions)
     assert checked > 3000
+
+
+def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(tmp_path):
+    """The table's number, re-made: UMaze seed 1 of experiments/pointmaze/grid.toml run again
+    from its job file (the same env steps as its row), its chain loaded in Python and judged
+    by gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as
+    the committed s1.gym.csv. Needs `pbcs` built with --features mujoco:
+    ``$PBCS_POINTMAZE_BIN`` (CI sets it); without it the test is skipped."""
+    import csv
+
+    import pbcs
+    import pbcs.pointmaze as pm
+
+    binary = os.environ.get("PBCS_POINTMAZE_BIN")
+    if not binary:
+        pytest.skip("set PBCS_POINTMAZE_BIN to `pbcs` built with --features mujoco")
+    cell = ROOT / "results/pointmaze/raw/grid/pbcs_pm-pointmaze_umaze"
+    row = next(csv.DictReader((cell / "s1.csv").open()))
+    judged = next(csv.DictReader((cell / "s1.gym.csv").open()))
+    out = tmp_path / "run"
+    subprocess.run(
+        [binary, "run", "--config", str(cell / "s1.toml"), "--out", str(out), "--quiet"],
+        check=True,
+    )
+    again = next(csv.DictReader((out / "record.csv").open()))
+    assert again["total_steps"] == row["env_steps"]
+    chain = pbcs.load_chain(out / "chain")
+    assert chain.pointmaze == ("PointMaze_UMaze-v3", (1, 1), (3, 1), 300)
+    r = pm.evaluate(chain, episodes=100, seed=1_000_001)
+    assert r["successes"] == int(judged["gym_successes"]) >= 95

@@ -1,0 +1,190 @@
+"""The practitioner's baseline of issue 35: Stable-Baselines3's SAC with HER on
+gymnasium-robotics' own PointMaze_<map>-v3 (continuing_task=False), on the fixed task of our
+experiment (start and goal cells: the two free cells farthest apart along the maze, found here
+by a breadth-first search of the env's own map, 4-neighbour moves, ties to the first pair in
+row-major order, start = the earlier cell; the same rule as src/pointmaze/model.rs).
+
+Protocol (the issue's point 4, the one PBCS's chains are judged by): every 10 000 env steps,
+100 deterministic episodes in a separate PointMaze of the same cells, from the env's own
+resets (start and goal drawn within ±0.25 of the cells' centres), within its time limit;
+success = the env's ``info["success"]`` on the last step. Training stops at the first
+evaluation with >= 95 successes, else after ``--steps`` (500 000) env steps.
+
+Settings: SB3's SAC defaults (networks 256×256, lr 3e-4, batch 256, γ = 0.99, τ = 0.005,
+buffer 1M, entropy auto) with HerReplayBuffer (4 sampled goals, strategy "future"), 1 000
+random warm-up steps, one torch thread.
+
+    python python/benches/sb3_pointmaze.py --map umaze --seeds 0-2 --out results/pointmaze/sb3
+
+Each evaluation is appended to ``<out>/sac_her-pointmaze_<map>/s<seed>.evals.csv`` as it
+happens (an interrupted run keeps them; a re-run starts that seed afresh); the finished run
+writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its wall clock
+beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of CI.
+"""
+
+import argparse
+import os
+import tempfile
+import time
+from collections import deque
+from pathlib import Path
+
+import gymnasium as gym
+import gymnasium_robotics
+import numpy as np
+
+gym.register_envs(gymnasium_robotics)
+
+MAPS = {"umaze": "UMaze", "open": "Open", "medium": "Medium", "large": "Large"}
+EVAL_EVERY = 10_000
+EVAL_EPISODES = 100
+SOLVED = 95
+
+
+def farthest_cells(maze_map):
+    """The pair of free cells farthest apart along the maze (see the module's docstring)."""
+    rows, cols = len(maze_map), len(maze_map[0])
+    free = [(i, j) for i in range(rows) for j in range(cols) if maze_map[i][j] != 1]
+    best = (-1, None, None)
+    for a in free:
+        dist = {a: 0}
+        queue = deque([a])
+        while queue:
+            i, j = queue.popleft()
+            for di, dj in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+                n = (i + di, j + dj)
+                if n in dist or not (0 <= n[0] < rows and 0 <= n[1] < cols):
+                    continue
+                if maze_map[n[0]][n[1]] == 1:
+                    continue
+                dist[n] = dist[(i, j)] + 1
+                queue.append(n)
+        for b in free:
+            if b > a and dist.get(b, -1) > best[0]:
+                best = (dist[b], a, b)
+    return best
+
+
+class FixedCells(gym.Wrapper):
+    """Every reset asks the env for the same start and goal cells (its own ±0.25 noise)."""
+
+    def __init__(self, env, start, goal):
+        super().__init__(env)
+        self.cells = {"reset_cell": np.array(start), "goal_cell": np.array(goal)}
+
+    def reset(self, *, seed=None, options=None):
+        return self.env.reset(seed=seed, options=dict(self.cells))
+
+
+def make_env(name, start, goal):
+    return FixedCells(gym.make(f"PointMaze_{name}-v3", continuing_task=False), start, goal)
+
+
+def evaluate(model, env):
+    """Successes of EVAL_EPISODES deterministic episodes in `env` (its own resets)."""
+    wins = 0
+    for _ in range(EVAL_EPISODES):
+        obs, _ = env.reset()
+        while True:
+            action, _ = model.predict(obs, deterministic=True)
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                wins += bool(info["success"])
+                break
+    return wins
+
+
+def write_atomic(path, text):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
+        f.write(text)
+    os.replace(f.name, path)
+
+
+def run(map_key, seed, steps, out):
+    import stable_baselines3
+    import torch
+    from stable_baselines3 import SAC, HerReplayBuffer
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    name = MAPS[map_key]
+    folder = out / f"sac_her-pointmaze_{map_key}"
+    row = folder / f"s{seed}.csv"
+    if row.exists():
+        return row.read_text()
+    torch.set_num_threads(1)
+    probe = gym.make(f"PointMaze_{name}-v3").unwrapped
+    length, start, goal = farthest_cells(probe.maze.maze_map)
+    env = make_env(name, start, goal)
+    env.reset(seed=seed)
+    eval_env = make_env(name, start, goal)
+    eval_env.reset(seed=1_000_000 + seed)
+    evals = folder / f"s{seed}.evals.csv"
+    folder.mkdir(parents=True, exist_ok=True)
+    evals.write_text("env_steps,successes,episodes,wall_seconds\n")
+    clock = time.perf_counter()
+    best = [0, 0]  # successes, env steps
+
+    class Evaluate(BaseCallback):
+        def _on_step(self):
+            if self.num_timesteps % EVAL_EVERY:
+                return True
+            wins = evaluate(self.model, eval_env)
+            with evals.open("a") as f:
+                f.write(f"{self.num_timesteps},{wins},{EVAL_EPISODES},"
+                        f"{time.perf_counter() - clock:.1f}\n")
+            if wins > best[0]:
+                best[:] = [wins, self.num_timesteps]
+            return wins < SOLVED
+
+    model = SAC(
+        "MultiInputPolicy",
+        env,
+        replay_buffer_class=HerReplayBuffer,
+        replay_buffer_kwargs=dict(n_sampled_goal=4, goal_selection_strategy="future"),
+        learning_starts=1_000,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
+    model.learn(total_timesteps=steps, callback=Evaluate())
+    seconds = time.perf_counter() - clock
+    solved = best[0] >= SOLVED
+    text = (
+        "library,algo,map,start_cell,goal_cell,cells_apart,seed,budget,solved,"
+        "steps_to_solve,best_successes,best_at_steps,env_steps,episodes\n"
+        f"sb3-{stable_baselines3.__version__},sac_her,pointmaze_{map_key},"
+        f"{start[0]} {start[1]},{goal[0]} {goal[1]},{length},{seed},{steps},"
+        f"{str(solved).lower()},{best[1] if solved else ''},{best[0]},{best[1]},"
+        f"{model.num_timesteps},{EVAL_EPISODES}\n"
+    )
+    write_atomic(
+        row.with_suffix(".timing.toml"),
+        f"# wall clock of model.learn with its evaluations (not deterministic)\n"
+        f"wall_seconds = {seconds:.1f}\nsteps_per_second = {model.num_timesteps / seconds:.0f}\n"
+        f"torch = \"{torch.__version__}\"\ntorch_threads = {torch.get_num_threads()}\n",
+    )
+    write_atomic(row, text)
+    return text
+
+
+def seeds(text):
+    if "-" in text:
+        a, b = text.split("-")
+        return range(int(a), int(b) + 1)
+    return [int(s) for s in text.split(",")]
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--map", choices=sorted(MAPS), required=True)
+    p.add_argument("--seeds", default="0-2", type=seeds)
+    p.add_argument("--steps", default=500_000, type=int)
+    p.add_argument("--out", default=Path("results/pointmaze/sb3"), type=Path)
+    args = p.parse_args()
+    for seed in args.seeds:
+        print(run(args.map, seed, args.steps, args.out), end="", flush=True)
+
+
+if __name__ == "__main__":
+    main()
