@@ -1,5 +1,5 @@
 //! Issue 35's learner baselines: our DDPG or TD3 alone (no PBCS) on PointMaze's sparse task,
-//! the same task PBCS's grid solves (`experiments/pointmaze/grid.toml`: start and goal cells
+//! the same task PBCS's grid solves (`experiments/pointmaze.toml`: start and goal cells
 //! farthest apart, success within 0.45 of every goal gymnasium-robotics' reset may draw; reward
 //! 1 there, and the episode ends).
 //!

@@ -83,11 +83,13 @@ impl EnvName {
         self.into()
     }
 
-    /// How titles and messages name the environment: `maze 5 (layout 0)`, `rooms`.
+    /// How titles and messages name the environment: `maze 5 (layout 0)`, `rooms`,
+    /// `PointMaze Medium`.
     pub fn label(self, maze: &MazeConfig) -> String {
-        match self {
-            EnvName::Maze => format!("maze {} (layout {})", maze.size, maze.seed),
-            other => other.name().to_string(),
+        match (self, self.point_map()) {
+            (EnvName::Maze, _) => format!("maze {} (layout {})", maze.size, maze.seed),
+            (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
+            (other, None) => other.name().to_string(),
         }
     }
 
@@ -131,6 +133,15 @@ impl EnvName {
             EnvName::PointmazeLarge => Some(MapName::Large),
         }
     }
+}
+
+/// What pictures draw of the registry's task on `map` (the same as its [`Planar::scene`],
+/// without MuJoCo): the map, the start cell and the success region of [`point_maze`].
+pub fn point_scene(map: MapName) -> crate::env::Scene {
+    use crate::pointmaze::{sure_radius, PointMap, GOAL_NOISE};
+    let m = PointMap::named(map);
+    let (start, goal) = m.farthest_cells();
+    m.scene(start, goal, sure_radius(GOAL_NOISE) as f32)
 }
 
 /// A PointMaze task ([`crate::pointmaze::PointMaze::named`]) whose success holds for every

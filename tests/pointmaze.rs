@@ -246,3 +246,16 @@ fn phase_1_bins_positions_and_its_trajectory_replays() {
     }
     assert!(env.success(&s));
 }
+
+/// Figures of committed rows draw PointMaze without MuJoCo (`pbcs::envs::point_scene`): the
+/// same scene as the registry's environment draws.
+#[test]
+fn the_scene_drawn_without_mujoco_is_the_environments() {
+    for m in MapName::iter() {
+        let env = PointMaze::named(m)
+            .unwrap()
+            .for_goal_noise(GOAL_NOISE)
+            .unwrap();
+        assert_eq!(pbcs::envs::point_scene(m), env.scene(), "{m:?}");
+    }
+}

@@ -1,7 +1,7 @@
 """PBCS's PointMaze chains judged by gymnasium-robotics itself (issue 35, point 4).
 
-For every finished run of the grid (``pbcs exp run experiments/pointmaze/grid.toml --results
-results/pointmaze``), the run is done again from its own job file (``s<seed>.toml``) with
+For every finished run of the grid (``pbcs exp run experiments/pointmaze.toml``: rows in
+``results/raw/pointmaze/<cell>/``), the run is done again from its own job file (``s<seed>.toml``) with
 ``pbcs run --config``, which saves the chain; the re-run must give the same env steps as the
 grid's row (the runs are deterministic: a difference stops the script). The chain then acts in
 gymnasium-robotics' ``PointMaze_<Map>-v3`` (``continuing_task=False``) for 100 episodes from
@@ -10,10 +10,10 @@ each within the env's time limit; success is the env's ``info["success"]``
 (:func:`pbcs.pointmaze.evaluate`, the first reset seeded with 1 000 000 + the run seed).
 Solved = at least 95 of 100.
 
-    python python/benches/pointmaze_gym.py --results results/pointmaze --pbcs <pbcs built with --features mujoco>
+    python python/benches/pointmaze_gym.py --pbcs <pbcs built with --features mujoco>
 
 Writes ``s<seed>.gym.csv`` beside each row (atomically; a seed already judged is skipped), and
-``<results>/gym_cells.csv``: per cell, the seeds solved by gymnasium-robotics and the env steps
+``results/pointmaze/gym_cells.csv`` (``--summary``): per cell, the seeds solved by gymnasium-robotics and the env steps
 (phase 1 included; median and quartiles, numpy's linear interpolation) of all seeds. Needs gymnasium-robotics and mujoco beside this package.
 """
 
@@ -75,10 +75,11 @@ def judge(pbcs_bin, row_path):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--results", default=Path("results/pointmaze"), type=Path)
+    p.add_argument("--raw", default=Path("results/raw/pointmaze"), type=Path)
+    p.add_argument("--summary", default=Path("results/pointmaze/gym_cells.csv"), type=Path)
     p.add_argument("--pbcs", default=os.environ.get("PBCS", "pbcs"))
     args = p.parse_args()
-    cells = sorted((args.results / "raw" / "grid").glob("*"))
+    cells = sorted(c for c in args.raw.glob("*") if c.is_dir())
     summary = []
     for cell in cells:
         rows = sorted(cell.glob("s[0-9]*.csv"), key=lambda p: int(p.stem[1:].split(".")[0]))
@@ -100,7 +101,7 @@ def main():
             print(f"{cell.name}: gymnasium-robotics solved {wins}/{len(rows)}, env steps median "
                   f"{med} [{q1}, {q3}]", flush=True)
     write_atomic(
-        args.results / "gym_cells.csv",
+        args.summary,
         "cell,gym_solved,seeds,env_steps_median,env_steps_q1,env_steps_q3\n" + "".join(summary),
     )
 

@@ -132,7 +132,7 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
 
 
 def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(tmp_path):
-    """The table's number, re-made: UMaze seed 1 of experiments/pointmaze/grid.toml run again
+    """The table's number, re-made: UMaze seed 1 of experiments/pointmaze.toml run again
     from its job file (the same env steps as its row), its chain loaded in Python and judged
     by gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as
     the committed s1.gym.csv. Needs `pbcs` built with --features mujoco:
@@ -145,7 +145,7 @@ def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(tmp_p
     binary = os.environ.get("PBCS_POINTMAZE_BIN")
     if not binary:
         pytest.skip("set PBCS_POINTMAZE_BIN to `pbcs` built with --features mujoco")
-    cell = ROOT / "results/pointmaze/raw/grid/pbcs_pm-pointmaze_umaze"
+    cell = ROOT / "results/raw/pointmaze/pbcs_pm-pointmaze_umaze"
     row = next(csv.DictReader((cell / "s1.csv").open()))
     judged = next(csv.DictReader((cell / "s1.gym.csv").open()))
     out = tmp_path / "run"

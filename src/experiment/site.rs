@@ -50,11 +50,14 @@ impl Site {
         }
     }
 
-    /// A grid row's or an axis' label: `N×N` or the environment's name.
+    /// A grid row's or an axis' label: `N×N`, a PointMaze's map (`Medium`) or the
+    /// environment's name.
     pub fn axis(self) -> String {
         match self {
             Site::Maze(n) => format!("{n}×{n}"),
-            Site::Env(e) => e.name().to_string(),
+            Site::Env(e) => e
+                .point_map()
+                .map_or_else(|| e.name().to_string(), |m| <&str>::from(m).to_string()),
         }
     }
 

@@ -15,6 +15,6 @@ pub mod model;
 #[cfg(feature = "mujoco")]
 mod sim;
 
-pub use model::{MapName, PointMap};
+pub use model::{sure_radius, MapName, PointMap, GOAL_NOISE, SUCCESS_DISTANCE};
 #[cfg(feature = "mujoco")]
-pub use sim::{PointMaze, PointState, GOAL_NOISE, MAX_SPEED, RADIUS, SUCCESS_DISTANCE};
+pub use sim::{PointMaze, PointState, MAX_SPEED, RADIUS};

@@ -23,6 +23,20 @@ use crate::error::{Error, Result};
 /// The point mass and its floor (gymnasium-robotics' `point.xml`, with an attribution comment).
 const POINT_XML: &str = include_str!("point.xml");
 
+/// Distance to the goal within which an episode succeeds (`compute_reward`'s 0.45).
+pub const SUCCESS_DISTANCE: f64 = 0.45;
+
+/// How far gymnasium-robotics' reset moves the goal from its cell's centre, along each axis
+/// (`position_noise_range` 0.25 × `maze_size_scaling` 1): the goal is uniform in the square
+/// of half-side 0.25 around the centre.
+pub const GOAL_NOISE: f64 = 0.25;
+
+/// The radius of the disc around the goal where the point is within [`SUCCESS_DISTANCE`] of
+/// every goal of the square of half-side `noise` around it: 0.45 − noise·√2.
+pub fn sure_radius(noise: f64) -> f64 {
+    SUCCESS_DISTANCE - noise * std::f64::consts::SQRT_2
+}
+
 /// Height of the walls (`maze_height`), in metres.
 const WALL_HEIGHT: f64 = 0.4;
 
@@ -252,6 +266,40 @@ impl PointMap {
             }
         }
         (best.1, best.2)
+    }
+
+    /// A position shifted so that the map spans [0, W] × [0, H] (how pictures draw it).
+    pub fn drawn(&self, [x, y]: [f64; 2]) -> (f32, f32) {
+        let (w, h) = (self.cols() as f64, self.rows() as f64);
+        ((x + w / 2.0) as f32, (y + h / 2.0) as f32)
+    }
+
+    /// What pictures draw of the task from cell `start` to cell `goal` whose success region is
+    /// the disc of `target_radius` around the goal: the map's wall cells, the start and the
+    /// target, in [0, W] × [0, H] ([`PointMap::drawn`]). Needs no MuJoCo, so that figures of
+    /// committed rows are drawn without it.
+    pub fn scene(
+        &self,
+        start: (usize, usize),
+        goal: (usize, usize),
+        target_radius: f32,
+    ) -> crate::env::Scene {
+        let (w, h) = (self.cols() as f32, self.rows() as f32);
+        let walls = (0..self.rows())
+            .flat_map(|i| (0..self.cols()).map(move |j| (i, j)))
+            .filter(|&c| self.is_wall(c))
+            .map(|(i, j)| {
+                let (x, y) = (j as f32, h - i as f32 - 1.0);
+                [(x, y), (x + 1.0, y + 1.0)]
+            })
+            .collect();
+        crate::env::Scene {
+            width: w,
+            height: h,
+            walls,
+            target: (self.drawn(self.cell_xy(goal)), target_radius),
+            start: self.drawn(self.cell_xy(start)),
+        }
     }
 
     /// The model: `point.xml` with, before the end of its world body, one box per wall cell,

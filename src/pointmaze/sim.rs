@@ -1,19 +1,11 @@
 //! The PointMaze environment on MuJoCo (feature `mujoco`): gymnasium-robotics'
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
-use super::model::{MapName, PointMap};
+use super::model::{sure_radius, MapName, PointMap, SUCCESS_DISTANCE};
 use crate::env::{BallIsClear, Env, Planar, SampleBall, Scene, Step};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Mutex;
-
-/// Distance to the goal within which an episode succeeds (`compute_reward`'s 0.45).
-pub const SUCCESS_DISTANCE: f64 = 0.45;
-
-/// How far gymnasium-robotics' reset moves the goal from its cell's centre, along each axis
-/// (`position_noise_range` 0.25 × `maze_size_scaling` 1): the goal is uniform in the square
-/// of half-side 0.25 around the centre.
-pub const GOAL_NOISE: f64 = 0.25;
 
 /// Speed limit applied to each velocity component before a step (`PointEnv.step`'s ±5).
 pub const MAX_SPEED: f64 = 5.0;
@@ -64,6 +56,8 @@ pub struct PointMaze {
     map: PointMap,
     start: [f64; 2],
     goal: [f64; 2],
+    /// The start and goal cells.
+    cells: ((usize, usize), (usize, usize)),
     /// Half-side of the square of goals success must hold for (0: the goal itself).
     goal_noise: f64,
     /// The simulator the pure step borrows: every step sets the whole state first, so what a
@@ -114,6 +108,7 @@ impl PointMaze {
         Ok(PointMaze {
             start: map.cell_xy(start),
             goal: goal_xy,
+            cells: (start, goal),
             goal_noise: 0.0,
             map,
             data: Mutex::new(data),
@@ -123,7 +118,7 @@ impl PointMaze {
     /// The same environment whose success (reward, end of episode) holds only where the point
     /// is within [`SUCCESS_DISTANCE`] of every goal in the square of half-side `noise` around
     /// the goal: the farthest such goal is a corner, so success is
-    /// ‖(|Δx| + noise, |Δy| + noise)‖ ≤ 0.45. With [`GOAL_NOISE`], the region gymnasium-robotics'
+    /// ‖(|Δx| + noise, |Δy| + noise)‖ ≤ 0.45. With [`super::GOAL_NOISE`], the region gymnasium-robotics'
     /// resets all agree on: within 0.45 − 0.25√2 ≈ 0.096 of the centre diagonally, 0.124 along
     /// the axes. `noise` = 0 is the environment itself, bit for bit.
     /// (`tests/pointmaze.rs` checks the region.)
@@ -144,7 +139,7 @@ impl PointMaze {
     /// The radius of the disc around the goal where success holds for every goal of the
     /// noise square (the whole region is a little larger along the axes).
     pub fn sure_radius(&self) -> f64 {
-        SUCCESS_DISTANCE - self.goal_noise * std::f64::consts::SQRT_2
+        sure_radius(self.goal_noise)
     }
 
     /// The map.
@@ -309,8 +304,7 @@ impl BallIsClear<PointState> for PointMaze {
 impl Planar for PointMaze {
     /// The position, shifted so that the map spans [0, W] × [0, H].
     fn point(&self, s: &PointState) -> (f32, f32) {
-        let (w, h) = (self.map.cols() as f64, self.map.rows() as f64);
-        ((s.qpos[0] + w / 2.0) as f32, (s.qpos[1] + h / 2.0) as f32)
+        self.map.drawn(s.qpos)
     }
 
     /// A ball's centre (x, y), shifted as [`Planar::point`] shifts positions.
@@ -320,24 +314,7 @@ impl Planar for PointMaze {
     }
 
     fn scene(&self) -> Scene {
-        let (w, h) = (self.map.cols() as f32, self.map.rows() as f32);
-        let walls = (0..self.map.rows())
-            .flat_map(|i| (0..self.map.cols()).map(move |j| (i, j)))
-            .filter(|&c| self.map.is_wall(c))
-            .map(|(i, j)| {
-                let (x, y) = (j as f32, h - i as f32 - 1.0);
-                [(x, y), (x + 1.0, y + 1.0)]
-            })
-            .collect();
-        Scene {
-            width: w,
-            height: h,
-            walls,
-            target: (
-                self.point(&PointState::at_rest(self.goal)),
-                self.sure_radius() as f32,
-            ),
-            start: self.point(&self.start()),
-        }
+        let (start, goal) = self.cells;
+        self.map.scene(start, goal, self.sure_radius() as f32)
     }
 }
