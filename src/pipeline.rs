@@ -272,6 +272,13 @@ pub fn write_tables(
     if !routes.is_empty() {
         write_records(&routes_path(results, &exp.name), &routes)?;
     }
+    let judged = crate::tables::judged::judged_cells(exp, results)?;
+    if !judged.is_empty() {
+        write_records(
+            &crate::tables::judged::judged_path(results, &exp.name),
+            &judged,
+        )?;
+    }
     let timing = crate::tables::cell_timings(exp, results, rows);
     write_records(
         &results

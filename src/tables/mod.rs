@@ -7,6 +7,7 @@
 //! and `pbcs table` (one method, no polars) writes directly.
 
 pub mod curves;
+pub mod judged;
 pub mod outside;
 pub mod routes;
 pub mod scaling;

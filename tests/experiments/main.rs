@@ -13,6 +13,7 @@ fn files() -> Vec<std::path::PathBuf> {
 
 mod committed;
 mod files;
+mod judged;
 mod locks;
 mod rows;
 mod sweeps;

@@ -1,0 +1,159 @@
+//! Chains judged again by an outside environment: PBCS's PointMaze chains played in
+//! gymnasium-robotics' own `PointMaze_<Map>-v3` by `python/benches/pointmaze_gym.py`, one row
+//! `s<seed>.gym.csv` beside each run's row. `pbcs aggregate` gathers them per cell into
+//! `results/tables/<experiment>.judged.csv` and `pbcs figures` writes their numbers
+//! (`\res{<experiment>:<cell>:judged:<field>}`), so the report quotes the outside judge's verdict,
+//! not the one measured in our own environment.
+
+use crate::error::{Error, Result};
+use crate::experiment::Experiment;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Successes out of 100 that count a chain as solved by the outside judge (the protocol's 95).
+pub const SOLVED_SUCCESSES: u32 = 95;
+
+/// One run's chain judged by the outside environment (`s<seed>.gym.csv`, written by
+/// `python/benches/pointmaze_gym.py`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JudgedRun {
+    /// The cell, as in the run's row.
+    pub cell: String,
+    /// The run seed.
+    pub seed: u64,
+    /// The judge: gymnasium-robotics' environment id.
+    pub gym_id: String,
+    /// Start cell, `row column`.
+    pub start_cell: String,
+    /// Goal cell, `row column`.
+    pub goal_cell: String,
+    /// The judge's time limit per episode.
+    pub time_limit: u32,
+    /// The run's env steps (phase 1 included), as in its row.
+    pub env_steps: u64,
+    /// Skills of the chain.
+    pub skills: u32,
+    /// Whether our own evaluation counted the run solved.
+    pub solved_own_env: bool,
+    /// Our own evaluation's chain success.
+    pub own_success_rate: f32,
+    /// Episodes the judge counted a success.
+    pub gym_successes: u32,
+    /// Episodes played.
+    pub gym_episodes: u32,
+    /// At least [`SOLVED_SUCCESSES`] of 100.
+    pub gym_solved: bool,
+    /// Mean episode length.
+    pub gym_mean_steps: f32,
+}
+
+/// One cell's verdict of the outside judge.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JudgedCell {
+    /// The cell.
+    pub cell: String,
+    /// The judge.
+    pub gym_id: String,
+    /// Seeds judged (all the cell's seeds).
+    pub seeds: usize,
+    /// Seeds whose chain the judge counted solved.
+    pub solved: usize,
+    /// The fewest successes of a seed.
+    pub successes_min: u32,
+}
+
+/// `results/tables/<experiment>.judged.csv`.
+pub fn judged_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.judged.csv"))
+}
+
+/// The judged runs of one cell's seeds read from `dir`, checked: none, or one per seed, each
+/// naming its cell and seed, successes within the episodes, `gym_solved` agreeing with them.
+fn judged_runs(dir: &Path, cell: &str, seeds: &[u64]) -> Result<Vec<JudgedRun>> {
+    let paths: Vec<PathBuf> = seeds
+        .iter()
+        .map(|s| dir.join(format!("s{s}.gym.csv")))
+        .collect();
+    if !paths.iter().any(|p| p.exists()) {
+        return Ok(Vec::new());
+    }
+    let mut runs = Vec::new();
+    for (path, &seed) in paths.iter().zip(seeds) {
+        if !path.exists() {
+            return Err(Error::io(
+                path,
+                std::io::Error::other("missing: a cell is judged for all its seeds or none"),
+            ));
+        }
+        let rows: Vec<JudgedRun> = crate::record::read_records(path)?;
+        let [run] = <[JudgedRun; 1]>::try_from(rows).map_err(|rows| {
+            Error::parse(path, format!("holds {} rows, one expected", rows.len()))
+        })?;
+        let bad = if run.cell != cell || run.seed != seed {
+            Some(format!(
+                "is cell {} seed {}, expected {cell} seed {seed}",
+                run.cell, run.seed
+            ))
+        } else if run.gym_episodes != 100 || run.gym_successes > run.gym_episodes {
+            Some(format!(
+                "{} successes of {} episodes (100 expected)",
+                run.gym_successes, run.gym_episodes
+            ))
+        } else if run.gym_solved != (run.gym_successes >= SOLVED_SUCCESSES) {
+            Some(format!(
+                "gym_solved = {} with {} successes",
+                run.gym_solved, run.gym_successes
+            ))
+        } else {
+            None
+        };
+        if let Some(why) = bad {
+            return Err(Error::parse(path, why));
+        }
+        runs.push(run);
+    }
+    Ok(runs)
+}
+
+/// Per cell of `exp`, the judged runs under `results/raw/<experiment>/`; cells without any are
+/// left out.
+pub fn judged_cells(exp: &Experiment, results: &Path) -> Result<Vec<JudgedCell>> {
+    let mut cells = Vec::new();
+    for cell in &exp.cells {
+        let seeds = exp.seeds_of(cell);
+        let runs = judged_runs(&exp.cell_dir(results, cell), &cell.id, &seeds)?;
+        let Some(first) = runs.first() else { continue };
+        cells.push(JudgedCell {
+            cell: cell.id.clone(),
+            gym_id: first.gym_id.clone(),
+            seeds: runs.len(),
+            solved: runs.iter().filter(|r| r.gym_solved).count(),
+            successes_min: runs.iter().map(|r| r.gym_successes).min().unwrap_or(0),
+        });
+    }
+    Ok(cells)
+}
+
+/// `\res{<experiment>:<cell>:judged:<field>}` (`seeds`, `solved`, `min`, `judge`) from the
+/// judged table, where it exists.
+pub fn judged_numbers(name: &str, results: &Path) -> Result<Vec<(String, String)>> {
+    let path = judged_path(results, name);
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let cells: Vec<JudgedCell> = crate::record::read_records(&path)?;
+    Ok(cells
+        .iter()
+        .flat_map(|c| {
+            [
+                ("seeds", c.seeds.to_string()),
+                ("solved", c.solved.to_string()),
+                ("min", c.successes_min.to_string()),
+                ("judge", c.gym_id.clone()),
+            ]
+            .map(|(f, v)| (format!("{}:judged:{f}", c.cell), v))
+        })
+        .collect())
+}
