@@ -59,7 +59,8 @@ pub enum EnvName {
     /// Two rooms joined by a door (`src/rooms.rs`); it has no parameters.
     Rooms,
     /// gymnasium-robotics' `PointMaze_UMaze-v3` (`src/pointmaze/`, feature `mujoco`), from
-    /// one of its two free cells farthest apart to the other.
+    /// one of its two free cells farthest apart to the other; success where every goal its
+    /// reset may draw counts one (`PointMaze::for_goal_noise`).
     PointmazeUmaze,
     /// gymnasium-robotics' `PointMaze_Open-v3`, the same way.
     PointmazeOpen,
