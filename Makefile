@@ -18,7 +18,7 @@ TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
 .PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
-        commands paper check-paper smoke python experiments mujoco test-mujoco
+        commands paper check-paper smoke python experiments mujoco test-mujoco pointmaze
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
@@ -38,6 +38,8 @@ help:
 	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
 	@echo "make test-mujoco   our PointMaze's tests, and the equality test against"
 	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
+	@echo "make pointmaze     the PointMaze grid (experiments/pointmaze.toml) with MuJoCo, then"
+	@echo "               gymnasium-robotics' verdict on every chain (python/benches/pointmaze_gym.py)"
 	@echo "make ci        what CI runs (.ci/run)"
 
 build:
@@ -70,6 +72,15 @@ test-mujoco: mujoco
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2" pytest
 	PBCS_POINTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/pointmaze_step \
 	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py
+
+# The PointMaze grid (its runs need MuJoCo), then every chain judged by gymnasium-robotics
+# (each run re-made from its job file, its chain played in PointMaze_<Map>-v3): the rows
+# `make figures` then draws. The Python package first: its build rebuilds `pbcs` without MuJoCo.
+pointmaze: mujoco python
+	$(CARGO) build --release --locked --features mujoco --bin pbcs
+	$(PBCS) exp run experiments/pointmaze.toml --jobs $(JOBS)
+	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
+	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
 
 # Aggregation with polars, then plotters; trains nothing (about a minute after the build).
 figures:
