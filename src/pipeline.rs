@@ -272,7 +272,7 @@ pub fn write_tables(
     if !routes.is_empty() {
         write_records(&routes_path(results, &exp.name), &routes)?;
     }
-    let judged = crate::tables::judged::judged_cells(exp, results)?;
+    let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
     if !judged.is_empty() {
         write_records(
             &crate::tables::judged::judged_path(results, &exp.name),

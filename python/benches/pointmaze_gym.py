@@ -96,7 +96,7 @@ def main():
             wins += g["gym_solved"] == "true"
             steps.append(int(g["env_steps"]))
         if rows:
-            q1, med, q3 = (int(v) for v in np.percentile(steps, [25, 50, 75]))
+            q1, med, q3 = (round(v) for v in np.percentile(steps, [25, 50, 75]))
             summary.append(f"{cell.name},{wins},{len(rows)},{med},{q1},{q3}\n")
             print(f"{cell.name}: gymnasium-robotics solved {wins}/{len(rows)}, env steps median "
                   f"{med} [{q1}, {q3}]", flush=True)

@@ -17,7 +17,8 @@ random warm-up steps, one torch thread.
     python python/benches/sb3_pointmaze.py --map umaze --seeds 0-2 --out results/pointmaze/sb3
 
 Each evaluation is appended to ``<out>/sac_her-pointmaze_<map>/s<seed>.evals.csv`` as it
-happens (an interrupted run keeps them; a re-run starts that seed afresh); the finished run
+happens (an interrupted run keeps them; a re-run of that seed refuses to start until that file
+is moved away, so committed evaluations are never overwritten); the finished run
 writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its wall clock
 beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of CI.
 """
@@ -121,6 +122,11 @@ def run(map_key, seed, steps, out):
     eval_env.reset(seed=1_000_000 + seed)
     evals = folder / f"s{seed}.evals.csv"
     folder.mkdir(parents=True, exist_ok=True)
+    if evals.exists():
+        raise SystemExit(
+            f"{evals}: the evaluations of an unfinished run of this seed (kept, never "
+            "overwritten); move it away to run the seed again"
+        )
     evals.write_text("env_steps,successes,episodes,wall_seconds\n")
     clock = time.perf_counter()
     best = [0, 0]  # successes, env steps

@@ -33,7 +33,8 @@ class Chain:
 
     @property
     def maze(self):
-        """``(size, layout)`` of the maze the chain was built for."""
+        """``(size, layout)`` of the maze the chain was built for (``ValueError`` for a chain
+        of another environment)."""
         return self._core.maze
 
     @property

@@ -54,7 +54,9 @@ def evaluate(chain, episodes=100, seed=0, env=None):
     ``success`` and ``steps``."""
     if episodes < 1:
         raise ValueError(f"invalid `episodes`: must be at least 1, got {episodes}")
-    env = env or make_env(chain)
+    own = env is None
+    if own:
+        env = make_env(chain)
     success, steps = [], []
     for e in range(episodes):
         obs, info = env.reset(seed=seed if e == 0 else None)
@@ -67,6 +69,8 @@ def evaluate(chain, episodes=100, seed=0, env=None):
                 break
         success.append(bool(info["success"]))
         steps.append(n)
+    if own:
+        env.close()
     return {
         "successes": int(sum(success)),
         "episodes": episodes,

@@ -68,24 +68,28 @@ fn finite_floats(
     Ok(v)
 }
 
-/// The input and output sizes every skill of `chain` shares, or an error naming the skill
-/// that differs.
+/// The input and output sizes (and ball dimension) every skill of `chain` shares, or an error
+/// naming the skill that differs.
 fn shared_dims(chain: &SkillChain, manifest: &std::path::Path) -> PyResult<(usize, usize)> {
     let dims = |i: usize| {
-        let sizes = chain.skills[i].policy.sizes();
-        (sizes[0], sizes[sizes.len() - 1])
+        let s = &chain.skills[i];
+        let sizes = s.policy.sizes();
+        (sizes[0], sizes[sizes.len() - 1], s.activation.center.len())
     };
     let first = dims(0);
     match (1..chain.skills.len()).find(|&i| dims(i) != first) {
         Some(i) => Err(PyValueError::new_err(format!(
-            "{}: skill {i} takes {} inputs and gives {} actions, skill 0 {} and {}",
+            "{}: skill {i} takes {} inputs, gives {} actions and has a ball of {} coordinates, \
+             skill 0 {}, {} and {}",
             manifest.display(),
             dims(i).0,
             dims(i).1,
+            dims(i).2,
             first.0,
-            first.1
+            first.1,
+            first.2
         ))),
-        None => Ok(first),
+        None => Ok((first.0, first.1)),
     }
 }
 
@@ -102,8 +106,11 @@ impl ChainCore {
                 manifest.display()
             )));
         }
+        // The maze needs no MuJoCo: a maze chain is checked against it; another environment's
+        // chain is checked for consistent skills (`shared_dims`).
         let maze = if job.env.is_maze() {
-            let (_, maze, _) = pbcs::runs::load_saved_chain(&dir, kernel).map_err(py_err)?;
+            let maze = pbcs::maze::Maze::new(&job.maze).map_err(py_err)?;
+            chain.check_env(&maze, &manifest).map_err(py_err)?;
             Some(maze)
         } else {
             None

@@ -339,6 +339,24 @@ impl Manifest {
 }
 
 impl ManifestSkill {
+    /// The activation ball lies in the position part of the observation (its first
+    /// `Env::position_dims` values: all of the maze's, x and y of PointMaze's): 1 to `input`
+    /// values.
+    fn check_center(&self, input: usize) -> std::result::Result<(), (&'static str, String)> {
+        if self.center.is_empty() || self.center.len() > input {
+            return Err((
+                "center",
+                format!(
+                    "has {} values, the network (sizes {:?}) needs 1 to {input} (the \
+                     observation's position part)",
+                    self.center.len(),
+                    self.sizes
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The first bad value of the skill, as (field, why).
     fn check(&self) -> std::result::Result<(), (&'static str, String)> {
         let plain = Path::new(&self.file).file_name() == Some(std::ffi::OsStr::new(&self.file));
@@ -368,19 +386,7 @@ impl ManifestSkill {
         }
         let (input, output) = (self.sizes[0], self.sizes[self.sizes.len() - 1]);
         let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);
-        // The activation ball lies in the position part of the observation (its first
-        // `Env::position_dims` values: all of the maze's, x and y of PointMaze's).
-        if self.center.is_empty() || self.center.len() > input {
-            return Err((
-                "center",
-                format!(
-                    "has {} values, the network (sizes {:?}) needs 1 to {input} (the \
-                     observation's position part)",
-                    self.center.len(),
-                    self.sizes
-                ),
-            ));
-        }
+        self.check_center(input)?;
         for (field, values, want, positive) in [
             ("center", Some(&self.center), self.center.len(), false),
             ("origin", Some(&self.origin), input, false),

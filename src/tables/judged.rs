@@ -6,7 +6,7 @@
 //! not the one measured in our own environment.
 
 use crate::error::{Error, Result};
-use crate::experiment::Experiment;
+use crate::experiment::{Experiment, RawRow};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -70,8 +70,10 @@ pub fn judged_path(results: &Path, experiment: &str) -> PathBuf {
 }
 
 /// The judged runs of one cell's seeds read from `dir`, checked: none, or one per seed, each
-/// naming its cell and seed, successes within the episodes, `gym_solved` agreeing with them.
-fn judged_runs(dir: &Path, cell: &str, seeds: &[u64]) -> Result<Vec<JudgedRun>> {
+/// naming its cell and seed, successes within the episodes, `gym_solved` agreeing with them,
+/// and the run it judged the one of the cell's row (`rows`: the same env steps and our own
+/// verdict), so that a verdict left from an earlier run is refused.
+fn judged_runs(dir: &Path, cell: &str, seeds: &[u64], rows: &[RawRow]) -> Result<Vec<JudgedRun>> {
     let paths: Vec<PathBuf> = seeds
         .iter()
         .map(|s| dir.join(format!("s{s}.gym.csv")))
@@ -87,9 +89,9 @@ fn judged_runs(dir: &Path, cell: &str, seeds: &[u64]) -> Result<Vec<JudgedRun>> 
                 std::io::Error::other("missing: a cell is judged for all its seeds or none"),
             ));
         }
-        let rows: Vec<JudgedRun> = crate::record::read_records(path)?;
-        let [run] = <[JudgedRun; 1]>::try_from(rows).map_err(|rows| {
-            Error::parse(path, format!("holds {} rows, one expected", rows.len()))
+        let read: Vec<JudgedRun> = crate::record::read_records(path)?;
+        let [run] = <[JudgedRun; 1]>::try_from(read).map_err(|read| {
+            Error::parse(path, format!("holds {} rows, one expected", read.len()))
         })?;
         let bad = if run.cell != cell || run.seed != seed {
             Some(format!(
@@ -107,7 +109,7 @@ fn judged_runs(dir: &Path, cell: &str, seeds: &[u64]) -> Result<Vec<JudgedRun>> 
                 run.gym_solved, run.gym_successes
             ))
         } else {
-            None
+            stale(&run, rows)
         };
         if let Some(why) = bad {
             return Err(Error::parse(path, why));
@@ -117,14 +119,40 @@ fn judged_runs(dir: &Path, cell: &str, seeds: &[u64]) -> Result<Vec<JudgedRun>> 
     Ok(runs)
 }
 
-/// Per cell of `exp`, the judged runs under `results/raw/<experiment>/`; cells without any are
-/// left out.
-pub fn judged_cells(exp: &Experiment, results: &Path) -> Result<Vec<JudgedCell>> {
+/// Why a judged run is not the run of its row in `rows`, if it is not.
+fn stale(run: &JudgedRun, rows: &[RawRow]) -> Option<String> {
+    match rows
+        .iter()
+        .find(|r| r.cell == run.cell && r.seed == run.seed)
+    {
+        None => Some("judges a run that has no row".to_string()),
+        Some(r) if (r.env_steps, r.solved) != (run.env_steps, run.solved_own_env) => Some(format!(
+            "judges a run of {} env steps (solved: {}), the row's run took {} (solved: {}): \
+             judge the run again",
+            run.env_steps, run.solved_own_env, r.env_steps, r.solved
+        )),
+        Some(_) => None,
+    }
+}
+
+/// Per cell of `exp`, the judged runs under `results/raw/<experiment>/` of the runs in `rows`;
+/// cells without any are left out. A cell's runs are judged by one environment.
+pub fn judged_cells(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<JudgedCell>> {
     let mut cells = Vec::new();
     for cell in &exp.cells {
         let seeds = exp.seeds_of(cell);
-        let runs = judged_runs(&exp.cell_dir(results, cell), &cell.id, &seeds)?;
+        let dir = exp.cell_dir(results, cell);
+        let runs = judged_runs(&dir, &cell.id, &seeds, rows)?;
         let Some(first) = runs.first() else { continue };
+        if let Some(other) = runs.iter().find(|r| r.gym_id != first.gym_id) {
+            return Err(Error::parse(
+                dir.join(format!("s{}.gym.csv", other.seed)),
+                format!(
+                    "judged by {}, seed {} by {}: one judge per cell",
+                    other.gym_id, first.seed, first.gym_id
+                ),
+            ));
+        }
         cells.push(JudgedCell {
             cell: cell.id.clone(),
             gym_id: first.gym_id.clone(),

@@ -1,7 +1,7 @@
 //! The outside judge's rows (`s<seed>.gym.csv`, gymnasium-robotics' verdict on PBCS's PointMaze
 //! chains) are read back checked: the committed ones give each cell's verdict, and a row that
-//! contradicts itself, names another seed, or is missing for one seed is refused naming the
-//! file.
+//! contradicts itself, names another seed, judges another run than its row's, has another
+//! judge, or is missing for one seed is refused naming the file.
 
 use super::*;
 use pbcs::tables::judged::judged_cells;
@@ -12,7 +12,9 @@ fn pointmaze() -> Experiment {
 
 #[test]
 fn the_committed_verdicts_are_read_per_cell() {
-    let cells = judged_cells(&pointmaze(), Path::new("results")).unwrap();
+    let exp = pointmaze();
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    let cells = judged_cells(&exp, Path::new("results"), &rows).unwrap();
     let got: Vec<(&str, usize, usize)> = cells
         .iter()
         .map(|c| (c.gym_id.as_str(), c.seeds, c.solved))
@@ -53,7 +55,8 @@ fn refused(edit: impl Fn(&Path)) -> String {
         std::fs::copy(from.join(&name), to.join(&name)).unwrap();
     }
     edit(&to.join("s3.gym.csv"));
-    judged_cells(&exp, tmp.path())
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    judged_cells(&exp, tmp.path(), &rows)
         .map(|c| format!("accepted: {c:?}"))
         .unwrap_err()
         .to_string()
@@ -70,11 +73,14 @@ fn a_row_that_contradicts_itself_or_is_missing_is_refused_naming_the_file() {
         f[i] = v;
         text.replace(&row, &f.join(","))
     };
-    // Columns: cell 0, seed 1, ..., gym_successes 10, gym_episodes 11, gym_solved 12.
+    // Columns: cell 0, seed 1, gym_id 2, ..., env_steps 6, ..., gym_successes 10,
+    // gym_episodes 11, gym_solved 12.
     for (bad, why) in [
         (with(12, "false"), "gym_solved"),
         (with(10, "101"), "successes"),
         (with(1, "4"), "seed 4"),
+        (with(6, "1"), "judge the run again"),
+        (with(2, "PointMaze_Open-v3"), "one judge per cell"),
     ] {
         let err = refused(|p| std::fs::write(p, &bad).unwrap());
         assert!(
