@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from common import write_atomic
 import pbcs
 import pbcs.pointmaze as pm
 
@@ -34,10 +35,6 @@ EPISODES = 100
 SOLVED = 95
 
 
-def write_atomic(path, text):
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
-        f.write(text)
-    os.replace(f.name, path)
 
 
 def judge(pbcs_bin, row_path):

@@ -31,6 +31,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from common import write_atomic
 import gymnasium as gym
 import numpy as np
 
@@ -89,11 +90,6 @@ def greedy(model, start=None, max_steps=1000):
     return False
 
 
-def write_atomic(path, text):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
-        f.write(text)
-    os.replace(f.name, path)
 
 
 def run(algo, seed, steps, out):

@@ -15,20 +15,14 @@ Needs stable-baselines3 (not part of CI). A finished seed's row is skipped on re
 """
 
 import argparse
-import os
-import tempfile
 import time
 from pathlib import Path
 
+from common import write_atomic
 import gymnasium as gym
 import numpy as np
 
 
-def write_atomic(path, text):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
-        f.write(text)
-    os.replace(f.name, path)
 
 
 def run(seed, out):

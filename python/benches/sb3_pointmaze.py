@@ -24,15 +24,14 @@ beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not par
 """
 
 import argparse
-import os
-import tempfile
 import time
 from collections import deque
 from pathlib import Path
 
+from common import write_atomic
+from pbcs.pointmaze import FixedCells
 import gymnasium as gym
 import gymnasium_robotics
-import numpy as np
 
 gym.register_envs(gymnasium_robotics)
 
@@ -66,17 +65,6 @@ def farthest_cells(maze_map):
     return best
 
 
-class FixedCells(gym.Wrapper):
-    """Every reset asks the env for the same start and goal cells (its own ±0.25 noise)."""
-
-    def __init__(self, env, start, goal):
-        super().__init__(env)
-        self.cells = {"reset_cell": np.array(start), "goal_cell": np.array(goal)}
-
-    def reset(self, *, seed=None, options=None):
-        return self.env.reset(seed=seed, options=dict(self.cells))
-
-
 def make_env(name, start, goal):
     return FixedCells(gym.make(f"PointMaze_{name}-v3", continuing_task=False), start, goal)
 
@@ -95,11 +83,6 @@ def evaluate(model, env):
     return wins
 
 
-def write_atomic(path, text):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
-        f.write(text)
-    os.replace(f.name, path)
 
 
 def run(map_key, seed, steps, out):
