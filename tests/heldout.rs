@@ -113,3 +113,33 @@ fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
         "Chains below 100 % of their evaluation episodes: layout 2611 size 8 seed 1 (97 %)."
     );
 }
+
+/// The held-out PointMaze grid (`experiments/pointmaze_heldout.toml`) was registered before it
+/// ran: it runs exactly the PointMaze grid's jobs, map by map, on seeds no PointMaze run had
+/// used, for the `fast` preset as it was then.
+#[test]
+fn the_held_out_pointmaze_grid_runs_the_grids_jobs_on_unused_seeds() {
+    let held = Experiment::load(Path::new("experiments/pointmaze_heldout.toml"), None).unwrap();
+    let grid = Experiment::load(Path::new("experiments/pointmaze.toml"), None).unwrap();
+    let reg = held.registered.clone().expect("a [registered] table");
+    let preset = std::fs::read(Path::new("experiments").join(&reg.preset)).unwrap();
+    let hash: String = Sha256::digest(&preset)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert_eq!(
+        hash, reg.sha256,
+        "experiments/{} changed since the held-out PointMaze grid was registered on {}: \
+         register a new one on unused seeds (and say so); do not update this hash.",
+        reg.preset, reg.date
+    );
+    assert_eq!(held.sites, grid.sites);
+    assert_eq!(held.cells.len(), grid.cells.len());
+    for (h, g) in held.cells.iter().zip(&grid.cells) {
+        assert_eq!((&h.id, &h.site), (&g.id, &g.site));
+        assert_eq!(h.job, g.job, "{}: not the grid's job", h.id);
+        let (hs, gs) = (held.seeds_of(h), grid.seeds_of(g));
+        assert_eq!(hs, (10..20).collect::<Vec<u64>>(), "{}", h.id);
+        assert!(hs.iter().all(|s| !gs.contains(s)), "{}: a seed of the grid", h.id);
+    }
+}
