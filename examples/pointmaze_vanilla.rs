@@ -11,7 +11,8 @@
 //!
 //! `cargo run --release --features mujoco --example pointmaze_vanilla -- <map> <algo> <first
 //! seed> <last seed> <out> [steps]` writes `<out>/<algo>-pointmaze_<map>/s<seed>.csv` (the
-//! summary), `s<seed>.evals.csv` (every evaluation) and `s<seed>.timing.toml`; a seed whose
+//! summary, [`pbcs::tables::outside::VanillaRun`], which `pbcs aggregate` reads back checked),
+//! `s<seed>.evals.csv` (every evaluation) and `s<seed>.timing.toml`; a seed whose
 //! summary exists is skipped (sweeps resume).
 
 use pbcs::config::TrainJob;
@@ -19,27 +20,9 @@ use pbcs::learner::Algo;
 use pbcs::nn::kernel::Kernel;
 use pbcs::pointmaze::{MapName, PointMaze, GOAL_NOISE};
 use pbcs::rng::Seeds;
-use serde::Serialize;
+use pbcs::tables::outside::VanillaRun;
 use std::path::{Path, PathBuf};
 use strum::IntoEnumIterator;
-
-/// One run's summary row.
-#[derive(Serialize)]
-struct Row {
-    algo: &'static str,
-    env: String,
-    seed: u64,
-    steps: u64,
-    episodes: u64,
-    /// Greedy success at the last evaluation (0 or 1).
-    final_success: f32,
-    /// Best greedy success over all evaluations.
-    best_success: f32,
-    /// Env steps at the first evaluation that reached the goal, if any.
-    first_success_steps: Option<u64>,
-    /// Training transitions that ended at the goal.
-    terminal_transitions: u64,
-}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -81,8 +64,8 @@ fn main() -> anyhow::Result<()> {
             |_, _| {},
         )?;
         let seconds = clock.elapsed().as_secs_f64();
-        let row = Row {
-            algo: algo.name(),
+        let row = VanillaRun {
+            algo: algo.name().to_string(),
             env: name.clone(),
             seed,
             steps,

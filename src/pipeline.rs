@@ -417,6 +417,12 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
             &cost,
         )?));
     }
+    let pointmaze = outside_table(results, "pointmaze");
+    if pointmaze.exists() {
+        numbers.push_str(&report::outside::outside_pointmaze_numbers(&read_records(
+            &pointmaze,
+        )?));
+    }
     Ok(numbers)
 }
 

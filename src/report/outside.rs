@@ -184,6 +184,45 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
     s
 }
 
+/// The numbers `\res{outside:pointmaze:<method>-<env>:<field>}` of PointMaze's learner
+/// baselines: `runs`, `ended`, `steps` (the most a run trained), `solved`, `solvedat` (SB3's
+/// fewest steps to solve, `--` where none did), `reached`, `best` (SB3: successes of 100;
+/// ours: 0 or 1), `bestat` (`--` where no evaluation succeeded) and `seeds`.
+pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseline]) -> String {
+    let mut s = String::new();
+    for r in rows {
+        let best = if r.library == "sb3" {
+            format!("{:.0}", r.best * 100.0)
+        } else {
+            format!("{:.0}", r.best)
+        };
+        let best_at = if r.best > 0.0 {
+            human_steps(r.best_at as f64)
+        } else {
+            "--".into()
+        };
+        for (f, v) in [
+            ("runs", r.runs.to_string()),
+            ("ended", r.ended.to_string()),
+            ("steps", human_steps(r.steps_max as f64)),
+            ("solved", r.solved.to_string()),
+            (
+                "solvedat",
+                r.solved_at_min
+                    .map_or("--".into(), |n| human_steps(n as f64)),
+            ),
+            ("reached", r.reached.to_string()),
+            ("best", best),
+            ("bestat", best_at),
+            ("seeds", r.seeds.clone()),
+        ] {
+            let key = format!("pointmaze:{}-{}:{f}", r.method, r.env);
+            def_res(&mut s, "outside", &key, &v);
+        }
+    }
+    s
+}
+
 /// The verdict of one maze comparison at the 5 % level of Fisher's exact test: "no significant
 /// difference", or which side solves more.
 pub fn maze_verdict(r: &crate::tables::outside::MazeComparison) -> &'static str {

@@ -15,6 +15,8 @@
 //!   published figure of `pendulum/published.toml` (RL-Zoo's benchmark).
 //! - **Update cost** (`update_cost.csv`, wall clock, copied as `outside.timing.csv`): the time
 //!   per environment step of SB3's and our updates measured in the same run on one machine.
+//! - **PointMaze** ([`pointmaze_baselines`]): our DDPG and TD3 alone and SB3's SAC+HER on
+//!   PBCS's PointMaze tasks (`<results>/pointmaze/vanilla/`, `<results>/pointmaze/sb3/`).
 
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};
@@ -395,8 +397,9 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
     Ok(())
 }
 
-/// Writes `outside.maze.csv`, `outside.pendulum.csv` and `outside.timing.csv` under
-/// `<results>/tables/` from the rows under `<results>/outside/` (each only where it has rows;
+/// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.timing.csv` and
+/// `outside.pointmaze.csv` under `<results>/tables/` from the rows under `<results>/outside/`
+/// (PointMaze's: `<results>/pointmaze/`, [`pointmaze_baselines`]) (each only where it has rows;
 /// a table without rows any more is removed); `table` is the experiment of our maze side.
 /// Returns the files written.
 pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<PathBuf>> {
@@ -407,11 +410,15 @@ pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<Pa
     put_or_remove(&outside_table(results, "pendulum"), &pendulum, &mut files)?;
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
+    let pointmaze = pointmaze_baselines(results)?;
+    put_or_remove(&outside_table(results, "pointmaze"), &pointmaze, &mut files)?;
     Ok(files)
 }
 
 mod pendulum;
 pub use pendulum::{pendulum_rows, PendulumRow, PendulumRun, Published};
+mod pointmaze;
+pub use pointmaze::{pointmaze_baselines, PointMazeBaseline, Sb3Eval, VanillaRun, SB3_SOLVED};
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,281 @@
+//! PointMaze's learner baselines (issue 35) as one table, `outside.pointmaze.csv`: our DDPG and
+//! TD3 alone on PBCS's PointMaze task (`examples/pointmaze_vanilla.rs`:
+//! `<results>/pointmaze/vanilla/<algo>-pointmaze_<map>/s<seed>.csv` with its `s<seed>.evals.csv`)
+//! and Stable-Baselines3's SAC+HER in gymnasium-robotics' own PointMaze
+//! (`python/benches/sb3_pointmaze.py`: `<results>/pointmaze/sb3/sac_her-pointmaze_<map>/`,
+//! `s<seed>.evals.csv` as the run goes, `s<seed>.csv` once it ended). An SB3 run stopped before
+//! its end counts with the evaluations it made, and the table says how many runs ended.
+
+use super::{seed_rows, seeds_text};
+use crate::error::{Error, Result};
+use crate::experiment::run_file;
+use crate::train::EvalRow;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Successes of 100 evaluation episodes that count SB3's policy as solving the map (the
+/// protocol's 95, as for PBCS's chains).
+pub const SB3_SOLVED: u64 = 95;
+
+/// One run of our DDPG or TD3 alone on PointMaze (`examples/pointmaze_vanilla.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VanillaRun {
+    /// `ddpg` or `td3`.
+    pub algo: String,
+    /// The registry's name (`pointmaze_umaze`).
+    pub env: String,
+    /// The run seed.
+    pub seed: u64,
+    /// Environment steps of training.
+    pub steps: u64,
+    /// Training episodes.
+    pub episodes: u64,
+    /// Greedy success at the last evaluation (0 or 1: one episode from the start).
+    pub final_success: f32,
+    /// Best greedy success over all evaluations.
+    pub best_success: f32,
+    /// Env steps at the first evaluation that reached the goal, if any.
+    pub first_success_steps: Option<u64>,
+    /// Training transitions that ended at the goal.
+    pub terminal_transitions: u64,
+}
+
+/// One evaluation of an SB3 run (`s<seed>.evals.csv`): 100 episodes from the env's own resets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sb3Eval {
+    /// Environment steps of training before it.
+    pub env_steps: u64,
+    /// Episodes that ended in `info["success"]`.
+    pub successes: u64,
+    /// Episodes played.
+    pub episodes: u64,
+    /// Wall clock since training started (not deterministic).
+    pub wall_seconds: f64,
+}
+
+/// One line of `outside.pointmaze.csv`: one learner on one map.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointMazeBaseline {
+    /// `ddpg`, `td3` (ours) or `sac_her` (SB3).
+    pub method: String,
+    /// `ours` or `sb3`.
+    pub library: String,
+    /// The registry's name of the map (`pointmaze_umaze`).
+    pub env: String,
+    /// Runs with rows.
+    pub runs: u64,
+    /// Of them, ended (their budget spent, or SB3's stopped at a solving evaluation).
+    pub ended: u64,
+    /// The most environment steps a run trained.
+    pub steps_max: u64,
+    /// Runs whose policy solves the map: ours, a final greedy episode from the start that
+    /// reaches the goal; SB3, an evaluation with at least [`SB3_SOLVED`] of 100.
+    pub solved: u64,
+    /// SB3: the fewest environment steps at which a run solved it (ours: never set).
+    pub solved_at_min: Option<u64>,
+    /// Runs with at least one successful evaluation episode.
+    pub reached: u64,
+    /// The best evaluation of any run: success fraction (ours: 0 or 1; SB3: successes / 100).
+    pub best: f64,
+    /// The steps of that evaluation (the first run, then the earliest, among ties).
+    pub best_at: u64,
+    /// The seeds, space-separated.
+    pub seeds: String,
+}
+
+/// The lines of `outside.pointmaze.csv` from the rows under `<results>/pointmaze/` (none
+/// without that folder): our learners first, then SB3's, each by map.
+pub fn pointmaze_baselines(results: &Path) -> Result<Vec<PointMazeBaseline>> {
+    let root = results.join("pointmaze");
+    let mut out = Vec::new();
+    for (method, dir) in folders(&root.join("vanilla"))? {
+        out.push(vanilla_line(&method, &dir)?);
+    }
+    for (method, dir) in folders(&root.join("sb3"))? {
+        out.push(sb3_line(&method, &dir)?);
+    }
+    Ok(out)
+}
+
+/// The folders `<method>-<env>` of `root` (none without `root`), sorted by name.
+fn folders(root: &Path) -> Result<Vec<(String, PathBuf)>> {
+    if !root.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(root).map_err(|e| Error::io(root, e))? {
+        let path = entry.map_err(|e| Error::io(root, e))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if let Some((method, _)) = name.split_once("-pointmaze_") {
+            if path.is_dir() {
+                found.push((method.to_string(), path.clone()));
+            }
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
+/// The map's name of a folder `<method>-<env>`.
+fn env_of(dir: &Path, method: &str) -> String {
+    let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    name[method.len() + 1..].to_string()
+}
+
+/// Our learner's line from one folder: every row checked against its folder and its own
+/// evaluations (`final_success` the last, `best_success` the best, `first_success_steps` the
+/// first that reached the goal).
+fn vanilla_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
+    let env = env_of(dir, method);
+    let runs: Vec<(PathBuf, VanillaRun)> = seed_rows(dir, |r: &VanillaRun| r.seed)?;
+    let mut best = (0.0f32, u64::MAX);
+    for (path, r) in &runs {
+        let evals: Vec<EvalRow> =
+            crate::record::read_records(&run_file(dir, r.seed, ".evals.csv"))?;
+        let at_best = evals.iter().find(|e| e.success == r.best_success);
+        let agrees = r.algo == method
+            && r.env == env
+            && evals
+                .last()
+                .is_some_and(|e| e.steps == r.steps && e.success == r.final_success)
+            && evals.iter().all(|e| e.success <= r.best_success)
+            && at_best.is_some()
+            && r.first_success_steps == evals.iter().find(|e| e.success > 0.0).map(|e| e.steps);
+        if !agrees {
+            let why = format!(
+                "does not agree with its folder ({method}, {env}) or its evaluations \
+                 (last at {} steps {}, best {}, first success {:?})",
+                r.steps, r.final_success, r.best_success, r.first_success_steps
+            );
+            return Err(Error::parse(path, why));
+        }
+        let at = at_best.map_or(u64::MAX, |e| e.steps);
+        if r.best_success > best.0 || (r.best_success == best.0 && at < best.1) {
+            best = (r.best_success, at);
+        }
+    }
+    Ok(PointMazeBaseline {
+        method: method.to_string(),
+        library: "ours".to_string(),
+        env,
+        runs: runs.len() as u64,
+        ended: runs.len() as u64,
+        steps_max: runs.iter().map(|(_, r)| r.steps).max().unwrap_or(0),
+        solved: runs.iter().filter(|(_, r)| r.final_success >= 1.0).count() as u64,
+        solved_at_min: None,
+        reached: runs.iter().filter(|(_, r)| r.best_success > 0.0).count() as u64,
+        best: f64::from(best.0),
+        best_at: if runs.is_empty() { 0 } else { best.1 },
+        seeds: seeds_text(runs.iter().map(|(_, r)| r.seed)),
+    })
+}
+
+/// The seeds of the files `s<seed>.evals.csv` of `dir`, sorted.
+fn evals_seeds(dir: &Path) -> Result<Vec<u64>> {
+    let mut seeds = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let seed = name
+            .strip_prefix('s')
+            .and_then(|n| n.strip_suffix(".evals.csv"))
+            .and_then(|n| n.parse::<u64>().ok())
+            .filter(|&s| path == run_file(dir, s, ".evals.csv"));
+        seeds.extend(seed);
+    }
+    seeds.sort_unstable();
+    Ok(seeds)
+}
+
+/// One SB3 run's evaluations, checked: 100 episodes each, successes within them, every 10 000
+/// steps in order.
+fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
+    let path = run_file(dir, seed, ".evals.csv");
+    let evals: Vec<Sb3Eval> = crate::record::read_records(&path)?;
+    for (i, e) in evals.iter().enumerate() {
+        if e.episodes != 100 || e.successes > e.episodes || e.env_steps != 10_000 * (i as u64 + 1) {
+            let why = format!(
+                "evaluation {} ({} successes of {} episodes at {} steps): 100 episodes every \
+                 10 000 steps expected",
+                i + 1,
+                e.successes,
+                e.episodes,
+                e.env_steps
+            );
+            return Err(Error::parse(&path, why));
+        }
+    }
+    Ok(evals)
+}
+
+/// SB3's line from one folder: every run's evaluations; a run ended where its `s<seed>.csv`
+/// exists, and then it must agree with them (its best, and its stop at a solving evaluation).
+fn sb3_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
+    let env = env_of(dir, method);
+    let ended: Vec<(PathBuf, Sb3Row)> = seed_rows(dir, |r: &Sb3Row| r.seed)?;
+    let seeds = evals_seeds(dir)?;
+    let mut line = PointMazeBaseline {
+        method: method.to_string(),
+        library: "sb3".to_string(),
+        env: env.clone(),
+        runs: seeds.len() as u64,
+        ended: ended.len() as u64,
+        steps_max: 0,
+        solved: 0,
+        solved_at_min: None,
+        reached: 0,
+        best: 0.0,
+        best_at: 0,
+        seeds: seeds_text(seeds.iter().copied()),
+    };
+    let mut best = (0, u64::MAX);
+    for &seed in &seeds {
+        let evals = sb3_evals(dir, seed)?;
+        let top = evals.iter().map(|e| e.successes).max().unwrap_or(0);
+        let top_at = evals
+            .iter()
+            .find(|e| e.successes == top)
+            .map_or(0, |e| e.env_steps);
+        if let Some((path, r)) = ended.iter().find(|(_, r)| r.seed == seed) {
+            let agrees = r.map == env
+                && r.best_successes == top
+                && r.best_at_steps == top_at
+                && r.solved == (top >= SB3_SOLVED);
+            if !agrees {
+                let why = format!("does not agree with s{seed}.evals.csv (best {top} at {top_at})");
+                return Err(Error::parse(path, why));
+            }
+        }
+        line.steps_max = line.steps_max.max(evals.last().map_or(0, |e| e.env_steps));
+        line.reached += u64::from(top > 0);
+        if let Some(e) = evals.iter().find(|e| e.successes >= SB3_SOLVED) {
+            line.solved += 1;
+            line.solved_at_min = Some(
+                line.solved_at_min
+                    .map_or(e.env_steps, |m| m.min(e.env_steps)),
+            );
+        }
+        if top > best.0 || (top == best.0 && top_at < best.1) {
+            best = (top, top_at);
+        }
+    }
+    if let Some((path, _)) = ended.iter().find(|(_, r)| !seeds.contains(&r.seed)) {
+        return Err(Error::parse(
+            path,
+            "an ended run without its evaluations file",
+        ));
+    }
+    line.best = best.0 as f64 / 100.0;
+    line.best_at = if seeds.is_empty() { 0 } else { best.1 };
+    Ok(line)
+}
+
+/// The row an SB3 run writes when it ends (`s<seed>.csv`), the fields checked here.
+#[derive(Debug, Clone, Deserialize)]
+struct Sb3Row {
+    map: String,
+    seed: u64,
+    solved: bool,
+    best_successes: u64,
+    best_at_steps: u64,
+}

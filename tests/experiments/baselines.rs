@@ -1,0 +1,169 @@
+//! PointMaze's learner baselines (`results/pointmaze/vanilla/`, `results/pointmaze/sb3/`) are
+//! read back checked into `outside.pointmaze.csv`: the committed rows give the counts their
+//! CSVs say, SB3's evaluations give known values, and a row that disagrees with its folder or
+//! its evaluations is refused naming the file.
+
+use pbcs::tables::outside::{pointmaze_baselines, PointMazeBaseline};
+use std::path::Path;
+
+/// The values of `column` in every `s<seed>.csv` of `dir`, as text.
+fn column(dir: &Path, column: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for seed in 0..100 {
+        let Ok(text) = std::fs::read_to_string(dir.join(format!("s{seed}.csv"))) else {
+            continue;
+        };
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let i = header.iter().position(|h| *h == column).unwrap();
+        out.push(row[i].to_string());
+    }
+    out
+}
+
+#[test]
+fn the_committed_vanilla_rows_give_the_counts_their_files_say() {
+    let lines = pointmaze_baselines(Path::new("results")).unwrap();
+    let ours: Vec<&PointMazeBaseline> = lines.iter().filter(|l| l.library == "ours").collect();
+    assert_eq!(ours.len(), 6, "DDPG and TD3 on three maps");
+    for l in ours {
+        let dir = Path::new("results/pointmaze/vanilla").join(format!("{}-{}", l.method, l.env));
+        let finals = column(&dir, "final_success");
+        let bests = column(&dir, "best_success");
+        assert_eq!(l.runs as usize, finals.len(), "{dir:?}");
+        let solved = finals
+            .iter()
+            .filter(|v| v.parse::<f32>().unwrap() >= 1.0)
+            .count();
+        let reached = bests
+            .iter()
+            .filter(|v| v.parse::<f32>().unwrap() > 0.0)
+            .count();
+        assert_eq!(
+            (l.solved as usize, l.reached as usize),
+            (solved, reached),
+            "{dir:?}"
+        );
+        assert_eq!(l.steps_max, 1_000_000, "{dir:?}");
+    }
+}
+
+/// A scratch results folder with `files` (path under `pointmaze/`, contents).
+fn scratch(files: &[(&str, String)]) -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    for (path, text) in files {
+        let path = tmp.path().join("pointmaze").join(path);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    tmp
+}
+
+fn evals(successes: &[u64]) -> String {
+    let mut s = "env_steps,successes,episodes,wall_seconds\n".to_string();
+    for (i, k) in successes.iter().enumerate() {
+        s += &format!("{},{k},100,{}.0\n", 10_000 * (i + 1), i + 1);
+    }
+    s
+}
+
+const SB3_HEADER: &str = "library,algo,map,start_cell,goal_cell,cells_apart,seed,budget,solved,\
+                          steps_to_solve,best_successes,best_at_steps,env_steps,episodes\n";
+
+#[test]
+fn sb3_evaluations_give_known_values() {
+    let dir = "sb3/sac_her-pointmaze_umaze";
+    let tmp = scratch(&[
+        (&format!("{dir}/s0.evals.csv"), evals(&[3, 96, 96])),
+        (&format!("{dir}/s1.evals.csv"), evals(&[0, 0])),
+        (&format!("{dir}/s2.evals.csv"), evals(&[40, 97])),
+        (
+            &format!("{dir}/s2.csv"),
+            format!(
+                "{SB3_HEADER}sb3-2.9.2,sac_her,pointmaze_umaze,3 1,1 1,6,2,500000,true,20000,\
+                 97,20000,20000,100\n"
+            ),
+        ),
+    ]);
+    let lines = pointmaze_baselines(tmp.path()).unwrap();
+    let want = PointMazeBaseline {
+        method: "sac_her".into(),
+        library: "sb3".into(),
+        env: "pointmaze_umaze".into(),
+        runs: 3,
+        ended: 1,
+        steps_max: 30_000,
+        solved: 2,
+        solved_at_min: Some(20_000),
+        reached: 2,
+        best: 0.97,
+        best_at: 20_000,
+        seeds: "0 1 2".into(),
+    };
+    assert_eq!(lines, vec![want]);
+}
+
+#[test]
+fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_file() {
+    let dir = "sb3/sac_her-pointmaze_umaze";
+    let ended = |best: u64| {
+        format!(
+            "{SB3_HEADER}sb3-2.9.2,sac_her,pointmaze_umaze,3 1,1 1,6,0,500000,false,,{best},\
+             20000,20000,100\n"
+        )
+    };
+    type Case = (Vec<(String, String)>, &'static str, &'static str);
+    let cases: Vec<Case> = vec![
+        (
+            vec![(format!("{dir}/s0.evals.csv"), evals(&[3, 101]))],
+            "s0.evals.csv",
+            "evaluation 2",
+        ),
+        (
+            vec![(
+                format!("{dir}/s0.evals.csv"),
+                evals(&[3, 4]).replace("20000,", "30000,"),
+            )],
+            "s0.evals.csv",
+            "every",
+        ),
+        (
+            vec![
+                (format!("{dir}/s0.evals.csv"), evals(&[3, 40])),
+                (format!("{dir}/s0.csv"), ended(41)),
+            ],
+            "s0.csv",
+            "does not agree",
+        ),
+        (
+            vec![(format!("{dir}/s0.csv"), ended(40))],
+            "s0.csv",
+            "without its evaluations",
+        ),
+    ];
+    for (files, file, why) in cases {
+        let files: Vec<(&str, String)> =
+            files.iter().map(|(p, t)| (p.as_str(), t.clone())).collect();
+        let tmp = scratch(&files);
+        let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
+        assert!(err.contains(file) && err.contains(why), "{why}: {err}");
+    }
+    // Our learners' rows: one committed run copied, then contradicted.
+    let from = Path::new("results/pointmaze/vanilla/ddpg-pointmaze_umaze");
+    let row = std::fs::read_to_string(from.join("s8.csv")).unwrap();
+    let evals8 = std::fs::read_to_string(from.join("s8.evals.csv")).unwrap();
+    let vdir = "vanilla/ddpg-pointmaze_umaze";
+    for (bad, why) in [
+        (row.replace(",8,", ",9,"), "file's name says 8"),
+        (row.replace("ddpg,", "td3,"), "does not agree"),
+        (row.replace(",80000,", ",90000,"), "does not agree"),
+    ] {
+        let tmp = scratch(&[
+            (&format!("{vdir}/s8.csv"), bad),
+            (&format!("{vdir}/s8.evals.csv"), evals8.clone()),
+        ]);
+        let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
+        assert!(err.contains("s8.csv") && err.contains(why), "{why}: {err}");
+    }
+}
