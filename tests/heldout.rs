@@ -140,6 +140,10 @@ fn the_held_out_pointmaze_grid_runs_the_grids_jobs_on_unused_seeds() {
         assert_eq!(h.job, g.job, "{}: not the grid's job", h.id);
         let (hs, gs) = (held.seeds_of(h), grid.seeds_of(g));
         assert_eq!(hs, (10..20).collect::<Vec<u64>>(), "{}", h.id);
-        assert!(hs.iter().all(|s| !gs.contains(s)), "{}: a seed of the grid", h.id);
+        assert!(
+            hs.iter().all(|s| !gs.contains(s)),
+            "{}: a seed of the grid",
+            h.id
+        );
     }
 }

@@ -17,13 +17,22 @@ random warm-up steps, one torch thread.
     python python/benches/sb3_pointmaze.py --map umaze --seeds 0-2 --out results/pointmaze/sb3
 
 Each evaluation is appended to ``<out>/sac_her-pointmaze_<map>/s<seed>.evals.csv`` as it
-happens (an interrupted run keeps them; a re-run of that seed refuses to start until that file
-is moved away, so committed evaluations are never overwritten); the finished run
-writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its wall clock
-beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of CI.
+happens, and the run saved right before it is appended (model, optimisers and HER replay buffer
+under ``--checkpoints``, default ``~/.cache/pbcs-rs/sb3-checkpoints``: about 100 MB a run, not
+committed). An interrupted run resumes from its last checkpoint when the script is started
+again (``s<seed>.resumes.csv`` lists where); evaluations already written are never rewritten,
+and a run whose evaluations have no checkpoint is refused (move its file away to start
+over). A resumed run is not the uninterrupted one: the training episode in progress is cut, and
+SB3's random streams, the training env's and the evaluation env's resets are seeded again from
+the run seed and the step it resumes at (so a resume at the same step is repeatable). The
+finished run writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its
+wall clock beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of
+CI.
 """
 
 import argparse
+import csv
+import json
 import time
 from collections import deque
 from pathlib import Path
@@ -85,10 +94,75 @@ def evaluate(model, env):
 
 
 
-def run(map_key, seed, steps, out):
+def read_evals(path):
+    """The evaluations written so far: (env_steps, successes, wall_seconds) in order."""
+    with path.open() as f:
+        return [(int(r["env_steps"]), int(r["successes"]), float(r["wall_seconds"]))
+                for r in csv.DictReader(f)]
+
+
+def save_checkpoint(model, ckpt, record):
+    """Saves `model` and its replay buffer as of `record` (env_steps, successes, wall_seconds),
+    then names them in ``last.json`` (written atomically), then removes older ones: a crash at
+    any point leaves ``last.json`` naming a whole checkpoint."""
+    steps = record[0]
+    ckpt.mkdir(parents=True, exist_ok=True)
+    model.save(ckpt / f"model_{steps}.zip")
+    model.save_replay_buffer(ckpt / f"replay_{steps}.pkl")
+    write_atomic(ckpt / "last.json", json.dumps(dict(zip(
+        ("env_steps", "successes", "wall_seconds"), record))))
+    for old in ckpt.glob("*_*.*"):
+        if old.stem.rsplit("_", 1)[1] != str(steps):
+            old.unlink()
+
+
+def resume(evals, ckpt, env, seed):
+    """The model of an interrupted run and its evaluations so far (the checkpoint's own
+    evaluation appended if the run stopped before writing it), or refuses."""
+    from stable_baselines3 import SAC
+
+    done = read_evals(evals)
+    last = ckpt / "last.json"
+    saved = json.loads(last.read_text()) if last.exists() else None
+    at = saved["env_steps"] if saved else None
+    if at is None or (done and done[-1][0] > at):
+        raise SystemExit(
+            f"{evals}: evaluations of a run with no checkpoint at its last one (kept, never "
+            "overwritten); move it away to run the seed again"
+        )
+    if not done or done[-1][0] < at:
+        done.append((at, saved["successes"], saved["wall_seconds"]))
+        with evals.open("a") as f:
+            f.write(f"{at},{saved['successes']},{EVAL_EPISODES},{saved['wall_seconds']:.1f}\n")
+    model = SAC.load(ckpt / f"model_{at}.zip", env=env, device="cpu")
+    model.load_replay_buffer(ckpt / f"replay_{at}.pkl")
+    model.set_random_seed(seed + at)
+    resumes = evals.with_name(evals.name.replace(".evals.", ".resumes."))
+    if not resumes.exists():
+        resumes.write_text("env_steps\n")
+    with resumes.open("a") as f:
+        f.write(f"{at}\n")
+    return model, done
+
+
+def new_model(env, seed):
+    from stable_baselines3 import SAC, HerReplayBuffer
+
+    return SAC(
+        "MultiInputPolicy",
+        env,
+        replay_buffer_class=HerReplayBuffer,
+        replay_buffer_kwargs=dict(n_sampled_goal=4, goal_selection_strategy="future"),
+        learning_starts=1_000,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
+
+
+def run(map_key, seed, steps, out, checkpoints):
     import stable_baselines3
     import torch
-    from stable_baselines3 import SAC, HerReplayBuffer
     from stable_baselines3.common.callbacks import BaseCallback
 
     name = MAPS[map_key]
@@ -100,43 +174,37 @@ def run(map_key, seed, steps, out):
     probe = gym.make(f"PointMaze_{name}-v3").unwrapped
     length, start, goal = farthest_cells(probe.maze.maze_map)
     env = make_env(name, start, goal)
-    env.reset(seed=seed)
     eval_env = make_env(name, start, goal)
-    eval_env.reset(seed=1_000_000 + seed)
     evals = folder / f"s{seed}.evals.csv"
+    ckpt = checkpoints / folder.name / f"s{seed}"
     folder.mkdir(parents=True, exist_ok=True)
     if evals.exists():
-        raise SystemExit(
-            f"{evals}: the evaluations of an unfinished run of this seed (kept, never "
-            "overwritten); move it away to run the seed again"
-        )
-    evals.write_text("env_steps,successes,episodes,wall_seconds\n")
-    clock = time.perf_counter()
-    best = [0, 0]  # successes, env steps
+        model, done = resume(evals, ckpt, env, seed)
+        at = done[-1][0]
+    else:
+        env.reset(seed=seed)
+        model, done, at = new_model(env, seed), [], 0
+        evals.write_text("env_steps,successes,episodes,wall_seconds\n")
+    eval_env.reset(seed=1_000_000 + seed + at)
+    clock = time.perf_counter() - (done[-1][2] if done else 0.0)
+    best = max(((k, n) for n, k, _ in done), key=lambda b: (b[0], -b[1]), default=(0, 0))
+    best = list(best)  # successes, env steps
 
     class Evaluate(BaseCallback):
         def _on_step(self):
             if self.num_timesteps % EVAL_EVERY:
                 return True
             wins = evaluate(self.model, eval_env)
+            record = (self.num_timesteps, wins, time.perf_counter() - clock)
+            save_checkpoint(self.model, ckpt, record)
             with evals.open("a") as f:
-                f.write(f"{self.num_timesteps},{wins},{EVAL_EPISODES},"
-                        f"{time.perf_counter() - clock:.1f}\n")
+                f.write(f"{record[0]},{wins},{EVAL_EPISODES},{record[2]:.1f}\n")
             if wins > best[0]:
                 best[:] = [wins, self.num_timesteps]
             return wins < SOLVED
 
-    model = SAC(
-        "MultiInputPolicy",
-        env,
-        replay_buffer_class=HerReplayBuffer,
-        replay_buffer_kwargs=dict(n_sampled_goal=4, goal_selection_strategy="future"),
-        learning_starts=1_000,
-        seed=seed,
-        device="cpu",
-        verbose=0,
-    )
-    model.learn(total_timesteps=steps, callback=Evaluate())
+    if best[0] < SOLVED and at < steps:
+        model.learn(total_timesteps=steps - at, callback=Evaluate(), reset_num_timesteps=at == 0)
     seconds = time.perf_counter() - clock
     solved = best[0] >= SOLVED
     text = (
@@ -170,9 +238,11 @@ def main():
     p.add_argument("--seeds", default="0-2", type=seeds)
     p.add_argument("--steps", default=500_000, type=int)
     p.add_argument("--out", default=Path("results/pointmaze/sb3"), type=Path)
+    p.add_argument("--checkpoints", type=Path,
+                   default=Path.home() / ".cache" / "pbcs-rs" / "sb3-checkpoints")
     args = p.parse_args()
     for seed in args.seeds:
-        print(run(args.map, seed, args.steps, args.out), end="", flush=True)
+        print(run(args.map, seed, args.steps, args.out, args.checkpoints), end="", flush=True)
 
 
 if __name__ == "__main__":

@@ -196,11 +196,7 @@ pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseli
         } else {
             format!("{:.0}", r.best)
         };
-        let best_at = if r.best > 0.0 {
-            human_steps(r.best_at as f64)
-        } else {
-            "--".into()
-        };
+        let best_at = r.best_at.map_or("--".into(), |n| human_steps(n as f64));
         for (f, v) in [
             ("runs", r.runs.to_string()),
             ("ended", r.ended.to_string()),

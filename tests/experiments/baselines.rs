@@ -77,6 +77,14 @@ fn sb3_evaluations_give_known_values() {
     let tmp = scratch(&[
         (&format!("{dir}/s0.evals.csv"), evals(&[3, 96, 96])),
         (&format!("{dir}/s1.evals.csv"), evals(&[0, 0])),
+        // An ended run that never succeeded: the script writes its best as 0 at 0 steps.
+        (
+            &format!("{dir}/s1.csv"),
+            format!(
+                "{SB3_HEADER}sb3-2.9.2,sac_her,pointmaze_umaze,3 1,1 1,6,1,20000,false,,0,0,\
+                 20000,100\n"
+            ),
+        ),
         (&format!("{dir}/s2.evals.csv"), evals(&[40, 97])),
         (
             &format!("{dir}/s2.csv"),
@@ -92,13 +100,13 @@ fn sb3_evaluations_give_known_values() {
         library: "sb3".into(),
         env: "pointmaze_umaze".into(),
         runs: 3,
-        ended: 1,
+        ended: 2,
         steps_max: 30_000,
         solved: 2,
         solved_at_min: Some(20_000),
         reached: 2,
         best: 0.97,
-        best_at: 20_000,
+        best_at: Some(20_000),
         seeds: "0 1 2".into(),
     };
     assert_eq!(lines, vec![want]);

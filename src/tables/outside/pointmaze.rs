@@ -77,8 +77,9 @@ pub struct PointMazeBaseline {
     pub reached: u64,
     /// The best evaluation of any run: success fraction (ours: 0 or 1; SB3: successes / 100).
     pub best: f64,
-    /// The steps of that evaluation (the first run, then the earliest, among ties).
-    pub best_at: u64,
+    /// The steps of that evaluation (the earliest among ties); none where no evaluation
+    /// succeeded.
+    pub best_at: Option<u64>,
     /// The seeds, space-separated.
     pub seeds: String,
 }
@@ -165,7 +166,7 @@ fn vanilla_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
         solved_at_min: None,
         reached: runs.iter().filter(|(_, r)| r.best_success > 0.0).count() as u64,
         best: f64::from(best.0),
-        best_at: if runs.is_empty() { 0 } else { best.1 },
+        best_at: (best.0 > 0.0).then_some(best.1),
         seeds: seeds_text(runs.iter().map(|(_, r)| r.seed)),
     })
 }
@@ -225,16 +226,17 @@ fn sb3_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
         solved_at_min: None,
         reached: 0,
         best: 0.0,
-        best_at: 0,
+        best_at: None,
         seeds: seeds_text(seeds.iter().copied()),
     };
     let mut best = (0, u64::MAX);
     for &seed in &seeds {
         let evals = sb3_evals(dir, seed)?;
         let top = evals.iter().map(|e| e.successes).max().unwrap_or(0);
+        // The script's own convention: 0 steps when no evaluation succeeded.
         let top_at = evals
             .iter()
-            .find(|e| e.successes == top)
+            .find(|e| top > 0 && e.successes == top)
             .map_or(0, |e| e.env_steps);
         if let Some((path, r)) = ended.iter().find(|(_, r)| r.seed == seed) {
             let agrees = r.map == env
@@ -266,7 +268,7 @@ fn sb3_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
         ));
     }
     line.best = best.0 as f64 / 100.0;
-    line.best_at = if seeds.is_empty() { 0 } else { best.1 };
+    line.best_at = (best.0 > 0).then_some(best.1);
     Ok(line)
 }
 
