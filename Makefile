@@ -38,7 +38,7 @@ help:
 	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
 	@echo "make test-mujoco   our PointMaze's tests, and the equality test against"
 	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
-	@echo "make pointmaze     the PointMaze grid (experiments/pointmaze.toml) with MuJoCo, then"
+	@echo "make pointmaze     the PointMaze grids (experiments/pointmaze.toml, pointmaze_heldout.toml) with MuJoCo, then"
 	@echo "               gymnasium-robotics' verdict on every chain (python/benches/pointmaze_gym.py)"
 	@echo "make ci        what CI runs (.ci/run)"
 
@@ -73,14 +73,18 @@ test-mujoco: mujoco
 	PBCS_POINTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/pointmaze_step \
 	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py
 
-# The PointMaze grid (its runs need MuJoCo), then every chain judged by gymnasium-robotics
-# (each run re-made from its job file, its chain played in PointMaze_<Map>-v3): the rows
-# `make figures` then draws. The Python package first: its build rebuilds `pbcs` without MuJoCo.
+# The PointMaze grid and its held-out grid (their runs need MuJoCo), then every chain judged
+# by gymnasium-robotics (each run re-made from its job file, its chain played in
+# PointMaze_<Map>-v3): the rows `make figures` then draws. The Python package first: its
+# build rebuilds `pbcs` without MuJoCo.
 pointmaze: mujoco python
 	$(CARGO) build --release --locked --features mujoco --bin pbcs
 	$(PBCS) exp run experiments/pointmaze.toml --jobs $(JOBS)
+	$(PBCS) exp run experiments/pointmaze_heldout.toml --jobs $(JOBS)
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
+	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
+	  --raw results/raw/pointmaze_heldout --summary results/pointmaze/gym_cells_heldout.csv
 
 # Aggregation with polars, then plotters; trains nothing (about a minute after the build).
 figures:
