@@ -24,7 +24,12 @@ again (``s<seed>.resumes.csv`` lists where); evaluations already written are nev
 and a run whose evaluations have no checkpoint is refused (move its file away to start
 over). A resumed run is not the uninterrupted one: the training episode in progress is cut, and
 SB3's random streams, the training env's and the evaluation env's resets are seeded again from
-the run seed and the step it resumes at (so a resume at the same step is repeatable). The
+the run seed and the step it resumes at (so a resume at the same step is repeatable; the
+transition of the checkpoint's own step, not yet stored when it was taken, is lost). A run
+stopped before its first evaluation starts afresh; a fresh start removes any checkpoint of its
+seed; a checkpoint that does not continue the evaluations written (its step and successes, its
+budget) is refused, as is a run with evaluations and no checkpoint; a refused seed is reported
+and the next one runs (exit status 1). The
 finished run writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its
 wall clock beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of
 CI.
@@ -33,6 +38,8 @@ CI.
 import argparse
 import csv
 import json
+import shutil
+import sys
 import time
 from collections import deque
 from pathlib import Path
@@ -94,43 +101,60 @@ def evaluate(model, env):
 
 
 
+class Refused(Exception):
+    """A seed that cannot run: its message says why and what to do."""
+
+
 def read_evals(path):
     """The evaluations written so far: (env_steps, successes, wall_seconds) in order."""
-    with path.open() as f:
-        return [(int(r["env_steps"]), int(r["successes"]), float(r["wall_seconds"]))
-                for r in csv.DictReader(f)]
+    try:
+        with path.open() as f:
+            return [(int(r["env_steps"]), int(r["successes"]), float(r["wall_seconds"]))
+                    for r in csv.DictReader(f)]
+    except (KeyError, TypeError, ValueError) as e:
+        raise Refused(f"{path}: unreadable ({e!r}; a line cut by a crash?): repair it or move "
+                      "it away") from e
 
 
-def save_checkpoint(model, ckpt, record):
+def save_checkpoint(model, ckpt, record, budget):
     """Saves `model` and its replay buffer as of `record` (env_steps, successes, wall_seconds),
-    then names them in ``last.json`` (written atomically), then removes older ones: a crash at
-    any point leaves ``last.json`` naming a whole checkpoint."""
+    then names them in ``last.json`` (written atomically, with the run's budget), then removes
+    older ones: a stopped process leaves ``last.json`` naming a whole checkpoint."""
     steps = record[0]
     ckpt.mkdir(parents=True, exist_ok=True)
     model.save(ckpt / f"model_{steps}.zip")
     model.save_replay_buffer(ckpt / f"replay_{steps}.pkl")
-    write_atomic(ckpt / "last.json", json.dumps(dict(zip(
-        ("env_steps", "successes", "wall_seconds"), record))))
+    meta = dict(zip(("env_steps", "successes", "wall_seconds"), record), budget=budget)
+    write_atomic(ckpt / "last.json", json.dumps(meta))
     for old in ckpt.glob("*_*.*"):
         if old.stem.rsplit("_", 1)[1] != str(steps):
             old.unlink()
 
 
-def resume(evals, ckpt, env, seed):
+def resume(evals, ckpt, env, seed, budget):
     """The model of an interrupted run and its evaluations so far (the checkpoint's own
-    evaluation appended if the run stopped before writing it), or refuses."""
+    evaluation appended if the run stopped before writing it); None when the run stopped
+    before its first evaluation (start afresh); refuses a checkpoint that is not this run's."""
     from stable_baselines3 import SAC
 
     done = read_evals(evals)
     last = ckpt / "last.json"
     saved = json.loads(last.read_text()) if last.exists() else None
+    if saved is None and not done:
+        return None
+    prev = done[-1] if done else (0, None, 0.0)
     at = saved["env_steps"] if saved else None
-    if at is None or (done and done[-1][0] > at):
-        raise SystemExit(
-            f"{evals}: evaluations of a run with no checkpoint at its last one (kept, never "
-            "overwritten); move it away to run the seed again"
+    fits = saved is not None and (
+        at == prev[0] + EVAL_EVERY or (at == prev[0] and saved["successes"] == prev[1])
+    ) and saved.get("budget", budget) == budget
+    if not fits:
+        raise Refused(
+            f"{evals}: evaluations up to {prev[0]} steps, checkpoint "
+            f"{'none' if saved is None else saved} in {ckpt} (budget {budget}): not this run's "
+            "state; the evaluations are kept, never overwritten: move them away to run the seed "
+            "again"
         )
-    if not done or done[-1][0] < at:
+    if at > prev[0]:
         done.append((at, saved["successes"], saved["wall_seconds"]))
         with evals.open("a") as f:
             f.write(f"{at},{saved['successes']},{EVAL_EPISODES},{saved['wall_seconds']:.1f}\n")
@@ -178,10 +202,12 @@ def run(map_key, seed, steps, out, checkpoints):
     evals = folder / f"s{seed}.evals.csv"
     ckpt = checkpoints / folder.name / f"s{seed}"
     folder.mkdir(parents=True, exist_ok=True)
-    if evals.exists():
-        model, done = resume(evals, ckpt, env, seed)
+    resumed = resume(evals, ckpt, env, seed, steps) if evals.exists() else None
+    if resumed:
+        model, done = resumed
         at = done[-1][0]
     else:
+        shutil.rmtree(ckpt, ignore_errors=True)  # another run's, if any: never adopted
         env.reset(seed=seed)
         model, done, at = new_model(env, seed), [], 0
         evals.write_text("env_steps,successes,episodes,wall_seconds\n")
@@ -196,7 +222,7 @@ def run(map_key, seed, steps, out, checkpoints):
                 return True
             wins = evaluate(self.model, eval_env)
             record = (self.num_timesteps, wins, time.perf_counter() - clock)
-            save_checkpoint(self.model, ckpt, record)
+            save_checkpoint(self.model, ckpt, record, steps)
             with evals.open("a") as f:
                 f.write(f"{record[0]},{wins},{EVAL_EPISODES},{record[2]:.1f}\n")
             if wins > best[0]:
@@ -241,8 +267,14 @@ def main():
     p.add_argument("--checkpoints", type=Path,
                    default=Path.home() / ".cache" / "pbcs-rs" / "sb3-checkpoints")
     args = p.parse_args()
+    refused = 0
     for seed in args.seeds:
-        print(run(args.map, seed, args.steps, args.out, args.checkpoints), end="", flush=True)
+        try:
+            print(run(args.map, seed, args.steps, args.out, args.checkpoints), end="", flush=True)
+        except Refused as e:
+            print(f"seed {seed} not run: {e}", file=sys.stderr, flush=True)
+            refused += 1
+    sys.exit(1 if refused else 0)
 
 
 if __name__ == "__main__":

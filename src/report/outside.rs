@@ -185,7 +185,7 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
 }
 
 /// The numbers `\res{outside:pointmaze:<method>-<env>:<field>}` of PointMaze's learner
-/// baselines: `runs`, `ended`, `steps` (the most a run trained), `solved`, `solvedat` (SB3's
+/// baselines: `runs`, `ended`, `resumed`, `steps` (the most a run trained), `solved`, `solvedat` (SB3's
 /// fewest steps to solve, `--` where none did), `reached`, `best` (SB3: successes of 100;
 /// ours: 0 or 1), `bestat` (`--` where no evaluation succeeded) and `seeds`.
 pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseline]) -> String {
@@ -200,6 +200,7 @@ pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseli
         for (f, v) in [
             ("runs", r.runs.to_string()),
             ("ended", r.ended.to_string()),
+            ("resumed", r.resumed.to_string()),
             ("steps", human_steps(r.steps_max as f64)),
             ("solved", r.solved.to_string()),
             (

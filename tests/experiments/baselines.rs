@@ -75,7 +75,7 @@ const SB3_HEADER: &str = "library,algo,map,start_cell,goal_cell,cells_apart,seed
 fn sb3_evaluations_give_known_values() {
     let dir = "sb3/sac_her-pointmaze_umaze";
     let tmp = scratch(&[
-        (&format!("{dir}/s0.evals.csv"), evals(&[3, 96, 96])),
+        (&format!("{dir}/s0.evals.csv"), evals(&[3, 94, 96])),
         (&format!("{dir}/s1.evals.csv"), evals(&[0, 0])),
         // An ended run that never succeeded: the script writes its best as 0 at 0 steps.
         (
@@ -87,6 +87,11 @@ fn sb3_evaluations_give_known_values() {
         ),
         (&format!("{dir}/s2.evals.csv"), evals(&[40, 97])),
         (
+            &format!("{dir}/s2.resumes.csv"),
+            "env_steps\n10000\n".to_string(),
+        ),
+        (&format!("{dir}/s3.evals.csv"), evals(&[])),
+        (
             &format!("{dir}/s2.csv"),
             format!(
                 "{SB3_HEADER}sb3-2.9.2,sac_her,pointmaze_umaze,3 1,1 1,6,2,500000,true,20000,\
@@ -95,12 +100,14 @@ fn sb3_evaluations_give_known_values() {
         ),
     ]);
     let lines = pointmaze_baselines(tmp.path()).unwrap();
+    // Seed 3 stopped before its first evaluation: left out; seed 2 was resumed once.
     let want = PointMazeBaseline {
         method: "sac_her".into(),
         library: "sb3".into(),
         env: "pointmaze_umaze".into(),
         runs: 3,
         ended: 2,
+        resumed: 1,
         steps_max: 30_000,
         solved: 2,
         solved_at_min: Some(20_000),
@@ -149,6 +156,32 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
             "s0.csv",
             "without its evaluations",
         ),
+        (
+            vec![(format!("{dir}/s0.evals.csv"), evals(&[96, 97]))],
+            "s0.evals.csv",
+            "none after one with 95",
+        ),
+        (
+            vec![(format!("{dir}/s0.evals.csv"), evals(&[]))],
+            "sac_her-pointmaze_umaze",
+            "holds no run",
+        ),
+        (
+            vec![(
+                format!("{dir}/s0.csv"),
+                ended(40).replace("sac_her,", "td3,"),
+            )],
+            "s0.csv",
+            "not a run of sac_her",
+        ),
+        (
+            vec![(
+                "sb3/sac_her-pointmaze_nowhere/s0.evals.csv".into(),
+                evals(&[1]),
+            )],
+            "pointmaze_nowhere",
+            "a map of the registry",
+        ),
     ];
     for (files, file, why) in cases {
         let files: Vec<(&str, String)> =
@@ -174,4 +207,13 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
         let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
         assert!(err.contains("s8.csv") && err.contains(why), "{why}: {err}");
     }
+    // Its evaluations out of order (the first two swapped): refused too.
+    let mut lines: Vec<&str> = evals8.lines().collect();
+    lines.swap(1, 2);
+    let tmp = scratch(&[
+        (&format!("{vdir}/s8.csv"), row.clone()),
+        (&format!("{vdir}/s8.evals.csv"), lines.join("\n") + "\n"),
+    ]);
+    let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
+    assert!(err.contains("s8.csv") && err.contains("in order"), "{err}");
 }

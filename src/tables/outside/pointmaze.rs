@@ -4,7 +4,8 @@
 //! and Stable-Baselines3's SAC+HER in gymnasium-robotics' own PointMaze
 //! (`python/benches/sb3_pointmaze.py`: `<results>/pointmaze/sb3/sac_her-pointmaze_<map>/`,
 //! `s<seed>.evals.csv` as the run goes, `s<seed>.csv` once it ended). An SB3 run stopped before
-//! its end counts with the evaluations it made, and the table says how many runs ended.
+//! its end counts with the evaluations it made (one stopped before its first is left out), and
+//! the table says how many runs ended and how many were resumed from a checkpoint.
 
 use super::{seed_rows, seeds_text};
 use crate::error::{Error, Result};
@@ -66,6 +67,8 @@ pub struct PointMazeBaseline {
     pub runs: u64,
     /// Of them, ended (their budget spent, or SB3's stopped at a solving evaluation).
     pub ended: u64,
+    /// Of them, resumed from a checkpoint at least once (SB3's `s<seed>.resumes.csv`).
+    pub resumed: u64,
     /// The most environment steps a run trained.
     pub steps_max: u64,
     /// Runs whose policy solves the map: ours, a final greedy episode from the start that
@@ -89,52 +92,83 @@ pub struct PointMazeBaseline {
 pub fn pointmaze_baselines(results: &Path) -> Result<Vec<PointMazeBaseline>> {
     let root = results.join("pointmaze");
     let mut out = Vec::new();
-    for (method, dir) in folders(&root.join("vanilla"))? {
-        out.push(vanilla_line(&method, &dir)?);
+    for f in folders(&root.join("vanilla"), &["ddpg", "td3"])? {
+        out.push(vanilla_line(&f)?);
     }
-    for (method, dir) in folders(&root.join("sb3"))? {
-        out.push(sb3_line(&method, &dir)?);
+    for f in folders(&root.join("sb3"), &["sac_her"])? {
+        out.push(sb3_line(&f)?);
     }
     Ok(out)
 }
 
-/// The folders `<method>-<env>` of `root` (none without `root`), sorted by name.
-fn folders(root: &Path) -> Result<Vec<(String, PathBuf)>> {
+/// One learner's folder `<method>-<env>`.
+struct Folder {
+    method: String,
+    env: String,
+    dir: PathBuf,
+}
+
+/// The folders `<method>-<env>` of `root` (none without `root`), sorted by name: every folder
+/// there must name one of `methods` and a PointMaze map of the registry; files are left alone.
+fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
     if !root.is_dir() {
         return Ok(Vec::new());
     }
     let mut found = Vec::new();
     for entry in std::fs::read_dir(root).map_err(|e| Error::io(root, e))? {
-        let path = entry.map_err(|e| Error::io(root, e))?.path();
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        if let Some((method, _)) = name.split_once("-pointmaze_") {
-            if path.is_dir() {
-                found.push((method.to_string(), path.clone()));
-            }
+        let dir = entry.map_err(|e| Error::io(root, e))?.path();
+        if !dir.is_dir() {
+            continue;
         }
+        let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let parsed = name.split_once('-').filter(|(m, env)| {
+            methods.contains(m)
+                && env.starts_with("pointmaze_")
+                && env.parse::<crate::envs::EnvName>().is_ok()
+        });
+        let Some((method, env)) = parsed else {
+            let why = format!(
+                "not a folder <method>-pointmaze_<map> with a method of {methods:?} and a map \
+                 of the registry"
+            );
+            return Err(Error::parse(&dir, why));
+        };
+        found.push(Folder {
+            method: method.to_string(),
+            env: env.to_string(),
+            dir: dir.clone(),
+        });
     }
-    found.sort();
+    found.sort_by(|a, b| a.dir.cmp(&b.dir));
     Ok(found)
 }
 
-/// The map's name of a folder `<method>-<env>`.
-fn env_of(dir: &Path, method: &str) -> String {
-    let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
-    name[method.len() + 1..].to_string()
+/// An error naming a learner's folder that holds no run.
+fn no_runs(dir: &Path) -> Error {
+    Error::parse(
+        dir,
+        "holds no run (remove the folder, or run a seed into it)",
+    )
 }
 
 /// Our learner's line from one folder: every row checked against its folder and its own
 /// evaluations (`final_success` the last, `best_success` the best, `first_success_steps` the
 /// first that reached the goal).
-fn vanilla_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
-    let env = env_of(dir, method);
+fn vanilla_line(f: &Folder) -> Result<PointMazeBaseline> {
+    let (method, env, dir) = (f.method.as_str(), f.env.clone(), f.dir.as_path());
     let runs: Vec<(PathBuf, VanillaRun)> = seed_rows(dir, |r: &VanillaRun| r.seed)?;
+    if runs.is_empty() {
+        return Err(no_runs(dir));
+    }
     let mut best = (0.0f32, u64::MAX);
     for (path, r) in &runs {
         let evals: Vec<EvalRow> =
             crate::record::read_records(&run_file(dir, r.seed, ".evals.csv"))?;
         let at_best = evals.iter().find(|e| e.success == r.best_success);
-        let agrees = r.algo == method
+        let in_order = evals.windows(2).all(|w| w[0].steps < w[1].steps)
+            && evals.iter().all(|e| (0.0..=1.0).contains(&e.success));
+        let agrees = in_order
+            && r.algo == method
             && r.env == env
             && evals
                 .last()
@@ -144,8 +178,8 @@ fn vanilla_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
             && r.first_success_steps == evals.iter().find(|e| e.success > 0.0).map(|e| e.steps);
         if !agrees {
             let why = format!(
-                "does not agree with its folder ({method}, {env}) or its evaluations \
-                 (last at {} steps {}, best {}, first success {:?})",
+                "does not agree with its folder ({method}, {env}) or its evaluations (in order, \
+                 successes in [0, 1]; last at {} steps {}, best {}, first success {:?})",
                 r.steps, r.final_success, r.best_success, r.first_success_steps
             );
             return Err(Error::parse(path, why));
@@ -161,6 +195,7 @@ fn vanilla_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
         env,
         runs: runs.len() as u64,
         ended: runs.len() as u64,
+        resumed: 0,
         steps_max: runs.iter().map(|(_, r)| r.steps).max().unwrap_or(0),
         solved: runs.iter().filter(|(_, r)| r.final_success >= 1.0).count() as u64,
         solved_at_min: None,
@@ -189,15 +224,20 @@ fn evals_seeds(dir: &Path) -> Result<Vec<u64>> {
 }
 
 /// One SB3 run's evaluations, checked: 100 episodes each, successes within them, every 10 000
-/// steps in order.
+/// steps in order, none after one that solved (the run stops there).
 fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
     let path = run_file(dir, seed, ".evals.csv");
     let evals: Vec<Sb3Eval> = crate::record::read_records(&path)?;
     for (i, e) in evals.iter().enumerate() {
-        if e.episodes != 100 || e.successes > e.episodes || e.env_steps != 10_000 * (i as u64 + 1) {
+        let after_solved = i > 0 && evals[i - 1].successes >= SB3_SOLVED;
+        if e.episodes != 100
+            || e.successes > e.episodes
+            || e.env_steps != 10_000 * (i as u64 + 1)
+            || after_solved
+        {
             let why = format!(
                 "evaluation {} ({} successes of {} episodes at {} steps): 100 episodes every \
-                 10 000 steps expected",
+                 10 000 steps expected, and none after one with {SB3_SOLVED} successes",
                 i + 1,
                 e.successes,
                 e.episodes,
@@ -211,72 +251,114 @@ fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
 
 /// SB3's line from one folder: every run's evaluations; a run ended where its `s<seed>.csv`
 /// exists, and then it must agree with them (its best, and its stop at a solving evaluation).
-fn sb3_line(method: &str, dir: &Path) -> Result<PointMazeBaseline> {
-    let env = env_of(dir, method);
+fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
+    let (method, env, dir) = (f.method.as_str(), f.env.clone(), f.dir.as_path());
     let ended: Vec<(PathBuf, Sb3Row)> = seed_rows(dir, |r: &Sb3Row| r.seed)?;
-    let seeds = evals_seeds(dir)?;
-    let mut line = PointMazeBaseline {
-        method: method.to_string(),
-        library: "sb3".to_string(),
-        env: env.clone(),
-        runs: seeds.len() as u64,
-        ended: ended.len() as u64,
-        steps_max: 0,
-        solved: 0,
-        solved_at_min: None,
-        reached: 0,
-        best: 0.0,
-        best_at: None,
-        seeds: seeds_text(seeds.iter().copied()),
-    };
-    let mut best = (0, u64::MAX);
-    for &seed in &seeds {
-        let evals = sb3_evals(dir, seed)?;
-        let top = evals.iter().map(|e| e.successes).max().unwrap_or(0);
-        // The script's own convention: 0 steps when no evaluation succeeded.
-        let top_at = evals
-            .iter()
-            .find(|e| top > 0 && e.successes == top)
-            .map_or(0, |e| e.env_steps);
-        if let Some((path, r)) = ended.iter().find(|(_, r)| r.seed == seed) {
-            let agrees = r.map == env
-                && r.best_successes == top
-                && r.best_at_steps == top_at
-                && r.solved == (top >= SB3_SOLVED);
-            if !agrees {
-                let why = format!("does not agree with s{seed}.evals.csv (best {top} at {top_at})");
-                return Err(Error::parse(path, why));
-            }
-        }
-        line.steps_max = line.steps_max.max(evals.last().map_or(0, |e| e.env_steps));
-        line.reached += u64::from(top > 0);
-        if let Some(e) = evals.iter().find(|e| e.successes >= SB3_SOLVED) {
-            line.solved += 1;
-            line.solved_at_min = Some(
-                line.solved_at_min
-                    .map_or(e.env_steps, |m| m.min(e.env_steps)),
-            );
-        }
-        if top > best.0 || (top == best.0 && top_at < best.1) {
-            best = (top, top_at);
-        }
-    }
-    if let Some((path, _)) = ended.iter().find(|(_, r)| !seeds.contains(&r.seed)) {
+    if let Some((path, _)) = ended.iter().find(|(_, r)| r.algo != method || r.map != env) {
         return Err(Error::parse(
             path,
-            "an ended run without its evaluations file",
+            format!("not a run of {method} on {env}"),
         ));
     }
-    line.best = best.0 as f64 / 100.0;
-    line.best_at = (best.0 > 0).then_some(best.1);
-    Ok(line)
+    let mut runs = Vec::new();
+    for seed in evals_seeds(dir)? {
+        let evals = sb3_evals(dir, seed)?;
+        let row = ended.iter().find(|(_, r)| r.seed == seed);
+        // A run stopped before its first evaluation has nothing to say yet: left out.
+        if evals.is_empty() && row.is_none() {
+            continue;
+        }
+        runs.push(sb3_run(seed, &evals, row)?);
+    }
+    if let Some((path, _)) = ended
+        .iter()
+        .find(|(_, r)| !runs.iter().any(|s| s.seed == r.seed))
+    {
+        return Err(Error::parse(path, "an ended run without its evaluations"));
+    }
+    if runs.is_empty() {
+        return Err(no_runs(dir));
+    }
+    let best = runs
+        .iter()
+        .map(|r| (r.top, r.top_at))
+        .max_by_key(|&(top, at)| (top, std::cmp::Reverse(at)))
+        .unwrap_or((0, 0));
+    Ok(PointMazeBaseline {
+        method: method.to_string(),
+        library: "sb3".to_string(),
+        env,
+        runs: runs.len() as u64,
+        ended: ended.len() as u64,
+        resumed: runs
+            .iter()
+            .filter(|r| run_file(dir, r.seed, ".resumes.csv").exists())
+            .count() as u64,
+        steps_max: runs.iter().map(|r| r.steps).max().unwrap_or(0),
+        solved: runs.iter().filter(|r| r.solved_at.is_some()).count() as u64,
+        solved_at_min: runs.iter().filter_map(|r| r.solved_at).min(),
+        reached: runs.iter().filter(|r| r.top > 0).count() as u64,
+        best: best.0 as f64 / 100.0,
+        best_at: (best.0 > 0).then_some(best.1),
+        seeds: seeds_text(runs.iter().map(|r| r.seed)),
+    })
+}
+
+/// One SB3 run's evaluations summed up.
+struct Sb3Run {
+    seed: u64,
+    /// The steps of its last evaluation.
+    steps: u64,
+    /// Its best successes, and the steps of their first evaluation (0 when none succeeded:
+    /// the script's own convention).
+    top: u64,
+    top_at: u64,
+    /// The steps of its first evaluation with at least [`SB3_SOLVED`] successes.
+    solved_at: Option<u64>,
+}
+
+/// Sums up one run's `evals`; its ended row, if any, must agree with them.
+fn sb3_run(seed: u64, evals: &[Sb3Eval], row: Option<&(PathBuf, Sb3Row)>) -> Result<Sb3Run> {
+    let top = evals.iter().map(|e| e.successes).max().unwrap_or(0);
+    let top_at = evals
+        .iter()
+        .find(|e| top > 0 && e.successes == top)
+        .map_or(0, |e| e.env_steps);
+    let run = Sb3Run {
+        seed,
+        steps: evals.last().map_or(0, |e| e.env_steps),
+        top,
+        top_at,
+        solved_at: evals
+            .iter()
+            .find(|e| e.successes >= SB3_SOLVED)
+            .map(|e| e.env_steps),
+    };
+    if let Some((path, r)) = row {
+        let agrees = r.library.starts_with("sb3-")
+            && r.best_successes == top
+            && r.best_at_steps == top_at
+            && r.solved == run.solved_at.is_some()
+            && r.env_steps == run.steps;
+        if !agrees {
+            let why = format!(
+                "does not agree with s{seed}.evals.csv (best {top} at {top_at}, last at {})",
+                run.steps
+            );
+            return Err(Error::parse(path, why));
+        }
+    }
+    Ok(run)
 }
 
 /// The row an SB3 run writes when it ends (`s<seed>.csv`), the fields checked here.
 #[derive(Debug, Clone, Deserialize)]
 struct Sb3Row {
+    library: String,
+    algo: String,
     map: String,
     seed: u64,
+    env_steps: u64,
     solved: bool,
     best_successes: u64,
     best_at_steps: u64,
