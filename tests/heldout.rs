@@ -5,18 +5,24 @@ use pbcs::experiment::Experiment;
 use sha2::{Digest, Sha256};
 use std::path::Path;
 
-#[test]
-fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
-    let exp = Experiment::load(Path::new("experiments/heldout.toml"), None).unwrap();
+/// A registered grid's `[registered]` table and its preset file's SHA-256 now.
+fn registration(exp: &Experiment) -> (pbcs::experiment::Registration, String) {
     let reg = exp
         .registered
         .clone()
-        .expect("heldout.toml has a [registered] table");
+        .unwrap_or_else(|| panic!("{} has a [registered] table", exp.name));
     let preset = std::fs::read(Path::new("experiments").join(&reg.preset)).unwrap();
-    let hash: String = Sha256::digest(&preset)
+    let hash = Sha256::digest(&preset)
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect();
+    (reg, hash)
+}
+
+#[test]
+fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
+    let exp = Experiment::load(Path::new("experiments/heldout.toml"), None).unwrap();
+    let (reg, hash) = registration(&exp);
     assert_eq!(
         hash, reg.sha256,
         "experiments/{} changed since the held-out grid was registered on {}: its rows no longer \
@@ -121,12 +127,7 @@ fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
 fn the_held_out_pointmaze_grid_runs_the_grids_jobs_on_unused_seeds() {
     let held = Experiment::load(Path::new("experiments/pointmaze_heldout.toml"), None).unwrap();
     let grid = Experiment::load(Path::new("experiments/pointmaze.toml"), None).unwrap();
-    let reg = held.registered.clone().expect("a [registered] table");
-    let preset = std::fs::read(Path::new("experiments").join(&reg.preset)).unwrap();
-    let hash: String = Sha256::digest(&preset)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let (reg, hash) = registration(&held);
     assert_eq!(
         hash, reg.sha256,
         "experiments/{} changed since the held-out PointMaze grid was registered on {}: \

@@ -108,24 +108,32 @@ pub struct UpdateCost {
     pub machine: String,
 }
 
+/// The files `s<seed><suffix>` of `dir` (`suffix` `.csv`, `.evals.csv`) with their seeds, in
+/// seed order (a file of another name, such as `s01.csv`, is ignored).
+fn seed_files(dir: &Path, suffix: &str) -> Result<Vec<(u64, PathBuf)>> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let seed = name
+            .strip_prefix('s')
+            .and_then(|n| n.strip_suffix(suffix))
+            .and_then(|n| n.parse::<u64>().ok())
+            .filter(|&seed| path == run_file(dir, seed, suffix));
+        out.extend(seed.map(|seed| (seed, path)));
+    }
+    out.sort();
+    Ok(out)
+}
+
 /// The rows `s<seed>.csv` of `dir` with their files, in seed order: each file one row whose
-/// seed (`seed_of`) is the file's (a file of another name, such as `s01.csv`, is ignored).
+/// seed (`seed_of`) is the file's ([`seed_files`]).
 fn seed_rows<T: serde::de::DeserializeOwned>(
     dir: &Path,
     seed_of: impl Fn(&T) -> u64,
 ) -> Result<Vec<(PathBuf, T)>> {
     let mut out = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let Some(seed) = name
-            .strip_prefix('s')
-            .and_then(|n| n.strip_suffix(".csv"))
-            .and_then(|n| n.parse::<u64>().ok())
-            .filter(|&seed| path == run_file(dir, seed, ".csv"))
-        else {
-            continue;
-        };
+    for (seed, path) in seed_files(dir, ".csv")? {
         let mut rows: Vec<T> = crate::record::read_records(&path)?;
         let row = match (rows.pop(), rows.is_empty()) {
             (Some(row), true) => row,
@@ -143,10 +151,9 @@ fn seed_rows<T: serde::de::DeserializeOwned>(
             );
             return Err(Error::parse(&path, message));
         }
-        out.push((seed, path, row));
+        out.push((path, row));
     }
-    out.sort_by_key(|(seed, _, _)| *seed);
-    Ok(out.into_iter().map(|(_, path, row)| (path, row)).collect())
+    Ok(out)
 }
 
 fn seeds_text(seeds: impl IntoIterator<Item = u64>) -> String {

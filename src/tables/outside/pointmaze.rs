@@ -7,7 +7,7 @@
 //! its end counts with the evaluations it made (one stopped before its first is left out), and
 //! the table says how many runs ended and how many were resumed from a checkpoint.
 
-use super::{seed_rows, seeds_text};
+use super::{seed_files, seed_rows, seeds_text};
 use crate::error::{Error, Result};
 use crate::experiment::run_file;
 use crate::train::EvalRow;
@@ -208,19 +208,10 @@ fn vanilla_line(f: &Folder) -> Result<PointMazeBaseline> {
 
 /// The seeds of the files `s<seed>.evals.csv` of `dir`, sorted.
 fn evals_seeds(dir: &Path) -> Result<Vec<u64>> {
-    let mut seeds = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let seed = name
-            .strip_prefix('s')
-            .and_then(|n| n.strip_suffix(".evals.csv"))
-            .and_then(|n| n.parse::<u64>().ok())
-            .filter(|&s| path == run_file(dir, s, ".evals.csv"));
-        seeds.extend(seed);
-    }
-    seeds.sort_unstable();
-    Ok(seeds)
+    Ok(seed_files(dir, ".evals.csv")?
+        .into_iter()
+        .map(|(seed, _)| seed)
+        .collect())
 }
 
 /// One SB3 run's evaluations, checked: 100 episodes each, successes within them, every 10 000
