@@ -235,6 +235,11 @@ impl<S: Clone> Archive<S> {
         self.bins.len()
     }
 
+    /// Every state, by id (in the order visited).
+    pub fn states(&self) -> &[S] {
+        &self.states
+    }
+
     /// State `id`.
     pub fn state(&self, id: u32) -> &S {
         &self.states[id as usize]

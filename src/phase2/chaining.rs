@@ -12,7 +12,8 @@
 use super::backplay;
 use super::task::{SkillTask, StepCounts};
 use super::{
-    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, TraceRow,
+    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, StartMode,
+    TraceRow,
 };
 use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
@@ -41,13 +42,45 @@ pub fn chain_skills<E: Env>(
     seeds: &Seeds,
     spent: u64,
     kernel: Kernel,
+    progress: impl FnMut(usize, Progress),
+) -> Result<Phase2Outcome> {
+    chain_skills_with_starts(
+        env, tau, None, learner, config, seeds, spent, kernel, progress,
+    )
+}
+
+/// [`chain_skills`], with Backplay's starts in B_ε(τ_K) drawn by `starts` where
+/// `phase2.start = "archive"` asks for them (phase 1's archive, [`super::ArchiveStarts`]);
+/// that setting without `starts` is refused.
+#[allow(clippy::too_many_arguments)]
+pub fn chain_skills_with_starts<E: Env>(
+    env: &E,
+    tau: &[E::State],
+    starts: Option<&dyn SampleBall<E::State>>,
+    learner: &LearnerConfig,
+    config: &Phase2Config,
+    seeds: &Seeds,
+    spent: u64,
+    kernel: Kernel,
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
     config.check()?;
     config.require_hooks(env)?;
+    let starts = match (config.start, starts) {
+        (StartMode::Archive, None) => {
+            return Err(crate::error::Error::invalid(
+                "phase2.start",
+                "\"archive\" draws Backplay's starts from phase 1's archive, which this call \
+                 was not given (chain_skills_with_starts; `pbcs run` and experiments pass it)",
+            ))
+        }
+        (StartMode::Archive, starts) => starts,
+        _ => None,
+    };
     let chainer = Chainer::new(
         env,
         tau,
+        starts,
         learner,
         config,
         seeds,
@@ -73,6 +106,8 @@ pub fn chain_skills<E: Env>(
 pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     env: &'a E,
     tau: &'a [E::State],
+    /// Backplay's starts where they are not the environment's ball ([`StartMode::Archive`]).
+    starts: Option<&'a dyn SampleBall<E::State>>,
     obs: Vec<Vec<f32>>,
     learner: &'a LearnerConfig,
     config: &'a Phase2Config,
@@ -96,6 +131,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
     fn new(
         env: &'a E,
         tau: &'a [E::State],
+        starts: Option<&'a dyn SampleBall<E::State>>,
         learner: &'a LearnerConfig,
         config: &'a Phase2Config,
         seeds: &'a Seeds,
@@ -106,6 +142,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         Chainer {
             env,
             tau,
+            starts,
             obs: tau
                 .iter()
                 .map(|s| {
@@ -203,7 +240,8 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let budget = config.max_env_steps.saturating_sub(self.spent.get());
         let goal = config.goal(env, &self.obs, lo + t);
         let mut task = SkillTask::new(env, config, states, goal, t, learner, rngs, budget)?
-            .with_entries(entries.to_vec());
+            .with_entries(entries.to_vec())
+            .with_starts(self.starts);
         let before = self.spent.get();
         task.on_event = Some(Box::new(move |p: Progress| {
             self.record(TraceRow {

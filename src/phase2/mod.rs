@@ -20,6 +20,7 @@ pub mod flat;
 pub mod goal;
 pub mod procedure;
 pub mod skill_chain;
+pub mod starts;
 pub mod task;
 
 pub use procedure::{
@@ -29,8 +30,11 @@ pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;
 use crate::error::Result;
-pub use chaining::{chain_skills, skill_chaining, verified, MAX_VERIFIED_CANDIDATES};
+pub use chaining::{
+    chain_skills, chain_skills_with_starts, skill_chaining, verified, MAX_VERIFIED_CANDIDATES,
+};
 use serde::{Deserialize, Serialize};
+pub use starts::ArchiveStarts;
 use task::StepCounts;
 
 /// Where Backplay's episodes start.
@@ -42,6 +46,10 @@ pub enum StartMode {
     Ball,
     /// Exactly at τ_K (the failure that appendix explains).
     Exact,
+    /// In B_ε(τ_K), among the states phase 1's archive visited there ([`ArchiveStarts`]):
+    /// states the environment reached, with their own velocities, instead of made-up ones.
+    /// Needs the archive: [`chain_skills_with_starts`] (`pbcs run` and experiments pass it).
+    Archive,
 }
 
 /// The last skill's goal (the skill whose target is τ_N).

@@ -355,8 +355,13 @@ impl Phase2Config {
     pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
         use crate::env::Capability;
         let i = &self.ideas;
-        if self.start == StartMode::Ball {
-            Capability::SampleBall.require(env, "phase2.start = \"ball\"")?;
+        match self.start {
+            StartMode::Ball => Capability::SampleBall.require(env, "phase2.start = \"ball\"")?,
+            // Where no archived state lies in the ball, the environment's own sample.
+            StartMode::Archive => {
+                Capability::SampleBall.require(env, "phase2.start = \"archive\"")?
+            }
+            StartMode::Exact => {}
         }
         if i.chain_check.is_some() {
             Capability::SampleBall.require(env, "phase2.chain_verify_episodes")?;

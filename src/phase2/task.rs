@@ -130,7 +130,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
         Ok(SkillTask {
             env,
             ball: match config.start {
-                StartMode::Ball => env.ball_starts(),
+                // Archive starts replace it ([`SkillTask::with_starts`]).
+                StartMode::Ball | StartMode::Archive => env.ball_starts(),
                 StartMode::Exact => None,
             },
             config,
@@ -167,6 +168,15 @@ impl<'a, E: Env> SkillTask<'a, E> {
         self
     }
 
+    /// With [`StartMode::Archive`], draws the starts in B_ε(τ_k) with `starts` (phase 1's
+    /// archive, [`crate::phase2::ArchiveStarts`]); otherwise (or with `None`) changes nothing.
+    pub fn with_starts(mut self, starts: Option<&'a dyn SampleBall<E::State>>) -> Self {
+        if let (StartMode::Archive, Some(starts)) = (self.config.start, starts) {
+            self.ball = Some(starts);
+        }
+        self
+    }
+
     /// The index of the goal's state in this task's section (τ_T).
     pub fn target(&self) -> usize {
         self.t
@@ -176,8 +186,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
         self.steps.train + self.steps.test >= self.budget
     }
 
-    /// `n` start states around τ_k: uniform in B_ε(τ_k), or τ_k itself
-    /// ([`StartMode::Exact`]).
+    /// `n` start states around τ_k: uniform in B_ε(τ_k) (made by the environment, or drawn
+    /// from phase 1's archive: [`StartMode::Archive`]), or τ_k itself ([`StartMode::Exact`]).
     fn starts(&mut self, k: usize, n: usize) -> Vec<E::State> {
         use rand::Rng as _;
         (0..n)

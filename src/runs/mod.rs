@@ -64,14 +64,16 @@ pub fn default_out(command: &str, maze: &MazeConfig, seed: u64, suffix: &str) ->
 }
 
 /// The part of a PBCS run's default folder that names its departures from the preset:
-/// `-nochain` without chaining, `-exact` with exact starts.
+/// `-nochain` without chaining, `-exact` with exact starts, `-archive` with archive starts.
 pub fn pbcs_suffix(job: &PbcsJob) -> String {
     let mut suffix = String::new();
     if !job.phase2.chaining {
         suffix.push_str("-nochain");
     }
-    if job.phase2.start == StartMode::Exact {
-        suffix.push_str("-exact");
+    match job.phase2.start {
+        StartMode::Exact => suffix.push_str("-exact"),
+        StartMode::Archive => suffix.push_str("-archive"),
+        StartMode::Ball => {}
     }
     suffix
 }

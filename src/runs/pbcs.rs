@@ -4,14 +4,15 @@ use super::{
     claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
 };
 use crate::config::PbcsJob;
-use crate::env::Planar;
+use crate::env::{Planar, SampleBall};
 use crate::envs::{EnvName, Visit};
 use crate::error::{Error, Result};
 use crate::explore::{explore, Exploration};
 use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::phase2::{
-    chain_skills, Failure, Phase2Outcome, Progress, SkillChain, StartMode, Variant,
+    chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, SkillChain,
+    StartMode, Variant,
 };
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_atomic, write_csv, write_record};
@@ -144,9 +145,13 @@ impl<E: Planar> PbcsRun<E> {
         let mut rng = seeds.stream(Stream::Explore);
         let found = explore(&env, &job.explore, &mut rng, |_, _| {})?;
         let tau = crate::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2)?.states;
-        let phase2 = chain_skills(
+        // Backplay's starts from the archive, where `phase2.start = "archive"` asks.
+        let archived = (job.phase2.start == StartMode::Archive)
+            .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
+        let phase2 = chain_skills_with_starts(
             &env,
             &tau,
+            archived.as_ref().map(|a| a as &dyn SampleBall<E::State>),
             &job.learner,
             &job.phase2,
             &seeds,

@@ -139,3 +139,82 @@ fn the_rooms_hooks_agree_with_the_step() {
     assert!(rooms.connect(&[0.7, 0.9], &[1.3, 0.9], 0.09).is_some());
     assert!(rooms.connect(&[0.7, 0.9], &[1.3, 0.9], 0.11).is_none());
 }
+
+/// Archive starts (`phase2.start = "archive"`): refused without the archive or without the
+/// environment's ball (its fallback), naming the setting.
+#[test]
+fn archive_starts_need_the_archive_and_the_ball() {
+    let mut c = Preset::Fast.job().unwrap().phase2;
+    c.start = StartMode::Archive;
+    says(
+        &refusal(&c),
+        "phase2.start = \"archive\"",
+        "Env::ball_starts",
+    );
+    let maze = Maze::new(&MazeConfig::default()).unwrap();
+    let tau: Vec<_> = (0..5).map(|_| maze.start()).collect();
+    let e = chain_skills(
+        &maze,
+        &tau,
+        &LearnerConfig::ddpg(),
+        &c,
+        &Seeds::new(0),
+        0,
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .expect_err("refused without the archive");
+    assert!(
+        matches!(e, Error::Invalid { .. }) && e.to_string().contains("phase2.start"),
+        "{e}"
+    );
+}
+
+/// [`ArchiveStarts`] against a brute-force scan: the states it finds in a ball are exactly the
+/// archived states within the radius (in archive order within a grid cell), every draw is one
+/// of them, and a ball with none falls back to the rooms' own ball sample.
+#[test]
+fn archive_starts_find_exactly_the_archived_states_in_the_ball() {
+    use pbcs::env::SampleBall;
+    use pbcs::explore::Archive;
+    use pbcs::phase2::ArchiveStarts;
+    use rand::Rng as _;
+    let rooms = TwoRooms;
+    let mut rng = Seeds::new(3).stream(pbcs::rng::Stream::Eval);
+    let mut archive = Archive::new([0.2f32, 0.2], &[0.2, 0.2], 2, 0.05);
+    for i in 0..400 {
+        // Points in the left half only, so that balls in the right half find none.
+        let p = [rng.random_range(0.0..0.9f32), rng.random_range(0.0..1.0f32)];
+        archive.insert(p, &p, i, &[0.0, 0.0]);
+    }
+    let starts = ArchiveStarts::new(&rooms, &archive, 0.1);
+    for _ in 0..300 {
+        let c = [rng.random_range(0.0..2.0f32), rng.random_range(0.0..1.0f32)];
+        let r = rng.random_range(0.01..0.3f32);
+        let mut found = starts.in_ball(&c, r);
+        found.sort_unstable();
+        let brute: Vec<u32> = (0..archive.len() as u32)
+            .filter(|&id| {
+                let p = archive.state(id);
+                (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) <= r * r
+            })
+            .collect();
+        assert_eq!(found, brute, "ball {c:?} {r}");
+        let s = starts.sample_ball(&c, r, &mut rng);
+        assert!(
+            (s[0] - c[0]).hypot(s[1] - c[1]) <= r + 1e-6,
+            "{c:?} {r} {s:?}"
+        );
+        if brute.is_empty() {
+            assert!(
+                !archive.states().contains(&s) || s == c,
+                "{s:?} made up, not archived"
+            );
+        } else {
+            assert!(
+                archive.states().contains(&s),
+                "{s:?} is not an archived state"
+            );
+        }
+    }
+}
