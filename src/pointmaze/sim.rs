@@ -267,8 +267,9 @@ impl Env for PointMaze {
 impl SampleBall<PointState> for PointMaze {
     /// A position uniform in the disc of radius `radius` around the centre's (r = radius·√u,
     /// angle uniform), redrawn while the point would overlap a wall (at most 16 draws, then
-    /// the centre's position); the centre's velocity and warm start. (A first choice, not
-    /// yet measured against random velocities or archived states in the ball.)
+    /// the centre's position); the centre's velocity and warm start. (Measured against
+    /// velocities spread around the centre's and against phase 1's archived states in the
+    /// ball, `phase2.start = "archive"`: neither did better, `results/dev/issue35/`.)
     fn sample_ball(
         &self,
         center: &PointState,
