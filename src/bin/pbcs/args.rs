@@ -40,7 +40,7 @@ pub struct RunArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
-    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact],
+    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact|-archive],
     /// out/run/<…>/<env>-s<seed>[…] for another environment].
     /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
