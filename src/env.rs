@@ -51,7 +51,7 @@ pub trait Env {
 
     /// Backplay's starts in a ball ([`SampleBall`]), if this environment can make new states:
     /// return `Some(self)` from an environment that implements it. `None` (the default): the
-    /// settings that need it (`phase2.start = "ball"`, `phase2.chain_verify_episodes`, an
+    /// settings that need it (`phase2.start = "ball"` or `"archive"`, `phase2.chain_verify_episodes`, an
     /// evaluation ball of radius above 0) are refused with [`crate::error::Error::Capability`],
     /// never replaced by exact starts.
     fn ball_starts(&self) -> Option<&dyn SampleBall<Self::State>> {

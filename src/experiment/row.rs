@@ -34,7 +34,7 @@ pub struct RawRow {
     pub gamma: f32,
     /// PBCS: whether skill chaining was on.
     pub chaining: bool,
-    /// PBCS: `ball` or `exact` starts; empty for vanilla.
+    /// PBCS: `ball`, `exact` or `archive` starts; empty for vanilla.
     pub starts: Option<StartMode>,
     /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
     /// vanilla, the final greedy evaluation does (or, with `train.final_eval_episodes`, ≥ 95 %
@@ -392,7 +392,10 @@ fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, Str
 fn pbcs_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
     let fail = |column, message: String| Err((column, message));
     if r.starts.is_none() {
-        return fail("starts", "empty in a PBCS row (`ball` or `exact`)".into());
+        return fail(
+            "starts",
+            "empty in a PBCS row (`ball`, `exact` or `archive`)".into(),
+        );
     }
     if let Some(first) = r.first_success_steps {
         return fail(

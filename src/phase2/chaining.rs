@@ -12,8 +12,7 @@
 use super::backplay;
 use super::task::{SkillTask, StepCounts};
 use super::{
-    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, StartMode,
-    TraceRow,
+    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, TraceRow,
 };
 use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
@@ -32,7 +31,8 @@ use std::time::Instant;
 /// `phase2.warm_start`, taken over from the skill before it), and its
 /// starts, noise and replay sampling read substream n (n counts restarts and repairs too, so
 /// it equals the skill's index when nothing restarts); `spent` is the step count already used
-/// (phase 1), charged against `config.max_env_steps`.
+/// (phase 1), charged against `config.max_env_steps`. Archive starts need phase 1's archive
+/// ([`chain_skills_with_starts`]): refused here.
 #[allow(clippy::too_many_arguments)]
 pub fn chain_skills<E: Env>(
     env: &E,
@@ -66,17 +66,7 @@ pub fn chain_skills_with_starts<E: Env>(
 ) -> Result<Phase2Outcome> {
     config.check()?;
     config.require_hooks(env)?;
-    let starts = match (config.start, starts) {
-        (StartMode::Archive, None) => {
-            return Err(crate::error::Error::invalid(
-                "phase2.start",
-                "\"archive\" draws Backplay's starts from phase 1's archive, which this call \
-                 was not given (chain_skills_with_starts; `pbcs run` and experiments pass it)",
-            ))
-        }
-        (StartMode::Archive, starts) => starts,
-        _ => None,
-    };
+    let starts = super::starts::archive_starts(config, starts)?;
     let chainer = Chainer::new(
         env,
         tau,
@@ -106,7 +96,7 @@ pub fn chain_skills_with_starts<E: Env>(
 pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     env: &'a E,
     tau: &'a [E::State],
-    /// Backplay's starts where they are not the environment's ball ([`StartMode::Archive`]).
+    /// Backplay's starts where they are not the environment's ball ([`super::StartMode::Archive`]).
     starts: Option<&'a dyn SampleBall<E::State>>,
     obs: Vec<Vec<f32>>,
     learner: &'a LearnerConfig,

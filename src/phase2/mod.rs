@@ -8,6 +8,8 @@
 //!   actions in [−1, 1]ᵈ);
 //! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
 //!   collecting skills backwards, then reversing them;
+//! * [`ArchiveStarts`] — Backplay's starts among phase 1's archived states in B_ε(τ_K)
+//!   (`phase2.start = "archive"`, [`starts`]);
 //! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
 //!   executing it uses π_0 until the state enters A_1, then π_1, and so on ([`skill_chain`]: type,
 //!   execution, persistence);

@@ -54,7 +54,8 @@ pub struct Phase2Config {
     /// Skill chaining on (PBCS) or off (PBCS without skill chaining: fail when a second skill
     /// would be needed).
     pub chaining: bool,
-    /// Starts in B_ε(τ_K) (the paper) or exactly at τ_K.
+    /// Starts in B_ε(τ_K) (the paper), exactly at τ_K, or among phase 1's archived states in
+    /// B_ε(τ_K) (ours).
     pub start: StartMode,
     /// The last skill's goal: the environment's success region (our correction, the default)
     /// or B_ε(τ_N) (the paper as written).

@@ -8,14 +8,20 @@
 //! making a new state ([`crate::env::SampleBall`] of the environment, which, with momentum,
 //! copies τ_K's velocity).
 
+use super::{Phase2Config, StartMode};
 use crate::env::{Env, SampleBall};
+use crate::error::{Error, Result};
 use crate::explore::Archive;
 use crate::rng::Rng;
 use rustc_hash::FxHashMap;
 
 /// Phase 1's archived states, looked up by position: a start in B_ε(c) is one of the archived
-/// states within ε of c's position (position: [`Env::position`]), uniformly; where none is
-/// (never on τ itself, which the archive holds), the environment's own ball sample.
+/// states within ε of c's position (position: [`Env::position`]), uniformly; where none is, the
+/// environment's own ball sample. The archive holds τ_0 … τ_{N−1} (not τ_N, and not the new
+/// states of a shortened τ), so a ball around one of those always finds one. A ball that holds
+/// only a few archived states gives nearly exact starts (no mixing with the environment's
+/// ball), and walls between an archived state and the centre are not looked at (with thick
+/// walls, as in PointMaze, a ball of radius ε does not reach across one).
 pub struct ArchiveStarts<'a, E: Env> {
     env: &'a E,
     states: &'a [E::State],
@@ -71,7 +77,10 @@ impl<'a, E: Env> ArchiveStarts<'a, E> {
     /// The ids of the archived states within `radius` of `centre` (a position), in a fixed
     /// order (cells row by row, then archive order).
     pub fn in_ball(&self, centre: &[f32], radius: f32) -> Vec<u32> {
-        let reach = (radius / self.side).ceil().max(0.0) as i32;
+        // At most the grid's extent: a huge (or infinite) radius scans every cell once.
+        let reach = (radius / self.side)
+            .ceil()
+            .clamp(0.0, f32::from(1u16 << 15)) as i32;
         let (ci, cj) = cell(centre, self.side);
         let r2 = radius * radius;
         let mut found = Vec::new();
@@ -121,4 +130,21 @@ fn position<E: Env>(env: &E, state: &E::State) -> Vec<f32> {
 fn cell(p: &[f32], side: f32) -> (i32, i32) {
     let at = |i: usize| p.get(i).map_or(0, |x| (x / side).floor() as i32);
     (at(0), at(1))
+}
+
+/// The starts Backplay draws from where `config` asks for archive starts: `starts`, refused
+/// when missing; `None` (the environment's ball, or exact starts) otherwise.
+pub(crate) fn archive_starts<'a, S>(
+    config: &Phase2Config,
+    starts: Option<&'a dyn SampleBall<S>>,
+) -> Result<Option<&'a dyn SampleBall<S>>> {
+    match (config.start, starts) {
+        (StartMode::Archive, None) => Err(Error::invalid(
+            "phase2.start",
+            "\"archive\" draws Backplay's starts from phase 1's archive, which this call was \
+             not given (chain_skills_with_starts; `pbcs run` and experiments pass it)",
+        )),
+        (StartMode::Archive, starts) => Ok(starts),
+        _ => Ok(None),
+    }
 }

@@ -68,7 +68,8 @@ fn episode_limits<E: Env>(
 pub struct SkillTask<'a, E: Env> {
     env: &'a E,
     /// Where starts in B_ε(τ_k) come from: the environment's [`SampleBall`] with
-    /// [`StartMode::Ball`] (required by [`SkillTask::new`]), `None` with exact starts.
+    /// [`StartMode::Ball`] (required by [`SkillTask::new`]) — and with [`StartMode::Archive`]
+    /// until [`SkillTask::with_starts`] gives the archive's —, `None` with exact starts.
     ball: Option<&'a dyn SampleBall<E::State>>,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
@@ -169,7 +170,9 @@ impl<'a, E: Env> SkillTask<'a, E> {
     }
 
     /// With [`StartMode::Archive`], draws the starts in B_ε(τ_k) with `starts` (phase 1's
-    /// archive, [`crate::phase2::ArchiveStarts`]); otherwise (or with `None`) changes nothing.
+    /// archive, [`crate::phase2::ArchiveStarts`]); otherwise (or with `None`) changes nothing:
+    /// a task with archive starts that is not given them draws from the environment's ball
+    /// ([`crate::phase2::chain_skills_with_starts`] refuses that case).
     pub fn with_starts(mut self, starts: Option<&'a dyn SampleBall<E::State>>) -> Self {
         if let (StartMode::Archive, Some(starts)) = (self.config.start, starts) {
             self.ball = Some(starts);

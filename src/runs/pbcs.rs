@@ -37,7 +37,7 @@ pub struct RunRecord {
     /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
     /// argmax actor.
     pub learner: String,
-    /// `ball` or `exact` starts.
+    /// `ball`, `exact` or `archive` starts.
     pub starts: StartMode,
     /// γ of the learner.
     pub gamma: f32,
@@ -129,7 +129,9 @@ impl<E: Planar> PbcsRun<E> {
             .require(env, "phase2.epsilon (the evaluation's B_ε(s_0))")
     }
 
-    /// Runs PBCS for `job` on `env`: phase 1, phase 2 ([`chain_skills`]), then the chain's
+    /// Runs PBCS for `job` on `env`: phase 1, phase 2
+    /// ([`crate::phase2::chain_skills_with_starts`], with the archive's starts when the job
+    /// asks for them), then the chain's
     /// evaluation from starts uniform in B_ε(s_0), every network on `kernel`.
     /// `progress(skill, report)` is called during phase 2. Writes nothing.
     pub fn compute_on(

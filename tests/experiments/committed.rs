@@ -5,8 +5,9 @@ use super::*;
 
 /// The committed raw rows read and written back give the same bytes: the row's enums (kind,
 /// starts, failure) keep the strings the files hold, empty where they do not apply. Every
-/// enum value but one occurs in the committed rows; that one (`budget`: no run at the paper's
-/// budgets ran out) is written and read back here, spelled as its `name()`, with the others.
+/// enum value but two occurs in the committed rows; those two (`budget`: no run at the paper's
+/// budgets ran out; `archive` starts: their rows are development rows, in `results/dev/`) are
+/// written and read back here, with the others.
 #[test]
 fn committed_raw_rows_round_trip_byte_for_byte() {
     use pbcs::experiment::{read_row, Kind};
@@ -83,6 +84,18 @@ fn committed_raw_rows_round_trip_byte_for_byte() {
             text.trim_end().ends_with(&format!(",{}", f.name())),
             "{text}"
         );
+        assert_eq!(read_row(&path).unwrap(), row);
+    }
+    // Consistent again: no failure, solved as its success rate says.
+    row.failure = None;
+    row.solved = row.success_rate >= 0.95;
+    for starts in [StartMode::Ball, StartMode::Exact, StartMode::Archive] {
+        row.starts = Some(starts);
+        let path = tmp.path().join("starts.csv");
+        pbcs::record::write_record(&path, &row).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let name = format!("{starts:?}").to_lowercase();
+        assert!(text.contains(&format!(",{name},")), "{text}");
         assert_eq!(read_row(&path).unwrap(), row);
     }
 }

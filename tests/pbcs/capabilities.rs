@@ -170,26 +170,33 @@ fn archive_starts_need_the_archive_and_the_ball() {
     );
 }
 
-/// [`ArchiveStarts`] against a brute-force scan: the states it finds in a ball are exactly the
-/// archived states within the radius (in archive order within a grid cell), every draw is one
-/// of them, and a ball with none falls back to the rooms' own ball sample.
+/// [`ArchiveStarts`] against a brute-force scan, on the plane (positions on both sides of 0):
+/// the states it finds in a ball are exactly the archived states within the radius, every draw
+/// is one of them, and a ball with none gives the centre (the plane makes no ball); on the
+/// rooms, a ball with none gives the rooms' own ball sample.
 #[test]
 fn archive_starts_find_exactly_the_archived_states_in_the_ball() {
     use pbcs::env::SampleBall;
     use pbcs::explore::Archive;
     use pbcs::phase2::ArchiveStarts;
     use rand::Rng as _;
-    let rooms = TwoRooms;
     let mut rng = Seeds::new(3).stream(pbcs::rng::Stream::Eval);
-    let mut archive = Archive::new([0.2f32, 0.2], &[0.2, 0.2], 2, 0.05);
+    let mut archive = Archive::new([-0.2f32, 0.2], &[-0.2, 0.2], 2, 0.05);
     for i in 0..400 {
-        // Points in the left half only, so that balls in the right half find none.
-        let p = [rng.random_range(0.0..0.9f32), rng.random_range(0.0..1.0f32)];
+        // Points in x < 0 only, so that balls far into x > 0 find none.
+        let p = [
+            rng.random_range(-1.0..-0.1f32),
+            rng.random_range(-1.0..1.0f32),
+        ];
         archive.insert(p, &p, i, &[0.0, 0.0]);
     }
-    let starts = ArchiveStarts::new(&rooms, &archive, 0.1);
-    for _ in 0..300 {
-        let c = [rng.random_range(0.0..2.0f32), rng.random_range(0.0..1.0f32)];
+    let starts = ArchiveStarts::new(&Plane, &archive, 0.1);
+    let (mut empty, mut full) = (0, 0);
+    for _ in 0..500 {
+        let c = [
+            rng.random_range(-1.2..1.2f32),
+            rng.random_range(-1.2..1.2f32),
+        ];
         let r = rng.random_range(0.01..0.3f32);
         let mut found = starts.in_ball(&c, r);
         found.sort_unstable();
@@ -201,20 +208,99 @@ fn archive_starts_find_exactly_the_archived_states_in_the_ball() {
             .collect();
         assert_eq!(found, brute, "ball {c:?} {r}");
         let s = starts.sample_ball(&c, r, &mut rng);
-        assert!(
-            (s[0] - c[0]).hypot(s[1] - c[1]) <= r + 1e-6,
-            "{c:?} {r} {s:?}"
-        );
         if brute.is_empty() {
-            assert!(
-                !archive.states().contains(&s) || s == c,
-                "{s:?} made up, not archived"
-            );
+            empty += 1;
+            assert_eq!(s, c, "no archived state in the ball: the centre");
         } else {
+            full += 1;
+            assert!(
+                (s[0] - c[0]).hypot(s[1] - c[1]) <= r + 1e-6,
+                "{c:?} {r} {s:?}"
+            );
             assert!(
                 archive.states().contains(&s),
                 "{s:?} is not an archived state"
             );
         }
     }
+    assert!(
+        empty > 50 && full > 50,
+        "{empty} empty balls, {full} with states"
+    );
+    // The rooms make ball states: an empty ball draws the rooms' own sample.
+    let rooms_starts = ArchiveStarts::new(&TwoRooms, &archive, 0.1);
+    let c = [1.5f32, 0.5];
+    let mut again = rng.clone();
+    assert_eq!(
+        rooms_starts.sample_ball(&c, 0.2, &mut rng),
+        TwoRooms.sample_ball(&c, 0.2, &mut again)
+    );
+}
+
+/// `phase2.start = "archive"` reaches Backplay: every start of a short phase 2 on the rooms is
+/// drawn by the starts given, and with `"ball"` none is, the run being the same as
+/// `chain_skills`'s (archive starts leave ball runs as they were).
+#[test]
+fn archive_starts_are_the_ones_backplay_draws() {
+    use pbcs::env::SampleBall;
+    use pbcs::phase2::{chain_skills_with_starts, Phase2Outcome};
+    use std::cell::Cell;
+    struct Counting(Cell<usize>);
+    impl SampleBall<[f32; 2]> for Counting {
+        fn sample_ball(&self, c: &[f32; 2], r: f32, rng: &mut pbcs::rng::Rng) -> [f32; 2] {
+            self.0.set(self.0.get() + 1);
+            TwoRooms.sample_ball(c, r, rng)
+        }
+    }
+    let tau: Vec<[f32; 2]> = (0..6)
+        .map(|i| [TwoRooms.start()[0] + 0.05 * i as f32, TwoRooms.start()[1]])
+        .collect();
+    let learner = LearnerConfig::ddpg();
+    let mut c = Preset::Fast.job().unwrap().phase2;
+    c.max_env_steps = 3000;
+    let run = |c: &Phase2Config, counting: Option<&Counting>| -> Phase2Outcome {
+        let starts = counting.map(|k| k as &dyn SampleBall<[f32; 2]>);
+        let seeds = Seeds::new(1);
+        chain_skills_with_starts(
+            &TwoRooms,
+            &tau,
+            starts,
+            &learner,
+            c,
+            &seeds,
+            0,
+            Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let counting = Counting(Cell::new(0));
+    let ball = run(&c, Some(&counting));
+    assert_eq!(counting.0.get(), 0, "ball starts drew from the archive's");
+    let plain = chain_skills(
+        &TwoRooms,
+        &tau,
+        &learner,
+        &c,
+        &Seeds::new(1),
+        0,
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    let rows = |o: &Phase2Outcome| -> Vec<(usize, usize, u64)> {
+        o.trace
+            .iter()
+            .map(|r| (r.skill, r.k, r.env_steps))
+            .collect()
+    };
+    assert!(!plain.trace.is_empty());
+    assert_eq!(rows(&ball), rows(&plain));
+    c.start = StartMode::Archive;
+    let archived = run(&c, Some(&counting));
+    let drawn = counting.0.get();
+    assert!(
+        drawn > 0 && !archived.trace.is_empty(),
+        "{drawn} archive starts drawn"
+    );
 }
