@@ -8,6 +8,7 @@
 //! making a new state ([`crate::env::SampleBall`] of the environment, which, with momentum,
 //! copies τ_K's velocity).
 
+use super::goal::{ball_center, dist};
 use super::{Phase2Config, StartMode};
 use crate::env::{Env, SampleBall};
 use crate::error::{Error, Result};
@@ -82,21 +83,17 @@ impl<'a, E: Env> ArchiveStarts<'a, E> {
             .ceil()
             .clamp(0.0, f32::from(1u16 << 15)) as i32;
         let (ci, cj) = cell(centre, self.side);
-        let r2 = radius * radius;
         let mut found = Vec::new();
         for i in ci - reach..=ci + reach {
             for j in cj - reach..=cj + reach {
                 let Some(ids) = self.cells.get(&(i, j)) else {
                     continue;
                 };
-                found.extend(ids.iter().copied().filter(|&id| {
-                    let p = &self.positions[id as usize];
-                    p.iter()
-                        .zip(centre)
-                        .map(|(a, b)| (a - b) * (a - b))
-                        .sum::<f32>()
-                        <= r2
-                }));
+                found.extend(
+                    ids.iter()
+                        .copied()
+                        .filter(|&id| dist(&self.positions[id as usize], centre) <= radius),
+                );
             }
         }
         found
@@ -119,11 +116,11 @@ impl<E: Env> SampleBall<E::State> for ArchiveStarts<'_, E> {
     }
 }
 
-/// The position of `state` ([`Env::position`] of its observation).
+/// The position of `state`, as a ball measures it ([`ball_center`] of its observation).
 fn position<E: Env>(env: &E, state: &E::State) -> Vec<f32> {
     let mut obs = vec![0.0; env.obs_dim()];
     env.observe(state, &mut obs);
-    env.position(&obs).to_vec()
+    ball_center(env, &obs)
 }
 
 /// The grid cell of a position (its first two coordinates; a 1-D position uses row 0).
