@@ -4,8 +4,9 @@
 //! Backplay to states near τ_K). Here that is free: [`Env::step`] is a pure function of
 //! `(&State, action)`, as in gymnax, so "resetting" is just passing another state. Implement
 //! this trait for your own environment to run phase 1 and phase 2 on it; PBCS's ball starts
-//! (the presets' `phase2.start = "ball"`, and the evaluation's B_ε(s_0)), clear balls and
-//! shortening need the hooks of [`Capability`], which a setting refuses to run without.
+//! (the presets' `phase2.start = "ball"`, and the evaluation's B_ε(s_0)), balls in position and
+//! velocity (`phase2.velocity_scale`), clear balls and shortening need the hooks of
+//! [`Capability`], which a setting refuses to run without.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -55,6 +56,13 @@ pub trait Env {
     /// evaluation ball of radius above 0) are refused with [`crate::error::Error::Capability`],
     /// never replaced by exact starts.
     fn ball_starts(&self) -> Option<&dyn SampleBall<Self::State>> {
+        None
+    }
+
+    /// Balls in position and velocity ([`VelocityBalls`]), if this environment observes a
+    /// velocity and can make states with a chosen one: `Some(self)` from one that implements
+    /// it. Needed by `phase2.velocity_scale` above 0.
+    fn velocity_balls(&self) -> Option<&dyn VelocityBalls<Self::State>> {
         None
     }
 
@@ -127,6 +135,28 @@ pub trait SampleBall<S> {
     fn sample_ball(&self, center: &S, radius: f32, rng: &mut crate::rng::Rng) -> S;
 }
 
+/// A capability: balls in position and velocity under the metric
+/// d(s, c)² = ‖x − x_c‖² + λ²‖v − v_c‖² (λ, `phase2.velocity_scale`, in seconds: a velocity
+/// difference of 1/λ weighs as much as a unit of distance), for an environment with momentum
+/// whose observation holds a velocity right after its position. An environment offers it
+/// through [`Env::velocity_balls`].
+pub trait VelocityBalls<S> {
+    /// How many observation components after the position ([`Env::position_dims`]) are its
+    /// velocity (PointMaze: vx, vy).
+    fn velocity_dims(&self) -> usize;
+
+    /// One state uniform in the ball of radius `radius` around `center` under the metric with
+    /// scale `scale` (λ > 0): position and velocity offsets drawn together, the state's other
+    /// parts (a solver's warm start) the centre's.
+    fn sample_velocity_ball(
+        &self,
+        center: &S,
+        radius: f32,
+        scale: f32,
+        rng: &mut crate::rng::Rng,
+    ) -> S;
+}
+
 /// A capability: whether the ball of radius `radius` around `center` is clear of everything
 /// that blocks. PBCS's `phase2.stop_at_failure` ends a skill at a failure from a clear ball
 /// (the policy's, not a wall's), and moved hand-overs try clear balls first. An environment
@@ -153,6 +183,8 @@ pub enum Capability {
     SampleBall,
     /// [`Env::clear_balls`] ([`BallIsClear`]).
     BallIsClear,
+    /// [`Env::velocity_balls`] ([`VelocityBalls`]).
+    VelocityBalls,
     /// [`Env::connector`] ([`Connect`]).
     Connect,
 }
@@ -163,6 +195,7 @@ impl Capability {
         match self {
             Capability::SampleBall => "Env::ball_starts (SampleBall)",
             Capability::BallIsClear => "Env::clear_balls (BallIsClear)",
+            Capability::VelocityBalls => "Env::velocity_balls (VelocityBalls)",
             Capability::Connect => "Env::connector (Connect)",
         }
     }
@@ -172,6 +205,7 @@ impl Capability {
         match self {
             Capability::SampleBall => env.ball_starts().is_some(),
             Capability::BallIsClear => env.clear_balls().is_some(),
+            Capability::VelocityBalls => env.velocity_balls().is_some(),
             Capability::Connect => env.connector().is_some(),
         }
     }

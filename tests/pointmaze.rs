@@ -259,3 +259,92 @@ fn the_scene_drawn_without_mujoco_is_the_environments() {
         assert_eq!(pbcs::envs::point_scene(m), env.scene(), "{m:?}");
     }
 }
+
+/// Starts in a ball of position and velocity (`phase2.velocity_scale` = λ): every draw lies in
+/// the ball d² = ‖Δx‖² + λ²‖Δv‖² ≤ r², clear of the walls, with the centre's warm start; and
+/// the draws are uniform in the 4-ball: the scaled velocity offset lies within r/2 with
+/// probability 2a² − a⁴ = 0.4375 (a = 1/2, the 2-D marginal of the uniform 4-ball), the whole
+/// offset within r/2 with probability 1/16. Near a wall, every position stays clear.
+#[test]
+fn velocity_balls_are_uniform_in_position_and_velocity() {
+    use pbcs::env::VelocityBalls;
+    let env = medium();
+    let (r, l) = (0.25f32, 0.1f32);
+    let center = PointState {
+        qpos: env.start().qpos,
+        qvel: [1.0, -2.0],
+        warmstart: [3.0, -4.0],
+    };
+    assert_eq!(env.velocity_balls().map(|v| v.velocity_dims()), Some(2));
+    let mut rng = pbcs::rng::Seeds::new(0).stream(pbcs::rng::Stream::Start);
+    let n = 8000;
+    let (mut slow, mut near) = (0, 0);
+    for _ in 0..n {
+        let s = env.sample_velocity_ball(&center, r, l, &mut rng);
+        let dx = [s.qpos[0] - center.qpos[0], s.qpos[1] - center.qpos[1]];
+        let dv = [s.qvel[0] - center.qvel[0], s.qvel[1] - center.qvel[1]];
+        let pos = dx[0].hypot(dx[1]);
+        let vel = f64::from(l) * dv[0].hypot(dv[1]);
+        assert!(pos.hypot(vel) <= f64::from(r) + 1e-9, "{s:?}");
+        assert_eq!(s.warmstart, center.warmstart);
+        slow += usize::from(vel <= f64::from(r) / 2.0);
+        near += usize::from(pos.hypot(vel) <= f64::from(r) / 2.0);
+    }
+    // Four standard errors (about 0.022 and 0.011).
+    let (p_slow, p_near) = (slow as f64 / n as f64, near as f64 / n as f64);
+    assert!((p_slow - 0.4375).abs() < 0.022, "{p_slow}");
+    assert!((p_near - 0.0625).abs() < 0.011, "{p_near}");
+    // UMaze's start (−1, 1) moved to x = −1.35, 0.15 from the wall that begins at x = −1.5
+    // (the point's radius is 0.1): draws that would overlap it are drawn again, and the ball
+    // is still filled up to the point's reach.
+    let umaze = PointMaze::named(MapName::UMaze).unwrap();
+    let by_wall = PointState {
+        qpos: [-1.35, 1.0],
+        ..center
+    };
+    let mut least = f64::INFINITY;
+    for _ in 0..2000 {
+        let s = umaze.sample_velocity_ball(&by_wall, r, l, &mut rng);
+        assert!(umaze.map().clearance(s.qpos) >= 0.1, "{s:?}");
+        least = least.min(s.qpos[0]);
+    }
+    assert!(least < -1.38, "{least}");
+}
+
+/// PBCS with balls in position and velocity, on the committed grid's UMaze seed 1 job
+/// (`results/raw/pointmaze/`, seconds) with `phase2.velocity_scale = 0.1`: every activation
+/// set of the saved chain is a ball around x, y, vx, vy of τ at its index, with weights
+/// (1, 1, λ, λ); the chain loads back equal, fits the environment and solves the task; and the
+/// switch changed the run (its step count differs from the committed row's).
+#[test]
+fn a_chain_with_balls_in_position_and_velocity_saves_them_and_solves() {
+    use pbcs::phase2::goal::BallMetric;
+    let grid = "results/raw/pointmaze/pbcs_pm-pointmaze_umaze/s1";
+    let text = std::fs::read_to_string(format!("{grid}.toml")).unwrap();
+    let mut job: pbcs::config::PbcsJob = toml::from_str(&text).unwrap();
+    job.phase2.ball = BallMetric::PositionVelocity { scale: 0.1 };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let (record, _) = pbcs::runs::run_pbcs(&job, kernel, &out, |_, _| {}).unwrap();
+    assert!(record.solved, "{record:?}");
+    let committed = std::fs::read_to_string(format!("{grid}.csv")).unwrap();
+    assert!(!committed.contains(&format!(",{},", record.total_steps)));
+    let chain = pbcs::phase2::SkillChain::load(&out.join("chain"), kernel).unwrap();
+    let env = PointMaze::named(MapName::UMaze).unwrap();
+    chain.check_env(&env, &out.join("chain")).unwrap();
+    // τ as the run wrote it: t, x, y, vx, vy, a0, a1 per row.
+    let tau: Vec<Vec<f32>> = csv::Reader::from_path(out.join("trajectory.csv"))
+        .unwrap()
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (1..5).map(|i| r[i].parse().unwrap()).collect()
+        })
+        .collect();
+    for s in &chain.skills {
+        assert_eq!(s.activation.weights, vec![1.0, 1.0, 0.1, 0.1]);
+        assert_eq!(s.activation.center, tau[s.start_index], "{s:?}");
+        assert_eq!(s.inputs.origin[2..], [0.0, 0.0]);
+    }
+}

@@ -187,10 +187,12 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                 let goal = self.config.goal(self.env, &self.obs, lo + t);
                 Skill {
                     policy,
-                    activation: Ball {
-                        center: super::goal::ball_center(self.env, &self.obs[lo + k]),
-                        radius: self.config.epsilon,
-                    },
+                    activation: Ball::around(
+                        self.env,
+                        &self.obs[lo + k],
+                        self.config.epsilon,
+                        self.config.ball,
+                    ),
                     start_index: lo + k,
                     target_index: lo + t,
                     inputs: self.config.inputs(self.env, &goal),

@@ -4,6 +4,7 @@
 //! procedure read from it (and written back to it, field for field), in which combinations
 //! that make no sense cannot be written. The conversions both ways are here.
 
+use super::goal::BallMetric;
 use super::{
     ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, LastGoal, Phase2Config, SkillInit,
     StartMode, Stopping,
@@ -42,6 +43,10 @@ pub struct FlatPhase2 {
     pub chaining: bool,
     /// [`Phase2Config::start`].
     pub start: StartMode,
+    /// λ of [`super::goal::BallMetric::PositionVelocity`] (0: balls in position, the
+    /// default, not written).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub velocity_scale: f32,
     /// The step of [`super::KWalk`] (its first step when adaptive).
     pub k_step: usize,
     /// [`super::Ideas::shorten`].
@@ -89,6 +94,11 @@ impl Default for FlatPhase2 {
     fn default() -> Self {
         Phase2Config::default().into()
     }
+}
+
+/// An unset λ (`phase2.velocity_scale`), left out of written files.
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 /// `0` as "off" in the flat form.
@@ -156,6 +166,10 @@ impl TryFrom<FlatPhase2> for Phase2Config {
     /// then [`Check::check`].
     fn try_from(f: FlatPhase2) -> Result<Self> {
         let episode_limit = f.typed_limit()?;
+        let ball = match f.velocity_scale {
+            0.0 => BallMetric::Position,
+            scale => BallMetric::PositionVelocity { scale },
+        };
         let config = Phase2Config {
             alpha: f.alpha,
             beta: f.beta,
@@ -163,6 +177,7 @@ impl TryFrom<FlatPhase2> for Phase2Config {
             max_steps: f.max_steps,
             chaining: f.chaining,
             start: f.start,
+            ball,
             last_goal: f.last_goal,
             inputs: match (f.inputs, f.warm_start) {
                 (FlatInputs::Raw, _) => InputMode::Raw,
@@ -225,6 +240,7 @@ impl From<Phase2Config> for FlatPhase2 {
             max_steps: c.max_steps,
             chaining: c.chaining,
             start: c.start,
+            velocity_scale: c.ball.scale(),
             k_step: i.k_walk.first_step(),
             shorten: i.shorten,
             early_stop: i.stopping.early_stop,

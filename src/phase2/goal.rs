@@ -45,9 +45,91 @@ pub fn dist(a: &[f32], b: &[f32]) -> f32 {
         .sqrt()
 }
 
+/// The distance d(a, c) = √(Σ w_i² (a_i − c_i)²) over the coordinates of `c` (a ball's
+/// centre), with weights `w` (empty: all 1, [`dist`]).
+#[inline]
+pub fn weighted_dist(a: &[f32], c: &[f32], w: &[f32]) -> f32 {
+    if w.is_empty() {
+        return dist(a, c);
+    }
+    a.iter()
+        .zip(c)
+        .zip(w)
+        .map(|((x, y), w)| (w * (x - y)) * (w * (x - y)))
+        .sum::<f32>()
+        .sqrt()
+}
+
 /// A ball's centre at the observation `obs` of `env`: its position ([`Env::position`]).
 pub fn ball_center<E: Env>(env: &E, obs: &[f32]) -> Vec<f32> {
     env.position(obs).to_vec()
+}
+
+/// What PBCS's balls — the goals B_ε(τ_T), the activation sets A_i and Backplay's starts —
+/// measure: the position (the paper, and the default), or, for an environment with momentum,
+/// position and velocity under d² = ‖Δx‖² + λ²‖Δv‖² (`phase2.velocity_scale` = λ, in
+/// seconds; needs [`crate::env::Env::velocity_balls`]).
+///
+/// ```
+/// use pbcs::phase2::goal::{weighted_dist, BallMetric};
+///
+/// // λ = 0.5 s: a velocity 0.4 off weighs as 0.2 of distance.
+/// let w = [1.0, 1.0, 0.5, 0.5];
+/// let d = weighted_dist(&[0.3, 0.0, 0.4, 0.0], &[0.0, 0.0, 0.0, 0.0], &w);
+/// assert!((d - (0.3f32 * 0.3 + 0.2 * 0.2).sqrt()).abs() < 1e-6);
+/// assert_eq!(BallMetric::default(), BallMetric::Position);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum BallMetric {
+    /// Position only: a ball is reached at any velocity.
+    #[default]
+    Position,
+    /// Position and velocity, a velocity difference weighed by λ = `scale` (> 0).
+    PositionVelocity {
+        /// λ, in seconds.
+        scale: f32,
+    },
+}
+
+impl BallMetric {
+    /// λ, or 0 for [`BallMetric::Position`] (the file's `phase2.velocity_scale`).
+    pub fn scale(self) -> f32 {
+        match self {
+            BallMetric::Position => 0.0,
+            BallMetric::PositionVelocity { scale } => scale,
+        }
+    }
+
+    /// How many velocity components the ball measures in `env` (0 for the position only, or
+    /// where `env` has no [`crate::env::VelocityBalls`]: refused before a run starts).
+    fn velocity_dims<E: Env>(self, env: &E) -> usize {
+        match self {
+            BallMetric::Position => 0,
+            BallMetric::PositionVelocity { .. } => {
+                env.velocity_balls().map_or(0, |v| v.velocity_dims())
+            }
+        }
+    }
+
+    /// The centre of the ball around the observation `obs`: its position, then (with
+    /// velocity) the velocity components that follow it.
+    pub fn center<E: Env>(self, env: &E, obs: &[f32]) -> Vec<f32> {
+        let n = env.position(obs).len() + self.velocity_dims(env);
+        obs[..n.min(obs.len())].to_vec()
+    }
+
+    /// The weights of [`weighted_dist`] for those coordinates: none (all 1) for the position,
+    /// else 1 per position component and λ per velocity component.
+    pub fn weights<E: Env>(self, env: &E) -> Vec<f32> {
+        match self {
+            BallMetric::Position => Vec::new(),
+            BallMetric::PositionVelocity { scale } => {
+                let mut w = vec![1.0; env.position_dims()];
+                w.resize(w.len() + self.velocity_dims(env), scale);
+                w
+            }
+        }
+    }
 }
 
 /// The shaped reward of a step that reaches the goal (the paper's 10).
@@ -74,6 +156,10 @@ pub struct Goal {
     pub center: Vec<f32>,
     /// Radius of the region (ε, or the success radius). Φ is bounded by 1 / radius.
     pub radius: f32,
+    /// Weights of the distance to the centre ([`weighted_dist`]; empty: all 1, a ball in
+    /// position; [`BallMetric::weights`] with velocity).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub weights: Vec<f32>,
 }
 
 impl Goal {
@@ -83,6 +169,15 @@ impl Goal {
             kind: GoalKind::Ball,
             center,
             radius: epsilon,
+            weights: Vec::new(),
+        }
+    }
+
+    /// B_ε around the observation `obs` of `env`, measured by `metric`.
+    pub fn ball_in<E: Env>(env: &E, obs: &[f32], epsilon: f32, metric: BallMetric) -> Self {
+        Goal {
+            weights: metric.weights(env),
+            ..Goal::ball(metric.center(env, obs), epsilon)
         }
     }
 
@@ -97,16 +192,23 @@ impl Goal {
             kind: GoalKind::EnvSuccess,
             center,
             radius,
+            weights: Vec::new(),
         }
     }
 
     /// The goal of the skill whose target is τ_t on a trajectory with observations `obs`
-    /// (τ_0 … τ_N): [`Goal::last`] when t = N, else B_ε(τ_t).
-    pub fn for_target<E: Env>(env: &E, obs: &[Vec<f32>], t: usize, epsilon: f32) -> Self {
+    /// (τ_0 … τ_N): [`Goal::last`] when t = N, else B_ε(τ_t) measured by `metric`.
+    pub fn for_target<E: Env>(
+        env: &E,
+        obs: &[Vec<f32>],
+        t: usize,
+        epsilon: f32,
+        metric: BallMetric,
+    ) -> Self {
         if t + 1 == obs.len() {
             Goal::last(env, &obs[t], epsilon)
         } else {
-            Goal::ball(ball_center(env, &obs[t]), epsilon)
+            Goal::ball_in(env, &obs[t], epsilon, metric)
         }
     }
 
@@ -116,7 +218,7 @@ impl Goal {
     pub fn reached(&self, next_obs: &[f32], terminal: bool, reward: f32) -> bool {
         let env_success = terminal && reward > 0.0;
         match self.kind {
-            GoalKind::Ball => env_success || dist(next_obs, &self.center) <= self.radius,
+            GoalKind::Ball => env_success || self.distance(next_obs) <= self.radius,
             GoalKind::EnvSuccess => env_success,
         }
     }
@@ -132,7 +234,13 @@ impl Goal {
     /// paper, with the bound that keeps it finite inside the region).
     #[inline]
     pub fn potential(&self, obs: &[f32]) -> f32 {
-        1.0 / dist(obs, &self.center).max(self.radius)
+        1.0 / self.distance(obs).max(self.radius)
+    }
+
+    /// d(obs, centre) in the goal's metric ([`weighted_dist`]).
+    #[inline]
+    pub fn distance(&self, obs: &[f32]) -> f32 {
+        weighted_dist(obs, &self.center, &self.weights)
     }
 
     /// The shaped reward of Algorithm 3: [`REACHED_REWARD`] when the step reached the goal,
@@ -167,9 +275,11 @@ impl Inputs {
     }
 
     /// The inputs of a skill aiming at `goal` in `env`: observations relative to the goal's
-    /// centre in the position ([`Env::position`]), the rest (a velocity) as it is.
+    /// centre in the position ([`Env::position`]), the rest (a velocity) as it is (also where
+    /// the goal measures the velocity, [`BallMetric::PositionVelocity`]).
     pub fn for_goal<E: Env>(env: &E, goal: &Goal) -> Self {
         let mut origin = goal.center.clone();
+        origin.truncate(env.position_dims());
         origin.resize(env.obs_dim(), 0.0);
         Inputs::new(
             origin,

@@ -4,8 +4,9 @@
 //! * [`task::SkillTask`] — Algorithm 3 (training with the shaped reward) and Backplay's
 //!   greedy tests, for one skill;
 //! * [`goal::Goal`] — what a skill must reach (reached, terminal, reward and potential from
-//!   one region), and [`goal::Inputs`] — what its networks see (goal-relative observations,
-//!   actions in [−1, 1]ᵈ);
+//!   one region), [`goal::BallMetric`] — what the balls measure (the position, or with
+//!   momentum position and velocity, `phase2.velocity_scale`), and [`goal::Inputs`] — what its
+//!   networks see (goal-relative observations, actions in [−1, 1]ᵈ);
 //! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
 //!   collecting skills backwards, then reversing them;
 //! * [`ArchiveStarts`] — Backplay's starts among phase 1's archived states in B_ε(τ_K)

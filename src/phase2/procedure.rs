@@ -31,7 +31,7 @@
 
 use super::backplay::Walk;
 use super::flat::FlatPhase2;
-use super::goal::{Goal, Inputs};
+use super::goal::{BallMetric, Goal, Inputs};
 use super::{LastGoal, StartMode};
 use crate::env::Env;
 use crate::error::{Error, Result};
@@ -57,6 +57,9 @@ pub struct Phase2Config {
     /// Starts in B_ε(τ_K) (the paper), exactly at τ_K, or among phase 1's archived states in
     /// B_ε(τ_K) (ours).
     pub start: StartMode,
+    /// What the balls measure — goals, activation sets, Backplay's starts: the position (the
+    /// paper) or, with momentum, position and velocity ([`BallMetric`]).
+    pub ball: BallMetric,
     /// The last skill's goal: the environment's success region (our correction, the default)
     /// or B_ε(τ_N) (the paper as written).
     pub last_goal: LastGoal,
@@ -266,6 +269,7 @@ impl Default for Phase2Config {
             max_steps: 50,
             chaining: true,
             start: StartMode::Ball,
+            ball: BallMetric::Position,
             last_goal: LastGoal::SuccessRegion,
             inputs: InputMode::GoalRelative {
                 init: SkillInit::Fresh,
@@ -330,6 +334,7 @@ impl Check for Phase2Config {
         if self.max_env_steps == 0 {
             return Err(Error::invalid("phase2.max_env_steps", "must be at least 1"));
         }
+        self.check_ball()?;
         if !self.chaining && i.dead_walk.is_some_and(|d| d.retargets > 0) {
             return Err(Error::invalid(
                 "phase2.retargets",
@@ -348,6 +353,28 @@ impl Check for Phase2Config {
 }
 
 impl Phase2Config {
+    /// λ positive and finite; archive starts only with balls in position (they are looked up
+    /// by position, [`super::ArchiveStarts`]).
+    fn check_ball(&self) -> Result<()> {
+        let BallMetric::PositionVelocity { scale } = self.ball else {
+            return Ok(());
+        };
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(Error::invalid(
+                "phase2.velocity_scale",
+                format!("must be 0 (balls in position) or positive, got {scale}"),
+            ));
+        }
+        if self.start == StartMode::Archive {
+            return Err(Error::invalid(
+                "phase2.velocity_scale",
+                "measures velocities too, while phase2.start = \"archive\" looks its starts \
+                 up by position: set phase2.start = \"ball\" or phase2.velocity_scale = 0",
+            ));
+        }
+        Ok(())
+    }
+
     /// Refuses, naming the setting and the hook, a setting that needs a hook of [`Env`] that
     /// `env` does not offer: ball starts and the chain's verification need
     /// [`Env::ball_starts`], `stop_at_failure` and hand-over moves [`Env::clear_balls`],
@@ -363,6 +390,9 @@ impl Phase2Config {
                 Capability::SampleBall.require(env, "phase2.start = \"archive\"")?
             }
             StartMode::Exact => {}
+        }
+        if self.ball != BallMetric::Position {
+            Capability::VelocityBalls.require(env, "phase2.velocity_scale")?;
         }
         if i.chain_check.is_some() {
             Capability::SampleBall.require(env, "phase2.chain_verify_episodes")?;
@@ -393,8 +423,8 @@ impl Phase2Config {
     /// [`LastGoal::Ball`].
     pub fn goal<E: Env>(&self, env: &E, obs: &[Vec<f32>], t: usize) -> Goal {
         match self.last_goal {
-            LastGoal::SuccessRegion => Goal::for_target(env, obs, t, self.epsilon),
-            LastGoal::Ball => Goal::ball(super::goal::ball_center(env, &obs[t]), self.epsilon),
+            LastGoal::SuccessRegion => Goal::for_target(env, obs, t, self.epsilon, self.ball),
+            LastGoal::Ball => Goal::ball_in(env, &obs[t], self.epsilon, self.ball),
         }
     }
 

@@ -2,8 +2,8 @@
 //! A_i = B_ε(τ_{K_i}) — its execution (π_0 until the state enters A_1, then π_1, ...) and its
 //! persistence (`manifest.toml` and one safetensors file per policy).
 
-use super::goal::dist;
 use super::goal::Inputs;
+use super::goal::{weighted_dist, BallMetric};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
@@ -20,12 +20,34 @@ pub struct Ball {
     pub center: Vec<f32>,
     /// Radius.
     pub radius: f32,
+    /// Weights of the distance ([`weighted_dist`]; empty: all 1, a ball in position;
+    /// [`super::goal::BallMetric::weights`] with velocity).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub weights: Vec<f32>,
 }
 
 impl Ball {
-    /// Whether `obs` is in the ball (d ≤ radius).
+    /// The ball of `radius` around `center`, in position (unit weights).
+    pub fn new(center: Vec<f32>, radius: f32) -> Self {
+        Ball {
+            center,
+            radius,
+            weights: Vec::new(),
+        }
+    }
+
+    /// The ball of `radius` around the observation `obs` of `env`, measured by `metric`.
+    pub fn around<E: Env>(env: &E, obs: &[f32], radius: f32, metric: BallMetric) -> Self {
+        Ball {
+            center: metric.center(env, obs),
+            radius,
+            weights: metric.weights(env),
+        }
+    }
+
+    /// Whether `obs` is in the ball (d ≤ radius, d in the ball's metric).
     pub fn contains(&self, obs: &[f32]) -> bool {
-        dist(&self.center, obs) <= self.radius
+        weighted_dist(obs, &self.center, &self.weights) <= self.radius
     }
 }
 
@@ -74,6 +96,9 @@ pub(crate) struct ManifestSkill {
     file: String,
     center: Vec<f32>,
     radius: f32,
+    /// [`Ball::weights`] (absent: a ball in position).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    weights: Vec<f32>,
     start_index: usize,
     target_index: usize,
     sizes: Vec<usize>,
@@ -138,7 +163,7 @@ impl SkillChain {
     /// # use pbcs::rng::{Seeds, Stream};
     /// # let skill = |c: [f32; 2]| Skill {
     /// #     policy: Mlp::new(&[2, 2], Head::Linear, &mut Seeds::new(0).stream(Stream::Init)),
-    /// #     activation: Ball { center: c.to_vec(), radius: 0.1 },
+    /// #     activation: Ball::new(c.to_vec(), 0.1),
     /// #     start_index: 0, target_index: 1, inputs: Inputs::new(vec![0.0; 2], vec![1.0; 2]),
     /// # };
     /// // Three skills whose balls are centred at x = 0, 1 and 2.
@@ -187,6 +212,7 @@ impl SkillChain {
                 file,
                 center: skill.activation.center.clone(),
                 radius: skill.activation.radius,
+                weights: skill.activation.weights.clone(),
                 start_index: skill.start_index,
                 target_index: skill.target_index,
                 sizes: skill.policy.sizes().to_vec(),
@@ -253,6 +279,7 @@ impl SkillChain {
                 activation: Ball {
                     center: m.center,
                     radius: m.radius,
+                    weights: m.weights,
                 },
                 start_index: m.start_index,
                 target_index: m.target_index,
@@ -281,13 +308,21 @@ impl SkillChain {
                     ),
                 ));
             }
-            if s.activation.center.len() != env.position_dims() {
+            // A weighted ball measures the velocity too (BallMetric::PositionVelocity).
+            let (velocity, what) = match s.activation.weights.is_empty() {
+                true => (0, "position"),
+                false => (
+                    env.velocity_balls().map_or(0, |v| v.velocity_dims()),
+                    "position and velocity",
+                ),
+            };
+            let want = env.position_dims() + velocity;
+            if s.activation.center.len() != want {
                 return Err(Error::parse(
                     path,
                     format!(
-                        "skills[{i}].center: has {} values, the environment's positions {}",
+                        "skills[{i}].center: has {} values, the environment's {what} {want}",
                         s.activation.center.len(),
-                        env.position_dims()
                     ),
                 ));
             }
@@ -340,8 +375,9 @@ impl Manifest {
 
 impl ManifestSkill {
     /// The activation ball lies in the position part of the observation (its first
-    /// `Env::position_dims` values: all of the maze's, x and y of PointMaze's): 1 to `input`
-    /// values.
+    /// `Env::position_dims` values: all of the maze's, x and y of PointMaze's), or, with
+    /// weights (balls in position and velocity), in the position and the velocity after it:
+    /// 1 to `input` values, and weights, if any, one per value, positive and finite.
     fn check_center(&self, input: usize) -> std::result::Result<(), (&'static str, String)> {
         if self.center.is_empty() || self.center.len() > input {
             return Err((
@@ -352,6 +388,22 @@ impl ManifestSkill {
                     self.center.len(),
                     self.sizes
                 ),
+            ));
+        }
+        let n = self.center.len();
+        if !(self.weights.is_empty() || self.weights.len() == n) {
+            return Err((
+                "weights",
+                format!(
+                    "has {} values, the centre {n} (or none: a ball in position)",
+                    self.weights.len()
+                ),
+            ));
+        }
+        if self.weights.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err((
+                "weights",
+                format!("must be positive and finite, got {:?}", self.weights),
             ));
         }
         Ok(())

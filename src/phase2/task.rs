@@ -4,9 +4,9 @@
 //! [`Inputs`]: observations relative to the goal's centre, actions in [−1, 1]ᵈ.
 
 use super::backplay::Backplayer;
-use super::goal::{dist, Goal, Inputs};
+use super::goal::{dist, BallMetric, Goal, Inputs};
 use super::{EventKind, Phase2Config, StartMode};
-use crate::env::{Env, SampleBall};
+use crate::env::{Env, SampleBall, VelocityBalls};
 use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
@@ -71,6 +71,9 @@ pub struct SkillTask<'a, E: Env> {
     /// [`StartMode::Ball`] (required by [`SkillTask::new`]) — and with [`StartMode::Archive`]
     /// until [`SkillTask::with_starts`] gives the archive's —, `None` with exact starts.
     ball: Option<&'a dyn SampleBall<E::State>>,
+    /// With balls in position and velocity ([`crate::phase2::goal::BallMetric`]) and
+    /// [`StartMode::Ball`], the environment's [`VelocityBalls`], which then draw the starts.
+    velocity: Option<&'a dyn VelocityBalls<E::State>>,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
     states: &'a [E::State],
@@ -135,6 +138,10 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 StartMode::Ball | StartMode::Archive => env.ball_starts(),
                 StartMode::Exact => None,
             },
+            velocity: match (config.start, config.ball) {
+                (StartMode::Ball, BallMetric::PositionVelocity { .. }) => env.velocity_balls(),
+                _ => None,
+            },
             config,
             states,
             t,
@@ -189,8 +196,9 @@ impl<'a, E: Env> SkillTask<'a, E> {
         self.steps.train + self.steps.test >= self.budget
     }
 
-    /// `n` start states around τ_k: uniform in B_ε(τ_k) (made by the environment, or drawn
-    /// from phase 1's archive: [`StartMode::Archive`]), or τ_k itself ([`StartMode::Exact`]).
+    /// `n` start states around τ_k: uniform in B_ε(τ_k) (made by the environment, in position
+    /// or in position and velocity, or drawn from phase 1's archive: [`StartMode::Archive`]),
+    /// or τ_k itself ([`StartMode::Exact`]).
     fn starts(&mut self, k: usize, n: usize) -> Vec<E::State> {
         use rand::Rng as _;
         (0..n)
@@ -199,11 +207,17 @@ impl<'a, E: Env> SkillTask<'a, E> {
                     let i = self.rng_start.random_range(0..self.entries.len());
                     self.entries[i].clone()
                 }
-                _ => match self.ball {
-                    Some(ball) => {
+                _ => match (self.velocity, self.ball) {
+                    (Some(v), _) => v.sample_velocity_ball(
+                        &self.states[k],
+                        self.config.epsilon,
+                        self.config.ball.scale(),
+                        &mut self.rng_start,
+                    ),
+                    (None, Some(ball)) => {
                         ball.sample_ball(&self.states[k], self.config.epsilon, &mut self.rng_start)
                     }
-                    None => self.states[k].clone(),
+                    (None, None) => self.states[k].clone(),
                 },
             })
             .collect()

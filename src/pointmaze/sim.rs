@@ -2,7 +2,7 @@
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{sure_radius, MapName, PointMap, SUCCESS_DISTANCE};
-use crate::env::{BallIsClear, Env, Planar, SampleBall, Scene, Step};
+use crate::env::{BallIsClear, Env, Planar, SampleBall, Scene, Step, VelocityBalls};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Mutex;
@@ -231,8 +231,9 @@ impl Env for PointMaze {
     }
 
     /// The position (x, y): phase 1 bins on it (binning the velocity too, nearly every state
-    /// had a bin of its own, `results/dev/issue35/`), and a goal B_ε(τ_T) or an activation
-    /// set is reached at any velocity.
+    /// had a bin of its own, `results/dev/issue35/`), and, with balls in position (the
+    /// preset), a goal B_ε(τ_T) or an activation set is reached at any velocity (balls in
+    /// position and velocity: [`VelocityBalls`], measured in `results/dev/issue35/`).
     fn position_dims(&self) -> usize {
         2
     }
@@ -255,6 +256,10 @@ impl Env for PointMaze {
         Some(self)
     }
 
+    fn velocity_balls(&self) -> Option<&dyn VelocityBalls<PointState>> {
+        Some(self)
+    }
+
     fn clear_balls(&self) -> Option<&dyn BallIsClear<PointState>> {
         Some(self)
     }
@@ -268,8 +273,9 @@ impl SampleBall<PointState> for PointMaze {
     /// A position uniform in the disc of radius `radius` around the centre's (r = radius·√u,
     /// angle uniform), redrawn while the point would overlap a wall (at most 16 draws, then
     /// the centre's position); the centre's velocity and warm start. (Measured against
-    /// velocities spread around the centre's and against phase 1's archived states in the
-    /// ball, `phase2.start = "archive"`: neither did better, `results/dev/issue35/`.)
+    /// velocities spread around the centre's, against phase 1's archived states in the
+    /// ball, `phase2.start = "archive"`: neither did better, `results/dev/issue35/`; balls in
+    /// position and velocity draw their own starts, [`VelocityBalls`].)
     fn sample_ball(
         &self,
         center: &PointState,
@@ -287,6 +293,47 @@ impl SampleBall<PointState> for PointMaze {
             if self.map.clearance(xy) >= RADIUS {
                 return PointState {
                     qpos: xy,
+                    ..*center
+                };
+            }
+        }
+        *center
+    }
+}
+
+impl VelocityBalls<PointState> for PointMaze {
+    /// vx, vy.
+    fn velocity_dims(&self) -> usize {
+        2
+    }
+
+    /// A point u uniform in the unit ball of R⁴ (drawn uniform in [−1, 1]⁴ until it lies in
+    /// the ball, which fills π²/32 ≈ 31 % of it), then position = centre's + radius·(u₀, u₁)
+    /// and velocity = centre's + radius·(u₂, u₃)/λ, each component within ±[`MAX_SPEED`] (the
+    /// step clips it there anyway); redrawn while the point would overlap a wall (at most 16
+    /// draws, then the centre); the centre's warm start.
+    fn sample_velocity_ball(
+        &self,
+        center: &PointState,
+        radius: f32,
+        scale: f32,
+        rng: &mut crate::rng::Rng,
+    ) -> PointState {
+        use rand::Rng as _;
+        let (r, l) = (f64::from(radius), f64::from(scale));
+        for _ in 0..BALL_DRAWS {
+            let u = loop {
+                let u: [f64; 4] = std::array::from_fn(|_| rng.random_range(-1.0..=1.0));
+                if u.iter().map(|x| x * x).sum::<f64>() <= 1.0 {
+                    break u;
+                }
+            };
+            let xy = [center.qpos[0] + r * u[0], center.qpos[1] + r * u[1]];
+            if self.map.clearance(xy) >= RADIUS {
+                let v = |i: usize| (center.qvel[i] + r * u[2 + i] / l).clamp(-MAX_SPEED, MAX_SPEED);
+                return PointState {
+                    qpos: xy,
+                    qvel: [v(0), v(1)],
                     ..*center
                 };
             }

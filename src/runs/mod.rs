@@ -27,6 +27,7 @@ use crate::config::{MazeConfig, PbcsJob, Preset, TrainJob};
 use crate::error::Result;
 use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
+use crate::phase2::goal::BallMetric;
 use crate::phase2::StartMode;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -64,7 +65,8 @@ pub fn default_out(command: &str, maze: &MazeConfig, seed: u64, suffix: &str) ->
 }
 
 /// The part of a PBCS run's default folder that names its departures from the preset:
-/// `-nochain` without chaining, `-exact` with exact starts, `-archive` with archive starts.
+/// `-nochain` without chaining, `-exact` with exact starts, `-archive` with archive starts,
+/// `-velocity` with balls in position and velocity.
 pub fn pbcs_suffix(job: &PbcsJob) -> String {
     let mut suffix = String::new();
     if !job.phase2.chaining {
@@ -74,6 +76,9 @@ pub fn pbcs_suffix(job: &PbcsJob) -> String {
         StartMode::Exact => suffix.push_str("-exact"),
         StartMode::Archive => suffix.push_str("-archive"),
         StartMode::Ball => {}
+    }
+    if job.phase2.ball != BallMetric::Position {
+        suffix.push_str("-velocity");
     }
     suffix
 }

@@ -3,7 +3,7 @@ use pbcs::config::MazeConfig;
 use pbcs::env::Env;
 use pbcs::maze::Maze;
 use pbcs::nn::{Head, Mlp};
-use pbcs::phase2::goal::{Goal, GoalKind, Inputs, REACHED_REWARD};
+use pbcs::phase2::goal::{BallMetric, Goal, GoalKind, Inputs, REACHED_REWARD};
 use pbcs::phase2::{Ball, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 
@@ -56,9 +56,12 @@ fn the_last_skill_aims_at_the_environments_target_disc() {
     assert!(g.reached(&[0.5, 1.32], step.terminal, step.reward));
     // A goal for T < N is B_ε(τ_T).
     let obs = vec![vec![0.5, 0.5], vec![0.6, 0.5], tau_n.to_vec()];
-    let mid = Goal::for_target(&maze, &obs, 1, 0.1);
+    let mid = Goal::for_target(&maze, &obs, 1, 0.1, BallMetric::Position);
     assert_eq!(mid, Goal::ball(vec![0.6, 0.5], 0.1));
-    assert_eq!(Goal::for_target(&maze, &obs, 2, 0.1), g);
+    assert_eq!(
+        Goal::for_target(&maze, &obs, 2, 0.1, BallMetric::Position),
+        g
+    );
 }
 
 #[test]
@@ -79,6 +82,35 @@ fn hovering_earns_nothing_anywhere() {
     assert_eq!(g.kind, GoalKind::EnvSuccess);
     assert!(!g.reached(&[3.0, 0.0], false, 0.0));
     assert_eq!(g.reward(&[3.0, 0.05], &[3.0, 0.05], false), 0.0);
+}
+
+/// A goal in position and velocity ([`BallMetric::PositionVelocity`], λ = 0.5 s): reached, and
+/// Φ measured, with the velocity difference weighed by λ; the networks still see the position
+/// relative to the goal's and the velocity as it is.
+#[test]
+fn a_goal_in_position_and_velocity_weighs_the_velocity_by_lambda() {
+    let g = Goal {
+        weights: vec![1.0, 1.0, 0.5, 0.5],
+        ..Goal::ball(vec![1.0, 1.0, 2.0, 0.0], 0.1)
+    };
+    // At the centre's position: reached with a velocity within ε/λ = 0.2 of the centre's.
+    assert!(g.reached(&[1.0, 1.0, 2.19, 0.0], false, 0.0));
+    assert!(!g.reached(&[1.0, 1.0, 2.21, 0.0], false, 0.0));
+    assert!(!g.reached(&[1.0, 1.0, 2.0, 0.21], false, 0.0));
+    // d² = 0.06² + (0.5 · 0.16)² = 0.1²: on the rim.
+    assert!(g.reached(&[1.06, 1.0, 2.16, 0.0], false, 0.0));
+    assert!((g.distance(&[1.06, 1.0, 2.16, 0.0]) - 0.1).abs() < 1e-6);
+    // Φ = 1/d with that d: from a velocity 1.0 off to 0.5 off earns 1/0.25 − 1/0.5 = 2.
+    let r = g.reward(&[1.0, 1.0, 3.0, 0.0], &[1.0, 1.0, 2.5, 0.0], false);
+    assert!((r - 2.0).abs() < 1e-5, "{r}");
+    // The environment's success reaches it at any velocity.
+    assert!(g.reached(&[1.0, 1.0, 9.0, 0.0], true, 1.0));
+    // An environment without velocity balls: the metric measures the position only.
+    let maze = maze2();
+    let m = BallMetric::PositionVelocity { scale: 0.5 };
+    assert_eq!(m.center(&maze, &[0.6, 0.5]), vec![0.6, 0.5]);
+    assert_eq!(m.weights(&maze), vec![1.0, 1.0]);
+    assert!(BallMetric::Position.weights(&maze).is_empty());
 }
 
 #[test]
@@ -114,10 +146,7 @@ fn homing_policy() -> Mlp {
 fn a_chain_feeds_each_skill_its_own_inputs_also_after_reloading() {
     let skill = Skill {
         policy: homing_policy(),
-        activation: Ball {
-            center: vec![0.0, 0.0],
-            radius: 0.1,
-        },
+        activation: Ball::new(vec![0.0, 0.0], 0.1),
         start_index: 0,
         target_index: 1,
         inputs: Inputs::new(vec![1.0, 0.0], vec![0.1, 0.1]),
@@ -142,10 +171,7 @@ fn a_malformed_manifest_is_an_error_naming_the_field() {
     let chain = SkillChain {
         skills: vec![Skill {
             policy: constant_policy([1.0, 0.0]),
-            activation: Ball {
-                center: vec![0.0, 0.0],
-                radius: 0.1,
-            },
+            activation: Ball::new(vec![0.0, 0.0], 0.1),
             start_index: 0,
             target_index: 1,
             inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),

@@ -304,3 +304,139 @@ fn archive_starts_are_the_ones_backplay_draws() {
         "{drawn} archive starts drawn"
     );
 }
+
+/// Balls in position and velocity (`phase2.velocity_scale` > 0): refused on an environment
+/// without [`pbcs::env::VelocityBalls`] (the maze, the rooms), naming the setting and the
+/// hook; a λ that is not positive and finite, and archive starts (looked up by position), are
+/// refused naming the field, in the typed form and in the file's.
+#[test]
+fn velocity_balls_need_the_hook_and_ball_starts() {
+    use pbcs::phase2::goal::BallMetric;
+    let maze = Maze::new(&MazeConfig::default()).unwrap();
+    let mut c = Preset::Fast.job().unwrap().phase2;
+    c.ball = BallMetric::PositionVelocity { scale: 0.1 };
+    for e in [
+        c.require_hooks(&maze).unwrap_err(),
+        c.require_hooks(&TwoRooms).unwrap_err(),
+    ] {
+        says(&e, "phase2.velocity_scale", "Env::velocity_balls");
+    }
+    c.ball = BallMetric::Position;
+    c.require_hooks(&maze).unwrap();
+    use pbcs::validate::Check;
+    for (scale, start) in [
+        (-0.1, StartMode::Ball),
+        (f32::NAN, StartMode::Ball),
+        (f32::INFINITY, StartMode::Ball),
+        (0.1, StartMode::Archive),
+    ] {
+        c.ball = BallMetric::PositionVelocity { scale };
+        c.start = start;
+        let e = c.check().unwrap_err();
+        assert!(
+            matches!(e, Error::Invalid { .. }) && e.to_string().contains("phase2.velocity_scale"),
+            "{scale} {start:?}: {e}"
+        );
+    }
+    // The file's form: 0 is the position (and is not written), a λ is written and read back.
+    let fast = Preset::Fast.job().unwrap().phase2;
+    let text = |c: &Phase2Config| toml::to_string(c).unwrap();
+    assert!(!text(&fast).contains("velocity_scale"));
+    let mut v = fast.clone();
+    v.ball = BallMetric::PositionVelocity { scale: 0.25 };
+    assert!(text(&v).contains("velocity_scale = 0.25"), "{}", text(&v));
+    assert_eq!(toml::from_str::<Phase2Config>(&text(&v)).unwrap(), v);
+    for bad in ["-0.25", "nan"] {
+        let e = toml::from_str::<Phase2Config>(
+            &text(&v).replace("velocity_scale = 0.25", &format!("velocity_scale = {bad}")),
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("phase2.velocity_scale"),
+            "{bad}: {e}"
+        );
+    }
+}
+
+/// `phase2.velocity_scale` reaches Backplay: on the rooms seen as x = position, y = velocity
+/// (an environment whose [`pbcs::env::VelocityBalls`] counts its draws), a short phase 2 with
+/// balls in position and velocity draws its starts there, one with balls in position never.
+#[test]
+fn velocity_balls_draw_backplays_starts() {
+    use pbcs::env::{SampleBall, Step, VelocityBalls};
+    use pbcs::phase2::goal::BallMetric;
+    use std::cell::Cell;
+    struct Moving(Cell<usize>);
+    impl Env for Moving {
+        type State = [f32; 2];
+        fn obs_dim(&self) -> usize {
+            2
+        }
+        fn action_dim(&self) -> usize {
+            2
+        }
+        fn action_bound(&self, i: usize) -> f32 {
+            TwoRooms.action_bound(i)
+        }
+        fn start(&self) -> [f32; 2] {
+            TwoRooms.start()
+        }
+        fn observe(&self, s: &[f32; 2], out: &mut [f32]) {
+            TwoRooms.observe(s, out)
+        }
+        fn step(&self, s: &[f32; 2], a: &[f32]) -> Step<[f32; 2]> {
+            TwoRooms.step(s, a)
+        }
+        fn position_dims(&self) -> usize {
+            1
+        }
+        fn ball_starts(&self) -> Option<&dyn SampleBall<[f32; 2]>> {
+            TwoRooms
+                .ball_starts()
+                .map(|_| &TwoRooms as &dyn SampleBall<[f32; 2]>)
+        }
+        fn velocity_balls(&self) -> Option<&dyn VelocityBalls<[f32; 2]>> {
+            Some(self)
+        }
+    }
+    impl VelocityBalls<[f32; 2]> for Moving {
+        fn velocity_dims(&self) -> usize {
+            1
+        }
+        fn sample_velocity_ball(
+            &self,
+            c: &[f32; 2],
+            r: f32,
+            _scale: f32,
+            rng: &mut pbcs::rng::Rng,
+        ) -> [f32; 2] {
+            self.0.set(self.0.get() + 1);
+            TwoRooms.sample_ball(c, r, rng)
+        }
+    }
+    let tau: Vec<[f32; 2]> = (0..6)
+        .map(|i| [TwoRooms.start()[0] + 0.05 * i as f32, TwoRooms.start()[1]])
+        .collect();
+    let mut c = Preset::Fast.job().unwrap().phase2;
+    (c.max_env_steps, c.ideas.stop_at_failure, c.ideas.shorten) = (3000, false, false);
+    c.ideas.dead_walk = None;
+    let run = |c: &Phase2Config, env: &Moving| {
+        chain_skills(
+            env,
+            &tau,
+            &LearnerConfig::ddpg(),
+            c,
+            &Seeds::new(1),
+            0,
+            Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let env = Moving(Cell::new(0));
+    assert!(!run(&c, &env).trace.is_empty());
+    assert_eq!(env.0.get(), 0, "balls in position drew velocity starts");
+    c.ball = BallMetric::PositionVelocity { scale: 0.5 };
+    let out = run(&c, &env);
+    assert!(env.0.get() > 0 && !out.trace.is_empty(), "{}", env.0.get());
+}

@@ -58,10 +58,7 @@ fn constant_policy(dir: [f32; 2]) -> Mlp {
 fn two_skill_chain() -> SkillChain {
     let skill = |dir, center: Vec<f32>, k| Skill {
         policy: constant_policy(dir),
-        activation: Ball {
-            center,
-            radius: 0.25,
-        },
+        activation: Ball::new(center, 0.25),
         start_index: k,
         target_index: k + 1,
         inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),

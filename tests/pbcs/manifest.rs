@@ -16,10 +16,7 @@ fn saved() -> (tempfile::TempDir, String) {
     let chain = SkillChain {
         skills: vec![Skill {
             policy: constant_policy([1.0, 0.0]),
-            activation: Ball {
-                center: vec![0.5, 0.5],
-                radius: 0.1,
-            },
+            activation: Ball::new(vec![0.5, 0.5], 0.1),
             start_index: 0,
             target_index: 3,
             inputs: Inputs::new(vec![0.5, 0.5], vec![1.0, 1.0]),
@@ -188,10 +185,7 @@ fn maze_chain() -> SkillChain {
     };
     let skill = |policy, center: Vec<f32>, k, inputs| Skill {
         policy,
-        activation: Ball {
-            center,
-            radius: 0.1,
-        },
+        activation: Ball::new(center, 0.1),
         start_index: k,
         target_index: k + 5,
         inputs,
@@ -269,10 +263,7 @@ fn a_chain_whose_balls_lie_in_the_position_part_saves_and_loads() {
     let chain = SkillChain {
         skills: vec![Skill {
             policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
-            activation: Ball {
-                center: vec![-1.0, 1.0],
-                radius: 0.25,
-            },
+            activation: Ball::new(vec![-1.0, 1.0], 0.25),
             start_index: 0,
             target_index: 9,
             inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
@@ -290,5 +281,51 @@ fn a_chain_whose_balls_lie_in_the_position_part_saves_and_loads() {
         let err = load_error(dir.path(), &text, "center = [-1.0, 1.0]", bad);
         assert_names(&err, "skills[0].center");
         assert!(err.contains("1 to 4"), "{err}");
+    }
+}
+
+/// Balls in position and velocity (`phase2.velocity_scale`): the centre holds x, y, vx, vy and
+/// the ball its weights; both are saved and loaded, and the loaded ball measures as the saved
+/// one (a state at the centre's position with a velocity 3/λ off is outside). Weights of
+/// another length than the centre, or not positive and finite, are refused naming the field.
+#[test]
+fn a_ball_in_position_and_velocity_keeps_its_weights() {
+    let mut rng = Seeds::new(0).stream(Stream::Init);
+    let ball = Ball {
+        center: vec![-1.0, 1.0, 2.0, 0.0],
+        radius: 0.25,
+        weights: vec![1.0, 1.0, 0.1, 0.1],
+    };
+    let chain = SkillChain {
+        skills: vec![Skill {
+            policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
+            activation: ball.clone(),
+            start_index: 0,
+            target_index: 9,
+            inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
+        }],
+        kernel: Kernel::detect(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    chain.save(dir.path()).unwrap();
+    let loaded = SkillChain::load(dir.path(), Kernel::detect()).unwrap();
+    assert_eq!(loaded, chain);
+    let a = &loaded.skills[0].activation;
+    // Velocity 2.0 vs 2.0 + 2.4: weighted 0.24 ≤ 0.25, inside; + 2.6: 0.26, outside.
+    assert!(a.contains(&[-1.0, 1.0, 4.4, 0.0]));
+    assert!(!a.contains(&[-1.0, 1.0, 4.6, 0.0]));
+    assert!(!a.contains(&[-1.0, 1.0, 2.0 + 3.0 / 0.1, 0.0]));
+    // The same centre without weights: a position ball would hold them all.
+    assert!(Ball::new(vec![-1.0, 1.0], 0.25).contains(&[-1.0, 1.0, 32.0, 0.0]));
+    let text = std::fs::read_to_string(dir.path().join("manifest.toml")).unwrap();
+    assert!(text.contains("weights = [1.0, 1.0, 0.1, 0.1]"), "{text}");
+    for (bad, why) in [
+        ("weights = [1.0, 1.0, 0.1]", "3 values"),
+        ("weights = [1.0, 1.0, 0.1, -0.1]", "positive"),
+        ("weights = [1.0, 1.0, 0.1, nan]", "positive"),
+    ] {
+        let err = load_error(dir.path(), &text, "weights = [1.0, 1.0, 0.1, 0.1]", bad);
+        assert_names(&err, "skills[0].weights");
+        assert!(err.contains(why), "{bad}: {err}");
     }
 }
