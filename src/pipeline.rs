@@ -238,8 +238,9 @@ pub fn render(
 /// chain success and the table under other success criteria), `<name>.curves.csv` (with a
 /// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
 /// each cell's shortest path), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
-/// chain's path beside |τ| and the fewest steps) and the wall-clock companion
-/// `<name>.timing.csv`.
+/// chain's path beside |τ| and the fewest steps), `<name>.judged.csv` (chains judged by an
+/// outside environment), `<name>.paired.csv` (a registered paired comparison) and the
+/// wall-clock companion `<name>.timing.csv`.
 pub fn write_tables(
     exp: &Experiment,
     results: &Path,
@@ -277,6 +278,13 @@ pub fn write_tables(
         write_records(
             &crate::tables::judged::judged_path(results, &exp.name),
             &judged,
+        )?;
+    }
+    let paired = crate::tables::paired::paired_sites(exp, rows);
+    if !paired.is_empty() {
+        write_records(
+            &crate::tables::paired::paired_path(results, &exp.name),
+            &paired,
         )?;
     }
     let timing = crate::tables::cell_timings(exp, results, rows);

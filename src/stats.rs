@@ -102,6 +102,25 @@ pub fn fisher_exact(k1: u64, n1: u64, k2: u64, n2: u64) -> f64 {
     p.min(1.0)
 }
 
+/// The two-sided exact sign test of `fewer` pairs against `more` (ties dropped): under
+/// H₀ each pair goes either way with probability 1/2, and p = min(1, 2·P(X ≤ min(k, n − k)))
+/// with X ~ Binomial(n = fewer + more, 1/2) (SciPy's `binomtest(k, n, 0.5)`). 1 with no pair.
+///
+/// ```
+/// // 9 of 10: p = 22/1024 (SciPy: 0.021484375).
+/// assert_eq!(pbcs::stats::sign_test(9, 1), 0.021484375);
+/// assert_eq!(pbcs::stats::sign_test(0, 0), 1.0);
+/// ```
+pub fn sign_test(fewer: u64, more: u64) -> f64 {
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    let n = fewer + more;
+    if n == 0 {
+        return 1.0;
+    }
+    let tail = Binomial::new(0.5, n).map_or(1.0, |b| b.cdf(fewer.min(more)));
+    (2.0 * tail).min(1.0)
+}
+
 /// Mean and sample standard deviation (n − 1 in the denominator) of `v`; `None` with fewer
 /// than two values.
 ///

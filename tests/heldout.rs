@@ -148,3 +148,49 @@ fn the_held_out_pointmaze_grid_runs_the_grids_jobs_on_unused_seeds() {
         );
     }
 }
+
+/// The registered comparison of balls in position and in position and velocity
+/// (`experiments/pointmaze_velocity.toml`) runs, map by map, the PointMaze grid's job and that
+/// job with only `phase2.velocity_scale` set, on seeds no other PointMaze grid used, for the
+/// `fast` preset as it was when it was registered.
+#[test]
+fn the_velocity_comparison_runs_the_grids_jobs_and_one_change_on_unused_seeds() {
+    use pbcs::phase2::goal::BallMetric;
+    let load = |f: &str| Experiment::load(&Path::new("experiments").join(f), None).unwrap();
+    let (cmp, grid, held) = (
+        load("pointmaze_velocity.toml"),
+        load("pointmaze.toml"),
+        load("pointmaze_heldout.toml"),
+    );
+    let (reg, hash) = registration(&cmp);
+    assert_eq!(
+        hash, reg.sha256,
+        "experiments/{} changed since the velocity comparison was registered on {}: register a \
+         new one on unused seeds (and say so); do not update this hash.",
+        reg.preset, reg.date
+    );
+    assert_eq!(cmp.sites, grid.sites);
+    let pbcs_job = |j: &pbcs::experiment::Job| match j {
+        pbcs::experiment::Job::Pbcs(j) => j.clone(),
+        _ => panic!("not a PBCS cell"),
+    };
+    let used: Vec<u64> = [&grid, &held]
+        .iter()
+        .flat_map(|e| e.cells.iter().flat_map(|c| e.seeds_of(c)))
+        .collect();
+    for g in &grid.cells {
+        let velocity_id = g.id.replace("pbcs_pm-", "pbcs_pm_velocity-");
+        let cell = |id: &str| cmp.cells.iter().find(|c| c.id == id).unwrap();
+        let (same, velocity) = (cell(&g.id), cell(&velocity_id));
+        assert_eq!(same.job, g.job, "{}: not the grid's job", g.id);
+        let mut expected = pbcs_job(&g.job);
+        expected.phase2.ball = BallMetric::PositionVelocity { scale: 0.1 };
+        assert_eq!(pbcs_job(&velocity.job), expected, "{velocity_id}");
+        for c in [same, velocity] {
+            let seeds = cmp.seeds_of(c);
+            assert_eq!(seeds, (20..30).collect::<Vec<u64>>(), "{}", c.id);
+            assert!(seeds.iter().all(|s| !used.contains(s)), "{}", c.id);
+        }
+    }
+    assert_eq!(cmp.cells.len(), 2 * grid.cells.len());
+}

@@ -144,3 +144,25 @@ fn fisher_exact_is_symmetric_and_a_probability() {
     // Equal proportions are never evidence of a difference.
     assert_eq!(fisher_exact(3, 10, 3, 10), 1.0);
 }
+
+#[test]
+fn sign_test_matches_scipy() {
+    use pbcs::stats::sign_test;
+    // scipy.stats.binomtest(k, n, 0.5).pvalue (SciPy 1.17.1, two-sided): (k, n − k, p).
+    for (k, m, p) in [
+        (9, 1, 0.021484375),
+        (7, 3, 0.34375),
+        (3, 7, 0.34375),
+        (24, 6, 0.0014309063553810122),
+        (0, 5, 0.0625),
+        (15, 15, 1.0),
+        (1, 0, 1.0),
+        (20, 7, 0.0191572904586792),
+    ] {
+        let ours = sign_test(k, m);
+        assert!(
+            (ours - p).abs() < 1e-12 * p.max(1e-3),
+            "{k} {m}: {ours} vs {p}"
+        );
+    }
+}

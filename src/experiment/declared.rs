@@ -141,6 +141,32 @@ impl FigureSpec {
 
 /// Every declared figure has a file-name-safe, unique name and names only methods of the
 /// experiment.
+/// The methods a registered paired comparison names (`[registered] paired`): two different
+/// methods of the file.
+pub(crate) fn check_paired(
+    path: &Path,
+    registered: Option<&super::Registration>,
+    methods: &[(String, String)],
+) -> Result<()> {
+    let Some([baseline, variant]) = registered.and_then(|r| r.paired.as_ref()) else {
+        return Ok(());
+    };
+    let field = format!("registered.paired in {}", path.display());
+    if baseline == variant {
+        return Err(Error::invalid(field, format!("names `{baseline}` twice")));
+    }
+    match [baseline, variant]
+        .into_iter()
+        .find(|m| !methods.iter().any(|(n, _)| n == *m))
+    {
+        Some(m) => Err(Error::invalid(
+            field,
+            format!("`{m}` is not a method of the file"),
+        )),
+        None => Ok(()),
+    }
+}
+
 pub(crate) fn check_figures(
     path: &Path,
     figures: &[FigureSpec],

@@ -204,6 +204,11 @@ pub struct Registration {
     pub sha256: String,
     /// The commit message's date of the registration (`2026-11-25`).
     pub date: String,
+    /// The registered analysis, where it is a paired comparison: `[baseline, variant]`, two
+    /// of the file's methods, run on the same sites and seeds (`pbcs aggregate` writes
+    /// `<experiment>.paired.csv`, [`crate::tables::paired`]).
+    #[serde(default)]
+    pub paired: Option<[String; 2]>,
 }
 
 impl Experiment {

@@ -481,6 +481,7 @@ impl Experiment {
         spec.check_methods(&all_methods)?;
         let (methods, cells) = spec.cells(path, &prof, &all_methods, &sites)?;
         check_figures(path, &spec.figures, &methods)?;
+        super::declared::check_paired(path, spec.registered.as_ref(), &methods)?;
         check_report(path, &spec.report, &cells)?;
         Ok(Experiment {
             title: spec.title,

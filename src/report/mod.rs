@@ -193,7 +193,10 @@ pub fn extra_numbers_tex(
     method_settings_tex(&mut s, exp)?;
     chain_numbers_tex(&mut s, name, results)?;
     route_numbers_tex(&mut s, name, results)?;
-    for (key, value) in crate::tables::judged::judged_numbers(name, results)? {
+    for (key, value) in crate::tables::judged::judged_numbers(name, results)?
+        .into_iter()
+        .chain(crate::tables::paired::paired_numbers(name, results)?)
+    {
         def_res(&mut s, name, &key, &value);
     }
     Ok(s)

@@ -9,6 +9,7 @@
 pub mod curves;
 pub mod judged;
 pub mod outside;
+pub mod paired;
 pub mod routes;
 pub mod scaling;
 

@@ -1,0 +1,210 @@
+//! A registered paired comparison: an experiment file whose `[registered]` table says
+//! `paired = [baseline, variant]` ran two methods on the same sites and seeds, and its
+//! registered outcome is, per site and over all sites pooled, the seeds where the variant used
+//! fewer env steps (phase 1 included) than the baseline, with the two-sided exact sign test
+//! ([`crate::stats::sign_test`], ties dropped). `pbcs aggregate` writes it to
+//! `results/tables/<experiment>.paired.csv`; `pbcs figures` writes its numbers
+//! (`\res{<experiment>:paired:<site>:<field>}`, the pooled row's site being `all`).
+
+use crate::experiment::{Experiment, RawRow};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The site name of the pooled row.
+pub const ALL_SITES: &str = "all";
+
+/// The comparison on one site, or on all of them pooled ([`ALL_SITES`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PairedSite {
+    /// The site (`pointmaze_medium`), or `all`.
+    pub site: String,
+    /// The baseline method.
+    pub baseline: String,
+    /// The variant method.
+    pub variant: String,
+    /// Seeds with a row in both methods' cells.
+    pub pairs: u64,
+    /// Pairs where the variant used fewer env steps.
+    pub fewer: u64,
+    /// Pairs where it used more.
+    pub more: u64,
+    /// Pairs with the same env steps (dropped by the test).
+    pub ties: u64,
+    /// The two-sided exact sign test of `fewer` against `more`.
+    pub p_value: f64,
+}
+
+/// `results/tables/<experiment>.paired.csv`.
+pub fn paired_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.paired.csv"))
+}
+
+/// The registered comparison of `exp` on its `rows`, per site (in the file's order, sites
+/// without a pair left out) and pooled; none when `exp` registers no paired comparison.
+///
+/// ```
+/// use pbcs::experiment::Experiment;
+/// // Without `[registered] paired`, no comparison.
+/// let exp = Experiment::load(std::path::Path::new("experiments/pointmaze.toml"), None).unwrap();
+/// assert!(pbcs::tables::paired::paired_sites(&exp, &[]).is_empty());
+/// ```
+pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
+    let Some([baseline, variant]) = exp.registered.as_ref().and_then(|r| r.paired.clone()) else {
+        return Vec::new();
+    };
+    let steps = |method: &str, site, seed| {
+        let cell = exp
+            .cells
+            .iter()
+            .find(|c| c.method == method && c.site == site)?;
+        rows.iter()
+            .find(|r| r.cell == cell.id && r.seed == seed)
+            .map(|r| r.env_steps)
+    };
+    let row = |site: String, diffs: &[std::cmp::Ordering]| {
+        let count = |o| diffs.iter().filter(|&&d| d == o).count() as u64;
+        let (fewer, more) = (
+            count(std::cmp::Ordering::Less),
+            count(std::cmp::Ordering::Greater),
+        );
+        PairedSite {
+            site,
+            baseline: baseline.clone(),
+            variant: variant.clone(),
+            pairs: diffs.len() as u64,
+            fewer,
+            more,
+            ties: count(std::cmp::Ordering::Equal),
+            p_value: crate::stats::sign_test(fewer, more),
+        }
+    };
+    let mut out = Vec::new();
+    let mut all = Vec::new();
+    for &site in &exp.sites {
+        let diffs: Vec<_> = exp
+            .seeds()
+            .into_iter()
+            .filter_map(|s| Some(steps(&variant, site, s)?.cmp(&steps(&baseline, site, s)?)))
+            .collect();
+        if !diffs.is_empty() {
+            all.extend_from_slice(&diffs);
+            out.push(row(site.to_string(), &diffs));
+        }
+    }
+    if !all.is_empty() {
+        out.push(row(ALL_SITES.to_string(), &all));
+    }
+    out
+}
+
+/// `\res{<experiment>:paired:<site>:<field>}` (`pairs`, `fewer`, `more`, `ties`, `p`: the
+/// p-value to two significant digits) from the paired table, where it exists.
+pub fn paired_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
+    let path = paired_path(results, name);
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let sites: Vec<PairedSite> = crate::record::read_records(&path)?;
+    Ok(sites
+        .iter()
+        .flat_map(|s| {
+            [
+                ("pairs", s.pairs.to_string()),
+                ("fewer", s.fewer.to_string()),
+                ("more", s.more.to_string()),
+                ("ties", s.ties.to_string()),
+                ("p", two_digits(s.p_value)),
+            ]
+            .map(|(f, v)| (format!("paired:{}:{f}", s.site), v))
+        })
+        .collect())
+}
+
+/// `p` to two significant digits (`0.021`, `0.34`, `1.0`).
+fn two_digits(p: f64) -> String {
+    if p <= 0.0 || !p.is_finite() {
+        return p.to_string();
+    }
+    let decimals = (1 - p.log10().floor() as i32).max(1) as usize;
+    format!("{p:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn p_values_print_with_two_significant_digits() {
+        for (p, s) in [
+            (0.021484375, "0.021"),
+            (0.34375, "0.34"),
+            (1.0, "1.0"),
+            (0.0014309, "0.0014"),
+        ] {
+            assert_eq!(super::two_digits(p), s);
+        }
+    }
+}
+
+#[cfg(test)]
+mod known {
+    use super::*;
+
+    /// Known counts: the committed PointMaze grid's rows as both methods of the registered
+    /// comparison, the variant's env steps changed seed by seed.
+    #[test]
+    fn counts_pairs_per_site_and_pooled() {
+        let exp = Experiment::load(Path::new("experiments/pointmaze_velocity.toml"), None).unwrap();
+        let grid = Experiment::load(Path::new("experiments/pointmaze.toml"), None).unwrap();
+        let rows = crate::experiment::read_raw(&grid, Path::new("results")).unwrap();
+        let mut ours = Vec::new();
+        for r in rows.iter().filter(|r| r.seed < 4) {
+            let site = r.site;
+            let base = exp
+                .cells
+                .iter()
+                .find(|c| c.method == "pbcs_pm" && c.site == site);
+            let var = exp
+                .cells
+                .iter()
+                .find(|c| c.method == "pbcs_pm_velocity" && c.site == site);
+            let (base, var) = (base.unwrap(), var.unwrap());
+            let seed = r.seed + 20;
+            ours.push(RawRow {
+                cell: base.id.clone(),
+                seed,
+                ..r.clone()
+            });
+            // UMaze: seeds 20, 21 fewer, 22 equal, 23 more; other maps: every seed fewer.
+            let delta: i64 = match (site.to_string().as_str(), r.seed) {
+                ("pointmaze_umaze", 2) => 0,
+                ("pointmaze_umaze", 3) => 1,
+                _ => -1,
+            };
+            let env_steps = r.env_steps.checked_add_signed(delta).unwrap();
+            ours.push(RawRow {
+                cell: var.id.clone(),
+                seed,
+                env_steps,
+                ..r.clone()
+            });
+        }
+        // Medium's seed 23 has no variant row: not a pair.
+        ours.retain(|r| !(r.cell == "pbcs_pm_velocity-pointmaze_medium" && r.seed == 23));
+        let got: Vec<_> = paired_sites(&exp, &ours)
+            .into_iter()
+            .map(|s| (s.site, s.pairs, s.fewer, s.more, s.ties))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("pointmaze_umaze".to_string(), 4, 2, 1, 1),
+                ("pointmaze_medium".to_string(), 3, 3, 0, 0),
+                ("pointmaze_large".to_string(), 4, 4, 0, 0),
+                (ALL_SITES.to_string(), 11, 9, 1, 1),
+            ]
+        );
+        let all = paired_sites(&exp, &ours).pop().unwrap();
+        assert_eq!(all.p_value, crate::stats::sign_test(9, 1));
+    }
+}
