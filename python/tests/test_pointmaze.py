@@ -11,6 +11,7 @@ feature: ``$PBCS_POINTMAZE_STEP`` names it (CI sets it); without it the test is 
 
 import os
 import subprocess
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -131,11 +132,22 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
     assert checked > 3000
 
 
-def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(tmp_path):
-    """The table's number, re-made: UMaze seed 1 of experiments/pointmaze.toml run again
-    from its job file (the same env steps as its row), its chain loaded in Python and judged
-    by gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as
-    the committed s1.gym.csv. Needs `pbcs` built with --features mujoco:
+@pytest.mark.parametrize(
+    "cell, seed, weights",
+    [
+        ("pointmaze/pbcs_pm-pointmaze_umaze", 1, None),
+        ("pointmaze_velocity/pbcs_pm_velocity-pointmaze_umaze", 21, [1.0, 1.0, 0.1, 0.1]),
+    ],
+)
+def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
+    tmp_path, cell, seed, weights
+):
+    """The table's number, re-made: UMaze seed 1 of experiments/pointmaze.toml (balls in
+    position) and seed 21 of experiments/pointmaze_velocity.toml's velocity arm (balls in
+    position and velocity, whose weights the manifest keeps) run again from their job files
+    (the same env steps as their rows), each chain loaded in Python and judged by
+    gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as the
+    committed s<seed>.gym.csv. Needs `pbcs` built with --features mujoco:
     ``$PBCS_POINTMAZE_BIN`` (CI sets it); without it the test is skipped."""
     import csv
 
@@ -145,17 +157,19 @@ def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(tmp_p
     binary = os.environ.get("PBCS_POINTMAZE_BIN")
     if not binary:
         pytest.skip("set PBCS_POINTMAZE_BIN to `pbcs` built with --features mujoco")
-    cell = ROOT / "results/raw/pointmaze/pbcs_pm-pointmaze_umaze"
-    row = next(csv.DictReader((cell / "s1.csv").open()))
-    judged = next(csv.DictReader((cell / "s1.gym.csv").open()))
+    cell = ROOT / "results/raw" / cell
+    row = next(csv.DictReader((cell / f"s{seed}.csv").open()))
+    judged = next(csv.DictReader((cell / f"s{seed}.gym.csv").open()))
     out = tmp_path / "run"
     subprocess.run(
-        [binary, "run", "--config", str(cell / "s1.toml"), "--out", str(out), "--quiet"],
+        [binary, "run", "--config", str(cell / f"s{seed}.toml"), "--out", str(out), "--quiet"],
         check=True,
     )
     again = next(csv.DictReader((out / "record.csv").open()))
     assert again["total_steps"] == row["env_steps"]
+    manifest = tomllib.loads((out / "chain" / "manifest.toml").read_text())
+    assert all(s.get("weights") == weights for s in manifest["skills"])
     chain = pbcs.load_chain(out / "chain")
     assert chain.pointmaze == ("PointMaze_UMaze-v3", (1, 1), (3, 1), 300)
-    r = pm.evaluate(chain, episodes=100, seed=1_000_001)
+    r = pm.evaluate(chain, episodes=100, seed=1_000_000 + seed)
     assert r["successes"] == int(judged["gym_successes"]) >= 95

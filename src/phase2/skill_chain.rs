@@ -309,12 +309,11 @@ impl SkillChain {
                 ));
             }
             // A weighted ball measures the velocity too (BallMetric::PositionVelocity).
-            let (velocity, what) = match s.activation.weights.is_empty() {
-                true => (0, "position"),
-                false => (
-                    env.velocity_balls().map_or(0, |v| v.velocity_dims()),
-                    "position and velocity",
-                ),
+            let (velocity, what) = if s.activation.weights.is_empty() {
+                (0, "position")
+            } else {
+                let dims = env.velocity_balls().map_or(0, |v| v.velocity_dims());
+                (dims, "position and velocity")
             };
             let want = env.position_dims() + velocity;
             if s.activation.center.len() != want {
