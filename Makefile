@@ -38,7 +38,7 @@ help:
 	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
 	@echo "make test-mujoco   our PointMaze's tests, and the equality test against"
 	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
-	@echo "make pointmaze     the PointMaze grids (experiments/pointmaze.toml, pointmaze_heldout.toml) with MuJoCo, then"
+	@echo "make pointmaze     the PointMaze grids (experiments/pointmaze*.toml) with MuJoCo, then"
 	@echo "               gymnasium-robotics' verdict on every chain (python/benches/pointmaze_gym.py)"
 	@echo "make ci        what CI runs (.ci/run)"
 
@@ -81,10 +81,13 @@ pointmaze: mujoco python
 	$(CARGO) build --release --locked --features mujoco --bin pbcs
 	$(PBCS) exp run experiments/pointmaze.toml --jobs $(JOBS)
 	$(PBCS) exp run experiments/pointmaze_heldout.toml --jobs $(JOBS)
+	$(PBCS) exp run experiments/pointmaze_velocity.toml --jobs $(JOBS)
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
 	  --raw results/raw/pointmaze_heldout --summary results/pointmaze/gym_cells_heldout.csv
+	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
+	  --raw results/raw/pointmaze_velocity --summary results/pointmaze/gym_cells_velocity.csv
 
 # Aggregation with polars, then plotters; trains nothing (about a minute after the build).
 figures:

@@ -233,7 +233,7 @@ impl Env for PointMaze {
     /// The position (x, y): phase 1 bins on it (binning the velocity too, nearly every state
     /// had a bin of its own, `results/dev/issue35/`), and, with balls in position (the
     /// preset), a goal B_ε(τ_T) or an activation set is reached at any velocity (balls in
-    /// position and velocity: [`VelocityBalls`], measured in `results/dev/issue35/`).
+    /// position and velocity: [`VelocityBalls`], `experiments/pointmaze_velocity.toml`).
     fn position_dims(&self) -> usize {
         2
     }
@@ -274,8 +274,9 @@ impl SampleBall<PointState> for PointMaze {
     /// angle uniform), redrawn while the point would overlap a wall (at most 16 draws, then
     /// the centre's position); the centre's velocity and warm start. (Measured against
     /// velocities spread around the centre's, against phase 1's archived states in the
-    /// ball, `phase2.start = "archive"`: neither did better, `results/dev/issue35/`; balls in
-    /// position and velocity draw their own starts, [`VelocityBalls`].)
+    /// ball, `phase2.start = "archive"`: neither did better, `results/dev/issue35/`. Balls in
+    /// position and velocity draw their own starts, [`VelocityBalls`]; with λ = 0.1 s they
+    /// did better in the registered comparison `experiments/pointmaze_velocity.toml`.)
     fn sample_ball(
         &self,
         center: &PointState,
