@@ -253,23 +253,28 @@ fn a_freshly_saved_chain_loads_and_policies_must_fit_the_maze() {
     assert_names(&err, "skills[1].action_scale");
 }
 
+/// A one-skill chain of PointMaze's shape (networks of 4 inputs, 2 actions) with `activation`.
+fn pointmaze_chain(activation: Ball) -> SkillChain {
+    let mut rng = Seeds::new(0).stream(Stream::Init);
+    SkillChain {
+        skills: vec![Skill {
+            policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
+            activation,
+            start_index: 0,
+            target_index: 9,
+            inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
+        }],
+        kernel: Kernel::detect(),
+    }
+}
+
 /// A chain of PointMaze's shape: networks of 4 inputs (x, y, vx, vy), activation balls in the
 /// position (2 values). Such a chain saved by `pbcs run --env pointmaze_umaze` did not load
 /// ("center has 2 values, the network needs 4") before the centre was allowed to be the
 /// position part; a centre longer than the input, or empty, is still refused.
 #[test]
 fn a_chain_whose_balls_lie_in_the_position_part_saves_and_loads() {
-    let mut rng = Seeds::new(0).stream(Stream::Init);
-    let chain = SkillChain {
-        skills: vec![Skill {
-            policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
-            activation: Ball::new(vec![-1.0, 1.0], 0.25),
-            start_index: 0,
-            target_index: 9,
-            inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
-        }],
-        kernel: Kernel::detect(),
-    };
+    let chain = pointmaze_chain(Ball::new(vec![-1.0, 1.0], 0.25));
     let dir = tempfile::tempdir().unwrap();
     chain.save(dir.path()).unwrap();
     assert_eq!(
@@ -290,22 +295,11 @@ fn a_chain_whose_balls_lie_in_the_position_part_saves_and_loads() {
 /// another length than the centre, or not positive and finite, are refused naming the field.
 #[test]
 fn a_ball_in_position_and_velocity_keeps_its_weights() {
-    let mut rng = Seeds::new(0).stream(Stream::Init);
-    let ball = Ball {
+    let chain = pointmaze_chain(Ball {
         center: vec![-1.0, 1.0, 2.0, 0.0],
         radius: 0.25,
         weights: vec![1.0, 1.0, 0.1, 0.1],
-    };
-    let chain = SkillChain {
-        skills: vec![Skill {
-            policy: Mlp::new(&[4, 8, 2], Head::Tanh(vec![1.0; 2]), &mut rng),
-            activation: ball.clone(),
-            start_index: 0,
-            target_index: 9,
-            inputs: Inputs::new(vec![0.5, 0.5, 0.0, 0.0], vec![1.0, 1.0]),
-        }],
-        kernel: Kernel::detect(),
-    };
+    });
     let dir = tempfile::tempdir().unwrap();
     chain.save(dir.path()).unwrap();
     let loaded = SkillChain::load(dir.path(), Kernel::detect()).unwrap();
