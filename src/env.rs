@@ -98,7 +98,9 @@ pub trait Env {
     /// environment that also observes velocities. Phase 1's archive bins on the position
     /// (over velocities too, nearly every state would have a bin of its own), and PBCS's balls
     /// measure it: the goals B_ε(τ_T), the activation sets A_i, the success region and τ's
-    /// length for the path limits, reached or measured whatever the velocity.
+    /// length for the path limits, reached or measured whatever the velocity (unless
+    /// `phase2.velocity_scale` puts the velocity in the goals and activation sets,
+    /// [`VelocityBalls`]).
     fn position_dims(&self) -> usize {
         self.obs_dim()
     }

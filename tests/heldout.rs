@@ -194,3 +194,30 @@ fn the_velocity_comparison_runs_the_grids_jobs_and_one_change_on_unused_seeds() 
     }
     assert_eq!(cmp.cells.len(), 2 * grid.cells.len());
 }
+
+/// `[registered] paired` names two different methods of its file: otherwise loading the file
+/// is an error naming the field.
+#[test]
+fn a_paired_comparison_names_two_methods_of_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        "experiments/pbcs_fast.toml",
+        dir.path().join("pbcs_fast.toml"),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string("experiments/pointmaze_velocity.toml").unwrap();
+    let good = "paired = [\"pbcs_pm\", \"pbcs_pm_velocity\"]";
+    assert!(text.contains(good));
+    for (bad, why) in [
+        ("paired = [\"pbcs_pm\", \"pbcs_pm\"]", "twice"),
+        (
+            "paired = [\"pbcs_pm\", \"nothing\"]",
+            "`nothing` is not a method",
+        ),
+    ] {
+        let path = dir.path().join("cmp.toml");
+        std::fs::write(&path, text.replace(good, bad)).unwrap();
+        let e = Experiment::load(&path, None).unwrap_err().to_string();
+        assert!(e.contains("registered.paired") && e.contains(why), "{e}");
+    }
+}

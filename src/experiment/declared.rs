@@ -139,8 +139,6 @@ impl FigureSpec {
     }
 }
 
-/// Every declared figure has a file-name-safe, unique name and names only methods of the
-/// experiment.
 /// The methods a registered paired comparison names (`[registered] paired`): two different
 /// methods of the file.
 pub(crate) fn check_paired(
@@ -167,6 +165,8 @@ pub(crate) fn check_paired(
     }
 }
 
+/// Every declared figure has a file-name-safe, unique name and names only methods of the
+/// experiment.
 pub(crate) fn check_figures(
     path: &Path,
     figures: &[FigureSpec],

@@ -118,16 +118,17 @@ impl BallMetric {
         obs[..n.min(obs.len())].to_vec()
     }
 
-    /// The weights of [`weighted_dist`] for those coordinates: none (all 1) for the position,
-    /// else 1 per position component and λ per velocity component.
+    /// The weights of [`weighted_dist`] for those coordinates: none (all 1) for the position
+    /// (also where `env` measures no velocity), else 1 per position component and λ per
+    /// velocity component.
     pub fn weights<E: Env>(self, env: &E) -> Vec<f32> {
-        match self {
-            BallMetric::Position => Vec::new(),
-            BallMetric::PositionVelocity { scale } => {
+        match (self, self.velocity_dims(env)) {
+            (BallMetric::PositionVelocity { scale }, v) if v > 0 => {
                 let mut w = vec![1.0; env.position_dims()];
-                w.resize(w.len() + self.velocity_dims(env), scale);
+                w.resize(w.len() + v, scale);
                 w
             }
+            _ => Vec::new(),
         }
     }
 }

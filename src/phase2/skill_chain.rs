@@ -383,7 +383,7 @@ impl ManifestSkill {
                 "center",
                 format!(
                     "has {} values, the network (sizes {:?}) needs 1 to {input} (the \
-                     observation's position part)",
+                     observation's position part, and with weights its velocity)",
                     self.center.len(),
                     self.sizes
                 ),

@@ -384,7 +384,8 @@ impl<P: FnMut(usize, Progress)> Visit for RunInto<'_, P> {
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target
-/// index), ball centre and radius.
+/// index), ball centre (its first two coordinates: the position; a ball in position and
+/// velocity keeps its whole centre and weights in the chain's `manifest.toml`) and radius.
 pub(crate) fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
     let header: Vec<String> = ["skill", "start_index", "target_index", "x", "y", "radius"]
         .map(String::from)
