@@ -60,9 +60,10 @@ pub fn weighted_dist(a: &[f32], c: &[f32], w: &[f32]) -> f32 {
         .sqrt()
 }
 
-/// A ball's centre at the observation `obs` of `env`: its position ([`Env::position`]).
+/// A ball's centre at the observation `obs` of `env`: its position ([`Env::position`]), the
+/// centre of a ball in position ([`BallMetric::Position`]).
 pub fn ball_center<E: Env>(env: &E, obs: &[f32]) -> Vec<f32> {
-    env.position(obs).to_vec()
+    BallMetric::Position.center(env, obs)
 }
 
 /// What PBCS's balls — the goals B_ε(τ_T), the activation sets A_i and Backplay's starts —
@@ -114,8 +115,8 @@ impl BallMetric {
     /// The centre of the ball around the observation `obs`: its position, then (with
     /// velocity) the velocity components that follow it.
     pub fn center<E: Env>(self, env: &E, obs: &[f32]) -> Vec<f32> {
-        let n = env.position(obs).len() + self.velocity_dims(env);
-        obs[..n.min(obs.len())].to_vec()
+        let position = env.position(obs).len();
+        obs[..(position + self.velocity_dims(env)).min(obs.len())].to_vec()
     }
 
     /// The weights of [`weighted_dist`] for those coordinates: none (all 1) for the position
