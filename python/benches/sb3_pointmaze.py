@@ -18,26 +18,30 @@ random warm-up steps, one torch thread.
 
 Each evaluation is appended to ``<out>/sac_her-pointmaze_<map>/s<seed>.evals.csv`` as it
 happens, and the run saved right before it is appended (model, optimisers and HER replay buffer
-under ``--checkpoints``, default ``~/.cache/pbcs-rs/sb3-checkpoints``: about 100 MB a run, not
-committed). An interrupted run resumes from its last checkpoint when the script is started
-again (``s<seed>.resumes.csv`` lists where); evaluations already written are never rewritten,
-and a run whose evaluations have no checkpoint is refused (move its file away to start
-over). A resumed run is not the uninterrupted one: the training episode in progress is cut, and
-SB3's random streams, the training env's and the evaluation env's resets are seeded again from
-the run seed and the step it resumes at (so a resume at the same step is repeatable; the
-transition of the checkpoint's own step, not yet stored when it was taken, is lost). A run
-stopped before its first evaluation starts afresh; a fresh start removes any checkpoint of its
-seed; a checkpoint that does not continue the evaluations written (its step and successes, its
-budget) is refused, as is a run with evaluations and no checkpoint; a refused seed is reported
-and the next one runs (exit status 1). The
-finished run writes ``s<seed>.csv`` atomically (a finished seed is skipped on re-run) and its
-wall clock beside it in ``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of
-CI.
+under ``--checkpoints``, default ``~/.cache/pbcs-rs/sb3-checkpoints``, not committed; the
+replay buffer holds only its rows written so far, about 166 bytes a step: 17 MB at 100 000
+steps, so that a checkpoint can travel between machines). An interrupted run resumes from its
+last checkpoint when the script is started again (``s<seed>.resumes.csv`` lists where);
+evaluations already written are never rewritten. A resumed run is not the uninterrupted one:
+the training episode in progress is cut, and SB3's random streams, the training env's and the
+evaluation env's resets are seeded again from the run seed and the step it resumes at (so a
+resume at the same step is repeatable; the transition of the checkpoint's own step, not yet
+stored when it was taken, is lost). A run is repeatable on one machine and torch only: the same
+seed on another gave other evaluations from the first one on. A run stopped before its first
+evaluation starts afresh; a fresh start removes any checkpoint of its seed; a checkpoint that
+does not continue the evaluations written (its step and successes, its budget) is refused, as
+is a run with evaluations and no checkpoint (move its file away to start over); a refused seed
+is reported and the next one runs (exit status 1). The finished run writes ``s<seed>.csv``
+atomically (a finished seed is skipped on re-run) and its wall clock beside it in
+``s<seed>.timing.toml``. Needs stable-baselines3 and torch; not part of CI.
 """
 
 import argparse
+import copy
 import csv
+import io
 import json
+import pickle
 import shutil
 import sys
 import time
@@ -45,6 +49,7 @@ from collections import deque
 from pathlib import Path
 
 from common import write_atomic
+import numpy as np
 from pbcs.pointmaze import FixedCells
 import gymnasium as gym
 import gymnasium_robotics
@@ -116,6 +121,57 @@ def read_evals(path):
                       "it away") from e
 
 
+def _rows(buffer, size):
+    """Names of the buffer's per-transition arrays (first axis `size`); ``observations.key``
+    for those in the dict observations."""
+    for name, value in vars(buffer).items():
+        items = value.items() if isinstance(value, dict) else [(None, value)]
+        for key, array in items:
+            if isinstance(array, np.ndarray) and array.shape[:1] == (size,):
+                yield name, key
+
+
+def cut_buffer(buffer):
+    """A shallow copy of the replay buffer holding only its rows written so far (SB3 allocates
+    all 1M rows at once: a checkpoint at 100k steps then takes 17 MB instead of 166 MB);
+    ``grow_buffer`` gives back the whole buffer, equal to the original array for array."""
+    rows = buffer.buffer_size if buffer.full else buffer.pos
+    cut = copy.copy(buffer)
+    names = list(_rows(buffer, buffer.buffer_size))
+    for name, key in names:
+        if key is None:
+            setattr(cut, name, getattr(buffer, name)[:rows])
+        else:
+            setattr(cut, name, {**getattr(cut, name), key: getattr(buffer, name)[key][:rows]})
+    cut.pbcs_cut = {"rows": rows, "names": names}
+    return cut
+
+
+def grow_buffer(buffer):
+    """The whole replay buffer from one saved by ``cut_buffer`` (a buffer saved whole, by an
+    earlier version of this script, is returned as it is): the unwritten rows are zeros, and
+    empty info dicts in HER's ``infos``, as SB3 allocates them."""
+    cut = vars(buffer).pop("pbcs_cut", None)
+    if cut is None:
+        return buffer
+    for name, key in cut["names"]:
+        value = getattr(buffer, name)
+        array = value if key is None else value[key]
+        if array.shape[:1] != (cut["rows"],):
+            raise Refused(f"replay buffer: {name} {key or ''} has {array.shape[0]} rows, not the "
+                          f"{cut['rows']} saved: a damaged checkpoint")
+        pad = np.zeros((buffer.buffer_size - cut["rows"], *array.shape[1:]), array.dtype)
+        if array.dtype == object:
+            for index in np.ndindex(pad.shape):
+                pad[index] = {}
+        whole = np.concatenate([array, pad])
+        if key is None:
+            setattr(buffer, name, whole)
+        else:
+            value[key] = whole
+    return buffer
+
+
 def save_checkpoint(model, ckpt, record, budget):
     """Saves `model` and its replay buffer as of `record` (env_steps, successes, wall_seconds),
     then names them in ``last.json`` (written atomically, with the run's budget), then removes
@@ -123,7 +179,8 @@ def save_checkpoint(model, ckpt, record, budget):
     steps = record[0]
     ckpt.mkdir(parents=True, exist_ok=True)
     model.save(ckpt / f"model_{steps}.zip")
-    model.save_replay_buffer(ckpt / f"replay_{steps}.pkl")
+    with (ckpt / f"replay_{steps}.pkl").open("wb") as f:
+        pickle.dump(cut_buffer(model.replay_buffer), f, protocol=pickle.HIGHEST_PROTOCOL)
     meta = dict(zip(("env_steps", "successes", "wall_seconds"), record), budget=budget)
     write_atomic(ckpt / "last.json", json.dumps(meta))
     for old in ckpt.glob("*_*.*"):
@@ -159,7 +216,9 @@ def resume(evals, ckpt, env, seed, budget):
         with evals.open("a") as f:
             f.write(f"{at},{saved['successes']},{EVAL_EPISODES},{saved['wall_seconds']:.1f}\n")
     model = SAC.load(ckpt / f"model_{at}.zip", env=env, device="cpu")
-    model.load_replay_buffer(ckpt / f"replay_{at}.pkl")
+    with (ckpt / f"replay_{at}.pkl").open("rb") as f:
+        buffer = grow_buffer(pickle.load(f))
+    model.load_replay_buffer(io.BytesIO(pickle.dumps(buffer, protocol=pickle.HIGHEST_PROTOCOL)))
     model.set_random_seed(seed + at)
     resumes = evals.with_name(evals.name.replace(".evals.", ".resumes."))
     if not resumes.exists():
