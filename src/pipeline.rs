@@ -239,8 +239,9 @@ pub fn render(
 /// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
 /// each cell's shortest path), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
 /// chain's path beside |τ| and the fewest steps), `<name>.judged.csv` (chains judged by an
-/// outside environment), `<name>.paired.csv` (a registered paired comparison) and the
-/// wall-clock companion `<name>.timing.csv`.
+/// outside environment), `<name>.paired.csv` (a registered paired comparison),
+/// `<name>.phases.csv` (PBCS cells: env steps by phase) and the wall-clock companion
+/// `<name>.timing.csv`.
 pub fn write_tables(
     exp: &Experiment,
     results: &Path,
@@ -285,6 +286,13 @@ pub fn write_tables(
         write_records(
             &crate::tables::paired::paired_path(results, &exp.name),
             &paired,
+        )?;
+    }
+    let phases = crate::tables::phases::cell_phases(exp, rows);
+    if !phases.is_empty() {
+        write_records(
+            &crate::tables::phases::phases_path(results, &exp.name),
+            &phases,
         )?;
     }
     let timing = crate::tables::cell_timings(exp, results, rows);

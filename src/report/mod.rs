@@ -175,7 +175,10 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
 /// - from `<experiment>.routes.csv`: `\res{<experiment>:<cell>:routes:fewest}` (the fewest
 ///   steps from s_0 to the target, median over the cell's runs) and `…:routes:tauleft` (the τ
 ///   phase 2 worked on as a percentage of phase 1's, median over the cell's runs: below 100
-///   where `shorten` is on).
+///   where `shorten` is on);
+/// - from `<experiment>.judged.csv`, `.paired.csv` and `.phases.csv`: the numbers of
+///   [`crate::tables::judged::judged_numbers`], [`crate::tables::paired::paired_numbers`] and
+///   [`crate::tables::phases::phases_numbers`].
 pub fn extra_numbers_tex(
     exp: &crate::experiment::Experiment,
     results: &std::path::Path,
@@ -196,6 +199,7 @@ pub fn extra_numbers_tex(
     for (key, value) in crate::tables::judged::judged_numbers(name, results)?
         .into_iter()
         .chain(crate::tables::paired::paired_numbers(name, results)?)
+        .chain(crate::tables::phases::phases_numbers(name, results)?)
     {
         def_res(&mut s, name, &key, &value);
     }

@@ -10,6 +10,7 @@ pub mod curves;
 pub mod judged;
 pub mod outside;
 pub mod paired;
+pub mod phases;
 pub mod routes;
 pub mod scaling;
 

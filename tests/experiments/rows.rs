@@ -10,9 +10,6 @@ use std::path::PathBuf;
 /// Writes a made-up finished PBCS run of (`cell`, `seed`) of `exp` into `results` as a sweep
 /// leaves it (its job file and its row; nothing is run): the path of the row.
 fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBuf {
-    let Job::Pbcs(j) = &cell.job else {
-        panic!("{}: not a PBCS cell", cell.id)
-    };
     let dir = exp.cell_dir(results, cell);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
@@ -20,7 +17,19 @@ fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBu
         cell.job.with_seed(seed).to_toml(),
     )
     .unwrap();
-    let row = RawRow {
+    let row = made_up_row(exp, cell, seed);
+    let path = run_file(&dir, seed, ".csv");
+    pbcs::record::write_record(&path, &row).unwrap();
+    path
+}
+
+/// A made-up finished PBCS row of (`cell`, `seed`) of `exp`: 1000 steps of phase 1, 2000 of
+/// training and 300 of tests.
+fn made_up_row(exp: &Experiment, cell: &Cell, seed: u64) -> RawRow {
+    let Job::Pbcs(j) = &cell.job else {
+        panic!("{}: not a PBCS cell", cell.id)
+    };
+    RawRow {
         experiment: exp.name.clone(),
         cell: cell.id.clone(),
         method: cell.method.clone(),
@@ -42,10 +51,7 @@ fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBu
         test_steps: 300,
         skills: 2,
         failure: None,
-    };
-    let path = run_file(&dir, seed, ".csv");
-    pbcs::record::write_record(&path, &row).unwrap();
-    path
+    }
 }
 
 /// `path` with the value of `column` on the record's line (line 2) replaced by `value`.
@@ -152,4 +158,58 @@ fn every_committed_raw_row_agrees_with_its_place() {
     }
     // table 250, gamma 80, unseen 40, beyond 100, ablations and protocol.
     assert!(checked >= 590, "only {checked} committed rows");
+}
+
+/// The phases table splits each cell's env steps as its rows do: medians of phase 1, training,
+/// tests and phase 1 + training, their extremes and the tests' share of all steps (known
+/// values); cells without PBCS rows are left out; its numbers are the report's.
+#[test]
+fn the_phases_table_splits_env_steps_as_the_rows_do() {
+    use pbcs::tables::phases::{cell_phases, phases_numbers, phases_path};
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let cell = exp.cell("pbcs-maze2").unwrap();
+    let rows: Vec<RawRow> = [(100, 1000, 900), (300, 4000, 1700), (200, 2000, 800)]
+        .into_iter()
+        .enumerate()
+        .map(|(seed, (phase1, train, test))| RawRow {
+            phase1_steps: phase1,
+            train_steps: train,
+            test_steps: test,
+            env_steps: phase1 + train + test,
+            ..made_up_row(&exp, cell, seed as u64)
+        })
+        .collect();
+    let table = cell_phases(&exp, &rows);
+    assert_eq!(table.len(), 1, "only the cell with rows");
+    let c = &table[0];
+    assert_eq!((c.cell.as_str(), c.runs), ("pbcs-maze2", 3));
+    assert_eq!(
+        [
+            c.phase1_median,
+            c.train_median,
+            c.test_median,
+            c.env_steps_median
+        ],
+        [200.0, 2000.0, 900.0, 3000.0]
+    );
+    assert_eq!(
+        (c.learning_median, c.learning_min, c.learning_max),
+        (2200.0, 1100, 4300)
+    );
+    assert!((c.test_share - 3400.0 / 11000.0).abs() < 1e-12);
+    let dir = tempfile::tempdir().unwrap();
+    let path = phases_path(dir.path(), &exp.name);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    pbcs::record::write_records(&path, &table).unwrap();
+    let numbers = phases_numbers(&exp.name, dir.path()).unwrap();
+    let get = |k: &str| {
+        let key = format!("pbcs-maze2:phases:{k}");
+        numbers
+            .iter()
+            .find(|(n, _)| *n == key)
+            .map(|(_, v)| v.clone())
+    };
+    assert_eq!(get("learning").as_deref(), Some("2k"));
+    assert_eq!(get("learningmax").as_deref(), Some("4k"));
+    assert_eq!(get("testshare").as_deref(), Some("31"));
 }

@@ -1,0 +1,119 @@
+//! Where a PBCS run's environment steps go (`results/tables/<experiment>.phases.csv`): phase 1,
+//! phase 2's training episodes and its test episodes (Backplay's β tests of each stage, each
+//! skill's verification and the chain's), per cell, as medians over the cell's PBCS runs.
+//!
+//! A row's `env_steps` counts all three. A learner whose evaluations are not counted as env
+//! steps — SB3's SAC+HER on PointMaze, evaluated every 10 000 steps by 100 episodes that its
+//! step count leaves out — compares with PBCS's `learning` steps (phase 1 + training) as well,
+//! so both are tabled. `pbcs figures` writes their numbers
+//! (`\res{<experiment>:<cell>:phases:<field>}`).
+
+use crate::experiment::{Experiment, Kind, RawRow, Site};
+use crate::fmt::human_steps;
+use crate::stats::median;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One cell's split of env steps, over its PBCS runs (solved or not).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellPhases {
+    /// Cell id.
+    pub cell: String,
+    /// Method name.
+    pub method: String,
+    /// Maze size N or another environment's name (column `maze`).
+    #[serde(rename = "maze")]
+    pub site: Site,
+    /// PBCS runs of the cell.
+    pub runs: u64,
+    /// Median env steps, all three parts.
+    pub env_steps_median: f64,
+    /// Median steps of phase 1.
+    pub phase1_median: f64,
+    /// Median steps of phase 2's training episodes.
+    pub train_median: f64,
+    /// Median steps of phase 2's test episodes.
+    pub test_median: f64,
+    /// Median of each run's phase 1 + training steps (its test episodes left out).
+    pub learning_median: f64,
+    /// The fewest phase 1 + training steps of a run.
+    pub learning_min: u64,
+    /// The most phase 1 + training steps of a run.
+    pub learning_max: u64,
+    /// The cell's test steps over its env steps, all runs summed.
+    pub test_share: f64,
+}
+
+/// `<results>/tables/<experiment>.phases.csv`.
+pub fn phases_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.phases.csv"))
+}
+
+/// The split of every cell of `exp` with PBCS rows, in the file's order of cells.
+///
+/// ```
+/// use pbcs::experiment::Experiment;
+/// // Without rows, no cell to split.
+/// let exp = Experiment::load(std::path::Path::new("experiments/pointmaze.toml"), None).unwrap();
+/// assert!(pbcs::tables::phases::cell_phases(&exp, &[]).is_empty());
+/// ```
+pub fn cell_phases(exp: &Experiment, rows: &[RawRow]) -> Vec<CellPhases> {
+    let mut out = Vec::new();
+    for c in &exp.cells {
+        let runs: Vec<&RawRow> = rows
+            .iter()
+            .filter(|r| r.cell == c.id && r.kind == Kind::Pbcs)
+            .collect();
+        if runs.is_empty() {
+            continue;
+        }
+        let mid = |part: fn(&RawRow) -> u64| {
+            median(&mut runs.iter().map(|r| part(r) as f64).collect::<Vec<_>>())
+        };
+        let learning = |r: &RawRow| r.phase1_steps + r.train_steps;
+        let sum = |part: fn(&RawRow) -> u64| runs.iter().map(|r| part(r)).sum::<u64>() as f64;
+        out.push(CellPhases {
+            cell: c.id.clone(),
+            method: c.method.clone(),
+            site: c.site,
+            runs: runs.len() as u64,
+            env_steps_median: mid(|r| r.env_steps),
+            phase1_median: mid(|r| r.phase1_steps),
+            train_median: mid(|r| r.train_steps),
+            test_median: mid(|r| r.test_steps),
+            learning_median: mid(learning),
+            learning_min: runs.iter().map(|r| learning(r)).min().unwrap_or(0),
+            learning_max: runs.iter().map(|r| learning(r)).max().unwrap_or(0),
+            test_share: sum(|r| r.test_steps) / sum(|r| r.env_steps).max(1.0),
+        });
+    }
+    out
+}
+
+/// `\res{<experiment>:<cell>:phases:<field>}` from the phases table, where it exists:
+/// `learning`, `learningmin`, `learningmax`, `phase1`, `train`, `test` (env steps as people
+/// write them, [`human_steps`]) and `testshare` (percent, no decimals).
+pub fn phases_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
+    let path = phases_path(results, name);
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let cells: Vec<CellPhases> = crate::record::read_records(&path)?;
+    Ok(cells
+        .iter()
+        .flat_map(|c| {
+            [
+                ("learning", human_steps(c.learning_median)),
+                ("learningmin", human_steps(c.learning_min as f64)),
+                ("learningmax", human_steps(c.learning_max as f64)),
+                ("phase1", human_steps(c.phase1_median)),
+                ("train", human_steps(c.train_median)),
+                ("test", human_steps(c.test_median)),
+                ("testshare", format!("{:.0}", c.test_share * 100.0)),
+            ]
+            .map(|(f, v)| (format!("{}:phases:{f}", c.cell), v))
+        })
+        .collect())
+}
