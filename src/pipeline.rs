@@ -270,31 +270,15 @@ pub fn write_tables(
             _ => {}
         }
     }
+    let name = exp.name.as_str();
     let routes = crate::tables::routes::routes(exp, results, rows)?;
-    if !routes.is_empty() {
-        write_records(&routes_path(results, &exp.name), &routes)?;
-    }
+    write_any(&routes_path(results, name), &routes)?;
     let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
-    if !judged.is_empty() {
-        write_records(
-            &crate::tables::judged::judged_path(results, &exp.name),
-            &judged,
-        )?;
-    }
+    write_any(&crate::tables::judged::judged_path(results, name), &judged)?;
     let paired = crate::tables::paired::paired_sites(exp, rows);
-    if !paired.is_empty() {
-        write_records(
-            &crate::tables::paired::paired_path(results, &exp.name),
-            &paired,
-        )?;
-    }
+    write_any(&crate::tables::paired::paired_path(results, name), &paired)?;
     let phases = crate::tables::phases::cell_phases(exp, rows);
-    if !phases.is_empty() {
-        write_records(
-            &crate::tables::phases::phases_path(results, &exp.name),
-            &phases,
-        )?;
-    }
+    write_any(&crate::tables::phases::phases_path(results, name), &phases)?;
     let timing = crate::tables::cell_timings(exp, results, rows);
     write_records(
         &results
@@ -302,6 +286,14 @@ pub fn write_tables(
             .join(format!("{}.timing.csv", exp.name)),
         &timing,
     )
+}
+
+/// Writes `rows` to `path` where there are any (a table with no row is not written).
+fn write_any<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+    if rows.is_empty() {
+        return Ok(());
+    }
+    write_records(path, rows)
 }
 
 /// Renders every figure of every experiment into `figures` and writes the report's generated
