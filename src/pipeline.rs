@@ -272,13 +272,13 @@ pub fn write_tables(
     }
     let name = exp.name.as_str();
     let routes = crate::tables::routes::routes(exp, results, rows)?;
-    write_any(&routes_path(results, name), &routes)?;
+    write_nonempty(&routes_path(results, name), &routes)?;
     let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
-    write_any(&crate::tables::judged::judged_path(results, name), &judged)?;
+    write_nonempty(&crate::tables::judged::judged_path(results, name), &judged)?;
     let paired = crate::tables::paired::paired_sites(exp, rows);
-    write_any(&crate::tables::paired::paired_path(results, name), &paired)?;
+    write_nonempty(&crate::tables::paired::paired_path(results, name), &paired)?;
     let phases = crate::tables::phases::cell_phases(exp, rows);
-    write_any(&crate::tables::phases::phases_path(results, name), &phases)?;
+    write_nonempty(&crate::tables::phases::phases_path(results, name), &phases)?;
     let timing = crate::tables::cell_timings(exp, results, rows);
     write_records(
         &results
@@ -289,7 +289,7 @@ pub fn write_tables(
 }
 
 /// Writes `rows` to `path` where there are any (a table with no row is not written).
-fn write_any<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+fn write_nonempty<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     if rows.is_empty() {
         return Ok(());
     }

@@ -178,9 +178,15 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
             env_steps: phase1 + train + test,
             ..made_up_row(&exp, cell, seed as u64)
         })
+        .chain([RawRow {
+            cell: "ddpg-maze2".into(),
+            method: "ddpg".into(),
+            kind: Kind::Vanilla,
+            ..made_up_row(&exp, cell, 0)
+        }])
         .collect();
     let table = cell_phases(&exp, &rows);
-    assert_eq!(table.len(), 1, "only the cell with rows");
+    assert_eq!(table.len(), 1, "only the cell with PBCS rows");
     let c = &table[0];
     assert_eq!((c.cell.as_str(), c.runs), ("pbcs-maze2", 3));
     assert_eq!(
