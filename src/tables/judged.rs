@@ -167,21 +167,13 @@ pub fn judged_cells(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result
 /// `\res{<experiment>:<cell>:judged:<field>}` (`seeds`, `solved`, `min`, `judge`) from the
 /// judged table, where it exists.
 pub fn judged_numbers(name: &str, results: &Path) -> Result<Vec<(String, String)>> {
-    let path = judged_path(results, name);
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let cells: Vec<JudgedCell> = crate::record::read_records(&path)?;
-    Ok(cells
-        .iter()
-        .flat_map(|c| {
-            [
-                ("seeds", c.seeds.to_string()),
-                ("solved", c.solved.to_string()),
-                ("min", c.successes_min.to_string()),
-                ("judge", c.gym_id.clone()),
-            ]
-            .map(|(f, v)| (format!("{}:judged:{f}", c.cell), v))
-        })
-        .collect())
+    super::table_numbers(&judged_path(results, name), |c: &JudgedCell| {
+        let fields = [
+            ("seeds", c.seeds.to_string()),
+            ("solved", c.solved.to_string()),
+            ("min", c.successes_min.to_string()),
+            ("judge", c.gym_id.clone()),
+        ];
+        (format!("{}:judged", c.cell), fields)
+    })
 }

@@ -118,6 +118,26 @@ impl CellStats {
     }
 }
 
+/// The `\res` numbers of a table written beside an experiment's (`judged`, `paired`,
+/// `phases`), where it exists: `fields(row)` gives a row's key prefix and its fields, each
+/// becoming the key `<prefix>:<field>`.
+pub(crate) fn table_numbers<T: serde::de::DeserializeOwned, const N: usize>(
+    path: &Path,
+    fields: impl Fn(&T) -> (String, [(&'static str, String); N]),
+) -> Result<Vec<(String, String)>> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let rows: Vec<T> = crate::record::read_records(path)?;
+    Ok(rows
+        .iter()
+        .flat_map(|r| {
+            let (prefix, fields) = fields(r);
+            fields.map(|(f, v)| (format!("{prefix}:{f}"), v))
+        })
+        .collect())
+}
+
 /// Where an experiment's table lives under `results`.
 pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
     results.join("tables").join(format!("{experiment}.csv"))

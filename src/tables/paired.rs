@@ -102,24 +102,16 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
 /// `\res{<experiment>:paired:<site>:<field>}` (`pairs`, `fewer`, `more`, `ties`, `p`: the
 /// p-value to two significant digits) from the paired table, where it exists.
 pub fn paired_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
-    let path = paired_path(results, name);
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let sites: Vec<PairedSite> = crate::record::read_records(&path)?;
-    Ok(sites
-        .iter()
-        .flat_map(|s| {
-            [
-                ("pairs", s.pairs.to_string()),
-                ("fewer", s.fewer.to_string()),
-                ("more", s.more.to_string()),
-                ("ties", s.ties.to_string()),
-                ("p", two_digits(s.p_value)),
-            ]
-            .map(|(f, v)| (format!("paired:{}:{f}", s.site), v))
-        })
-        .collect())
+    super::table_numbers(&paired_path(results, name), |s: &PairedSite| {
+        let fields = [
+            ("pairs", s.pairs.to_string()),
+            ("fewer", s.fewer.to_string()),
+            ("more", s.more.to_string()),
+            ("ties", s.ties.to_string()),
+            ("p", two_digits(s.p_value)),
+        ];
+        (format!("paired:{}", s.site), fields)
+    })
 }
 
 /// `p` to two significant digits (`0.021`, `0.34`, `1.0`).

@@ -96,24 +96,16 @@ pub fn cell_phases(exp: &Experiment, rows: &[RawRow]) -> Vec<CellPhases> {
 /// `learning`, `learningmin`, `learningmax`, `phase1`, `train`, `test` (env steps as people
 /// write them, [`human_steps`]) and `testshare` (percent, no decimals).
 pub fn phases_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
-    let path = phases_path(results, name);
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let cells: Vec<CellPhases> = crate::record::read_records(&path)?;
-    Ok(cells
-        .iter()
-        .flat_map(|c| {
-            [
-                ("learning", human_steps(c.learning_median)),
-                ("learningmin", human_steps(c.learning_min as f64)),
-                ("learningmax", human_steps(c.learning_max as f64)),
-                ("phase1", human_steps(c.phase1_median)),
-                ("train", human_steps(c.train_median)),
-                ("test", human_steps(c.test_median)),
-                ("testshare", format!("{:.0}", c.test_share * 100.0)),
-            ]
-            .map(|(f, v)| (format!("{}:phases:{f}", c.cell), v))
-        })
-        .collect())
+    super::table_numbers(&phases_path(results, name), |c: &CellPhases| {
+        let fields = [
+            ("learning", human_steps(c.learning_median)),
+            ("learningmin", human_steps(c.learning_min as f64)),
+            ("learningmax", human_steps(c.learning_max as f64)),
+            ("phase1", human_steps(c.phase1_median)),
+            ("train", human_steps(c.train_median)),
+            ("test", human_steps(c.test_median)),
+            ("testshare", format!("{:.0}", c.test_share * 100.0)),
+        ];
+        (format!("{}:phases", c.cell), fields)
+    })
 }
