@@ -116,7 +116,7 @@ cell: bin
 	$(PBCS) exp check experiments/$(EXP).toml --cell $(CELL) $(if $(SEED),--seed $(SEED),) --jobs $(JOBS) $(PROFILE_FLAG)
 
 paper:
-	@command -v latexmk >/dev/null 2>&1 || { echo "make paper needs latexmk and LaTeX (Debian/Ubuntu: apt install latexmk texlive-latex-extra texlive-science); nothing was built"; exit 2; }
+	@command -v latexmk >/dev/null 2>&1 || { echo "make paper needs latexmk and LaTeX (Debian/Ubuntu: apt install latexmk texlive-latex-recommended texlive-latex-extra texlive-fonts-recommended); nothing was built"; exit 2; }
 	$(MAKE) figures
 	cd paper && latexmk -pdf -interaction=nonstopmode report.tex
 
