@@ -10,7 +10,11 @@ use std::path::Path;
 fn outside_ascii(text: &str) -> Vec<(usize, char)> {
     text.lines()
         .enumerate()
-        .flat_map(|(i, line)| line.chars().filter(|c| !c.is_ascii()).map(move |c| (i + 1, c)))
+        .flat_map(|(i, line)| {
+            line.chars()
+                .filter(|c| !c.is_ascii())
+                .map(move |c| (i + 1, c))
+        })
         .collect()
 }
 
