@@ -272,10 +272,10 @@ def run(map_key, seed, steps, out, checkpoints):
         evals.write_text("env_steps,successes,episodes,wall_seconds\n")
     eval_env.reset(seed=1_000_000 + seed + at)
     clock = time.perf_counter() - (done[-1][2] if done else 0.0)
-    best = max(((k, n) for n, k, _ in done), key=lambda b: (b[0], -b[1]), default=(0, 0))
-    # successes, env steps; (0, 0) while no evaluation has succeeded, resumed or not (the
-    # convention `pbcs aggregate` checks the ended row against)
-    best = list(best) if best[0] > 0 else [0, 0]
+    # successes, env steps: the first evaluation with the most successes; (0, 0) while none has
+    # succeeded, resumed or not (the convention `pbcs aggregate` checks the ended row against)
+    succeeded = ((k, n) for n, k, _ in done if k > 0)
+    best = list(max(succeeded, key=lambda b: (b[0], -b[1]), default=(0, 0)))
 
     class Evaluate(BaseCallback):
         def _on_step(self):
