@@ -9,7 +9,9 @@ PROFILE ?=
 EXPERIMENTS ?= $(patsubst experiments/%.toml,%,$(shell grep -l '^\[\[method\]\]' experiments/*.toml))
 
 PROFILE_FLAG = $(if $(PROFILE),--profile $(PROFILE),)
-RESULTS = $(if $(PROFILE),results-$(PROFILE),results)
+# The results folder; empty: `results`, or `results-<profile>` with a profile.
+RESULTS ?=
+RESULTS_FLAG = $(if $(RESULTS),--results $(RESULTS),)
 # The figures build has polars (aggregation); the other commands do not need it.
 PBCS_POLARS = $(CARGO) run --release --locked --features polars --quiet --
 # The binary where cargo puts it (CARGO_TARGET_DIR, as .ci/run sets it, or target/); the `bin`
@@ -25,13 +27,15 @@ help:
 	@echo "make test      run the test suite (the README's test command)"
 	@echo "make figures   tables, figures and the report's LaTeX from the committed raw CSVs"
 	@echo "               (results/raw -> results/tables, results/figures, paper/generated)"
-	@echo "make results   re-run every experiment (resumable; JOBS=2; PROFILE=smoke)"
+	@echo "make results   re-run every experiment (resumable; JOBS=2; PROFILE=smoke; RESULTS=DIR);"
+	@echo "               an experiment this build cannot run (PointMaze: MuJoCo) is skipped"
+	@echo "               with one line saying how to run it (make pointmaze)"
 	@echo "make results-parallel   the same through make -j\$$JOBS, one rule per (cell, seed)"
 	@echo "make commands  print one command per (cell, seed), for a cluster's job array"
 	@echo "make experiments   list the experiment grids (EXPERIMENTS)"
 	@echo "make cell EXP=table CELL=pbcs-maze2 [SEED=3]   re-run one table cell and compare"
 	@echo "make paper     build paper/report.pdf (needs latexmk + texlive)"
-	@echo "make smoke     the whole pipeline on the smoke profile (what CI runs)"
+	@echo "make smoke     the whole pipeline on the smoke profile (CI runs it; RESULTS=DIR)"
 	@echo "make bench     phase-1 speed, and learner update cost (every kernel, candle, end to end)"
 	@echo "make lint      rustfmt and clippy"
 	@echo "make python    the Python package into \$$VENV (default .venv) and its tests"
@@ -91,25 +95,28 @@ pointmaze: mujoco python
 
 # Aggregation with polars, then plotters; trains nothing (about a minute after the build).
 figures:
-	$(PBCS_POLARS) aggregate $(PROFILE_FLAG)
-	$(PBCS_POLARS) figures $(PROFILE_FLAG)
+	$(PBCS_POLARS) aggregate $(PROFILE_FLAG) $(RESULTS_FLAG)
+	$(PBCS_POLARS) figures $(PROFILE_FLAG) $(RESULTS_FLAG)
 
 bin:
 	$(CARGO) build --release --locked
 
 results: bin
-	for e in $(EXPERIMENTS); do $(PBCS) exp run experiments/$$e.toml --jobs $(JOBS) $(PROFILE_FLAG) || exit 1; done
+	for e in $(EXPERIMENTS); do $(PBCS) exp run experiments/$$e.toml --jobs $(JOBS) $(PROFILE_FLAG) \
+	  $(RESULTS_FLAG) --skip-unavailable || exit 1; done
 
 results-parallel: bin
 	mkdir -p $(TARGET_DIR)
-	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) > $(TARGET_DIR)/runs-$$e.mk || exit 1; \
+	for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml --make $(PROFILE_FLAG) \
+	  $(RESULTS_FLAG) --skip-unavailable > $(TARGET_DIR)/runs-$$e.mk || exit 1; \
 	  $(MAKE) -f $(TARGET_DIR)/runs-$$e.mk -j$(JOBS) PBCS=$(PBCS) || exit 1; done
 
 experiments:
 	@echo $(EXPERIMENTS)
 
 commands: bin
-	@for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml $(PROFILE_FLAG); done
+	@for e in $(EXPERIMENTS); do $(PBCS) exp list experiments/$$e.toml $(PROFILE_FLAG) $(RESULTS_FLAG) \
+	  --skip-unavailable; done
 
 cell: bin
 	@test -n "$(EXP)" -a -n "$(CELL)" || { echo "usage: make cell EXP=table CELL=pbcs-maze2 [SEED=3]"; exit 2; }

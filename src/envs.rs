@@ -134,6 +134,19 @@ impl EnvName {
             EnvName::PointmazeLarge => Some(MapName::Large),
         }
     }
+
+    /// The cargo feature this environment needs and this build lacks (`mujoco` for PointMaze
+    /// in a build without it), or None when this build runs it.
+    ///
+    /// ```
+    /// use pbcs::envs::EnvName;
+    /// assert_eq!(EnvName::Rooms.missing_feature(), None);
+    /// let lacks = if cfg!(feature = "mujoco") { None } else { Some("mujoco") };
+    /// assert_eq!(EnvName::PointmazeLarge.missing_feature(), lacks);
+    /// ```
+    pub fn missing_feature(self) -> Option<&'static str> {
+        (self.point_map().is_some() && !cfg!(feature = "mujoco")).then_some("mujoco")
+    }
 }
 
 /// What pictures draw of the registry's task on `map` (the same as its [`Planar::scene`],

@@ -192,13 +192,14 @@ pub struct Experiment {
 }
 
 /// A grid registered before any of its runs existed (`[registered]` of an experiment file):
-/// the preset file its methods run and that file's SHA-256 then. `tests/heldout.rs` fails when
-/// the preset no longer has that hash: the grid then says nothing about the preset as it is,
-/// and must be registered again on new layouts.
+/// the preset file its methods run and that file's SHA-256 then. When the preset no longer
+/// has that hash the grid says nothing about the preset as it is: a sweep refuses to run it
+/// ([`Registration::check`], called by [`sweep`]), and `tests/heldout.rs` fails; the grid must
+/// then be registered again, on new layouts or seeds.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Registration {
-    /// The preset file in `experiments/` (`pbcs_fast.toml`).
+    /// The preset file, beside the experiment file (`pbcs_fast.toml`).
     pub preset: String,
     /// Its SHA-256 (lower-case hex) when the grid was registered.
     pub sha256: String,
@@ -209,6 +210,57 @@ pub struct Registration {
     /// `<experiment>.paired.csv`, [`crate::tables::paired`]).
     #[serde(default)]
     pub paired: Option<[String; 2]>,
+    /// Where the preset file is: `preset` in the experiment file's folder (set by
+    /// [`Experiment::load`]).
+    #[serde(skip)]
+    pub preset_path: std::path::PathBuf,
+}
+
+impl Registration {
+    /// The SHA-256 (lower-case hex) of the preset file as it is now.
+    pub fn preset_sha256(&self) -> Result<String> {
+        use sha2::{Digest, Sha256};
+        let bytes =
+            std::fs::read(&self.preset_path).map_err(|e| Error::io(&self.preset_path, e))?;
+        Ok(Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect())
+    }
+
+    /// Ok when the preset file still has the registered hash; else an error naming the
+    /// experiment, the preset and both hashes. A grid run with another preset would write rows
+    /// the registration does not cover.
+    ///
+    /// ```
+    /// use pbcs::experiment::Experiment;
+    /// use std::path::Path;
+    /// let exp = Experiment::load(Path::new("experiments/heldout.toml"), None).unwrap();
+    /// exp.registered.as_ref().unwrap().check("heldout").unwrap();
+    /// let mut moved = exp.registered.clone().unwrap();
+    /// moved.sha256 = "0".repeat(64);
+    /// let e = moved.check("heldout").unwrap_err().to_string();
+    /// assert!(e.contains(&"0".repeat(64)) && e.contains("pbcs_fast.toml"), "{e}");
+    /// ```
+    pub fn check(&self, experiment: &str) -> Result<()> {
+        let now = self.preset_sha256()?;
+        if now == self.sha256 {
+            return Ok(());
+        }
+        Err(Error::invalid(
+            format!("registered.sha256 of {experiment}"),
+            format!(
+                "the grid was registered on {} for {} with SHA-256 {}, but that file's SHA-256 \
+                 is now {now}: its runs would not be the registered grid's. Restore the preset \
+                 as registered (git log -- {}), or register a new grid (new layouts or seeds) \
+                 for the preset as it is",
+                self.date,
+                self.preset_path.display(),
+                self.sha256,
+                self.preset_path.display(),
+            ),
+        ))
+    }
 }
 
 impl Experiment {
@@ -224,6 +276,37 @@ impl Experiment {
             .get(&cell.site)
             .map_or(self.seed_count, |&n| n.min(self.seed_count));
         (self.first_seed..self.first_seed + n).collect()
+    }
+
+    /// The environments of the grid this build cannot run, with the cargo feature each needs
+    /// ([`crate::envs::EnvName::missing_feature`]): empty when every run can run here.
+    pub fn missing_features(&self) -> Vec<(crate::envs::EnvName, &'static str)> {
+        self.sites
+            .iter()
+            .filter_map(|s| match s {
+                Site::Env(e) => e.missing_feature().map(|f| (*e, f)),
+                Site::Maze(_) => None,
+            })
+            .collect()
+    }
+
+    /// None when this build runs every environment of the grid; else what it lacks and how
+    /// to run the grid, in one line.
+    pub fn unavailable(&self) -> Option<String> {
+        let missing = self.missing_features();
+        let (_, feature) = missing.first()?;
+        let names: Vec<&str> = missing.iter().map(|(e, _)| <&str>::from(*e)).collect();
+        Some(format!(
+            "{}: its environments {} need the cargo feature `{feature}`, which this build of \
+             pbcs lacks: build with `--features {feature}`{}",
+            self.name,
+            names.join(", "),
+            if *feature == "mujoco" {
+                " after `make mujoco` (`make pointmaze` does both and runs the PointMaze grids)"
+            } else {
+                ""
+            }
+        ))
     }
 
     /// How many runs the grid has: the seeds of every cell.

@@ -495,7 +495,10 @@ impl Experiment {
             seed_count,
             seeds_by_maze,
             picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
-            registered: spec.registered,
+            registered: spec.registered.map(|r| super::Registration {
+                preset_path: path.parent().unwrap_or(Path::new(".")).join(&r.preset),
+                ..r
+            }),
             report: spec.report,
             figures: if spec.figures.is_empty() {
                 vec![FigureSpec::Bars {

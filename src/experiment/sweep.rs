@@ -80,7 +80,8 @@ pub enum Event {
 /// Returns the rows in the order of `runs`; the first error stops handing out new runs and is
 /// returned. Before anything else the sweep takes the lock of `results`
 /// ([`crate::record::FolderLock`]): exclusively for several runs, shared for one; a folder
-/// another sweep holds is refused at once, naming it, and nothing is read or run.
+/// another sweep holds is refused at once, naming it, and nothing is read or run. A
+/// registered grid whose preset file changed is refused first ([`super::Registration::check`]).
 pub fn sweep(
     exp: &Experiment,
     runs: &[Pending],
@@ -89,6 +90,10 @@ pub fn sweep(
     kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<Vec<RawRow>> {
+    // A registered grid runs only with the preset it was registered for.
+    if let Some(registration) = &exp.registered {
+        registration.check(&exp.name)?;
+    }
     let _folder = crate::record::FolderLock::acquire(results, runs.len() <= 1)?;
     // Finished runs first (cheap), so that a config mismatch is reported before any work.
     let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());

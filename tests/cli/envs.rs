@@ -154,3 +154,39 @@ fn pbcs_explore_env_rooms_explores_the_rooms() {
         stderr(&o)
     );
 }
+
+/// `make results` runs every experiment file: one whose environments this build cannot run
+/// (PointMaze without `--features mujoco`) is refused before any work by `pbcs exp run`,
+/// saying how to build it, and skipped with that line under `--skip-unavailable`. With the
+/// feature, neither applies.
+#[test]
+fn an_experiment_this_build_cannot_run_is_refused_or_skipped_before_any_work() {
+    if cfg!(feature = "mujoco") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let results = dir.path().join("results");
+    let args = [
+        "exp",
+        "run",
+        "experiments/pointmaze.toml",
+        "--profile",
+        "smoke",
+        "--results",
+        super::path(&results),
+    ];
+    let o = super::pbcs(&args);
+    assert!(!o.status.success());
+    let e = super::stderr(&o);
+    for needle in ["pointmaze_umaze", "--features mujoco", "make mujoco"] {
+        assert!(e.contains(needle), "{needle} not in: {e}");
+    }
+    let o = super::pbcs(&[&args[..], &["--skip-unavailable"]].concat());
+    assert!(o.status.success(), "{}", super::stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.starts_with("skipped pointmaze: ") && out.lines().count() == 1,
+        "{out}"
+    );
+    assert!(!results.exists(), "nothing was written");
+}

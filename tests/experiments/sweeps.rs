@@ -13,11 +13,7 @@ fn smoke_profile_runs_end_to_end_deterministically() {
         let exp = Experiment::load(&f, Some("smoke")).unwrap();
         // PointMaze's runs need MuJoCo (feature `mujoco`): without it, its file is left out
         // (`cargo test --features mujoco` runs it too).
-        let point_maze = exp
-            .sites
-            .iter()
-            .any(|s| matches!(s, pbcs::experiment::Site::Env(e) if e.point_map().is_some()));
-        if point_maze && !cfg!(feature = "mujoco") {
+        if exp.unavailable().is_some() {
             continue;
         }
         let runs = plan(&exp, None, None).unwrap();
@@ -244,4 +240,50 @@ fn an_interrupted_runs_lock_file_blocks_nothing() {
         drop(lock);
         assert!(!path.exists());
     }
+}
+
+/// A registered grid whose preset file changed since its registration is refused before
+/// anything runs or is written, the message naming the preset and both hashes; the preset as
+/// registered runs.
+#[test]
+fn a_registered_grid_runs_only_with_the_preset_it_was_registered_for() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in ["heldout.toml", "pbcs_fast.toml"] {
+        std::fs::copy(Path::new("experiments").join(f), dir.path().join(f)).unwrap();
+    }
+    let preset = dir.path().join("pbcs_fast.toml");
+    let registered = std::fs::read(&preset).unwrap();
+    // One comment more: the jobs are the same, the file is not the one registered.
+    let mut edited = registered.clone();
+    edited.extend_from_slice(b"# edited after the registration\n");
+    std::fs::write(&preset, &edited).unwrap();
+    let exp = Experiment::load(&dir.path().join("heldout.toml"), Some("smoke")).unwrap();
+    let reg = exp.registered.clone().unwrap();
+    let now = reg.preset_sha256().unwrap();
+    assert_ne!(now, reg.sha256);
+    let runs = plan(&exp, None, None).unwrap();
+    let results = dir.path().join("results");
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let err = sweep(&exp, &runs, &results, 1, kernel, |_, _| {})
+        .unwrap_err()
+        .to_string();
+    for needle in [
+        reg.sha256.as_str(),
+        now.as_str(),
+        "pbcs_fast.toml",
+        "registered",
+    ] {
+        assert!(err.contains(needle), "{needle} not in: {err}");
+    }
+    assert!(!results.join("raw").exists(), "nothing is written");
+    // A missing preset is an error naming it, too.
+    std::fs::remove_file(&preset).unwrap();
+    let err = sweep(&exp, &runs, &results, 1, kernel, |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("pbcs_fast.toml"), "{err}");
+    // The preset as registered: the grid runs.
+    std::fs::write(&preset, &registered).unwrap();
+    let rows = sweep(&exp, &runs, &results, 1, kernel, |_, _| {}).unwrap();
+    assert_eq!(rows.len(), runs.len());
 }

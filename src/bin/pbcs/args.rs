@@ -296,6 +296,11 @@ pub enum ExpCommand {
         /// Runs at a time (one thread each; the bytes written do not depend on it).
         #[arg(long, default_value_t = 2, value_parser = parse_jobs)]
         jobs: usize,
+        /// An experiment whose environments this build cannot run (PointMaze without
+        /// `--features mujoco`) is skipped with one line saying how to run it, instead of
+        /// refused (`make results`).
+        #[arg(long)]
+        skip_unavailable: bool,
     },
     /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
     /// `# done` after finished ones.
@@ -311,6 +316,10 @@ pub enum ExpCommand {
         /// runs.sbatch`).
         #[arg(long)]
         slurm: bool,
+        /// An experiment whose environments this build cannot run is listed as one comment
+        /// line saying how to run it (with `--make`, a makefile with nothing to do).
+        #[arg(long)]
+        skip_unavailable: bool,
     },
     /// Re-run one cell (all its seeds, or one) in a scratch folder and compare with the
     /// committed raw rows: byte for byte, and if they differ, whether the new success rate lies

@@ -99,12 +99,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 cell,
                 seed,
                 jobs,
-            } => exp_run(&args, cell.as_deref(), seed, jobs, kernel),
+                skip_unavailable,
+            } => exp_run(
+                &args,
+                (cell.as_deref(), seed),
+                jobs,
+                skip_unavailable,
+                kernel,
+            ),
             ExpCommand::List {
                 exp: args,
                 make,
                 slurm,
-            } => exp_list(&args, make, slurm),
+                skip_unavailable,
+            } => exp_list(&args, make, slurm, skip_unavailable),
             ExpCommand::Check {
                 exp: args,
                 cell,
@@ -246,15 +254,21 @@ fn render(
     Ok(())
 }
 
-/// `pbcs exp run`: an experiment's planned runs (or one cell, one seed), resuming.
+/// `pbcs exp run`: an experiment's planned runs (or one cell, one seed), resuming. An
+/// experiment this build cannot run is refused before any work, or skipped with one line.
 fn exp_run(
     args: &ExpArgs,
-    cell: Option<&str>,
-    seed: Option<u64>,
+    (cell, seed): (Option<&str>, Option<u64>),
     jobs: usize,
+    skip_unavailable: bool,
     kernel: Kernel,
 ) -> anyhow::Result<()> {
     let (exp, results) = args.load()?;
+    if let Some(why) = exp.unavailable() {
+        anyhow::ensure!(skip_unavailable, "{why}");
+        println!("skipped {why}");
+        return Ok(());
+    }
     let plan = pbcs::experiment::plan(&exp, cell, seed)?;
     let (rows, ran) = sweep(&exp, &plan, &results, jobs, kernel)?;
     println!(
@@ -272,9 +286,18 @@ fn exp_run(
     Ok(())
 }
 
-/// `pbcs exp list`: the runs as commands, a Makefile or a SLURM array.
-fn exp_list(args: &ExpArgs, make: bool, slurm: bool) -> anyhow::Result<()> {
+/// `pbcs exp list`: the runs as commands, a Makefile or a SLURM array. An experiment this
+/// build cannot run is refused, or listed as one comment line.
+fn exp_list(args: &ExpArgs, make: bool, slurm: bool, skip_unavailable: bool) -> anyhow::Result<()> {
     let (exp, results) = args.load()?;
+    if let Some(why) = exp.unavailable() {
+        anyhow::ensure!(skip_unavailable, "{why}");
+        println!(
+            "# skipped {why}{}",
+            if make { "\n.PHONY: all\nall:" } else { "" }
+        );
+        return Ok(());
+    }
     let profile = args.profile.as_deref();
     let launch = pbcs::launch::Launch::new(&exp, &args.file, profile, args.results.as_deref());
     match (make, slurm) {
