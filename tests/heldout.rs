@@ -2,7 +2,6 @@
 //! `fast` preset as it was then: its recorded SHA-256 must still be the preset file's.
 
 use pbcs::experiment::Experiment;
-use sha2::{Digest, Sha256};
 use std::path::Path;
 
 /// A registered grid's `[registered]` table and its preset file's SHA-256 now.
@@ -11,11 +10,7 @@ fn registration(exp: &Experiment) -> (pbcs::experiment::Registration, String) {
         .registered
         .clone()
         .unwrap_or_else(|| panic!("{} has a [registered] table", exp.name));
-    let preset = std::fs::read(Path::new("experiments").join(&reg.preset)).unwrap();
-    let hash = Sha256::digest(&preset)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = reg.preset_sha256().unwrap();
     (reg, hash)
 }
 
@@ -40,36 +35,6 @@ fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
     assert_eq!(exp.sites, [8, 16, 24, 32].map(pbcs::experiment::Site::Maze));
     let runs: usize = exp.cells.iter().map(|c| exp.seeds_of(c).len()).sum();
     assert_eq!(runs, 2 * (10 + 10 + 5 + 3));
-}
-
-/// The README quotes the held-out grid's results as `methods_by_maze_markdown` generates them
-/// from the committed tables, between its `heldout:begin` and `heldout:end` markers: no
-/// number of that block is typed.
-#[test]
-fn the_readme_quotes_the_held_out_results_as_generated() {
-    let results = Path::new("results");
-    let stats = pbcs::tables::read_table(&pbcs::tables::table_path(results, "heldout")).unwrap();
-    let runs =
-        pbcs::criteria::read_chains(&pbcs::criteria::chains_path(results, "heldout")).unwrap();
-    assert_eq!(runs.len(), 56, "every registered run has its chain row");
-    let generated = pbcs::tables::methods_by_maze_markdown(&stats, &runs);
-    let readme = std::fs::read_to_string("README.md").unwrap();
-    let begin = "<!-- heldout:begin (generated from results/tables/heldout.csv and heldout.chains.csv: tests/heldout.rs) -->\n";
-    let end = "<!-- heldout:end -->";
-    let at = readme
-        .find(begin)
-        .expect("the README's heldout:begin marker")
-        + begin.len();
-    let to = at
-        + readme[at..]
-            .find(end)
-            .expect("the README's heldout:end marker");
-    assert_eq!(
-        &readme[at..to],
-        format!("\n{generated}\n"),
-        "the README's held-out block differs from what the committed tables give: paste the \
-         generated block (left: README, right: generated)"
-    );
 }
 
 /// Known values: one maze, two methods, one chain below 100 %.

@@ -1,11 +1,8 @@
-//! The settings table (`experiments/settings.toml` with both presets' values): complete, and
-//! the README quotes exactly what it generates.
+//! The settings table (`experiments/settings.toml` with both presets' values) is complete
+//! (`tests/docs.rs` checks that `docs/phase2.md` quotes exactly what it generates).
 
-use pbcs::report::settings::{load, settings_markdown};
+use pbcs::report::settings::load;
 use std::path::Path;
-
-const BEGIN: &str = "<!-- settings:begin (generated from experiments/settings.toml and the presets: tests/settings.rs) -->\n";
-const END: &str = "<!-- settings:end -->";
 
 /// Every field of both presets has one entry, and every entry names a field: removing one,
 /// doubling one or naming a field that does not exist is an error naming it.
@@ -36,26 +33,4 @@ fn every_preset_field_has_exactly_one_entry() {
         let e = load(&path).unwrap_err().to_string();
         assert!(e.contains(expected), "{e}");
     }
-}
-
-/// The README's settings table is the generated one, byte for byte (regenerate it by pasting
-/// the text this test prints when it fails).
-#[test]
-fn the_readme_quotes_the_generated_settings_table() {
-    let rows = load(Path::new("experiments/settings.toml")).unwrap();
-    let table = settings_markdown(&rows);
-    let readme = std::fs::read_to_string("README.md").unwrap();
-    let quoted = readme
-        .find(BEGIN)
-        .and_then(|b| {
-            let from = b + BEGIN.len();
-            readme[from..].find(END).map(|e| &readme[from..from + e])
-        })
-        .unwrap_or_else(|| {
-            panic!("README.md has no settings block; put this there:\n{BEGIN}{table}{END}")
-        });
-    assert!(
-        quoted == table,
-        "README.md's settings table differs from the generated one; replace it by:\n{table}"
-    );
 }

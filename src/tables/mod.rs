@@ -6,7 +6,9 @@
 //! computes the same statistics in plain Rust, which the aggregation checks polars against
 //! and `pbcs table` (one method, no polars) writes directly.
 
+pub mod cost;
 pub mod curves;
+pub mod headline;
 pub mod judged;
 pub mod outside;
 pub mod paired;
@@ -230,8 +232,8 @@ pub fn grid_markdown(stats: &[CellStats], timings: &[CellTiming]) -> String {
 /// (its label): solved k/n with the Wilson interval, the median environment steps, and how
 /// many of the cell's chains reached the target in every evaluation episode (from the
 /// experiment's `chains.csv` rows, `runs`); then one line naming each run whose chain did not
-/// (its success in percent), or saying that none did. What the README quotes for the
-/// held-out grid (`tests/heldout.rs` holds the two equal).
+/// (its success in percent), or saying that none did. What `docs/results.md` quotes for the
+/// held-out grid (`tests/docs.rs` holds the two equal).
 pub fn methods_by_maze_markdown(
     stats: &[CellStats],
     runs: &[crate::criteria::ChainSuccess],

@@ -1,0 +1,135 @@
+//! The README's headline table: the paper's maze and gymnasium-robotics' PointMaze, each
+//! number read from a committed table (`results/tables/`), never typed. `tests/docs.rs`
+//! holds the README's block equal to [`headline_markdown`].
+
+use super::judged::{judged_path, JudgedCell};
+use super::outside::PointMazeBaseline;
+use super::{read_table, table_path, CellStats};
+use crate::error::{Error, Result};
+use crate::experiment::Site;
+use crate::fmt::human_steps;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The headline tables in Markdown, from the tables under `results`: per maze size of the
+/// `table` experiment, the paper's PBCS steps, our DDPG and TD3, and PBCS with the `paper`
+/// and `fast` presets (solved / runs, median environment steps of all runs); per PointMaze
+/// map, PBCS's chains as gymnasium-robotics judged them on the grid and the held-out grid,
+/// and the learners alone (`outside.pointmaze.csv`). A missing table or cell is an error
+/// naming it.
+pub fn headline_markdown(results: &Path) -> Result<String> {
+    let mut s = maze_table(&read_table(&table_path(results, "table"))?)?;
+    s.push('\n');
+    s.push_str(&pointmaze_table(results)?);
+    Ok(s)
+}
+
+/// The cell of `method` at `site` in `stats`, or an error naming both.
+fn cell<'a>(stats: &'a [CellStats], method: &str, site: &Site) -> Result<&'a CellStats> {
+    stats
+        .iter()
+        .find(|c| c.method == method && &c.site == site)
+        .ok_or_else(|| {
+            Error::parse(
+                Path::new("results/tables"),
+                format!("no cell of method `{method}` at {site}"),
+            )
+        })
+}
+
+/// `9/10` (solved of runs).
+fn solved(c: &CellStats) -> String {
+    format!("{}/{}", c.successes, c.n)
+}
+
+/// `9/10, 195k` (solved of runs, median environment steps of all runs).
+fn solved_steps(c: &CellStats) -> String {
+    format!("{}, {}", solved(c), human_steps(c.steps_median))
+}
+
+fn maze_table(stats: &[CellStats]) -> Result<String> {
+    let mut sizes: Vec<Site> = stats.iter().map(|c| c.site).collect();
+    sizes.dedup();
+    let mut s = String::from(
+        "| maze | the paper's PBCS (1 run) | DDPG, 1M steps | TD3, 1M steps | PBCS `paper` | \
+         PBCS `fast` |\n| --- | --- | --- | --- | --- | --- |\n",
+    );
+    for site in &sizes {
+        let pbcs = cell(stats, "pbcs", site)?;
+        // The paper's round figures as it writes them: 5M, not 5.00M.
+        let paper = pbcs.paper_steps.map_or("–".into(), |p| {
+            let h = human_steps(p as f64);
+            h.replace(".00M", "M")
+        });
+        let label = site.size().map_or(site.to_string(), |n| format!("{n}×{n}"));
+        let _ = writeln!(
+            s,
+            "| {label} | {paper} | {} | {} | {} | **{}** |",
+            solved(cell(stats, "ddpg", site)?),
+            solved(cell(stats, "td3", site)?),
+            solved_steps(pbcs),
+            solved_steps(cell(stats, "pbcs_fast", site)?),
+        );
+    }
+    Ok(s)
+}
+
+fn pointmaze_table(results: &Path) -> Result<String> {
+    let grid = read_table(&table_path(results, "pointmaze"))?;
+    let held = read_table(&table_path(results, "pointmaze_heldout"))?;
+    let judged = |name: &str| -> Result<Vec<JudgedCell>> {
+        crate::record::read_records(&judged_path(results, name))
+    };
+    let (grid_judged, held_judged) = (judged("pointmaze")?, judged("pointmaze_heldout")?);
+    let baselines: Vec<PointMazeBaseline> =
+        crate::record::read_records(&super::outside::outside_table(results, "pointmaze"))?;
+    let mut s = String::from(
+        "| map | PBCS, seeds 0–9 | PBCS, held out: 10–19 | DDPG, 1M steps | TD3, 1M steps | \
+         SAC+HER (SB3) |\n| --- | --- | --- | --- | --- | --- |\n",
+    );
+    for c in &grid {
+        let Site::Env(env) = c.site else { continue };
+        let name: &str = env.into();
+        let map = env.point_map().map_or(name, <&str>::from);
+        let judged_cell = |cells: &[JudgedCell], stats: &[CellStats]| -> Result<String> {
+            let stats = cell(stats, &c.method, &c.site)?;
+            let j = cells.iter().find(|j| j.cell == stats.cell).ok_or_else(|| {
+                Error::parse(
+                    Path::new("results/tables"),
+                    format!("{}: not judged", stats.cell),
+                )
+            })?;
+            Ok(format!(
+                "{}/{}, {}",
+                j.solved,
+                j.seeds,
+                human_steps(stats.steps_median)
+            ))
+        };
+        let baseline = |method: &str| -> Result<String> {
+            let b = baselines
+                .iter()
+                .find(|b| b.method == method && b.env == name)
+                .ok_or_else(|| {
+                    Error::parse(
+                        Path::new("results/tables/outside.pointmaze.csv"),
+                        format!("no line for {method} on {name}"),
+                    )
+                })?;
+            Ok(match b.solved_at_min {
+                Some(at) => format!("{}/{} (from {})", b.solved, b.runs, human_steps(at as f64)),
+                None => format!("{}/{}", b.solved, b.runs),
+            })
+        };
+        let _ = writeln!(
+            s,
+            "| {map} | **{}** | {} | {} | {} | {} |",
+            judged_cell(&grid_judged, &grid)?,
+            judged_cell(&held_judged, &held)?,
+            baseline("ddpg")?,
+            baseline("td3")?,
+            baseline("sac_her")?,
+        );
+    }
+    Ok(s)
+}
