@@ -18,8 +18,9 @@ use std::collections::BTreeSet;
 /// Commands whose arguments are names, keys, paths or options, not prose: removed with their
 /// arguments (`[…]` options and one `{…}`; `\begin` takes every argument that follows it, as in
 /// `\begin{thebibliography}{9}`).
-const NAMED: [&str; 12] = [
+const NAMED: [&str; 13] = [
     "res",
+    "path",
     "setting",
     "ref",
     "label",

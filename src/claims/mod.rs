@@ -235,7 +235,7 @@ fn fails_everywhere(
 pub struct ClaimSpec {
     /// Short id (`vanilla_ddpg_fails`).
     pub id: String,
-    /// What the paper says.
+    /// What the paper says (math spans `$…$` as [`crate::report::tex`] reads them).
     pub paper: String,
     /// The experiment whose table judges it.
     pub experiment: String,
@@ -302,11 +302,14 @@ struct ClaimsFile {
     claims: Vec<ClaimSpec>,
 }
 
-/// Reads the claims file (`experiments/claims.toml`), in order; a malformed file or a `pooled`
-/// test with fewer than two methods is an error naming the file.
+/// Reads the claims file (`experiments/claims.toml`), in order; a malformed file, a `pooled`
+/// test with fewer than two methods or a `paper` text with an unbalanced math span (`$…$`,
+/// [`crate::report::check_math`]) is an error naming the file and the claim.
 pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
     let file: ClaimsFile = crate::validate::read_toml(path)?;
     for (i, c) in file.claims.iter().enumerate() {
+        crate::report::check_math(&c.paper)
+            .map_err(|e| Error::parse(path, format!("claim[{i}] ({}), paper: {e}", c.id)))?;
         if let ClaimTest::Pooled { methods } = &c.test {
             if methods.len() < 2 {
                 return Err(Error::parse(

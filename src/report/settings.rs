@@ -2,7 +2,7 @@
 //! `experiments/pbcs_fast.toml`), its value in each, what it does and where its value comes
 //! from (`experiments/settings.toml`). The values are read from the preset files, so the
 //! report's `\res{preset:<name>:<field>}` numbers, its settings table (`presets.tex`) and the
-//! README's table (`settings_markdown`) never restate a value by hand.
+//! Markdown table of `docs/phase2.md` (`settings_markdown`) never restate a value by hand.
 //!
 //! ```
 //! use pbcs::config::Preset;
@@ -44,9 +44,9 @@ pub struct SettingDoc {
     pub field: String,
     /// Where its value comes from.
     pub source: Source,
-    /// What it does, in one line.
+    /// What it does, in one line (math spans `$…$` as [`super::tex`] reads them).
     pub what: String,
-    /// Where its value was measured or justified.
+    /// Where its value was measured or justified (math spans as in `what`).
     pub evidence: String,
 }
 
@@ -131,7 +131,7 @@ pub fn code_tex() -> String {
         let _ = writeln!(
             s,
             "\\expandafter\\def\\csname res:code:{name}\\endcsname{{{}}}",
-            super::tex(&v)
+            super::tex_code(&v)
         );
     }
     s
@@ -158,10 +158,17 @@ fn show(v: &toml::Value) -> String {
 
 /// Reads `experiments/settings.toml` and checks it against the presets: the presets state the
 /// same fields, and each has exactly one entry (an entry without a field, or a field without
-/// an entry, is an error naming it). Returns the entries with each preset's value, in the
-/// file's order.
+/// an entry, is an error naming it); an unbalanced math span (`$…$`) in a text is an error
+/// naming the entry and the field ([`super::check_math`]). Returns the entries with each
+/// preset's value, in the file's order.
 pub fn load(path: &Path) -> Result<Vec<(SettingDoc, Vec<String>)>> {
     let file: SettingsFile = crate::validate::read_toml(path)?;
+    for doc in &file.setting {
+        for (name, text) in [("what", &doc.what), ("evidence", &doc.evidence)] {
+            super::check_math(text)
+                .map_err(|e| Error::parse(path, format!("setting `{}`, {name}: {e}", doc.field)))?;
+        }
+    }
     let values = PRESETS
         .iter()
         .map(|&p| preset_values(p))
@@ -231,28 +238,27 @@ pub fn presets_tex(rows: &[(SettingDoc, Vec<String>)]) -> String {
                 "\\expandafter\\def\\csname res:preset:{}:{}\\endcsname{{{}}}",
                 p.name(),
                 doc.field,
-                super::tex(v)
+                super::tex_code(v)
             );
         }
     }
     s.push_str(&code_tex());
     s.push_str("\\newcommand{\\presetstable}{%\n");
-    s.push_str(
-        "\\begin{longtable}{@{}p{0.2\\textwidth}p{0.08\\textwidth}p{0.08\\textwidth}\
-         p{0.3\\textwidth}p{0.26\\textwidth}@{}}\n\\toprule\nsetting & \\texttt{paper} & \
-         \\texttt{fast} & what it does (source) & where its value comes from \\\\\n\\midrule\n\
-         \\endhead\n",
-    );
+    s.push_str(&longtable_head(
+        &[0.21, 0.1, 0.1, 0.275, 0.24],
+        "setting & \\texttt{paper} & \\texttt{fast} & what it does (source) & where its value \
+         comes from",
+    ));
     for (doc, values) in rows {
         let source: &str = doc.source.into();
         let _ = writeln!(
             s,
-            "\\texttt{{{}}} & {} \\\\",
-            super::tex(&doc.field),
+            "{} & {} \\\\",
+            super::tex_code_breakable(&doc.field),
             [
                 values
                     .iter()
-                    .map(|v| format!("\\texttt{{{}}}", super::tex(v)))
+                    .map(|v| super::tex_code_breakable(v))
                     .collect::<Vec<_>>()
                     .join(" & "),
                 format!("{} ({source})", super::tex(&doc.what)),
@@ -261,11 +267,29 @@ pub fn presets_tex(rows: &[(SettingDoc, Vec<String>)]) -> String {
             .join(" & ")
         );
     }
-    s.push_str("\\bottomrule\n\\end{longtable}}\n");
+    s.push_str(LONGTABLE_FOOT);
     s
 }
 
-/// The README's settings table (Markdown): the same rows as [`presets.tex`].
+/// The end of a table that [`longtable_head`] began (and of the command around it).
+const LONGTABLE_FOOT: &str = "\\bottomrule\n\\end{longtable}}}\n";
+
+/// The start of a generated `longtable` in a command's body: ragged-right `p` columns of these
+/// fractions of the text width (with the column gaps, at most the text width), narrower gaps
+/// than LaTeX's, and `header` repeated on every page. Needs the `array` package.
+fn longtable_head(widths: &[f64], header: &str) -> String {
+    let columns: String = widths
+        .iter()
+        .map(|w| format!(">{{\\raggedright\\arraybackslash}}p{{{w}\\textwidth}}"))
+        .collect();
+    format!(
+        "{{\\setlength{{\\tabcolsep}}{{4pt}}%\n\
+         \\begin{{longtable}}{{@{{}}{columns}@{{}}}}\n\\toprule\n{header} \\\\\n\\midrule\n\\endhead\n"
+    )
+}
+
+/// The settings table in Markdown (`docs/phase2.md`'s): the same rows as [`presets.tex`],
+/// the texts without their math spans' dollars ([`super::plain`]).
 pub fn settings_markdown(rows: &[(SettingDoc, Vec<String>)]) -> String {
     let mut s = String::from(
         "| setting | `paper` | `fast` | what it does | source | where its value comes from |\n\
@@ -279,15 +303,16 @@ pub fn settings_markdown(rows: &[(SettingDoc, Vec<String>)]) -> String {
             "| `{}` | {} | {} | {source} | {} |",
             doc.field,
             cells.join(" | "),
-            doc.what.replace('|', "\\|"),
-            doc.evidence.replace('|', "\\|"),
+            super::plain(&doc.what).replace('|', "\\|"),
+            super::plain(&doc.evidence).replace('|', "\\|"),
         );
     }
     s
 }
 
 /// One entry of `experiments/departures.toml`: where the `paper` preset departs from the
-/// paper's text.
+/// paper's text. Its texts mark formulas as math spans (`$d(s′, τ_T) ≤ ε$`, read by
+/// [`super::tex`]).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Departure {
@@ -309,7 +334,8 @@ struct DeparturesFile {
     departure: Vec<Departure>,
 }
 
-/// Reads `experiments/departures.toml` (at least one entry; no empty text).
+/// Reads `experiments/departures.toml` (at least one entry; no empty text; balanced math spans,
+/// [`super::check_math`]: an error names the entry and the field).
 pub fn load_departures(path: &Path) -> Result<Vec<Departure>> {
     let file: DeparturesFile = crate::validate::read_toml(path)?;
     for (i, d) in file.departure.iter().enumerate() {
@@ -326,6 +352,9 @@ pub fn load_departures(path: &Path) -> Result<Vec<Departure>> {
                     format!("departure[{i}].{name} is empty"),
                 ));
             }
+            super::check_math(text).map_err(|e| {
+                Error::parse(path, format!("departure[{i}] ({}), {name}: {e}", d.place))
+            })?;
         }
     }
     Ok(file.departure)
@@ -335,11 +364,12 @@ pub fn load_departures(path: &Path) -> Result<Vec<Departure>> {
 pub fn departures_tex(departures: &[Departure]) -> String {
     let mut s = String::from(
         "% Generated by `pbcs figures` from experiments/departures.toml. Do not edit.\n\
-         \\newcommand{\\departurestable}{%\n\
-         \\begin{longtable}{@{}p{0.16\\textwidth}p{0.22\\textwidth}p{0.24\\textwidth}\
-         p{0.2\\textwidth}p{0.12\\textwidth}@{}}\n\\toprule\nwhere & the paper & the code & \
-         why & measured \\\\\n\\midrule\n\\endhead\n",
+         \\newcommand{\\departurestable}{%\n",
     );
+    s.push_str(&longtable_head(
+        &[0.14, 0.2, 0.22, 0.19, 0.175],
+        "where & the paper & the code & why & measured",
+    ));
     for d in departures {
         let _ = writeln!(
             s,
@@ -351,6 +381,6 @@ pub fn departures_tex(departures: &[Departure]) -> String {
                 .join(" & ")
         );
     }
-    s.push_str("\\bottomrule\n\\end{longtable}}\n");
+    s.push_str(LONGTABLE_FOOT);
     s
 }

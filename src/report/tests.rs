@@ -179,3 +179,97 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         "{tex}"
     );
 }
+
+/// The departures table sets the committed file's formulas as math (no literal `_` or braces
+/// of a subscript), in ragged-right columns whose widths and gaps fit the text width, with
+/// file paths that may break.
+#[test]
+fn the_departures_table_sets_math_as_math_and_fits() {
+    let departures =
+        settings::load_departures(std::path::Path::new("experiments/departures.toml")).unwrap();
+    let tex = settings::departures_tex(&departures);
+    for expected in [
+        "$(K_s, \\pi_s)$",
+        "$d(s', \\tau_T) \\le \\varepsilon$",
+        "$B_\\varepsilon(\\tau_N)$",
+        "$\\Phi(s) = 1 / d(s, A_i)$",
+        "$\\pi_i$ until the state enters $A_{i+1}$",
+        "\\path{experiments/ablations.toml}, mazes 2 and 5",
+        ">{\\raggedright\\arraybackslash}p{0.14\\textwidth}",
+    ] {
+        assert!(tex.contains(expected), "{expected}: {tex}");
+    }
+    // No subscript or group of a formula is printed as text: the one `\_` is a code name's.
+    assert_eq!(tex.matches("\\_").count(), 1, "{tex}");
+    assert!(tex.contains("\\texttt{backplay\\_failed}"), "{tex}");
+    assert!(!tex.contains("\\{"), "{tex}");
+    assert!(tex.is_ascii(), "{tex}");
+}
+
+/// A math span left open in a departure, a setting or a claim is an error when the file is
+/// read, naming the file, the entry and the field.
+#[test]
+fn an_unbalanced_dollar_is_an_error_naming_the_entry_and_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("departures.toml");
+    std::fs::write(
+        &path,
+        "[[departure]]\nplace = \"a place\"\npaper = \"$d(s′, τ_T) ≤ ε\"\nours = \"o\"\n\
+         why = \"w\"\nmeasured = \"no\"\n",
+    )
+    .unwrap();
+    let e = settings::load_departures(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("departures.toml")
+            && e.contains("departure[0] (a place), paper: unbalanced `$`"),
+        "{e}"
+    );
+
+    let text = std::fs::read_to_string("experiments/settings.toml").unwrap();
+    let bad = text.replacen("what = \"$β$: episodes", "what = \"$β: episodes", 1);
+    assert_ne!(bad, text);
+    let path = dir.path().join("settings.toml");
+    std::fs::write(&path, bad).unwrap();
+    let e = settings::load(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("settings.toml") && e.contains("setting `phase2.beta`, what: unbalanced `$`"),
+        "{e}"
+    );
+
+    let path = dir.path().join("claims.toml");
+    std::fs::write(
+        &path,
+        "[[claim]]\nid = \"x\"\npaper = \"in $B_ε(τ_K)\"\nexperiment = \"table\"\n\
+         test = { kind = \"solves_everywhere\", method = \"a\" }\n",
+    )
+    .unwrap();
+    let e = crate::claims::load_claims(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("claims.toml") && e.contains("claim[0] (x), paper: unbalanced `$`"),
+        "{e}"
+    );
+}
+
+/// The Markdown table (`docs/phase2.md`) shows a setting's text without its math spans'
+/// dollars, and the report's table sets it as math.
+#[test]
+fn settings_texts_are_plain_in_markdown_and_math_in_latex() {
+    let rows = settings::load(std::path::Path::new("experiments/settings.toml")).unwrap();
+    let start = rows
+        .iter()
+        .find(|(d, _)| d.field == "phase2.start")
+        .unwrap();
+    assert!(start.0.what.contains("$B_ε(τ_K)$"), "{}", start.0.what);
+    let markdown = settings::settings_markdown(&rows);
+    assert!(
+        markdown.contains("uniform in B_ε(τ_K), exactly τ_K,"),
+        "{markdown}"
+    );
+    assert!(!markdown.contains('$'));
+    let tex = settings::presets_tex(&rows);
+    assert!(
+        tex.contains("uniform in $B_\\varepsilon(\\tau_K)$, exactly $\\tau_K$,"),
+        "{tex}"
+    );
+    assert!(tex.contains("\\texttt{phase2.\\allowbreak{}chain\\_\\allowbreak{}verify\\_"));
+}
