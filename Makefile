@@ -93,7 +93,7 @@ pointmaze: mujoco python
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
 	  --raw results/raw/pointmaze_velocity --summary results/pointmaze/gym_cells_velocity.csv
 
-# Aggregation with polars, then plotters; trains nothing (about a minute after the build).
+# Aggregation with polars, then plotters; trains nothing (27 s measured after the build).
 figures:
 	$(PBCS_POLARS) aggregate $(PROFILE_FLAG) $(RESULTS_FLAG)
 	$(PBCS_POLARS) figures $(PROFILE_FLAG) $(RESULTS_FLAG)

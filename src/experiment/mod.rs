@@ -297,8 +297,8 @@ impl Experiment {
         let (_, feature) = missing.first()?;
         let names: Vec<&str> = missing.iter().map(|(e, _)| <&str>::from(*e)).collect();
         Some(format!(
-            "{}: its environments {} need the cargo feature `{feature}`, which this build of \
-             pbcs lacks: build with `--features {feature}`{}",
+            "{}: running {} needs the cargo feature `{feature}`, which this build of pbcs \
+             lacks: build with `--features {feature}`{}",
             self.name,
             names.join(", "),
             if *feature == "mujoco" {
