@@ -60,6 +60,7 @@ pub mod figures;
 pub mod fmt;
 pub mod launch;
 pub mod learner;
+pub mod mathtext;
 pub mod maze;
 pub mod nn;
 pub mod pendulum;

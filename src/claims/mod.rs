@@ -304,11 +304,11 @@ struct ClaimsFile {
 
 /// Reads the claims file (`experiments/claims.toml`), in order; a malformed file, a `pooled`
 /// test with fewer than two methods or a `paper` text with an unbalanced math span (`$…$`,
-/// [`crate::report::check_math`]) is an error naming the file and the claim.
+/// [`crate::mathtext::check_math`]) is an error naming the file and the claim.
 pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
     let file: ClaimsFile = crate::validate::read_toml(path)?;
     for (i, c) in file.claims.iter().enumerate() {
-        crate::report::check_math(&c.paper)
+        crate::mathtext::check_math(&c.paper)
             .map_err(|e| Error::parse(path, format!("claim[{i}] ({}), paper: {e}", c.id)))?;
         if let ClaimTest::Pooled { methods } = &c.test {
             if methods.len() < 2 {

@@ -65,7 +65,8 @@ fn hours(seconds: f64) -> String {
 /// which `make results` does not run).
 pub fn cost_markdown(exps: &[Experiment], results: &Path) -> Result<String> {
     let mut s = String::from(
-        "| experiment | runs | core-hours | hours on 2 cores (`JOBS=2`) |\n| --- | --- | --- | --- |\n",
+        "| experiment | runs | core-hours | hours on 2 cores (`JOBS=2`) |\n\
+         | --- | --- | --- | --- |\n",
     );
     let (mut runs, mut seconds) = (0, 0.0);
     for exp in exps {
