@@ -8,8 +8,8 @@
 
 use pbcs::config::{ExploreConfig, MazeConfig};
 use pbcs::env::{random_action, Env};
-use pbcs::explore::explore;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
+use pbcs::phase1::explore;
 use pbcs::rng::{Seeds, Stream};
 use std::hint::black_box;
 use std::time::Instant;

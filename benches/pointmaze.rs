@@ -6,7 +6,7 @@
 //! actions from each map's start, restarted every 1 000 steps, three repeats per map.
 
 use pbcs::env::{random_action, Env};
-use pbcs::pointmaze::{MapName, PointMaze};
+use pbcs::envs::pointmaze::{MapName, PointMaze};
 use pbcs::rng::{Seeds, Stream};
 use std::hint::black_box;
 use std::time::Instant;

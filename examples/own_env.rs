@@ -1,7 +1,7 @@
 //! PBCS on an environment other than the maze, calling phase 1
-//! ([`pbcs::explore::explore`]) and phase 2 ([`pbcs::phase2::chain_skills`]) yourself.
+//! ([`pbcs::phase1::explore`]) and phase 2 ([`pbcs::phase2::chain_skills`]) yourself.
 //!
-//! The environment is [`pbcs::rooms::TwoRooms`] (`src/rooms.rs`, a file of its own: an
+//! The environment is [`pbcs::envs::rooms::TwoRooms`] (`src/envs/rooms.rs`, a file of its own: an
 //! implementation of [`pbcs::env::Env`] with its PBCS hooks): two rooms side by side joined by
 //! a door, the target just across the wall from the start. Everything else (the learner, α,
 //! β, ε, the budgets, every switch) comes from the `fast` preset; a switch that needs a hook
@@ -11,10 +11,10 @@
 
 use pbcs::config::Preset;
 use pbcs::env::evaluation_starts;
-use pbcs::explore::explore;
+use pbcs::envs::rooms::TwoRooms;
+use pbcs::phase1::explore;
 use pbcs::phase2::{chain_skills, phase2_trajectory};
 use pbcs::rng::{Seeds, Stream};
-use pbcs::rooms::TwoRooms;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seed: u64 = match std::env::args().nth(1) {

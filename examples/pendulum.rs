@@ -1,4 +1,4 @@
-//! Our TD3 on Pendulum-v1 (ported step for step: `pbcs::pendulum`) with RL-Zoo's tuned TD3
+//! Our TD3 on Pendulum-v1 (ported step for step: `pbcs::envs::pendulum`) with RL-Zoo's tuned TD3
 //! settings for Pendulum-v1: 20 000 steps, γ = 0.98, replay 200 000, 10 000 random warm-up
 //! steps, learning rate 1e-3, networks [400, 300], Gaussian noise σ = 0.1, batch 256 (SB3's
 //! TD3 default), τ = 0.005, and after each 200-step episode as many updates as its steps
@@ -11,10 +11,10 @@
 //! `cargo run --release --example pendulum -- [FIRST_SEED LAST_SEED]` (default 0 9); the SB3
 //! side is `python/benches/sb3_pendulum.py`.
 
+use pbcs::envs::pendulum::{Pendulum, EPISODE_STEPS};
 use pbcs::learner::{Algo, LearnerConfig};
-use pbcs::pendulum::{Pendulum, EPISODE_STEPS};
 use pbcs::rng::Seeds;
-use pbcs::train::{train_vanilla, TrainConfig, Updates};
+use pbcs::vanilla::{train_vanilla, TrainConfig, Updates};
 use std::path::Path;
 
 fn main() -> anyhow::Result<()> {

@@ -2,8 +2,8 @@
 //! `cargo run --release --example phase2_trace -- MAZE SEED [CONFIG.toml]`
 use pbcs::config::{self, PbcsJob};
 use pbcs::env::Env;
-use pbcs::explore::explore;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
+use pbcs::phase1::explore;
 use pbcs::phase2::chain_skills;
 use pbcs::rng::{Seeds, Stream};
 

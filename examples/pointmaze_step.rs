@@ -1,4 +1,4 @@
-//! Steps our PointMaze (`src/pointmaze/`) for an outside program: the equality test
+//! Steps our PointMaze (`src/envs/pointmaze/`) for an outside program: the equality test
 //! (`python/tests/test_pointmaze.py`) sends the same states and actions to this and to
 //! gymnasium-robotics' `PointMaze_*-v3`, and compares what comes back.
 //!
@@ -13,7 +13,7 @@
 //! `cargo run --release --features mujoco --example pointmaze_step < episodes.txt`
 
 use pbcs::env::Env;
-use pbcs::pointmaze::{MapName, PointMaze, PointState};
+use pbcs::envs::pointmaze::{MapName, PointMaze, PointState};
 use std::io::{BufRead, Write};
 use strum::IntoEnumIterator;
 

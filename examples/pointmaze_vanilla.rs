@@ -16,9 +16,9 @@
 //! summary exists is skipped (sweeps resume).
 
 use pbcs::config::TrainJob;
+use pbcs::envs::pointmaze::{MapName, PointMaze, GOAL_NOISE};
 use pbcs::learner::Algo;
 use pbcs::nn::kernel::Kernel;
-use pbcs::pointmaze::{MapName, PointMaze, GOAL_NOISE};
 use pbcs::rng::Seeds;
 use pbcs::tables::outside::VanillaRun;
 use std::path::{Path, PathBuf};
@@ -55,7 +55,7 @@ fn main() -> anyhow::Result<()> {
             continue;
         }
         let clock = std::time::Instant::now();
-        let r = pbcs::train::train_vanilla(
+        let r = pbcs::vanilla::train_vanilla(
             &env,
             &job.learner,
             &job.train,

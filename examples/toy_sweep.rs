@@ -1,9 +1,9 @@
 //! Measures greedy success on the 1-D toy after a step budget, over seeds (used to choose the
 //! budget of the learning test). `cargo run --release --example toy_sweep -- STEPS`
+use pbcs::envs::toy::Toy1D;
 use pbcs::learner::LearnerConfig;
 use pbcs::rng::Seeds;
-use pbcs::toy::Toy1D;
-use pbcs::train::{train_vanilla, TrainConfig};
+use pbcs::vanilla::{train_vanilla, TrainConfig};
 
 fn main() {
     let steps: u64 = std::env::args()

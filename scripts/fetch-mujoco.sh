@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# MuJoCo 3.17.0 for the `mujoco` feature (gymnasium-robotics' PointMaze, src/pointmaze/): the
+# MuJoCo 3.17.0 for the `mujoco` feature (gymnasium-robotics' PointMaze, src/envs/pointmaze/): the
 # library inside the PyPI wheel `mujoco==3.17.0` — the version mujoco-rs 7.0.0 binds, and the
 # one gymnasium-robotics runs on in the equality test — put in .mujoco/lib under its soname
 # (libmujoco.so.3.17.0, what binaries load) and as libmujoco.so (what the linker looks for).

@@ -20,13 +20,13 @@ use crate::envs::EnvName;
 use crate::error::Result;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
-use crate::train::TrainConfig;
 use crate::validate::parse_toml;
+use crate::vanilla::TrainConfig;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-pub use crate::explore::ExploreConfig;
-pub use crate::maze::{MazeConfig, MAX_MAZE_SIZE};
+pub use crate::envs::maze::{MazeConfig, MAX_MAZE_SIZE};
+pub use crate::phase1::ExploreConfig;
 pub use crate::validate::{load, Check};
 
 /// What `pbcs explore` runs: phase 1 on one environment (the maze unless `env` names another)

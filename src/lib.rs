@@ -7,20 +7,21 @@
 //!
 //! | paper | module |
 //! | --- | --- |
-//! | Appendix "Experimental Setup": the maze MDP | [`maze`] |
+//! | Appendix "Experimental Setup": the maze MDP | [`envs::maze`] |
 //! | Background, "Reset-anywhere" | [`env`] (pure `step(&State, action)`; PBCS's optional hooks as capabilities) |
-//! | Phase 1 and appendix algorithm "Exploration algorithm" | [`explore`] |
+//! | Phase 1 and appendix algorithm "Exploration algorithm" | [`phase1`] |
 //! | Settings the paper gives or leaves open | [`config`] |
 //! | Background, "DDPG"; the TD3 baseline; appendix "Replacing the actor update" | [`learner`] (TD3, DDPG preset, argmax actor) on [`nn`] |
-//! | Results table, "Vanilla" columns | [`train`] (training on the environment's own reward) |
+//! | Results table, "Vanilla" columns | [`vanilla`] (training on the environment's own reward) |
 //! | Phase 2: Algorithm 1 (skill chaining), 2 (Backplay), 3 (training with reward shaping) | [`phase2`] |
 //! | Wilson score intervals (appendix on γ); Fisher's exact test | [`stats`] |
 //! | "solved when a controller is able to reliably reach a rewarded state": other thresholds | [`criteria`] |
 //!
-//! [`rooms`] is a second environment for PBCS (two rooms and a door, every hook offered),
-//! [`pointmaze`] is gymnasium-robotics' PointMaze on MuJoCo (feature `mujoco`), and [`envs`]
-//! names the environments jobs and the command run;
-//! [`toy`] is a 1-D task the tests use to check that the learners learn. Around them:
+//! [`envs`] names the environments jobs and the command run, one module each:
+//! [`envs::maze`], [`envs::rooms`] (two rooms and a door, every hook offered),
+//! [`envs::pointmaze`] (gymnasium-robotics' PointMaze on MuJoCo, feature `mujoco`),
+//! [`envs::pendulum`] (gymnasium's Pendulum-v1) and [`envs::toy`] (a 1-D task the tests use to
+//! check that the learners learn). Around them:
 //! [`validate`] (the `Check` trait and the one TOML loader), [`rng`] derives every random
 //! stream from one run seed, [`record`] writes result files atomically, [`plot`] draws planar
 //! environments with plotters, and [`runs`] turns a job into an outcome (`compute`) and writes it (`write`):
@@ -55,30 +56,25 @@ pub mod env;
 pub mod envs;
 pub mod error;
 pub mod experiment;
-pub mod explore;
 pub mod figures;
 pub mod fmt;
 pub mod launch;
 pub mod learner;
 pub mod mathtext;
-pub mod maze;
 pub mod nn;
-pub mod pendulum;
+pub mod phase1;
 pub mod phase2;
 pub mod pipeline;
 pub mod plot;
-pub mod pointmaze;
 pub mod record;
 pub mod report;
 pub mod reproduce;
 pub mod rng;
 pub mod rollout;
-pub mod rooms;
 pub mod runs;
 pub mod stats;
 pub mod tables;
-pub mod toy;
-pub mod train;
 pub mod validate;
+pub mod vanilla;
 
 pub use error::{Error, Result};

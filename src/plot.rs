@@ -309,7 +309,7 @@ pub fn render_scene(
 ///
 /// ```
 /// use pbcs::env::Planar;
-/// use pbcs::maze::{Maze, MazeConfig};
+/// use pbcs::envs::maze::{Maze, MazeConfig};
 /// use pbcs::plot::{render_rgb, MazePicture};
 ///
 /// let maze = Maze::new(&MazeConfig { size: 2, ..Default::default() }).unwrap();

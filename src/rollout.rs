@@ -14,7 +14,7 @@
 //! ```
 //! use pbcs::env::{Env, Step};
 //! use pbcs::rollout::{lockstep, Agent, Tally, Verdict};
-//! use pbcs::toy::Toy1D;
+//! use pbcs::envs::toy::Toy1D;
 //!
 //! /// Always pushes left, towards the toy's target at 0 (five steps of 0.1 from its start);
 //! /// an episode succeeds at the environment's positive reward.

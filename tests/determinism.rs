@@ -59,7 +59,7 @@ fn the_maze_seed_changes_the_layout_not_the_run_seed() {
     // Same maze seed, other run seeds: the maze (walls in the SVG) is unchanged; only the
     // exploration differs. Same run seed, other maze seed: another layout.
     use pbcs::config::MazeConfig;
-    use pbcs::maze::Maze;
+    use pbcs::envs::maze::Maze;
     let base = MazeConfig {
         size: 7,
         ..MazeConfig::default()

@@ -2,8 +2,8 @@
 
 use pbcs::config::{ExploreConfig, MazeConfig};
 use pbcs::env::Env;
-use pbcs::explore::{explore, NO_PARENT};
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
+use pbcs::phase1::{explore, NO_PARENT};
 use pbcs::rng::{Seeds, Stream};
 
 fn check_phase1(size: usize, maze_seed: u64, seed: u64) {
@@ -96,7 +96,7 @@ fn archive_counters_follow_the_selection_rule() {
 
 #[test]
 fn shortened_trajectories_are_real_steps_and_much_shorter() {
-    use pbcs::explore::shorten;
+    use pbcs::phase1::shorten;
     for size in [2, 5, 10, 15] {
         let maze = Maze::new(&MazeConfig {
             size,

@@ -9,7 +9,7 @@ use parry2d::query::{intersection_test, Ray, RayCast};
 use parry2d::shape::{Cuboid, Segment};
 use pbcs::config::MazeConfig;
 use pbcs::env::Env;
-use pbcs::maze::{Maze, Wall, Walls};
+use pbcs::envs::maze::{Maze, Wall, Walls};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 

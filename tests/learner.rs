@@ -1,11 +1,11 @@
 //! TD3/DDPG: TD targets, target smoothing, learning on the 1-D toy, determinism, bad input.
 
 use pbcs::config::Check;
+use pbcs::envs::toy::Toy1D;
 use pbcs::learner::replay::Batch;
 use pbcs::learner::{ActorUpdate, Learner, LearnerConfig};
 use pbcs::rng::Seeds;
-use pbcs::toy::Toy1D;
-use pbcs::train::{train_vanilla, TrainConfig};
+use pbcs::vanilla::{train_vanilla, TrainConfig};
 
 fn batch_of_two(done: [f32; 2]) -> Batch {
     Batch {
@@ -357,7 +357,7 @@ fn replay_samples_whole_transitions_from_the_newest() {
 #[test]
 fn the_final_protocol_evaluation_changes_no_training_byte() {
     use pbcs::env::{evaluation_starts, Env as _};
-    use pbcs::maze::{Maze, MazeConfig};
+    use pbcs::envs::maze::{Maze, MazeConfig};
     let maze = Maze::new(&MazeConfig {
         size: 2,
         ..Default::default()
@@ -396,7 +396,7 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
     assert!(starts
         .iter()
         .all(|s| (s - maze.start()).norm() <= 0.1 + 1e-6));
-    let again = pbcs::train::greedy_episodes(&maze, &mut a.learner, starts, 30);
+    let again = pbcs::vanilla::greedy_episodes(&maze, &mut a.learner, starts, 30);
     assert_eq!(again, b.final_eval);
     for e in &b.final_eval {
         assert!(e.steps >= 1 && e.steps <= 30);
@@ -411,7 +411,7 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
 /// episodes that ended after the warm-up.
 #[test]
 fn episode_updates_come_at_episode_ends_as_many_as_steps() {
-    use pbcs::train::Updates;
+    use pbcs::vanilla::Updates;
     let schedule = |updates| TrainConfig {
         steps: 1_000,
         max_episode_steps: 100,
@@ -422,7 +422,7 @@ fn episode_updates_come_at_episode_ends_as_many_as_steps() {
     };
     let run = |updates| {
         train_vanilla(
-            &pbcs::pendulum::Pendulum,
+            &pbcs::envs::pendulum::Pendulum,
             &LearnerConfig {
                 batch_size: 32,
                 ..LearnerConfig::td3()

@@ -1,7 +1,7 @@
 //! Maze generation: perfect mazes, seeds, the fixed 2×2 U-shape, sizes beyond 15.
 
 use pbcs::config::MazeConfig;
-use pbcs::maze::{Layout, Maze, Side};
+use pbcs::envs::maze::{Layout, Maze, Side};
 
 #[test]
 fn every_cell_is_reachable_and_the_maze_is_a_tree() {

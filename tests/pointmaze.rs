@@ -3,7 +3,7 @@
 //! gymnasium-robotics' own environment is `python/tests/test_pointmaze.py`.
 
 use pbcs::env::{Env, Planar};
-use pbcs::pointmaze::{MapName, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE};
+use pbcs::envs::pointmaze::{MapName, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE};
 use strum::IntoEnumIterator;
 
 fn medium() -> PointMaze {
@@ -229,7 +229,7 @@ fn phase_1_bins_positions_and_its_trajectory_replays() {
     let env = PointMaze::named(MapName::UMaze).unwrap();
     let config = pbcs::config::ExploreConfig::default();
     let mut rng = pbcs::rng::Seeds::new(0).stream(pbcs::rng::Stream::Explore);
-    let found = pbcs::explore::explore(&env, &config, &mut rng, |_, _| {}).unwrap();
+    let found = pbcs::phase1::explore(&env, &config, &mut rng, |_, _| {}).unwrap();
     let a = &found.archive;
     let square = |x: f64| ((x as f32) / config.bin_side).floor() as i32;
     let squares: std::collections::HashSet<(i32, i32)> = (0..a.len() as u32)

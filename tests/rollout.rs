@@ -4,12 +4,12 @@
 
 use pbcs::config::MazeConfig;
 use pbcs::env::{Env, Step};
+use pbcs::envs::maze::Maze;
+use pbcs::envs::toy::Toy1D;
 use pbcs::learner::{Learner, LearnerConfig};
-use pbcs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::rng::{Seeds, Stream};
 use pbcs::rollout::{lockstep, Agent, Tally, Verdict};
-use pbcs::toy::Toy1D;
 
 /// Pushes left at full speed (the toy's target is at 0, steps of at most 0.1) and records
 /// which episodes each step ran, in the order `after` saw them.
@@ -130,7 +130,7 @@ fn greedy_episodes_through_the_engine_equal_the_plain_loop() {
             .unwrap()
         };
         let (mut a, mut b) = (learner(seed), learner(seed));
-        let engine = pbcs::train::greedy_episodes(&env, &mut a, starts.clone(), 60);
+        let engine = pbcs::vanilla::greedy_episodes(&env, &mut a, starts.clone(), 60);
         for (e, s) in engine.iter().zip(&starts) {
             let plain = plain_greedy(&env, &mut b, *s);
             assert_eq!((e.success, e.steps), plain, "seed {seed}, start {s}");

@@ -2,7 +2,7 @@
 gymnasium-robotics' own PointMaze_<map>-v3 (continuing_task=False), on the fixed task of our
 experiment (start and goal cells: the two free cells farthest apart along the maze, found here
 by a breadth-first search of the env's own map, 4-neighbour moves, ties to the first pair in
-row-major order, start = the earlier cell; the same rule as src/pointmaze/model.rs).
+row-major order, start = the earlier cell; the same rule as src/envs/pointmaze/model.rs).
 
 Protocol (the issue's point 4, the one PBCS's chains are judged by): every 10 000 env steps,
 100 deterministic episodes in a separate PointMaze of the same cells, from the env's own

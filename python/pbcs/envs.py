@@ -6,7 +6,7 @@ in [−0.1, 0.1]² (the paper's action space; out-of-range components are clippe
 entering the target disc (radius 0.2 around (N − 0.5, N − 0.5), or (0.5, 1.5) for N = 2), which
 terminates the episode; −1 for a step into a wall; 0 otherwise. Episodes are truncated after
 ``max_episode_steps`` steps (1000 by default, our vanilla baselines' episode length). The step
-is the Rust core's own (``pbcs::maze::Maze::step``).
+is the Rust core's own (``pbcs::envs::maze::Maze::step``).
 """
 
 import numpy as np

@@ -5,7 +5,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use pbcs::config::PbcsJob;
 use pbcs::env::Env;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::nn::Workspace;
 use pbcs::phase2::SkillChain;
@@ -109,7 +109,7 @@ impl ChainCore {
         // The maze needs no MuJoCo: a maze chain is checked against it; another environment's
         // chain is checked for consistent skills (`shared_dims`).
         let maze = if job.env.is_maze() {
-            let maze = pbcs::maze::Maze::new(&job.maze).map_err(py_err)?;
+            let maze = pbcs::envs::maze::Maze::new(&job.maze).map_err(py_err)?;
             chain.check_env(&maze, &manifest).map_err(py_err)?;
             Some(maze)
         } else {
@@ -188,7 +188,7 @@ impl ChainCore {
     #[getter]
     fn pointmaze(&self) -> Option<PointTask> {
         let map = self.job.env.point_map()?;
-        let (start, goal) = pbcs::pointmaze::PointMap::named(map).farthest_cells();
+        let (start, goal) = pbcs::envs::pointmaze::PointMap::named(map).farthest_cells();
         Some((map.gym_id(), start, goal, map.time_limit()))
     }
 

@@ -5,7 +5,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use parry2d::math::Point;
 use pbcs::env::Env;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
 use pbcs::plot::MazePicture;
 use pyo3::prelude::*;
 
@@ -304,7 +304,7 @@ impl MazeVecEnv {
     }
 }
 
-/// One step of the Rust port of gymnasium's Pendulum-v1 (`pbcs::pendulum`) from (θ, θ̇) with
+/// One step of the Rust port of gymnasium's Pendulum-v1 (`pbcs::envs::pendulum`) from (θ, θ̇) with
 /// torque `torque`: the next (θ, θ̇), the reward and the observation (cos θ, sin θ, θ̇). For the
 /// test that the port's steps are gymnasium's.
 #[pyfunction]
@@ -313,7 +313,7 @@ pub(crate) fn pendulum_step(
     theta_dot: f64,
     torque: f32,
 ) -> ((f64, f64), f32, [f32; 3]) {
-    let p = pbcs::pendulum::Pendulum;
+    let p = pbcs::envs::pendulum::Pendulum;
     let step = p.step(&[theta, theta_dot], &[torque]);
     let mut obs = [0.0f32; 3];
     p.observe(&step.state, &mut obs);

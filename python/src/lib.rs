@@ -1,7 +1,7 @@
 //! `pbcs._pbcs`: the compiled part of the Python package `pbcs` (python/pbcs/ wraps it).
 //!
-//! Everything here calls the Rust core: the maze steps with `pbcs::maze::Maze`'s own step
-//! function (no second implementation), phase 1 is `pbcs::explore`, a PBCS run is
+//! Everything here calls the Rust core: the maze steps with `pbcs::envs::maze::Maze`'s own step
+//! function (no second implementation), phase 1 is `pbcs::phase1`, a PBCS run is
 //! `pbcs::runs::PbcsRun::compute`, a saved chain is `pbcs::phase2::SkillChain::load` run by
 //! `SkillChain::active_skill` and `SkillChain::act`. Every error of the core becomes a Python
 //! exception carrying its message (`ValueError` for bad input, `OSError` for files,
@@ -11,7 +11,7 @@
 use numpy::ndarray::Array3;
 use numpy::{IntoPyArray, PyArray1, PyArray3, PyArrayMethods};
 use parry2d::math::Point;
-use pbcs::maze::{Maze, MazeConfig};
+use pbcs::envs::maze::{Maze, MazeConfig};
 use pbcs::plot::{render_rgb, MazePicture};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -141,6 +141,6 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pipeline::run, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::evaluation_starts, m)?)?;
     m.add_function(wrap_pyfunction!(env::pendulum_step, m)?)?;
-    m.add("MAX_MAZE_SIZE", pbcs::maze::MAX_MAZE_SIZE)?;
+    m.add("MAX_MAZE_SIZE", pbcs::envs::maze::MAX_MAZE_SIZE)?;
     Ok(())
 }

@@ -1,4 +1,4 @@
-"""The Rust port of Pendulum-v1 (pbcs::pendulum, the task our learners are checked on against
+"""The Rust port of Pendulum-v1 (pbcs::envs::pendulum, the task our learners are checked on against
 Stable-Baselines3) steps exactly as gymnasium's own, for the same states and actions."""
 
 import gymnasium as gym

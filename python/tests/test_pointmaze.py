@@ -1,5 +1,5 @@
 """The referee: gymnasium-robotics' own PointMaze_*-v3 (MuJoCo 3.17.0) and our Rust PointMaze
-(``src/pointmaze/``, driven through ``examples/pointmaze_step.rs``) are set to the same whole
+(``src/envs/pointmaze/``, driven through ``examples/pointmaze_step.rs``) are set to the same whole
 states — position, velocity and the solver's warm start — and given the same actions; every
 observation, warm start, reward, success flag and termination must be the same, bit for bit,
 on every map: from random states anywhere in the free space with random actions (some outside

@@ -147,7 +147,9 @@ impl Cell {
             }
         }
         match &self.job {
-            Job::Vanilla(j) => Ok(crate::env::Planar::scene(&crate::maze::Maze::new(&j.maze)?)),
+            Job::Vanilla(j) => Ok(crate::env::Planar::scene(&crate::envs::maze::Maze::new(
+                &j.maze,
+            )?)),
             // PointMaze's scene is its map's (no MuJoCo needed to draw committed rows).
             Job::Pbcs(j) => match j.env.point_map() {
                 Some(map) => Ok(crate::envs::point_scene(map)),

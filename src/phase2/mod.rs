@@ -220,11 +220,11 @@ pub struct TraceRow {
 /// [`Ideas::shorten`] is on.
 pub fn phase2_trajectory<E: Env>(
     env: &E,
-    tau: &crate::explore::Trajectory<E::State>,
+    tau: &crate::phase1::Trajectory<E::State>,
     config: &Phase2Config,
-) -> Result<crate::explore::Trajectory<E::State>> {
+) -> Result<crate::phase1::Trajectory<E::State>> {
     if config.ideas.shorten {
-        crate::explore::shorten(env, tau, config.epsilon)
+        crate::phase1::shorten(env, tau, config.epsilon)
     } else {
         Ok(tau.clone())
     }

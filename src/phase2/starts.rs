@@ -12,7 +12,7 @@ use super::goal::{ball_center, dist};
 use super::{Phase2Config, StartMode};
 use crate::env::{Env, SampleBall};
 use crate::error::{Error, Result};
-use crate::explore::Archive;
+use crate::phase1::Archive;
 use crate::rng::Rng;
 use rustc_hash::FxHashMap;
 
@@ -41,8 +41,8 @@ impl<'a, E: Env> ArchiveStarts<'a, E> {
     /// ```
     /// use nalgebra::Point2;
     /// use pbcs::env::SampleBall;
-    /// use pbcs::explore::Archive;
-    /// use pbcs::maze::{Maze, MazeConfig};
+    /// use pbcs::phase1::Archive;
+    /// use pbcs::envs::maze::{Maze, MazeConfig};
     /// use pbcs::phase2::ArchiveStarts;
     ///
     /// let maze = Maze::new(&MazeConfig::default()).unwrap();

@@ -5,11 +5,11 @@ use super::{
 };
 use crate::config::PbcsJob;
 use crate::env::{Planar, SampleBall};
+use crate::envs::maze::Maze;
 use crate::envs::{EnvName, Visit};
 use crate::error::{Error, Result};
-use crate::explore::{explore, Exploration};
-use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
+use crate::phase1::{explore, Exploration};
 use crate::phase2::{
     chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, SkillChain,
     StartMode, Variant,

@@ -3,15 +3,15 @@
 use super::{claim, write_timing, SOLVED_AT};
 use crate::config::TrainJob;
 use crate::env::Planar;
+use crate::envs::maze::Maze;
 use crate::error::Result;
 use crate::learner::{ActorUpdate, Algo};
-use crate::maze::Maze;
 use crate::nn::kernel::Kernel;
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
-use crate::train::train_vanilla;
 use crate::validate::Check;
+use crate::vanilla::train_vanilla;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -50,7 +50,7 @@ pub struct TrainRun {
     /// The one-row summary.
     pub summary: TrainSummary,
     /// Evaluations, visited bins, the trained learner.
-    pub result: crate::train::TrainOutcome,
+    pub result: crate::vanilla::TrainOutcome,
     /// What `train.png` draws: the visited bins as red squares.
     pub picture: PictureData,
     /// The layer kernel the learner ran on.

@@ -5,7 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, Experiment, Job};
-use crate::train::EvalRow;
+use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -11,9 +11,9 @@
 //! * the fewest steps: the shortest collision-free path from s_0 to the target disc, at the
 //!   largest action per step ([`Maze::fewest_steps`]).
 
+use crate::envs::maze::Maze;
 use crate::error::{Error, Result};
 use crate::experiment::{evaluation_file, Experiment, Job, Kind, RawRow};
-use crate::maze::Maze;
 use crate::rng::{Seeds, Stream};
 use crate::runs::EvalEpisode;
 use serde::{Deserialize, Serialize};
@@ -70,7 +70,7 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
         };
         let maze = Maze::new(&job.maze)?;
         let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
-        let found = crate::explore::explore(&maze, &job.explore, &mut rng, |_, _| {})?;
+        let found = crate::phase1::explore(&maze, &job.explore, &mut rng, |_, _| {})?;
         let walked = crate::phase2::phase2_trajectory(&maze, &found.trajectory, &job.phase2)?;
         let mut steps: Vec<f64> = episodes
             .iter()

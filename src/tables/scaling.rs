@@ -3,9 +3,9 @@
 //! through the cells' medians — computed here once, drawn by the figure and quoted by the
 //! report.
 
+use crate::envs::maze::Maze;
 use crate::error::Result;
 use crate::experiment::{Cell, Experiment, Job};
-use crate::maze::Maze;
 use crate::tables::CellStats;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

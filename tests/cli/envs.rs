@@ -1,5 +1,5 @@
 //! Environments by name on the command line: `pbcs run --env rooms` runs PBCS on the two
-//! rooms (`src/rooms.rs`) and `pbcs eval` re-runs its chain, both knowing the environment from
+//! rooms (`src/envs/rooms.rs`) and `pbcs eval` re-runs its chain, both knowing the environment from
 //! the job alone; `pbcs explore --env rooms` runs phase 1 there; maze settings given to
 //! another environment are refused.
 

@@ -104,7 +104,7 @@ fn committed_raw_rows_round_trip_byte_for_byte() {
 /// Layouts 0 and 1 of the 3×3 maze are the same maze (the file once used them).
 #[test]
 fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
-    use pbcs::maze::Layout;
+    use pbcs::envs::maze::Layout;
     assert_eq!(Layout::generate(3, 0), Layout::generate(3, 1));
     let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
     for &n in &exp.sites {

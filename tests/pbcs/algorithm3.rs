@@ -1,7 +1,7 @@
 use super::{constant_policy, Plane};
 use pbcs::config::MazeConfig;
 use pbcs::env::Env;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
 use pbcs::nn::{Head, Mlp};
 use pbcs::phase2::goal::{BallMetric, Goal, GoalKind, Inputs, REACHED_REWARD};
 use pbcs::phase2::{Ball, Skill, SkillChain};

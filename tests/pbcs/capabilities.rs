@@ -6,14 +6,14 @@
 use super::Plane;
 use pbcs::config::{MazeConfig, Preset};
 use pbcs::env::{evaluation_starts, Env};
+use pbcs::envs::maze::Maze;
+use pbcs::envs::rooms::TwoRooms;
 use pbcs::error::Error;
-use pbcs::explore::Trajectory;
 use pbcs::learner::LearnerConfig;
-use pbcs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
+use pbcs::phase1::Trajectory;
 use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Config, StartMode};
 use pbcs::rng::Seeds;
-use pbcs::rooms::TwoRooms;
 
 /// The error `chain_skills` on the plane gives for `config`, before any work.
 fn refusal(config: &Phase2Config) -> Error {
@@ -177,7 +177,7 @@ fn archive_starts_need_the_archive_and_the_ball() {
 #[test]
 fn archive_starts_find_exactly_the_archived_states_in_the_ball() {
     use pbcs::env::SampleBall;
-    use pbcs::explore::Archive;
+    use pbcs::phase1::Archive;
     use pbcs::phase2::ArchiveStarts;
     use rand::Rng as _;
     let mut rng = Seeds::new(3).stream(pbcs::rng::Stream::Eval);

@@ -173,7 +173,7 @@ fn the_evaluation_episodes_are_written_and_a_saved_chain_gives_them_back() {
     let wins = episodes.iter().filter(|e| e.success).count();
     assert_eq!(wins as f32 / episodes.len() as f32, record.success_rate);
     // A successful episode takes at least the shortest path's steps.
-    let maze = pbcs::maze::Maze::new(&j.maze).unwrap();
+    let maze = pbcs::envs::maze::Maze::new(&j.maze).unwrap();
     let fewest = maze.fewest_steps().unwrap();
     assert!(episodes
         .iter()

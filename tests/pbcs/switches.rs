@@ -1,6 +1,6 @@
 use pbcs::config::{Check, PbcsJob};
 use pbcs::env::Env;
-use pbcs::maze::Maze;
+use pbcs::envs::maze::Maze;
 use pbcs::phase2::goal::{Goal, GoalKind};
 use pbcs::phase2::{EventKind, InputMode, LastGoal};
 use pbcs::runs::PbcsRun;

@@ -21,7 +21,7 @@
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};
 use crate::stats::{fisher_exact, wilson, Z95};
-use crate::train::EvalRow;
+use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

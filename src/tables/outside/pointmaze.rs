@@ -10,7 +10,7 @@
 use super::{seed_files, seed_rows, seeds_text};
 use crate::error::{Error, Result};
 use crate::experiment::run_file;
-use crate::train::EvalRow;
+use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

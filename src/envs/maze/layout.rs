@@ -161,7 +161,7 @@ impl Layout {
     /// the grid). In a perfect maze it is the only path.
     ///
     /// ```
-    /// use pbcs::maze::Layout;
+    /// use pbcs::envs::maze::Layout;
     ///
     /// // The 2×2 maze is the U: (0,0) → (1,0) → (1,1) → (0,1).
     /// let u = Layout::generate(2, 0);

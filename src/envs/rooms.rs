@@ -13,7 +13,7 @@
 //!
 //! ```
 //! use pbcs::env::Env;
-//! use pbcs::rooms::TwoRooms;
+//! use pbcs::envs::rooms::TwoRooms;
 //!
 //! let rooms = TwoRooms;
 //! // Straight at the wall: blocked, the point stays where it was.

@@ -25,11 +25,17 @@
 //! assert_eq!("rooms".parse::<EnvName>().unwrap(), EnvName::Rooms);
 //! ```
 
+pub mod maze;
+pub mod pendulum;
+pub mod pointmaze;
+pub mod rooms;
+pub mod toy;
+
 use crate::env::Planar;
+use crate::envs::maze::{Maze, MazeConfig};
+use crate::envs::pointmaze::MapName;
+use crate::envs::rooms::TwoRooms;
 use crate::error::Result;
-use crate::maze::{Maze, MazeConfig};
-use crate::pointmaze::MapName;
-use crate::rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
 
 /// The environments PBCS runs on, by name.
@@ -53,12 +59,12 @@ use serde::{Deserialize, Serialize};
 #[strum(serialize_all = "snake_case")]
 #[value(rename_all = "snake_case")]
 pub enum EnvName {
-    /// The paper's continuous maze (`src/maze/`), sized and laid out by the job's `[maze]`.
+    /// The paper's continuous maze (`src/envs/maze/`), sized and laid out by the job's `[maze]`.
     #[default]
     Maze,
-    /// Two rooms joined by a door (`src/rooms.rs`); it has no parameters.
+    /// Two rooms joined by a door (`src/envs/rooms.rs`); it has no parameters.
     Rooms,
-    /// gymnasium-robotics' `PointMaze_UMaze-v3` (`src/pointmaze/`, feature `mujoco`), from
+    /// gymnasium-robotics' `PointMaze_UMaze-v3` (`src/envs/pointmaze/`, feature `mujoco`), from
     /// one of its two free cells farthest apart to the other; success where every goal its
     /// reset may draw counts one (`PointMaze::for_goal_noise`).
     PointmazeUmaze,
@@ -124,7 +130,7 @@ impl EnvName {
 
     /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
     /// the map, the task's cells and gymnasium-robotics' id and time limit are in
-    /// [`crate::pointmaze::model`].
+    /// [`crate::envs::pointmaze::model`].
     pub fn point_map(self) -> Option<MapName> {
         match self {
             EnvName::Maze | EnvName::Rooms => None,
@@ -152,18 +158,18 @@ impl EnvName {
 /// What pictures draw of the registry's task on `map` (the same as its [`Planar::scene`],
 /// without MuJoCo): the map, the start cell and the success region of [`point_maze`].
 pub fn point_scene(map: MapName) -> crate::env::Scene {
-    use crate::pointmaze::{sure_radius, PointMap, GOAL_NOISE};
+    use crate::envs::pointmaze::{sure_radius, PointMap, GOAL_NOISE};
     let m = PointMap::named(map);
     let (start, goal) = m.farthest_cells();
     m.scene(start, goal, sure_radius(GOAL_NOISE) as f32)
 }
 
-/// A PointMaze task ([`crate::pointmaze::PointMaze::named`]) whose success holds for every
-/// goal gymnasium-robotics' reset may draw ([`crate::pointmaze::GOAL_NOISE`]): one fixed chain
+/// A PointMaze task ([`crate::envs::pointmaze::PointMaze::named`]) whose success holds for every
+/// goal gymnasium-robotics' reset may draw ([`crate::envs::pointmaze::GOAL_NOISE`]): one fixed chain
 /// is judged there from the env's own resets, which move the goal up to 0.25 along each axis.
 #[cfg(feature = "mujoco")]
 fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
-    use crate::pointmaze::{PointMaze, GOAL_NOISE};
+    use crate::envs::pointmaze::{PointMaze, GOAL_NOISE};
     work.on(PointMaze::named(map)?.for_goal_noise(GOAL_NOISE)?)
 }
 

@@ -6,7 +6,7 @@
 //! Needs no MuJoCo: the XML is text.
 //!
 //! ```
-//! use pbcs::pointmaze::model::{MapName, PointMap};
+//! use pbcs::envs::pointmaze::model::{MapName, PointMap};
 //! let u = PointMap::named(MapName::UMaze);
 //! assert_eq!((u.rows(), u.cols()), (5, 5));
 //! // Cell (i, j) is centred at x = (j + 0.5) − W/2, y = H/2 − (i + 0.5).

@@ -60,7 +60,7 @@ impl Walls {
     /// so any placement stays correct; the grid only decides speed.
     ///
     /// ```
-    /// use pbcs::maze::{Wall, Walls};
+    /// use pbcs::envs::maze::{Wall, Walls};
     /// use parry2d::math::Point;
     ///
     /// let wall = Wall::from_corners(Point::new(1.0, 0.0), Point::new(1.5, 2.0));

@@ -5,7 +5,7 @@
 //!
 //! ```
 //! use pbcs::env::Env;
-//! use pbcs::toy::Toy1D;
+//! use pbcs::envs::toy::Toy1D;
 //! let toy = Toy1D;
 //! let step = toy.step(&0.05, &[-0.1]);
 //! assert_eq!((step.reward, step.terminal), (1.0, true));

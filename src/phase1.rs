@@ -375,8 +375,8 @@ pub fn explore<E: Env>(
 ///
 /// ```
 /// use pbcs::config::{ExploreConfig, MazeConfig};
-/// use pbcs::explore::{explore, shorten};
-/// use pbcs::maze::Maze;
+/// use pbcs::phase1::{explore, shorten};
+/// use pbcs::envs::maze::Maze;
 /// use pbcs::rng::{Seeds, Stream};
 ///
 /// let maze = Maze::new(&MazeConfig { size: 5, ..Default::default() }).unwrap();

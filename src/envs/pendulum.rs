@@ -12,7 +12,7 @@
 //!
 //! ```
 //! use pbcs::env::Env;
-//! use pbcs::pendulum::Pendulum;
+//! use pbcs::envs::pendulum::Pendulum;
 //! // Hanging straight down and still: no torque keeps it there, at the largest angle cost.
 //! let s = Pendulum.step(&[std::f64::consts::PI, 0.0], &[0.0]);
 //! assert_eq!(s.state[1], 15.0 * std::f64::consts::PI.sin() * 0.05);

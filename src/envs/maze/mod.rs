@@ -15,7 +15,7 @@
 //! ```
 //! use pbcs::config::MazeConfig;
 //! use pbcs::env::Env;
-//! use pbcs::maze::Maze;
+//! use pbcs::envs::maze::Maze;
 //!
 //! let maze = Maze::new(&MazeConfig { size: 2, ..MazeConfig::default() }).unwrap();
 //! let s0 = maze.start();
@@ -182,7 +182,7 @@ impl Maze {
     ///
     /// ```
     /// use pbcs::config::MazeConfig;
-    /// use pbcs::maze::Maze;
+    /// use pbcs::envs::maze::Maze;
     ///
     /// // The 2×2 U: around the end of the wall at y = 1 (x ≤ 1.05), two legs of
     /// // √(0.55² + 0.45²) and 0.1 between the corners, less the 0.2 disc: 1.32.
@@ -202,7 +202,7 @@ impl Maze {
     ///
     /// ```
     /// use pbcs::config::MazeConfig;
-    /// use pbcs::maze::Maze;
+    /// use pbcs::envs::maze::Maze;
     ///
     /// // The 2×2 U: legs of Chebyshev length 0.55, 0.1 and 0.55 less the disc's part of the
     /// // last (0.2 · 0.55 / √(0.55² + 0.45²)): 1.058, so 11 steps.
