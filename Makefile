@@ -86,6 +86,7 @@ pointmaze: mujoco python
 	$(PBCS) exp run experiments/pointmaze.toml --jobs $(JOBS)
 	$(PBCS) exp run experiments/pointmaze_heldout.toml --jobs $(JOBS)
 	$(PBCS) exp run experiments/pointmaze_velocity.toml --jobs $(JOBS)
+	$(PBCS) exp run experiments/pointmaze_vanilla.toml --jobs $(JOBS)
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \

@@ -60,7 +60,13 @@ fn end_to_end(kernel: Kernel, steps: u64) -> (f64, u64, u64) {
     job.phase2.max_env_steps = steps;
     // The run stops at the budget (maze 10 needs ~1M steps), so no evaluation is timed.
     let t = Instant::now();
-    let run = pbcs::runs::PbcsRun::compute(&job, kernel, |_, _| {}).unwrap();
+    let run = pbcs::runs::PbcsRun::compute(
+        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        kernel,
+        |_, _| {},
+    )
+    .unwrap();
     let r = &run.record;
     (
         r.total_steps as f64 / t.elapsed().as_secs_f64(),

@@ -48,7 +48,13 @@ fn main() {
             job.maze.size = size;
             job.seed = seed;
             let clock = Instant::now();
-            let run = PbcsRun::compute(&job, kernel, |_, _| {}).expect("the run completes");
+            let run = PbcsRun::compute(
+                pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
+                &pbcs::validate::Check::valid(job.clone()).unwrap(),
+                kernel,
+                |_, _| {},
+            )
+            .expect("the run completes");
             let wall = clock.elapsed().as_secs_f64();
             let r = &run.record;
             println!(

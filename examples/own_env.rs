@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &env,
         &tau,
         &job.learner,
-        &job.phase2,
+        job.phase2.ready(&env)?,
         &seeds,
         found.env_steps,
         pbcs::nn::kernel::Kernel::detect(),

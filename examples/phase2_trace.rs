@@ -30,7 +30,7 @@ fn main() -> anyhow::Result<()> {
         &maze,
         tau,
         &job.learner,
-        &job.phase2,
+        job.phase2.ready(&maze)?,
         &seeds,
         found.env_steps,
         pbcs::nn::kernel::Kernel::detect(),

@@ -54,6 +54,30 @@ impl Check for ExploreJob {
     }
 }
 
+/// Where a job runs, to set: its run seed, its environment's name and the maze (used when the
+/// environment is the maze). Every job has them; a grid's cell and the command's flags set
+/// them through this.
+pub trait Located {
+    /// The run seed, the environment and the maze.
+    fn location(&self) -> (u64, EnvName, &MazeConfig);
+    /// The same, to set.
+    fn location_mut(&mut self) -> (&mut u64, &mut EnvName, &mut MazeConfig);
+}
+
+macro_rules! located {
+    ($($job:ty),*) => {$(
+        impl Located for $job {
+            fn location(&self) -> (u64, EnvName, &MazeConfig) {
+                (self.seed, self.env, &self.maze)
+            }
+            fn location_mut(&mut self) -> (&mut u64, &mut EnvName, &mut MazeConfig) {
+                (&mut self.seed, &mut self.env, &mut self.maze)
+            }
+        }
+    )*};
+}
+located!(ExploreJob, TrainJob, PbcsJob);
+
 /// A job naming an environment other than the maze must leave `[maze]` at its defaults.
 fn refuse_maze_of_other_env(env: EnvName, maze: &MazeConfig) -> Result<()> {
     if !env.is_maze() && *maze != MazeConfig::default() {
@@ -69,14 +93,18 @@ fn refuse_maze_of_other_env(env: EnvName, maze: &MazeConfig) -> Result<()> {
     Ok(())
 }
 
-/// What `pbcs train` runs: a vanilla baseline (DDPG, TD3, or the argmax actor) on one maze's
-/// own reward.
+/// What `pbcs train` runs: a vanilla baseline (DDPG, TD3, or the argmax actor) on one
+/// environment's own reward (the maze unless `env` names another).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrainJob {
     /// The run seed.
     pub seed: u64,
-    /// The maze.
+    /// The environment ([`crate::envs::EnvName`]): the maze unless named (and then left out
+    /// of the written job).
+    #[serde(skip_serializing_if = "EnvName::is_maze")]
+    pub env: EnvName,
+    /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
     /// The learner's hyper-parameters.
     pub learner: LearnerConfig,
@@ -86,6 +114,7 @@ pub struct TrainJob {
 
 impl Check for TrainJob {
     fn check(&self) -> Result<()> {
+        refuse_maze_of_other_env(self.env, &self.maze)?;
         self.maze.check()?;
         self.learner.check()?;
         self.train.check()
@@ -144,6 +173,84 @@ impl Check for PbcsJob {
         self.explore.check()?;
         self.learner.check()?;
         self.phase2.check()
+    }
+}
+
+impl PbcsJob {
+    /// PBCS without chaining (`pbcs run --no-chaining`): one skill, so what acts between
+    /// skills goes with it. Returns the settings set to 0 for it (`phase2.retargets`,
+    /// `phase2.chain_repairs`), to be said.
+    pub fn without_chaining(&mut self) -> Vec<&'static str> {
+        self.phase2.chaining = false;
+        let ideas = &mut self.phase2.ideas;
+        let between = [
+            (
+                "phase2.retargets",
+                ideas.dead_walk.as_mut().map(|d| &mut d.retargets),
+            ),
+            (
+                "phase2.chain_repairs",
+                ideas.chain_check.as_mut().map(|c| &mut c.repairs),
+            ),
+        ];
+        let mut zeroed = Vec::new();
+        for (field, value) in between {
+            if let Some(value) = value.filter(|v| **v > 0) {
+                *value = 0;
+                zeroed.push(field);
+            }
+        }
+        zeroed
+    }
+}
+
+/// What a command line or a Python call changes in a job before it runs: where it runs and
+/// its seed, each left as the job has it when `None` (the same call in both, so a job means
+/// the same from either). [`Place::apply`] refuses a maze size or layout for a job on another
+/// environment.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Place {
+    /// The environment (`--env`, `env=`).
+    pub env: Option<EnvName>,
+    /// The maze's size (`--maze`, `size=`).
+    pub maze_size: Option<usize>,
+    /// The maze's layout seed (`--maze-seed`, `layout=`).
+    pub maze_seed: Option<u64>,
+    /// The run seed (`--seed`, `seed=`).
+    pub seed: Option<u64>,
+}
+
+impl Place {
+    /// Sets the fields given into `job`; a maze size or layout with an environment other
+    /// than the maze is refused, naming the environment.
+    ///
+    /// ```
+    /// use pbcs::config::{Place, ExploreJob};
+    /// use pbcs::envs::EnvName;
+    /// let mut job = ExploreJob::default();
+    /// let place = Place { env: Some(EnvName::Rooms), seed: Some(3), ..Place::default() };
+    /// place.apply(&mut job).unwrap();
+    /// assert_eq!((job.env, job.seed), (EnvName::Rooms, 3));
+    /// let maze = Place { maze_size: Some(4), ..place };
+    /// assert!(maze.apply(&mut job).unwrap_err().to_string().contains("rooms"));
+    /// ```
+    pub fn apply(&self, job: &mut impl Located) -> Result<()> {
+        let (seed, env, maze) = job.location_mut();
+        *env = self.env.unwrap_or(*env);
+        if !env.is_maze() && (self.maze_size.is_some() || self.maze_seed.is_some()) {
+            return Err(crate::error::Error::invalid(
+                "maze",
+                format!(
+                    "a maze size or layout (--maze, --maze-seed; Python's size=, layout=) sets \
+                     the maze, but the run's environment is `{}`",
+                    env.name()
+                ),
+            ));
+        }
+        maze.size = self.maze_size.unwrap_or(maze.size);
+        maze.seed = self.maze_seed.unwrap_or(maze.seed);
+        *seed = self.seed.unwrap_or(*seed);
+        Ok(())
     }
 }
 

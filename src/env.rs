@@ -43,12 +43,10 @@ pub trait Env {
     /// The initial state s_0.
     fn start(&self) -> Self::State;
 
-    /// A start state for a training or evaluation episode. Defaults to the fixed
-    /// [`Env::start`]; environments with a start distribution override it.
-    fn sample_start(&self, rng: &mut crate::rng::Rng) -> Self::State {
-        let _ = rng;
-        self.start()
-    }
+    /// A start state for a vanilla learner's training or evaluation episode: its start
+    /// distribution, or [`Env::start`] for an environment whose episodes all start there
+    /// (each environment says which: no default).
+    fn sample_start(&self, rng: &mut crate::rng::Rng) -> Self::State;
 
     /// Backplay's starts in a ball ([`SampleBall`]), if this environment can make new states:
     /// return `Some(self)` from an environment that implements it. `None` (the default): the
@@ -79,10 +77,11 @@ pub trait Env {
     }
 
     /// The environment's success region as a ball in observation space, `(centre, radius)`,
-    /// if it has one (the maze: the target and its 0.2 radius). PBCS's last skill aims at it:
-    /// its potential is measured to this centre, so that the last skill is paid for reaching
-    /// the region the environment rewards and for nothing else. Without one, the last skill's
-    /// potential is measured to τ_N.
+    /// if it has one (the maze: the target and its 0.2 radius). PBCS's last skill aims at it
+    /// (`phase2.last_goal = "success_region"`, the presets'): its potential is measured to
+    /// this centre, so that the last skill is paid for reaching the region the environment
+    /// rewards and for nothing else. `None` (the default): that setting is refused
+    /// ([`Capability::SuccessRegion`]); `phase2.last_goal = "ball"` aims at B_ε(τ_N) instead.
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
         None
     }
@@ -111,14 +110,13 @@ pub trait Env {
         &obs[..self.position_dims().clamp(1, obs.len())]
     }
 
-    /// How far one step can move the position ([`Env::position`]),
-    /// which turns a path length into steps for PBCS's path limits: by default the smallest
-    /// action bound (an action of the maze and the rooms is a displacement); an environment
-    /// whose actions are forces says how far its fastest step goes.
-    fn step_reach(&self) -> f32 {
-        (0..self.action_dim())
-            .map(|i| self.action_bound(i))
-            .fold(f32::INFINITY, f32::min)
+    /// How far one step can move the position ([`Env::position`]), which turns a path length
+    /// into steps for PBCS's path limits (`phase2.episode_path_limit`,
+    /// `phase2.test_path_limit`): the action bound where an action is a displacement (the
+    /// maze, the rooms), how far the fastest step goes where actions are forces. `None` (the
+    /// default): those settings are refused ([`Capability::StepReach`]).
+    fn step_reach(&self) -> Option<f32> {
+        None
     }
 
     /// Column names of the observation, for CSV headers.
@@ -189,6 +187,10 @@ pub enum Capability {
     VelocityBalls,
     /// [`Env::connector`] ([`Connect`]).
     Connect,
+    /// [`Env::success_region`].
+    SuccessRegion,
+    /// [`Env::step_reach`].
+    StepReach,
 }
 
 impl Capability {
@@ -199,6 +201,8 @@ impl Capability {
             Capability::BallIsClear => "Env::clear_balls (BallIsClear)",
             Capability::VelocityBalls => "Env::velocity_balls (VelocityBalls)",
             Capability::Connect => "Env::connector (Connect)",
+            Capability::SuccessRegion => "Env::success_region",
+            Capability::StepReach => "Env::step_reach",
         }
     }
 
@@ -209,6 +213,8 @@ impl Capability {
             Capability::BallIsClear => env.clear_balls().is_some(),
             Capability::VelocityBalls => env.velocity_balls().is_some(),
             Capability::Connect => env.connector().is_some(),
+            Capability::SuccessRegion => env.success_region().is_some(),
+            Capability::StepReach => env.step_reach().is_some(),
         }
     }
 
@@ -258,11 +264,9 @@ pub trait Planar: Env {
     fn scene(&self) -> Scene;
 
     /// Where a ball centred at `center` (a position, [`Env::position`]: an activation set) is
-    /// drawn: (`center[0]`, `center[1]`) unless the
-    /// environment draws its positions elsewhere.
-    fn ball_point(&self, center: &[f32]) -> (f32, f32) {
-        (center[0], center[1])
-    }
+    /// drawn, in the plane of [`Planar::point`] (the maze and the rooms: `center` itself;
+    /// PointMaze: shifted as its points are).
+    fn ball_point(&self, center: &[f32]) -> (f32, f32);
 }
 
 /// Fills `out` with an action drawn uniformly from the action box of `env`.

@@ -89,6 +89,15 @@ pub enum Error {
         /// The hook (`Env::ball_starts (SampleBall)`).
         hook: &'static str,
     },
+    /// `pbcs exp check`: a cell's fresh rows differ from the committed ones beyond what was
+    /// asked for (bytes with `--exact`, else the committed success interval).
+    #[error("cell {cell} not reproduced: {message}")]
+    NotReproduced {
+        /// The cell id.
+        cell: String,
+        /// How they differ.
+        message: String,
+    },
     /// Rendering a picture failed.
     #[error("plot {path}: {message}")]
     Plot {

@@ -36,11 +36,12 @@
 //! ```
 //! use pbcs::config::ExploreJob;
 //! use pbcs::runs::run_explore;
+//! use pbcs::validate::Check;
 //!
 //! let mut job = ExploreJob::default();
 //! job.maze.size = 2;
 //! let out = tempfile::tempdir().unwrap();
-//! let (summary, _seconds) = run_explore(&job, out.path(), |_, _| {}).unwrap();
+//! let (summary, _seconds) = run_explore(&job.valid().unwrap(), out.path(), |_, _| {}).unwrap();
 //! assert!(summary.trajectory_len >= 2);
 //! assert!(out.path().join("explore.png").exists());
 //! ```

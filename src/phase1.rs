@@ -314,7 +314,7 @@ pub struct Exploration<S> {
 /// `config.budget` steps. `progress(steps, archive_len)` is called every 65 536 steps.
 ///
 /// ```
-/// use pbcs::{config::{ExploreConfig, MazeConfig}, env::Env, explore::explore, maze::Maze};
+/// use pbcs::{config::{ExploreConfig, MazeConfig}, env::Env, phase1::explore, envs::maze::Maze};
 /// use pbcs::rng::{Seeds, Stream};
 ///
 /// let maze = Maze::new(&MazeConfig { size: 2, ..Default::default() }).unwrap();

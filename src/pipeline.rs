@@ -111,6 +111,25 @@ pub struct Aggregated {
     pub table: PathBuf,
 }
 
+impl std::fmt::Display for Aggregated {
+    /// What `pbcs aggregate` prints for the experiment: its runs and cells and the table
+    /// written, or that it had no rows.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.runs {
+            0 => write!(f, "{}: no raw rows, skipped", self.experiment),
+            n => write!(
+                f,
+                "{}: {n} of {} runs in {} cells → {} (polars; checked against the plain \
+                 computation)",
+                self.experiment,
+                self.expected,
+                self.cells,
+                self.table.display()
+            ),
+        }
+    }
+}
+
 /// Aggregates every experiment's raw rows under `results` with polars
 /// ([`crate::aggregate::aggregate`], checked against the plain computation) and writes its
 /// tables ([`write_tables`]); an experiment without rows is reported and skipped. A build
@@ -166,6 +185,32 @@ pub struct Rendered {
     pub unjudged: Vec<String>,
     /// Every file written.
     pub files: Vec<PathBuf>,
+}
+
+impl Rendered {
+    /// What `pbcs figures` prints: the claims a profile cannot judge, the experiments skipped,
+    /// each table as Markdown, the claims' verdicts and the count of files written.
+    pub fn summary(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        for why in &self.unjudged {
+            let _ = writeln!(s, "{why} (not judged under this profile)");
+        }
+        for (name, path) in &self.skipped {
+            let _ = writeln!(s, "{name}: no table at {}, skipped", path.display());
+        }
+        for (exp, stats) in &self.tables {
+            let table = crate::tables::markdown(stats);
+            let _ = write!(s, "\n{} — {}\n{table}", exp.name, exp.title);
+        }
+        s.push_str("\nthe paper's claims against our tables:\n");
+        for c in &self.claims {
+            let verdict = c.verdict.word().to_uppercase();
+            let _ = writeln!(s, "- {} — {verdict}: {}", c.id, c.ours);
+        }
+        let _ = write!(s, "\nwrote {} files", self.files.len());
+        s
+    }
 }
 
 /// Reads each experiment's table under `results`, judges the claims of `claims_file` against
@@ -441,7 +486,8 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
 pub fn aggregate_outside(exps: &[Experiment], results: &Path) -> Result<Vec<PathBuf>> {
     match exps.iter().find(|e| e.report.results_table) {
         Some(table) if crate::tables::outside::outside_dir(results).is_dir() => {
-            crate::tables::outside::write_outside_tables(table, results)
+            let pointmaze = exps.iter().find(|e| e.name == "pointmaze_vanilla");
+            crate::tables::outside::write_outside_tables(table, pointmaze, results)
         }
         _ => Ok(Vec::new()),
     }

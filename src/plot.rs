@@ -24,10 +24,10 @@ pub fn register_font() {
     });
 }
 
-/// What to draw over the maze.
+/// What to draw over a planar environment's scene ([`crate::env::Scene`]).
 #[derive(Debug, Clone, Default)]
-pub struct MazePicture<'a> {
-    /// Title line above the maze.
+pub struct Picture<'a> {
+    /// Title line above the scene.
     pub title: String,
     /// Faint points (archive states, visited states).
     pub points: &'a [(f32, f32)],
@@ -43,7 +43,7 @@ pub struct MazePicture<'a> {
     pub circles: Vec<((f32, f32), f32)>,
 }
 
-/// Height of the legend line under the maze.
+/// Height of the legend line under the scene.
 const LEGEND_PX: u32 = 18;
 
 /// The layers of `picture.csv`, by their names in the file (one table: strum derives both
@@ -65,11 +65,11 @@ enum Layer {
     Circle,
 }
 
-/// Most archive points drawn in an SVG maze picture (the PNG draws them all).
+/// Most archive points drawn in an SVG picture (the PNG draws them all).
 pub const SVG_MAX_POINTS: usize = 20_000;
 
-/// The legend of what `picture` draws (colours named), empty when it draws nothing but the maze.
-pub fn legend(picture: &MazePicture) -> String {
+/// The legend of what `picture` draws (colours named), empty when it draws nothing but the scene.
+pub fn legend(picture: &Picture) -> String {
     let mut parts = vec!["blue dot: start", "green disc: target"];
     if !picture.points.is_empty() {
         parts.push("faint blue: visited states");
@@ -98,12 +98,12 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
     }
 }
 
-/// Draws `picture` over `scene` (a maze's, [`crate::env::Planar::scene`]) on `area` (any plotters
+/// Draws `picture` over `scene` (an environment's, [`crate::env::Planar::scene`]) on `area` (any plotters
 /// backend; the caller presents it).
 pub fn draw_scene<DB: DrawingBackend>(
     area: DrawingArea<DB, Shift>,
     scene: &Scene,
-    picture: &MazePicture,
+    picture: &Picture,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     area.fill(&WHITE)?;
     let area = with_legend(area, picture)?;
@@ -173,7 +173,7 @@ pub fn draw_scene<DB: DrawingBackend>(
 /// width; untitled panels of a grid do not. Returns the area left for the picture.
 fn with_legend<DB: DrawingBackend>(
     area: DrawingArea<DB, Shift>,
-    picture: &MazePicture,
+    picture: &Picture,
 ) -> std::result::Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>> {
     if picture.title.is_empty() {
         return Ok(area);
@@ -263,7 +263,7 @@ fn scene_px(scene: &Scene) -> (u32, u32) {
 /// deterministic stride), so that it stays small for millions of states; the PNG draws all.
 pub fn render_scene(
     scene: &Scene,
-    picture: &MazePicture,
+    picture: &Picture,
     png: &Path,
     svg: &Path,
     svg_max_points: usize,
@@ -289,7 +289,7 @@ pub fn render_scene(
         v.iter().step_by(stride).copied().collect()
     };
     let (points, area) = (thin(picture.points), thin(picture.red_area));
-    let svg_picture = MazePicture {
+    let svg_picture = Picture {
         points: &points,
         red_area: &area,
         ..picture.clone()
@@ -310,14 +310,14 @@ pub fn render_scene(
 /// ```
 /// use pbcs::env::Planar;
 /// use pbcs::envs::maze::{Maze, MazeConfig};
-/// use pbcs::plot::{render_rgb, MazePicture};
+/// use pbcs::plot::{render_rgb, Picture};
 ///
 /// let maze = Maze::new(&MazeConfig { size: 2, ..Default::default() }).unwrap();
-/// let rgb = render_rgb(&maze.scene(), &MazePicture::default(), 64).unwrap();
+/// let rgb = render_rgb(&maze.scene(), &Picture::default(), 64).unwrap();
 /// assert_eq!(rgb.len(), 64 * 64 * 3);
 /// assert_eq!(&rgb[..3], &[255, 255, 255]); // the white margin
 /// ```
-pub fn render_rgb(scene: &Scene, picture: &MazePicture, side: u32) -> Result<Vec<u8>> {
+pub fn render_rgb(scene: &Scene, picture: &Picture, side: u32) -> Result<Vec<u8>> {
     register_font();
     let mut buf = vec![0u8; side as usize * side as usize * 3];
     {
@@ -329,7 +329,7 @@ pub fn render_rgb(scene: &Scene, picture: &MazePicture, side: u32) -> Result<Vec
     Ok(buf)
 }
 
-/// The owned content of a [`MazePicture`], as stored in a run's `picture.csv`, so that figures
+/// The owned content of a [`Picture`], as stored in a run's `picture.csv`, so that figures
 /// can be drawn again from committed results without re-running anything.
 ///
 /// The CSV has one row per point: `layer, index, x, y, r`, where `layer` is `point`, `red`
@@ -367,8 +367,8 @@ pub struct PictureData {
 
 impl PictureData {
     /// A picture of this data with `title`.
-    pub fn picture(&self, title: String) -> MazePicture<'_> {
-        MazePicture {
+    pub fn picture(&self, title: String) -> Picture<'_> {
+        Picture {
             title,
             points: &self.points,
             tau_paths: self.tau_paths.iter().map(Vec::as_slice).collect(),

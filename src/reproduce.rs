@@ -136,6 +136,44 @@ impl CellCheck {
         ));
         s
     }
+
+    /// The verdict `pbcs exp check` ends with: `MATCH`, or different bytes inside the
+    /// committed interval (an error with `exact`), preceded by the kernel note where it
+    /// explains a difference; an error when the fresh success rate lies outside the interval.
+    pub fn verdict(&self, cell: &str, exact: bool) -> crate::error::Result<String> {
+        let reproduced = self.reproduced();
+        let mut s = match (reproduced == Reproduced::Match, self.kernel_note()) {
+            (false, Some(note)) => format!("note: {note}\n"),
+            _ => String::new(),
+        };
+        let (n, differ) = (self.n(), self.n() - self.identical());
+        let ((lo, hi), rate) = (self.interval(), self.solved_now() as f64 / n as f64);
+        let fail = |why: String| {
+            Err(crate::error::Error::NotReproduced {
+                cell: cell.to_string(),
+                message: format!("{s}{why}"),
+            })
+        };
+        match reproduced {
+            Reproduced::Match => s.push_str("MATCH: the committed rows are reproduced exactly"),
+            Reproduced::WithinInterval if exact => {
+                return fail(format!(
+                    "--exact: {differ} of {n} rows differ from the committed bytes"
+                ))
+            }
+            Reproduced::WithinInterval => s.push_str(&format!(
+                "DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed \
+                 interval"
+            )),
+            Reproduced::Outside => {
+                return fail(format!(
+                    "the new success rate {rate:.2} lies outside the committed interval \
+                     [{lo:.3}, {hi:.3}]"
+                ))
+            }
+        }
+        Ok(s)
+    }
 }
 /// Re-runs `cell` of `exp` (every seed, or `seed`) into a scratch folder, `jobs` at a time,
 /// and compares with the committed rows under `results`. A missing committed row is an error

@@ -26,6 +26,48 @@ use std::path::Path;
 pub trait Check {
     /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.
     fn check(&self) -> Result<()>;
+
+    /// The value, checked once ([`Valid`]): what a run takes, so that nothing after it checks
+    /// again.
+    fn valid(self) -> Result<Valid<Self>>
+    where
+        Self: Sized,
+    {
+        self.check()?;
+        Ok(Valid(self))
+    }
+}
+
+/// A value whose [`Check`] passed (linfa's checked parameters): made only by [`Check::valid`],
+/// so a function that takes one knows its fields are in range without checking them again.
+/// It reads as the value ([`std::ops::Deref`]) and serialises as it.
+///
+/// ```
+/// use pbcs::config::TrainJob;
+/// use pbcs::validate::Check;
+/// let mut job = TrainJob::default();
+/// job.train.steps = 0;
+/// let e = job.clone().valid().unwrap_err().to_string();
+/// assert!(e.contains("train.steps"), "{e}");
+/// job.train.steps = 20_000;
+/// assert_eq!(job.valid().unwrap().train.steps, 20_000);
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct Valid<T>(T);
+
+impl<T> Valid<T> {
+    /// The value, to change it (and check it again to run it).
+    pub fn into_inner(self) -> T {
+        self.0
+    }
+}
+
+impl<T> std::ops::Deref for Valid<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.0
+    }
 }
 
 /// Parses `text` (the contents of `path`) as TOML; a syntax error or an unknown key is an

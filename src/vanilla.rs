@@ -92,6 +92,17 @@ impl Check for TrainConfig {
         if !(self.visit_bin.is_finite() && self.visit_bin > 0.0) {
             return Err(Error::invalid("train.visit_bin", "must be positive"));
         }
+        if self.learning_starts > self.steps {
+            return Err(Error::invalid(
+                "train.learning_starts",
+                format!(
+                    "{} of train.steps = {}: the learner would never update (its first update \
+                     comes after learning_starts steps; equal to train.steps: random actions \
+                     only)",
+                    self.learning_starts, self.steps
+                ),
+            ));
+        }
         if !(self.final_eval_epsilon.is_finite() && self.final_eval_epsilon > 0.0) {
             return Err(Error::invalid(
                 "train.final_eval_epsilon",

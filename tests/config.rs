@@ -160,10 +160,19 @@ fn train_rejects_bad_learner_settings_and_runs_a_small_case() {
     assert!(code != 0 && err.contains("learner.gamma"), "{code} {err}");
     let (code, err) = pbcs(&["train", "--algo", "sac", "--out", o]);
     assert!(code != 0 && err.contains("sac"), "{code} {err}");
-    let (code, err) = pbcs(&[
-        "train", "--algo", "td3", "--maze", "2", "--seed", "1", "--steps", "1500", "--quiet",
-        "--out", o,
-    ]);
+    // `--steps` below the config's `train.learning_starts` (10 000 by default) would never
+    // update the learner: refused, naming the field.
+    let small = [
+        "--algo", "td3", "--maze", "2", "--seed", "1", "--steps", "1500", "--quiet",
+    ];
+    let (code, err) = pbcs(&[&["train"][..], &small, &["--out", o]].concat());
+    assert!(
+        code != 0 && err.contains("train.learning_starts"),
+        "{code} {err}"
+    );
+    let (_tmp2, starts) = write("[train]\nlearning_starts = 500\n");
+    let config = ["--config", starts.to_str().unwrap()];
+    let (code, err) = pbcs(&[&["train"][..], &config, &small, &["--out", o]].concat());
     assert_eq!(code, 0, "{err}");
     for f in [
         "summary.csv",

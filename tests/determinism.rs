@@ -14,7 +14,12 @@ const FILES: [&str; 6] = [
 ];
 
 fn run(job: &ExploreJob, dir: &Path) {
-    run_explore(job, dir, |_, _| {}).unwrap();
+    run_explore(
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        dir,
+        |_, _| {},
+    )
+    .unwrap();
 }
 
 #[test]
@@ -83,14 +88,14 @@ fn vanilla_training_is_byte_identical_per_seed() {
     job.train.eval_every = 1_000;
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     run_train(
-        &job,
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         a.path(),
         |_, _| {},
     )
     .unwrap();
     run_train(
-        &job,
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         b.path(),
         |_, _| {},

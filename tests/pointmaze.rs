@@ -326,7 +326,13 @@ fn a_chain_with_balls_in_position_and_velocity_saves_them_and_solves() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let kernel = pbcs::nn::kernel::Kernel::detect();
-    let (record, _) = pbcs::runs::run_pbcs(&job, kernel, &out, |_, _| {}).unwrap();
+    let (record, _) = pbcs::runs::run_pbcs(
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        kernel,
+        &out,
+        |_, _| {},
+    )
+    .unwrap();
     assert!(record.solved, "{record:?}");
     let committed: Vec<csv::StringRecord> = csv::Reader::from_path(format!("{grid}.csv"))
         .unwrap()

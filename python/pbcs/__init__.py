@@ -4,6 +4,8 @@ Everything is computed by the Rust package pbcs-rs (the compiled module ``pbcs._
 
 * :class:`ContinuousMaze` — the paper's continuous maze as a ``gymnasium.Env``, registered as
   ``pbcs/ContinuousMaze-v0``; :class:`ContinuousMazeVec` steps N mazes in one call.
+* :func:`make` — any environment of the registry by name (``maze``, ``rooms``, PointMaze in a
+  build with MuJoCo), registered as ``pbcs/<name>-v0``.
 * :func:`explore` — phase 1: the trajectory τ from s_0 to the target.
 * :func:`run` — a whole PBCS run with a preset (``fast`` or ``paper``).
 * :func:`load_chain` — a chain of skills saved by ``pbcs run`` as a policy (:class:`Chain`).
@@ -23,7 +25,7 @@ from gymnasium.envs.registration import register
 
 from . import _pbcs
 from .chain import Chain, load_chain
-from .envs import ContinuousMaze, ContinuousMazeVec
+from .envs import ContinuousMaze, ContinuousMazeVec, RegisteredEnv, make
 
 __all__ = [
     "ContinuousMaze",
@@ -32,11 +34,14 @@ __all__ = [
     "evaluation_starts",
     "explore",
     "load_chain",
+    "make",
+    "RegisteredEnv",
     "run",
     "MAX_MAZE_SIZE",
 ]
 
 MAX_MAZE_SIZE = _pbcs.MAX_MAZE_SIZE
+ENV_NAMES = tuple(_pbcs.ENV_NAMES)
 
 
 def explore(size, layout=0, seed=0, bin_side=None, budget=None):
@@ -52,8 +57,8 @@ def run(size=None, layout=None, seed=0, preset="fast", config=None, out=None,
         max_env_steps=None, env=None):
     """A whole PBCS run (phase 1, phase 2, the chain's evaluation from B_ε(s_0)), run seed
     ``seed``, with the preset ``fast`` or ``paper``, or the job in the TOML file ``config``, on
-    the environment ``env`` names (``"maze"`` or ``"rooms"``; default: the config's, else the
-    maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0). With
+    the environment ``env`` names (a registry name, ``ENV_NAMES``; default: the config's, else
+    the maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0). With
     ``out`` (a folder), the run's files are written there as ``pbcs run --out`` writes them,
     the chain in ``out/chain`` (load it with :func:`load_chain`). Returns the run's record as a
     dict (``env``, ``solved``, ``success_rate``, ``skills``, step counts, ``tau`` as points of
@@ -70,6 +75,9 @@ def evaluation_starts(size, layout=0, seed=0, episodes=100, epsilon=0.1):
     vanilla run with ``train.final_eval_episodes``; judge any other policy from them too."""
     return _pbcs.evaluation_starts(size, layout, seed, episodes, epsilon)
 
+
+for _name in ENV_NAMES:
+    register(id=f"pbcs/{_name}-v0", entry_point="pbcs.envs:make", kwargs={"name": _name})
 
 register(
     id="pbcs/ContinuousMaze-v0",

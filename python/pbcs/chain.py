@@ -5,7 +5,7 @@ gymnasium-robotics)."""
 import numpy as np
 
 from . import _pbcs
-from .envs import ContinuousMaze
+from .envs import ContinuousMaze, RegisteredEnv
 
 
 def load_chain(path):
@@ -65,40 +65,56 @@ class Chain:
         return self._core.act(obs)
 
     def make_env(self, **kwargs):
-        """A :class:`ContinuousMaze` of the chain's maze (``kwargs`` go to its constructor)."""
-        size, layout = self._core.maze
+        """The chain's environment as a ``gymnasium.Env`` (``kwargs`` go to its constructor):
+        a :class:`ContinuousMaze` of its maze, else the registry's (:func:`pbcs.make`), with
+        episodes of the job's evaluation length."""
         kwargs.setdefault("max_episode_steps", self._core.eval_max_steps)
-        return ContinuousMaze(size=size, layout=layout, **kwargs)
+        if self.env == "maze":
+            size, layout = self._core.maze
+            return ContinuousMaze(size=size, layout=layout, **kwargs)
+        return RegisteredEnv(self.env, **kwargs)
 
-    def rollout(self, start=None, env=None, max_steps=None):
-        """One episode through the Gymnasium environment ``env`` (default: a new one of the
-        chain's maze) from ``start`` (default s_0): a dict with the ``states`` visited (start
-        included), ``success`` (the target was reached) and ``steps``."""
+    def rollout(self, start=None, env=None, max_steps=None, seed=None):
+        """One episode through the Gymnasium environment ``env`` (default: :meth:`make_env`)
+        from ``start`` (a state the env's reset takes as ``options={"state": start}``, the
+        maze's; default: the env's own reset, seeded with ``seed``), at most ``max_steps``
+        steps (default: the job's evaluation length): a dict with the observations visited
+        (``states``, start included), ``success`` and ``steps``. A dict observation (a
+        goal-conditioned env, gymnasium-robotics') is acted on through its ``observation``;
+        success is the env's ``info["success"]`` where it says one, else a positive reward at
+        the end of the episode."""
         env = env or self.make_env()
         limit = max_steps or self._core.eval_max_steps
         options = None if start is None else {"state": start}
-        obs, _ = env.reset(options=options)
+        obs, info = env.reset(seed=seed, options=options)
         self.reset()
-        states, success = [obs], False
+        see = (lambda o: o["observation"]) if isinstance(obs, dict) else (lambda o: o)
+        states, success = [see(obs)], False
         for _ in range(limit):
-            obs, reward, terminated, truncated, _ = env.step(self.act(obs))
-            states.append(obs)
-            if terminated:
-                success = reward > 0
-                break
-            if truncated:
+            obs, reward, terminated, truncated, info = env.step(self.act(see(obs)))
+            states.append(see(obs))
+            if terminated or truncated:
+                success = bool(info["success"]) if "success" in info else terminated and reward > 0
                 break
         return {"states": np.stack(states), "success": success, "steps": len(states) - 1}
 
     def eval_starts(self, episodes=100, seed=None):
         """The start states of ``pbcs eval --episodes episodes --seed seed`` (default seed:
-        the run's), uniform in B_ε(s_0): shape (episodes, 2)."""
+        the run's), uniform in B_ε(s_0), as observations: shape (episodes, observation
+        length)."""
         return self._core.eval_starts(episodes, seed)
 
     def evaluate(self, episodes=100, seed=None):
         """``pbcs eval``'s protocol, stepped in Python: :meth:`rollout` from each of
         :meth:`eval_starts`. Returns ``successes``, ``episodes`` and each episode's ``success``
-        and ``steps``; equal to :meth:`evaluate_in_core` for the same arguments."""
+        and ``steps``; equal to :meth:`evaluate_in_core` for the same arguments. Needs the
+        maze's reset-anywhere (:meth:`evaluate_in_core` evaluates a chain of any
+        environment)."""
+        if self.env != "maze":
+            raise ValueError(
+                f"a chain of env = {self.env!r}: its evaluation starts are set through the "
+                "maze's reset-anywhere; use evaluate_in_core"
+            )
         env = self.make_env()
         runs = [self.rollout(tuple(s), env=env) for s in self.eval_starts(episodes, seed)]
         success = np.array([r["success"] for r in runs])
@@ -116,12 +132,13 @@ class Chain:
         return self._core.evaluate(episodes, seed)
 
     def core_rollout(self, start=None, max_steps=None):
-        """One execution computed by the core: ``states``, ``success``, ``steps`` and the
-        ``skill_used`` for each action."""
+        """One execution computed by the core from s_0 (or ``start``, a point of the maze):
+        ``states`` (the points drawn), ``success``, ``steps`` and the ``skill_used`` for each
+        action."""
         return self._core.rollout(start, max_steps)
 
     def render(self, paths=None, size=256):
-        """An RGB image of the chain's maze with its activation balls and ``paths`` (arrays of
-        shape (len, 2)) in green."""
+        """An RGB image of the chain's environment with its activation balls and ``paths``
+        (arrays of shape (len, 2): points as :meth:`core_rollout` gives them) in green."""
         paths = None if paths is None else [np.asarray(p, dtype=np.float32) for p in paths]
         return self._core.render(paths, size)

@@ -1,4 +1,5 @@
-"""The paper's continuous maze as Gymnasium environments (one maze, and N mazes per call).
+"""The paper's continuous maze as Gymnasium environments (one maze, and N mazes per call), and
+every environment of pbcs-rs' registry by name (:func:`make`, :class:`RegisteredEnv`).
 
 State and observation: the point mass's position in [0, N]² (float32). Action: its step,
 in [−0.1, 0.1]² (the paper's action space; out-of-range components are clipped, NaN counts as
@@ -150,3 +151,61 @@ class ContinuousMazeVec(VectorEnv):
             np.ascontiguousarray(actions, dtype=np.float32)
         )
         return obs, rewards, terminations, truncations, {}
+
+
+class RegisteredEnv(gym.Env):
+    """An environment of pbcs-rs' registry by name (``maze``, ``rooms``, ``pointmaze_<map>``
+    in a build with MuJoCo), as a ``gymnasium.Env``: the observation is the environment's
+    (float32, unbounded box), the action box its bounds (out-of-range components are clipped,
+    NaN counts as 0), ``reset`` starts from its start distribution (s_0 for the maze, the rooms
+    and PointMaze's task), ``step`` is the Rust core's own, truncated after
+    ``max_episode_steps``. ``size`` and ``layout`` are the maze's and refused for another
+    environment. ``render()`` (with ``render_mode="rgb_array"``) draws the environment with
+    the episode's path.
+
+    >>> env = RegisteredEnv("rooms")
+    >>> obs, _ = env.reset(seed=0)
+    >>> obs.tolist()
+    [0.30000001192092896, 0.20000000298023224]
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
+
+    def __init__(self, name="maze", size=None, layout=None, max_episode_steps=1000,
+                 render_mode=None, render_size=256):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"invalid `render_mode`: must be one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
+        self._core = _pbcs.NamedEnv(name, size, layout, max_episode_steps)
+        self.name = self._core.name
+        n = self._core.obs_dim
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)
+        bounds = np.asarray(self._core.action_bounds, dtype=np.float32)
+        self.action_space = spaces.Box(-bounds, bounds, dtype=np.float32)
+        self.render_mode = render_mode
+        self.render_size = render_size
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return self._core.reset(seed), {}
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float32).reshape(-1)
+        obs, reward, terminated, truncated = self._core.step(a.tolist())
+        return obs, reward, terminated, truncated, {}
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return self._core.render(self.render_size)
+        return None
+
+
+def make(name, **kwargs):
+    """The environment of pbcs-rs' registry called ``name`` (:class:`RegisteredEnv`; the maze
+    as :class:`ContinuousMaze`, which adds reset-anywhere); ``kwargs`` go to its constructor.
+    Every name also has a Gymnasium id, ``pbcs/<name>-v0``."""
+    if name == "maze":
+        return ContinuousMaze(**kwargs)
+    return RegisteredEnv(name, **kwargs)

@@ -50,25 +50,19 @@ def make_env(chain, **kwargs):
 
 def evaluate(chain, episodes=100, seed=0, env=None):
     """``episodes`` episodes of ``chain`` in gymnasium-robotics (:func:`make_env`), the first
-    reset seeded with ``seed``. Returns ``successes``, ``episodes`` and each episode's
-    ``success`` and ``steps``."""
+    reset seeded with ``seed``, each the chain's one rollout (:meth:`pbcs.Chain.rollout`:
+    ``info["success"]`` on the last step, within the env's time limit). Returns
+    ``successes``, ``episodes`` and each episode's ``success`` and ``steps``."""
     if episodes < 1:
         raise ValueError(f"invalid `episodes`: must be at least 1, got {episodes}")
     own = env is None
     if own:
         env = make_env(chain)
-    success, steps = [], []
-    for e in range(episodes):
-        obs, info = env.reset(seed=seed if e == 0 else None)
-        chain.reset()
-        n = 0
-        while True:
-            obs, _, terminated, truncated, info = env.step(chain.act(obs["observation"]))
-            n += 1
-            if terminated or truncated:
-                break
-        success.append(bool(info["success"]))
-        steps.append(n)
+    limit = chain.pointmaze[3]
+    runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
+            for e in range(episodes)]
+    success = [r["success"] for r in runs]
+    steps = [r["steps"] for r in runs]
     if own:
         env.close()
     return {

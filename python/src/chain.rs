@@ -1,15 +1,15 @@
 //! A saved chain of skills as a policy.
 
-use crate::{count, invalid, py_err, rgb, state_of};
+use crate::named::{chain_env, obs_array, rgb_of, ChainEnv};
+use crate::{count, invalid, py_err, state_of};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use pbcs::config::PbcsJob;
-use pbcs::env::Env;
 use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::nn::Workspace;
 use pbcs::phase2::SkillChain;
-use pbcs::plot::MazePicture;
+use pbcs::plot::Picture;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -22,8 +22,11 @@ use std::path::PathBuf;
 pub(crate) struct ChainCore {
     chain: SkillChain,
     job: PbcsJob,
-    /// The maze of a maze chain; None for another environment (acting needs no environment).
+    /// The maze of a maze chain (rollouts from a given point); None for another environment.
     maze: Option<Maze>,
+    /// The chain's environment, made by the registry for rollouts, starts and pictures; the
+    /// registry's error where this build cannot make it (acting needs no environment).
+    env: Result<Box<dyn ChainEnv>, String>,
     dir: PathBuf,
     active: usize,
     /// The policies' input and output sizes (the environment's observation and action).
@@ -36,12 +39,23 @@ impl ChainCore {
     fn the_maze(&self) -> PyResult<&Maze> {
         self.maze.as_ref().ok_or_else(|| {
             PyValueError::new_err(format!(
-                "{}: a chain of env = \"{}\", not of the maze (act on observations of that \
-                 environment instead)",
+                "{}: a chain of env = \"{}\", not of the maze (a start point needs the maze: \
+                 leave it out to start at s_0)",
                 self.dir.join("manifest.toml").display(),
                 self.job.env.name()
             ))
         })
+    }
+
+    /// The chain's environment, or the error that says why this build cannot make it.
+    fn the_env(&self) -> PyResult<&dyn ChainEnv> {
+        match &self.env {
+            Ok(env) => Ok(env.as_ref()),
+            Err(why) => Err(PyValueError::new_err(format!(
+                "{}: {why} (acting on observations needs no environment)",
+                self.dir.join("manifest.toml").display()
+            ))),
+        }
     }
 }
 
@@ -116,10 +130,23 @@ impl ChainCore {
             None
         };
         let dims = shared_dims(&chain, &manifest)?;
+        let env = chain_env(&job).map_err(|e| e.to_string());
+        if let Ok(env) = &env {
+            if env.obs_dim() != dims.0 {
+                return Err(PyValueError::new_err(format!(
+                    "{}: the skills take {} inputs, but env = \"{}\" observes {}",
+                    manifest.display(),
+                    dims.0,
+                    job.env.name(),
+                    env.obs_dim()
+                )));
+            }
+        }
         Ok(ChainCore {
             chain,
             job,
             maze,
+            env,
             dir,
             active: 0,
             dims,
@@ -211,7 +238,7 @@ impl ChainCore {
     }
 
     /// The start states of `pbcs eval`'s episodes for `seed` (default: the run's seed), in
-    /// order: shape (episodes, 2).
+    /// order, as observations: shape (episodes, observation length), (x, y) in the maze.
     #[pyo3(signature = (episodes = 100, seed = None))]
     fn eval_starts<'py>(
         &self,
@@ -224,21 +251,15 @@ impl ChainCore {
             .map(|s| count("seed", s))
             .transpose()?
             .unwrap_or(self.job.seed);
-        let starts = pbcs::env::evaluation_starts(
-            self.the_maze()?,
-            self.job.phase2.epsilon,
-            n,
-            &pbcs::rng::Seeds::new(seed),
-        )
-        .map_err(py_err)?;
-        let flat: Vec<f32> = starts.iter().flat_map(|p| [p.x, p.y]).collect();
-        Ok(Array2::from_shape_vec((n, 2), flat)
-            .expect("two coordinates per state")
-            .into_pyarray(py))
+        let starts = (self.the_env()?)
+            .eval_starts(&self.job, n, seed)
+            .map_err(py_err)?;
+        Ok(obs_array(py, &starts, self.dims.0))
     }
 
-    /// One execution in the core from `start` (default s_0): the states visited, whether it
-    /// reached the target, and the skill that chose each action.
+    /// One execution in the core from `start` (default s_0; a start point needs the maze): the
+    /// states visited as the points they are drawn at, whether it reached the target, and the
+    /// skill that chose each action.
     #[pyo3(signature = (start = None, max_steps = None))]
     fn rollout<'py>(
         &self,
@@ -246,26 +267,30 @@ impl ChainCore {
         start: Option<(f32, f32)>,
         max_steps: Option<i64>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let s = match start {
-            Some((x, y)) => state_of(self.the_maze()?, "start", x, y)?,
-            None => self.the_maze()?.start(),
-        };
         let m = match max_steps {
             Some(m) => count("max_steps", m)? as usize,
             None => self.job.phase2.eval_max_steps,
         };
-        let r = self.chain.run(self.the_maze()?, s, m);
-        let flat: Vec<f32> = r.states.iter().flat_map(|p| [p.x, p.y]).collect();
+        let (points, success, skill_used) = match start {
+            Some((x, y)) => {
+                let maze = self.the_maze()?;
+                let r = self.chain.run(maze, state_of(maze, "start", x, y)?, m);
+                let points: Vec<(f32, f32)> = r.states.iter().map(|p| (p.x, p.y)).collect();
+                (points, r.success, r.skill_used)
+            }
+            None => self.the_env()?.rollout(&self.chain, m),
+        };
+        let flat: Vec<f32> = points.iter().flat_map(|&(x, y)| [x, y]).collect();
         let d = PyDict::new(py);
         d.set_item(
             "states",
-            Array2::from_shape_vec((r.states.len(), 2), flat)
+            Array2::from_shape_vec((points.len(), 2), flat)
                 .expect("two coordinates per state")
                 .into_pyarray(py),
         )?;
-        d.set_item("success", r.success)?;
-        d.set_item("steps", r.states.len() - 1)?;
-        d.set_item("skill_used", r.skill_used.into_pyarray(py))?;
+        d.set_item("success", success)?;
+        d.set_item("steps", points.len() - 1)?;
+        d.set_item("skill_used", skill_used.into_pyarray(py))?;
         Ok(d)
     }
 
@@ -297,8 +322,8 @@ impl ChainCore {
         Ok(d)
     }
 
-    /// An RGB image of the chain's maze with its activation balls and `paths` (a list of
-    /// (len, 2) arrays) in green.
+    /// An RGB image of the chain's environment with its activation balls and `paths` (a list
+    /// of (len, 2) arrays of drawn points, as `rollout` gives them) in green.
     #[pyo3(signature = (paths = None, size = 256))]
     fn render<'py>(
         &self,
@@ -320,22 +345,13 @@ impl ChainCore {
             }
             rollout_paths.push(a.outer_iter().map(|r| (r[0], r[1])).collect());
         }
-        let picture = MazePicture {
+        let (scene, circles) = self.the_env()?.picture(&self.chain);
+        let picture = Picture {
             rollout_paths,
-            circles: self
-                .chain
-                .skills
-                .iter()
-                .map(|s| {
-                    (
-                        (s.activation.center[0], s.activation.center[1]),
-                        s.activation.radius,
-                    )
-                })
-                .collect(),
-            ..MazePicture::default()
+            circles,
+            ..Picture::default()
         };
-        rgb(py, self.the_maze()?, &picture, size)
+        rgb_of(py, &scene, &picture, size)
     }
 
     fn __len__(&self) -> usize {

@@ -1,12 +1,13 @@
 //! The maze environments: one episode (`MazeEnv`) and N mazes per call (`MazeVecEnv`).
 
-use crate::{action_of, count, invalid, maze_of, rgb, state_of, walls_of};
+use crate::named::rgb_of;
+use crate::{action_of, count, invalid, maze_of, state_of, walls_of};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use parry2d::math::Point;
 use pbcs::env::Env;
 use pbcs::envs::maze::Maze;
-use pbcs::plot::MazePicture;
+use pbcs::plot::Picture;
 use pyo3::prelude::*;
 
 /// `max_episode_steps` of both environments: 1 to 2³² − 1.
@@ -107,12 +108,12 @@ impl MazeEnv {
     /// path in green and the agent as a small purple circle.
     #[pyo3(signature = (size = 256))]
     fn render<'py>(&self, py: Python<'py>, size: i64) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        let picture = MazePicture {
+        let picture = Picture {
             rollout_paths: vec![self.path.clone()],
             circles: vec![((self.state.x, self.state.y), 0.06)],
-            ..MazePicture::default()
+            ..Picture::default()
         };
-        rgb(py, &self.maze, &picture, size)
+        rgb_of(py, &pbcs::env::Planar::scene(&self.maze), &picture, size)
     }
 
     #[getter]

@@ -8,11 +8,9 @@
 //! `RuntimeError` for work that failed); arguments are checked before they reach the core, so
 //! nothing panics across the boundary.
 
-use numpy::ndarray::Array3;
-use numpy::{IntoPyArray, PyArray1, PyArray3, PyArrayMethods};
+use numpy::{PyArray1, PyArrayMethods};
 use parry2d::math::Point;
 use pbcs::envs::maze::{Maze, MazeConfig};
-use pbcs::plot::{render_rgb, MazePicture};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
@@ -109,27 +107,9 @@ pub(crate) fn walls_of(maze: &Maze) -> Vec<(f32, f32, f32, f32)> {
         .collect()
 }
 
-pub(crate) fn rgb<'py>(
-    py: Python<'py>,
-    maze: &Maze,
-    picture: &MazePicture,
-    side: i64,
-) -> PyResult<Bound<'py, PyArray3<u8>>> {
-    if !(16..=4096).contains(&side) {
-        return Err(invalid(
-            "size",
-            format!("must be between 16 and 4096 pixels, got {side}"),
-        ));
-    }
-    let side = side as u32;
-    let buf = render_rgb(&pbcs::env::Planar::scene(maze), picture, side).map_err(py_err)?;
-    let a = Array3::from_shape_vec((side as usize, side as usize, 3), buf)
-        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    Ok(a.into_pyarray(py))
-}
-
 mod chain;
 mod env;
+mod named;
 mod pipeline;
 
 #[pymodule]
@@ -137,10 +117,16 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::MazeEnv>()?;
     m.add_class::<env::MazeVecEnv>()?;
     m.add_class::<chain::ChainCore>()?;
+    m.add_class::<named::NamedEnv>()?;
     m.add_function(wrap_pyfunction!(pipeline::explore, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::run, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::evaluation_starts, m)?)?;
     m.add_function(wrap_pyfunction!(env::pendulum_step, m)?)?;
     m.add("MAX_MAZE_SIZE", pbcs::envs::maze::MAX_MAZE_SIZE)?;
+    let names: Vec<&str> = pbcs::envs::EnvName::all()
+        .iter()
+        .map(|e| e.name())
+        .collect();
+    m.add("ENV_NAMES", names)?;
     Ok(())
 }

@@ -3,15 +3,15 @@
 use crate::{count, invalid, maze_of, py_err};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
-use pbcs::config::{ExploreJob, PbcsJob, Preset};
+use pbcs::config::{ExploreJob, PbcsJob, Place, Preset};
 use pbcs::env::{EvalEpisode, Planar};
-use pbcs::envs::{EnvName, Visit};
+use pbcs::envs::EnvName;
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs::{PbcsRun, RunRecord};
 use pbcs::validate::Check;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Phase 1 on the maze `size` of layout `layout` with run seed `seed`: τ (from s_0 to the
 /// first rewarded state) as an array of shape (len, 2), the actions between its states
@@ -44,9 +44,10 @@ pub(crate) fn explore<'py>(
         m.target_radius,
         m.max_action,
     )?;
-    job.check().map_err(py_err)?;
+    let job = job.valid().map_err(py_err)?;
+    let maze = pbcs::envs::maze::Maze::new(&job.maze).map_err(py_err)?;
     let run = py
-        .detach(|| pbcs::runs::ExploreRun::compute(&job, |_, _| {}))
+        .detach(|| pbcs::runs::ExploreRun::compute(maze, &job, |_, _| {}))
         .map_err(py_err)?;
     let t = &run.found.trajectory;
     let tau: Vec<f32> = t.states.iter().flat_map(|p| [p.x, p.y]).collect();
@@ -130,45 +131,49 @@ pub(crate) fn run<'py>(
         None => Preset::named(preset).and_then(Preset::job),
     }
     .map_err(py_err)?;
-    if let Some(name) = env {
-        job.env = name.parse::<EnvName>().map_err(|_| {
-            invalid(
-                "env",
-                format!(
-                    "`{name}` is not an environment (maze, {})",
-                    EnvName::others()
-                ),
-            )
-        })?;
-    }
-    if !job.env.is_maze() && (size.is_some() || layout.is_some()) {
-        return Err(invalid(
-            "maze",
-            format!(
-                "`{}` has no maze: leave `size` and `layout` out",
-                job.env.name()
-            ),
-        ));
-    }
-    if let Some(n) = size {
-        job.maze.size = usize::try_from(count("maze.size", n)?).unwrap_or(usize::MAX);
-    }
-    if let Some(m) = layout {
-        job.maze.seed = count("maze.seed", m)?;
-    }
-    job.seed = count("seed", seed)?;
+    let env = env
+        .map(|name| {
+            name.parse::<EnvName>().map_err(|_| {
+                invalid(
+                    "env",
+                    format!(
+                        "`{name}` is not an environment (maze, {})",
+                        EnvName::others()
+                    ),
+                )
+            })
+        })
+        .transpose()?;
+    let place = Place {
+        env,
+        maze_size: size
+            .map(|n| count("maze.size", n).map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+            .transpose()?,
+        maze_seed: layout.map(|m| count("maze.seed", m)).transpose()?,
+        seed: Some(count("seed", seed)?),
+    };
+    place.apply(&mut job).map_err(py_err)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
     }
-    job.check().map_err(py_err)?;
+    let job = job.valid().map_err(py_err)?;
     let kernel = Kernel::from_env().map_err(py_err)?;
-    let work = RunOn {
-        job: &job,
-        kernel,
-        out: out.as_deref(),
-    };
+    let built = job.env.build(&job.maze).map_err(py_err)?;
     let done = py
-        .detach(|| job.env.visit(&job.maze, work))
+        .detach(|| {
+            pbcs::with_env!(built, |env| {
+                let run = PbcsRun::compute(env, &job, kernel, |_, _| {})?;
+                if let Some(dir) = out.as_deref() {
+                    run.write(&job, dir)?;
+                }
+                pbcs::Result::Ok(RunDone {
+                    tau: run.tau.iter().map(|s| run.env.point(s)).collect(),
+                    record: run.record,
+                    seconds: run.seconds,
+                    evaluation: run.evaluation,
+                })
+            })
+        })
         .map_err(py_err)?;
     record_dict(py, &done, out)
 }
@@ -218,30 +223,4 @@ struct RunDone {
     seconds: f64,
     tau: Vec<(f32, f32)>,
     evaluation: Vec<EvalEpisode>,
-}
-
-/// [`run`] on the environment the job names: refuses a setting it lacks a hook for, runs,
-/// and writes the run's files into `out` if given.
-struct RunOn<'a> {
-    job: &'a PbcsJob,
-    kernel: Kernel,
-    out: Option<&'a Path>,
-}
-
-impl Visit for RunOn<'_> {
-    type Output = RunDone;
-
-    fn on<E: Planar>(self, env: E) -> pbcs::Result<RunDone> {
-        PbcsRun::require_hooks(&env, self.job)?;
-        let run = PbcsRun::compute_on(env, self.job, self.kernel, |_, _| {})?;
-        if let Some(dir) = self.out {
-            run.write(self.job, dir)?;
-        }
-        Ok(RunDone {
-            tau: run.tau.iter().map(|s| run.env.point(s)).collect(),
-            record: run.record,
-            seconds: run.seconds,
-            evaluation: run.evaluation,
-        })
-    }
 }

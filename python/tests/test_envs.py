@@ -35,20 +35,41 @@ def test_a_rooms_run_writes_its_folder_and_its_chain_acts_on_rooms_observations(
     assert (out / "record.csv").exists() and (out / "chain" / "manifest.toml").exists()
     assert 'env = "rooms"' in (out / "chain" / "run.toml").read_text()
     assert record["chain"] == out / "chain"
-    # Chain acts on any environment's observations; what needs the maze is refused, naming
-    # the environment.
+    # The chain acts on any environment's observations, and rolls out, evaluates and draws on
+    # its own environment (the registry's); only the maze's own questions are refused.
     chain = pbcs.load_chain(out / "chain")
     assert chain.env == "rooms" and chain.pointmaze is None
     chain.reset()
     action = chain.act([0.5, 0.5])
     assert action.shape == (2,) and np.all(np.isfinite(action))
-    for call in (lambda: chain.maze, lambda: chain.core_rollout(), lambda: chain.render()):
+    for call in (lambda: chain.maze, lambda: chain.core_rollout(start=(0.3, 0.2))):
         try:
             call()
         except ValueError as e:
             assert "rooms" in str(e) and "not of the maze" in str(e)
         else:
             raise AssertionError("a rooms chain answered as a maze chain")
+    core = chain.core_rollout()
+    assert core["success"] == record["solved"]
+    assert (core["states"][:, 0] <= 2).all() and (core["states"][:, 1] <= 1).all()
+    # Stepped in Python through the registry's environment: the same episode.
+    ours = chain.rollout()
+    assert (ours["success"], ours["steps"]) == (core["success"], core["steps"])
+    assert ours["states"][-1].tobytes() == core["states"][-1].tobytes()
+    picture = chain.render([core["states"]])
+    assert picture.shape == (256, 256, 3) and picture.dtype == np.uint8
+    starts = chain.eval_starts(episodes=5)
+    assert starts.shape == (5, 2)
+    # The run's own evaluation, re-run by the core from the chain folder.
+    again = chain.evaluate_in_core(episodes=len(record["evaluation_success"]))
+    assert again["success"].tolist() == record["evaluation_success"].tolist()
+    assert again["steps"].tolist() == record["evaluation_steps"].tolist()
+    try:
+        chain.evaluate()
+    except ValueError as e:
+        assert "evaluate_in_core" in str(e)
+    else:
+        raise AssertionError("a rooms chain's evaluation was stepped through the maze")
     for bad in ([0.5], [0.5, float("nan")], "xy"):
         try:
             chain.act(bad)

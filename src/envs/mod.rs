@@ -1,27 +1,30 @@
-//! Environments by name: the registry the `pbcs` command, jobs and the Python package read.
+//! Environments by name: the registry the `pbcs` command, jobs and the Python package read, and
+//! one module per environment.
 //!
 //! A job names its environment (`env = "rooms"`; none: the maze, so every config written
-//! before the registry means what it meant). [`EnvName::visit`] builds the environment a name
-//! stands for and hands it to generic code ([`Visit`]), which sees only [`Planar`] (an
-//! [`crate::env::Env`] that can be drawn). Adding an environment is its own file, one variant
-//! here and one arm in [`EnvName::visit`].
+//! before the registry means what it meant). [`EnvName::build`] makes the environment a name
+//! stands for, once per run, as a [`Built`]; [`with_env!`](crate::with_env) hands it to generic
+//! code, which sees only [`Planar`] (an [`crate::env::Env`] that can be drawn) and is compiled
+//! once per environment, so the step loops inside stay monomorphic. A closure cannot be generic
+//! over `E`, and a visitor struct per command (what this registry had) repeats each command's
+//! arguments as fields; the macro is the one `match` over [`Built`].
+//!
+//! Adding an environment: its own module here (`three_rooms.rs` is the example), and in this
+//! file its `mod` line, a variant of [`EnvName`], its arm in [`EnvName::build`], a variant of
+//! [`Built`] and its arm in `with_env!`: five lines, nothing else in the package.
 //!
 //! ```
 //! use pbcs::config::MazeConfig;
 //! use pbcs::env::{Env, Planar};
-//! use pbcs::envs::{EnvName, Visit};
+//! use pbcs::envs::EnvName;
 //!
 //! /// The start of whichever environment is named.
-//! struct Start;
-//! impl Visit for Start {
-//!     type Output = (f32, f32);
-//!     fn on<E: Planar>(self, env: E) -> pbcs::Result<(f32, f32)> {
-//!         Ok(env.point(&env.start()))
-//!     }
+//! fn start(name: EnvName) -> pbcs::Result<(f32, f32)> {
+//!     let built = name.build(&MazeConfig::default())?;
+//!     Ok(pbcs::with_env!(built, |env| env.point(&env.start())))
 //! }
-//! let maze = MazeConfig::default();
-//! assert_eq!(EnvName::Maze.visit(&maze, Start).unwrap(), (0.5, 0.5));
-//! assert_eq!(EnvName::Rooms.visit(&maze, Start).unwrap(), (0.3, 0.2));
+//! assert_eq!(start(EnvName::Maze).unwrap(), (0.5, 0.5));
+//! assert_eq!(start(EnvName::Rooms).unwrap(), (0.3, 0.2));
 //! assert_eq!("rooms".parse::<EnvName>().unwrap(), EnvName::Rooms);
 //! ```
 
@@ -29,13 +32,13 @@ pub mod maze;
 pub mod pendulum;
 pub mod pointmaze;
 pub mod rooms;
+pub mod three_rooms;
 pub mod toy;
 
-use crate::env::Planar;
-use crate::envs::maze::{Maze, MazeConfig};
-use crate::envs::pointmaze::MapName;
-use crate::envs::rooms::TwoRooms;
 use crate::error::Result;
+use maze::{Maze, MazeConfig};
+use pointmaze::{MapName, PointMaze};
+use rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
 
 /// The environments PBCS runs on, by name.
@@ -64,6 +67,8 @@ pub enum EnvName {
     Maze,
     /// Two rooms joined by a door (`src/envs/rooms.rs`); it has no parameters.
     Rooms,
+    /// Three rooms in a row (`src/envs/three_rooms.rs`); it has no parameters.
+    ThreeRooms,
     /// gymnasium-robotics' `PointMaze_UMaze-v3` (`src/envs/pointmaze/`, feature `mujoco`), from
     /// one of its two free cells farthest apart to the other; success where every goal its
     /// reset may draw counts one (`PointMaze::for_goal_noise`).
@@ -76,12 +81,46 @@ pub enum EnvName {
     PointmazeLarge,
 }
 
-/// Generic work on whichever environment a name stands for ([`EnvName::visit`]).
-pub trait Visit {
-    /// What the work returns.
-    type Output;
-    /// The work on `env`.
-    fn on<E: Planar>(self, env: E) -> Result<Self::Output>;
+/// An environment made from its name ([`EnvName::build`]); [`with_env!`](crate::with_env)
+/// runs generic code on the one it holds.
+#[derive(Debug)]
+pub enum Built {
+    /// [`EnvName::Maze`].
+    Maze(Maze),
+    /// [`EnvName::Rooms`].
+    Rooms(TwoRooms),
+    /// [`EnvName::ThreeRooms`].
+    ThreeRooms(three_rooms::ThreeRooms),
+    /// The four PointMaze names (with MuJoCo; a build without it refuses them in
+    /// [`EnvName::build`], and its `PointMaze` has no values).
+    PointMaze(PointMaze),
+}
+
+/// Runs `$body` with `$env` bound to the environment a [`Built`] holds, as a value of its own
+/// type: the body is compiled once per environment (`match` arms), so generic code inside it
+/// runs monomorphic.
+///
+/// ```
+/// use pbcs::env::Env;
+/// use pbcs::envs::EnvName;
+/// let rooms = EnvName::Rooms.build(&Default::default()).unwrap();
+/// assert_eq!(pbcs::with_env!(rooms, |env| env.action_dim()), 2);
+/// ```
+#[macro_export]
+macro_rules! with_env {
+    ($built:expr, |$env:ident| $body:expr) => {
+        match $built {
+            $crate::envs::Built::Maze($env) => $body,
+            $crate::envs::Built::Rooms($env) => $body,
+            $crate::envs::Built::ThreeRooms($env) => $body,
+            // Without MuJoCo this arm has no values (and its body is unreachable code).
+            $crate::envs::Built::PointMaze($env) => {
+                #[allow(unreachable_code)]
+                let out = $body;
+                out
+            }
+        }
+    };
 }
 
 impl EnvName {
@@ -100,9 +139,14 @@ impl EnvName {
         }
     }
 
+    /// Every environment of the registry, in order.
+    pub fn all() -> &'static [EnvName] {
+        <EnvName as clap::ValueEnum>::value_variants()
+    }
+
     /// The names of the environments other than the maze, comma-separated (for messages).
     pub fn others() -> String {
-        <EnvName as clap::ValueEnum>::value_variants()
+        EnvName::all()
             .iter()
             .filter(|e| !e.is_maze())
             .map(|e| e.name())
@@ -115,17 +159,19 @@ impl EnvName {
         *self == EnvName::Maze
     }
 
-    /// Builds the environment this name stands for (the maze from `maze`) and runs `work` on
-    /// it.
-    pub fn visit<V: Visit>(self, maze: &MazeConfig, work: V) -> Result<V::Output> {
-        match self {
-            EnvName::Maze => work.on(Maze::new(maze)?),
-            EnvName::Rooms => work.on(TwoRooms),
+    /// Makes the environment this name stands for (the maze from `maze`): once per run.
+    pub fn build(self, maze: &MazeConfig) -> Result<Built> {
+        Ok(match self {
+            EnvName::Maze => Built::Maze(Maze::new(maze)?),
+            EnvName::Rooms => Built::Rooms(TwoRooms),
+            EnvName::ThreeRooms => Built::ThreeRooms(three_rooms::ThreeRooms),
             EnvName::PointmazeUmaze
             | EnvName::PointmazeOpen
             | EnvName::PointmazeMedium
-            | EnvName::PointmazeLarge => point_maze(self.point_map().expect("a PointMaze"), work),
-        }
+            | EnvName::PointmazeLarge => {
+                Built::PointMaze(point_maze(self.point_map().expect("a PointMaze"))?)
+            }
+        })
     }
 
     /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
@@ -133,11 +179,11 @@ impl EnvName {
     /// [`crate::envs::pointmaze::model`].
     pub fn point_map(self) -> Option<MapName> {
         match self {
-            EnvName::Maze | EnvName::Rooms => None,
             EnvName::PointmazeUmaze => Some(MapName::UMaze),
             EnvName::PointmazeOpen => Some(MapName::Open),
             EnvName::PointmazeMedium => Some(MapName::Medium),
             EnvName::PointmazeLarge => Some(MapName::Large),
+            _ => None,
         }
     }
 
@@ -164,19 +210,17 @@ pub fn point_scene(map: MapName) -> crate::env::Scene {
     m.scene(start, goal, sure_radius(GOAL_NOISE) as f32)
 }
 
-/// A PointMaze task ([`crate::envs::pointmaze::PointMaze::named`]) whose success holds for every
-/// goal gymnasium-robotics' reset may draw ([`crate::envs::pointmaze::GOAL_NOISE`]): one fixed chain
+/// A PointMaze task ([`crate::envs::pointmaze::PointMaze::named`]) whose success holds for
+/// every goal gymnasium-robotics' reset may draw ([`pointmaze::GOAL_NOISE`]): one fixed chain
 /// is judged there from the env's own resets, which move the goal up to 0.25 along each axis.
 #[cfg(feature = "mujoco")]
-fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
-    use crate::envs::pointmaze::{PointMaze, GOAL_NOISE};
-    work.on(PointMaze::named(map)?.for_goal_noise(GOAL_NOISE)?)
+fn point_maze(map: MapName) -> Result<PointMaze> {
+    PointMaze::named(map)?.for_goal_noise(pointmaze::GOAL_NOISE)
 }
 
 /// Without MuJoCo: refused, saying how to build with it.
 #[cfg(not(feature = "mujoco"))]
-fn point_maze<V: Visit>(map: MapName, work: V) -> Result<V::Output> {
-    let _ = work;
+fn point_maze(map: MapName) -> Result<PointMaze> {
     Err(crate::error::Error::invalid(
         "env",
         format!(

@@ -94,6 +94,16 @@ impl Env for TwoRooms {
         [0.3, 0.2]
     }
 
+    /// Every episode starts at s_0.
+    fn sample_start(&self, _rng: &mut crate::rng::Rng) -> [f32; 2] {
+        self.start()
+    }
+
+    /// An action is a displacement clipped to ±`MAX_ACTION` per axis.
+    fn step_reach(&self) -> Option<f32> {
+        Some(MAX_ACTION)
+    }
+
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
         Some((TARGET.to_vec(), TARGET_RADIUS))
     }
@@ -145,6 +155,10 @@ impl Env for TwoRooms {
 impl Planar for TwoRooms {
     fn point(&self, s: &[f32; 2]) -> (f32, f32) {
         (s[0], s[1])
+    }
+
+    fn ball_point(&self, center: &[f32]) -> (f32, f32) {
+        (center[0], center[1])
     }
 
     /// The 2 × 1 rectangle, its border and the wall below the door drawn 0.02 thick.

@@ -138,14 +138,6 @@ pub struct Cell {
 impl Cell {
     /// What a picture of the cell draws its runs over: its environment's scene.
     pub fn scene(&self) -> Result<crate::env::Scene> {
-        /// The scene of whichever environment the job names.
-        struct SceneOf;
-        impl crate::envs::Visit for SceneOf {
-            type Output = crate::env::Scene;
-            fn on<E: crate::env::Planar>(self, env: E) -> Result<crate::env::Scene> {
-                Ok(env.scene())
-            }
-        }
         match &self.job {
             Job::Vanilla(j) => Ok(crate::env::Planar::scene(&crate::envs::maze::Maze::new(
                 &j.maze,
@@ -153,10 +145,53 @@ impl Cell {
             // PointMaze's scene is its map's (no MuJoCo needed to draw committed rows).
             Job::Pbcs(j) => match j.env.point_map() {
                 Some(map) => Ok(crate::envs::point_scene(map)),
-                None => j.env.visit(&j.maze, SceneOf),
+                None => Ok(crate::with_env!(j.env.build(&j.maze)?, |env| {
+                    crate::env::Planar::scene(&env)
+                })),
             },
         }
     }
+}
+
+/// The most seeds a cell runs: each is a run of seconds to hours, so more is a typo (and the
+/// plan lists every run in memory).
+pub const MAX_SEEDS: u64 = 100_000;
+
+/// A grid's seeds `first_seed`, …, `first_seed + count − 1` (`field` names the count): 1 to
+/// [`MAX_SEEDS`] of them, the last one a `u64`, and each of `pictures` (the `picture_seeds`
+/// the same file gives) among them, so that no picture is asked for and silently not drawn.
+///
+/// ```
+/// use pbcs::experiment::check_seeds;
+/// assert!(check_seeds("seeds", 0, 10, &[0]).is_ok());
+/// for (first, count, pictures) in [(0, 0, vec![]), (0, u64::MAX, vec![]), (u64::MAX, 1, vec![]), (0, 2, vec![50])] {
+///     assert!(check_seeds("seeds", first, count, &pictures).is_err());
+/// }
+/// ```
+pub fn check_seeds(field: &str, first_seed: u64, count: u64, pictures: &[u64]) -> Result<()> {
+    if !(1..=MAX_SEEDS).contains(&count) {
+        return Err(Error::invalid(
+            field,
+            format!("{count}: needs 1 to {MAX_SEEDS} seeds (each is a whole run; more is a typo)"),
+        ));
+    }
+    let Some(end) = first_seed.checked_add(count) else {
+        return Err(Error::invalid(
+            "first_seed",
+            format!("{first_seed} + {count} seeds passes the largest seed, 2^64 − 1"),
+        ));
+    };
+    if let Some(p) = pictures.iter().find(|p| !(first_seed..end).contains(p)) {
+        return Err(Error::invalid(
+            "picture_seeds",
+            format!(
+                "{p} is not one of the grid's seeds {first_seed}..{} (its picture would never \
+                 be drawn)",
+                end - 1
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A resolved experiment: every cell's job, the seeds, the profile.

@@ -82,8 +82,8 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Vanilla,
-            site: Site::Maze(s.maze),
-            maze_seed: s.maze_seed,
+            site: Site::of(job.env, &job.maze),
+            maze_seed: layout_seed(job.env, &job.maze),
             seed: job.seed,
             learner: job.learner.record_name(),
             gamma: job.learner.gamma,
@@ -111,8 +111,8 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Pbcs,
-            site: pbcs_site(job),
-            maze_seed: layout_seed(job),
+            site: Site::of(job.env, &job.maze),
+            maze_seed: layout_seed(job.env, &job.maze),
             seed: r.seed,
             learner: r.learner,
             gamma: r.gamma,
@@ -132,18 +132,10 @@ impl RawRow {
     }
 }
 
-/// Where a PBCS job runs.
-fn pbcs_site(job: &PbcsJob) -> Site {
-    match job.env {
-        crate::envs::EnvName::Maze => Site::Maze(job.maze.size),
-        other => Site::Env(other),
-    }
-}
-
-/// The maze layout seed of a PBCS job; 0 for another environment.
-fn layout_seed(job: &PbcsJob) -> u64 {
-    if job.env.is_maze() {
-        job.maze.seed
+/// The maze layout seed of a job on `env`; 0 for another environment.
+fn layout_seed(env: crate::envs::EnvName, maze: &crate::envs::maze::MazeConfig) -> u64 {
+    if env.is_maze() {
+        maze.seed
     } else {
         0
     }
@@ -170,7 +162,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
     let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
         Job::Vanilla(j) => (
             Kind::Vanilla,
-            j.maze.seed,
+            layout_seed(j.env, &j.maze),
             j.learner.record_name(),
             j.learner.gamma,
             false,
@@ -179,7 +171,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ),
         Job::Pbcs(j) => (
             Kind::Pbcs,
-            layout_seed(j),
+            layout_seed(j.env, &j.maze),
             j.learner.record_name(),
             j.learner.gamma,
             j.phase2.chaining,

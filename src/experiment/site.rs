@@ -34,6 +34,14 @@ pub enum Site {
 }
 
 impl Site {
+    /// Where a job runs: its environment, and the maze's size when that is the maze.
+    pub fn of(env: EnvName, maze: &crate::envs::maze::MazeConfig) -> Site {
+        match env {
+            EnvName::Maze => Site::Maze(maze.size),
+            other => Site::Env(other),
+        }
+    }
+
     /// The cell id's suffix: `maze<N>` or the environment's name.
     pub fn id(self) -> String {
         match self {

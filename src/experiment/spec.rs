@@ -3,8 +3,8 @@
 
 use super::declared::{check_figures, check_report};
 use super::site::paper_run;
-use super::{Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
-use crate::config::{PbcsJob, TrainJob};
+use super::{check_seeds, Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
+use crate::config::{Located, PbcsJob, TrainJob};
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::validate::Check;
@@ -382,25 +382,25 @@ impl ExperimentSpec {
     }
 }
 
-/// A PBCS job of a grid runs where its site says: the site sets `env` (and the maze's size),
-/// so a job that names an environment itself is refused, naming `env` and `what` (the
-/// method).
-fn place(job: &mut PbcsJob, site: Site, what: &str) -> Result<()> {
-    if !job.env.is_maze() {
+/// A job of a grid runs where its site says: the site sets `env` (and the maze's size), so a
+/// job that names an environment itself is refused, naming `env` and `what` (the method).
+fn place(job: &mut impl Located, site: Site, what: &str) -> Result<()> {
+    let (seed, env, maze) = job.location_mut();
+    if !env.is_maze() {
         return Err(Error::invalid(
             "env",
             format!(
                 "{what}: \"{}\" — a grid's rows say where its methods run: list the \
                  environment in the experiment's `envs` instead",
-                job.env.name()
+                env.name()
             ),
         ));
     }
     match site {
-        Site::Maze(n) => job.maze.size = n,
-        Site::Env(e) => job.env = e,
+        Site::Maze(n) => maze.size = n,
+        Site::Env(e) => *env = e,
     }
-    job.seed = 0;
+    *seed = 0;
     Ok(())
 }
 
@@ -418,26 +418,16 @@ fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, site: Site) -> Resu
             ),
         )
     };
-    let job = match (m.kind, site) {
-        (Kind::Vanilla, Site::Maze(n)) => {
+    let method = format!("method `{}`", m.name);
+    let job = match m.kind {
+        Kind::Vanilla => {
             let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
-            j.maze.size = n;
-            j.seed = 0;
+            place(&mut j, site, &method)?;
             Job::Vanilla(j)
         }
-        (Kind::Vanilla, Site::Env(e)) => {
-            return Err(Error::invalid(
-                "envs",
-                format!(
-                    "{where_}: vanilla baselines run on the maze only, not `{}` (give the \
-                     method `envs = []`)",
-                    e.name()
-                ),
-            ))
-        }
-        (Kind::Pbcs, _) => {
+        Kind::Pbcs => {
             let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
-            place(&mut j, site, &format!("method `{}`", m.name))?;
+            place(&mut j, site, &method)?;
             Job::Pbcs(j)
         }
     };
@@ -462,10 +452,14 @@ impl Experiment {
             .map(|s| s.to_string_lossy().into_owned())
             .ok_or_else(|| Error::parse(path, "no file name"))?;
         let prof = spec.profile(path, profile)?;
+        check_seeds("seeds", spec.first_seed, spec.seeds, &spec.picture_seeds)?;
         let seed_count = prof.seeds.unwrap_or(spec.seeds);
-        if seed_count == 0 {
-            return Err(Error::invalid("seeds", "must be at least 1"));
-        }
+        let picture_seeds = (prof.picture_seeds.clone()).unwrap_or(spec.picture_seeds.clone());
+        let field = match profile {
+            Some(p) => format!("profile.{p}.seeds"),
+            None => "seeds".to_string(),
+        };
+        check_seeds(&field, spec.first_seed, seed_count, &[])?;
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
         let envs = prof.envs.clone().unwrap_or(spec.envs.clone());
         let sites: Vec<Site> = (mazes.iter().map(|&n| Site::Maze(n)))
@@ -494,7 +488,7 @@ impl Experiment {
             first_seed: spec.first_seed,
             seed_count,
             seeds_by_maze,
-            picture_seeds: prof.picture_seeds.unwrap_or(spec.picture_seeds),
+            picture_seeds,
             registered: spec.registered.map(|r| super::Registration {
                 preset_path: path.parent().unwrap_or(Path::new(".")).join(&r.preset),
                 ..r
@@ -532,9 +526,7 @@ impl Experiment {
         check_method_name(name)?;
         let sites: Vec<Site> = sizes.iter().map(|&n| Site::Maze(n)).collect();
         check_sites(&sites)?;
-        if seeds == 0 {
-            return Err(Error::invalid("seeds", "must be at least 1"));
-        }
+        check_seeds("--seeds", 0, seeds, &default_picture_seeds())?;
         let cells = sites
             .iter()
             .map(|&site| {

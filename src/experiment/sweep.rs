@@ -4,11 +4,12 @@
 use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
-use crate::runs::{run_outcome, TrainRun};
+use crate::runs::run_outcome;
+use crate::validate::Check;
 use std::path::Path;
 
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
-/// computed without writing anything ([`TrainRun::compute`], [`run_outcome`]), then only
+/// computed without writing anything ([`crate::runs::train_outcome`], [`run_outcome`]), then only
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
 /// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS, and vanilla runs judged by
 /// PBCS's protocol), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
@@ -23,7 +24,7 @@ pub fn run_cell_seed(
     let job = cell.job.with_seed(seed);
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
-            let run = TrainRun::compute(j, kernel, |_, _| {})?;
+            let run = crate::runs::train_outcome(&j.clone().valid()?, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
             let final_eval = &run.result.final_eval;
             if !final_eval.is_empty() {
@@ -33,7 +34,7 @@ pub fn run_cell_seed(
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
-            let run = run_outcome(j, kernel, |_, _| {})?;
+            let run = run_outcome(&j.clone().valid()?, kernel, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
             let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)
@@ -134,7 +135,8 @@ pub fn sweep(
     Ok(rows.into_iter().flatten().collect())
 }
 
-/// `f` on every item, `jobs` at a time (a pool of `jobs` threads), the results in the items'
+/// `f` on every item, `jobs` at a time (a pool of `jobs` threads, at most one per item), the
+/// results in the items'
 /// order. Items start in their order (each free thread takes the next one), so an interrupted
 /// sweep has finished a prefix of its plan: with the table's plan, whole mazes, smallest first.
 /// After the first error no new item starts, and that error is returned. Every run is
@@ -145,8 +147,9 @@ pub fn run_parallel<T: Sync, R: Send>(
     f: impl Fn(&T) -> Result<R> + Sync,
 ) -> Result<Vec<R>> {
     use rayon::prelude::*;
+    // No more threads than items: `--jobs 1000000` on ten runs starts ten.
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
+        .num_threads(jobs.clamp(1, items.len().max(1)))
         .build()
         .map_err(|e| Error::invalid("jobs", e.to_string()))?;
     let mut done: Vec<(usize, R)> = pool.install(|| {

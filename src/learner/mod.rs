@@ -220,10 +220,12 @@ impl Check for LearnerConfig {
                 return Err(Error::invalid(field, format!("must be ≥ 0, got {v}")));
             }
         }
-        if self.actor_update == ActorUpdate::Argmax && self.argmax_samples == 0 {
+        if self.argmax_samples == 0 {
+            // Unused by the gradient actor, but a job that says 0 says something it cannot
+            // mean: refused whatever the actor, so switching the actor never makes it bad.
             return Err(Error::invalid(
                 "learner.argmax_samples",
-                "must be at least 1 for the argmax actor",
+                "must be at least 1 (the argmax actor's sampled actions)",
             ));
         }
         Ok(())

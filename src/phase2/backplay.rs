@@ -31,15 +31,11 @@ pub trait Backplayer {
         let _ = k;
     }
     /// Whether this problem ran out of its step budget (then its result is discarded).
-    fn exhausted(&self) -> bool {
-        false
-    }
+    fn exhausted(&self) -> bool;
     /// Whether B_ε(τ_k) is known to be clear of obstacles (then a partial failure there is
-    /// the policy's, not a wall's). Default: unknown.
-    fn ball_is_clear(&self, k: usize) -> bool {
-        let _ = k;
-        false
-    }
+    /// the policy's, not a wall's; `false` where it is not known, which `phase2.stop_at_failure`
+    /// then never stops at).
+    fn ball_is_clear(&self, k: usize) -> bool;
 }
 
 /// What Backplay needs of the procedure ([`super::Phase2Config::walk`]): α, how K walks and

@@ -12,14 +12,14 @@
 use super::backplay;
 use super::task::{SkillTask, StepCounts};
 use super::{
-    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Skill, SkillChain, TraceRow,
+    Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Ready, Skill, SkillChain,
+    TraceRow,
 };
 use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
 use crate::rng::{Rng, Seeds, Stream};
-use crate::validate::Check;
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
 
@@ -38,7 +38,7 @@ pub fn chain_skills<E: Env>(
     env: &E,
     tau: &[E::State],
     learner: &LearnerConfig,
-    config: &Phase2Config,
+    config: Ready<'_, E>,
     seeds: &Seeds,
     spent: u64,
     kernel: Kernel,
@@ -58,21 +58,20 @@ pub fn chain_skills_with_starts<E: Env>(
     tau: &[E::State],
     starts: Option<&dyn SampleBall<E::State>>,
     learner: &LearnerConfig,
-    config: &Phase2Config,
+    ready: Ready<'_, E>,
     seeds: &Seeds,
     spent: u64,
     kernel: Kernel,
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
-    config.check()?;
-    config.require_hooks(env)?;
+    let config = ready.settings();
     let starts = super::starts::archive_starts(config, starts)?;
     let chainer = Chainer::new(
         env,
         tau,
         starts,
         learner,
-        config,
+        ready,
         seeds,
         spent,
         kernel,
@@ -101,6 +100,8 @@ pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     obs: Vec<Vec<f32>>,
     learner: &'a LearnerConfig,
     config: &'a Phase2Config,
+    /// `config`, checked against `env`, for each learning problem ([`SkillTask::new`]).
+    ready: Ready<'a, E>,
     seeds: &'a Seeds,
     /// The layer kernel of every learner and of the chain.
     kernel: Kernel,
@@ -123,7 +124,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         tau: &'a [E::State],
         starts: Option<&'a dyn SampleBall<E::State>>,
         learner: &'a LearnerConfig,
-        config: &'a Phase2Config,
+        ready: Ready<'a, E>,
         seeds: &'a Seeds,
         spent: u64,
         kernel: Kernel,
@@ -142,7 +143,8 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                 })
                 .collect(),
             learner,
-            config,
+            config: ready.settings(),
+            ready,
             seeds,
             kernel,
             spent: Cell::new(spent),
@@ -231,7 +233,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         ];
         let budget = config.max_env_steps.saturating_sub(self.spent.get());
         let goal = config.goal(env, &self.obs, lo + t);
-        let mut task = SkillTask::new(env, config, states, goal, t, learner, rngs, budget)?
+        let mut task = SkillTask::new(env, self.ready, states, goal, t, learner, rngs, budget)
             .with_entries(entries.to_vec())
             .with_starts(self.starts);
         let before = self.spent.get();

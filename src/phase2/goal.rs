@@ -185,7 +185,9 @@ impl Goal {
 
     /// The last skill's goal: the environment's success region ([`Env::success_region`]), or,
     /// for an environment that does not describe one, its success with Φ measured to τ_N
-    /// (`tau_n`) and bounded by 1/ε.
+    /// (`tau_n`) and bounded by 1/ε. (PBCS's runs ask for it with
+    /// `phase2.last_goal = "success_region"`, which such an environment refuses before any
+    /// work: [`crate::env::Capability::SuccessRegion`].)
     pub fn last<E: Env>(env: &E, tau_n: &[f32], epsilon: f32) -> Self {
         let (center, radius) = env
             .success_region()

@@ -27,7 +27,8 @@ pub mod starts;
 pub mod task;
 
 pub use procedure::{
-    ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, Phase2Config, SkillInit, Stopping,
+    ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, Phase2Config, Ready, SkillInit,
+    Stopping,
 };
 pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 

@@ -375,11 +375,30 @@ impl Phase2Config {
         Ok(())
     }
 
+    /// These settings checked ([`Check`]) and checked against `env`
+    /// ([`Phase2Config::require_hooks`]): what phase 2's entry points take ([`Ready`]).
+    pub fn ready<E: Env + ?Sized>(&self, env: &E) -> Result<Ready<'_, E>> {
+        self.check()?;
+        self.ready_checked(env)
+    }
+
+    /// [`Phase2Config::ready`] for settings already checked (a part of a
+    /// [`crate::validate::Valid`] job): the hooks only.
+    pub(crate) fn ready_checked<E: Env + ?Sized>(&self, env: &E) -> Result<Ready<'_, E>> {
+        self.require_hooks(env)?;
+        Ok(Ready {
+            config: self,
+            env: std::marker::PhantomData,
+        })
+    }
+
     /// Refuses, naming the setting and the hook, a setting that needs a hook of [`Env`] that
     /// `env` does not offer: ball starts and the chain's verification need
     /// [`Env::ball_starts`], `stop_at_failure` and hand-over moves [`Env::clear_balls`],
-    /// `shorten` [`Env::connector`]. (Before, each silently did something else: exact
-    /// starts, no stop, no shortening.)
+    /// `shorten` [`Env::connector`], path limits [`Env::step_reach`], the last skill aiming at
+    /// the success region [`Env::success_region`]. (Before, each silently did something else:
+    /// exact starts, no stop, no shortening, the smallest action bound as a step's reach, τ_N
+    /// as the target.)
     pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
         use crate::env::Capability;
         let i = &self.ideas;
@@ -406,6 +425,16 @@ impl Phase2Config {
         }
         if i.shorten {
             Capability::Connect.require(env, "phase2.shorten")?;
+        }
+        if let Some(limit) = i.episode_limit {
+            let setting = match limit {
+                EpisodeLimit::Every(_) => "phase2.path_limit",
+                EpisodeLimit::Greedy(_) => "phase2.test_path_limit",
+            };
+            Capability::StepReach.require(env, setting)?;
+        }
+        if self.last_goal == LastGoal::SuccessRegion {
+            Capability::SuccessRegion.require(env, "phase2.last_goal = \"success_region\"")?;
         }
         Ok(())
     }
@@ -471,5 +500,29 @@ impl Phase2Config {
     /// Greedy episodes of a hand-over try: `verify_skills`, or β.
     pub fn handover_episodes(&self) -> usize {
         self.ideas.verify_skills.unwrap_or(self.beta)
+    }
+}
+
+/// Phase 2's settings, checked and checked against the environment they run on: made once per
+/// run by [`Phase2Config::ready`] (or by a run from its valid job), taken by
+/// [`super::chain_skills`] and [`super::SkillTask::new`], which check nothing again.
+#[derive(Debug)]
+pub struct Ready<'a, E: ?Sized> {
+    config: &'a Phase2Config,
+    env: std::marker::PhantomData<fn(&E)>,
+}
+
+impl<E: ?Sized> Clone for Ready<'_, E> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<E: ?Sized> Copy for Ready<'_, E> {}
+
+impl<'a, E: ?Sized> Ready<'a, E> {
+    /// The settings.
+    pub fn settings(self) -> &'a Phase2Config {
+        self.config
     }
 }

@@ -54,7 +54,10 @@ fn episode_limits<E: Env>(
     let Some(p) = p else {
         return vec![config.max_steps; lengths.len()];
     };
-    let a = env.step_reach();
+    // Checked before any work ([`Phase2Config::require_hooks`]): path limits need the reach.
+    let a = env
+        .step_reach()
+        .expect("path limits need Env::step_reach (checked by Ready)");
     lengths
         .iter()
         .map(|l| {
@@ -113,25 +116,26 @@ pub struct SkillTask<'a, E: Env> {
 impl<'a, E: Env> SkillTask<'a, E> {
     /// The task of reaching `goal` (the goal of τ_T, `t`: [`Phase2Config::goal`]) along
     /// `states` with `learner`, whose actions live in [`Phase2Config::learner_bounds`]; random
-    /// streams for starts, noise and replay sampling are passed in.
+    /// streams for starts, noise and replay sampling are passed in. The settings come checked
+    /// against `env` ([`super::Ready`]).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         env: &'a E,
-        config: &'a Phase2Config,
+        config: super::Ready<'a, E>,
         states: &'a [E::State],
         goal: Goal,
         t: usize,
         learner: Learner,
         rngs: [Rng; 3],
         budget: u64,
-    ) -> crate::error::Result<Self> {
-        config.require_hooks(env)?;
+    ) -> Self {
+        let config = config.settings();
         let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
         let lengths = lengths_to_goal(env, &states[..=t]);
         let (train_limit, greedy_limit) = config.path_limits();
-        Ok(SkillTask {
+        SkillTask {
             env,
             ball: match config.start {
                 // Archive starts replace it ([`SkillTask::with_starts`]).
@@ -166,7 +170,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
             limits: episode_limits(env, config, train_limit, &lengths),
             test_limits: episode_limits(env, config, greedy_limit, &lengths),
             on_event: None,
-        })
+        }
     }
 
     /// Draws half of the starts at K = 0 from `entries` (where an executed chain entered

@@ -6,7 +6,7 @@ use crate::config::PbcsJob;
 use crate::env::Planar;
 use crate::env::{evaluation_starts, Env, Scene};
 use crate::envs::maze::Maze;
-use crate::envs::{EnvName, Visit};
+use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::phase2::SkillChain;
@@ -144,14 +144,17 @@ pub fn eval_chain(
     }
     let (job, chain) = load_saved_job(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
-    let work = EvalOn {
-        chain_dir,
-        chain: &chain,
-        job: &job,
-        episodes,
-        seed,
-    };
-    let (rows, rollout_paths, circles, scene) = job.env.visit(&job.maze, work)?;
+    let manifest = chain_dir.join("manifest.toml");
+    let (rows, rollout_paths, circles, scene) =
+        crate::with_env!(job.env.build(&job.maze)?, |env| {
+            chain.check_env(&env, &manifest)?;
+            let (rows, rollouts) = evaluate_chain(&env, &chain, &job, episodes, seed)?;
+            let points: Vec<Vec<(f32, f32)>> = rollouts
+                .iter()
+                .map(|r| r.iter().map(|s| env.point(s)).collect())
+                .collect();
+            (rows, points, ball_circles(&env, &chain), env.scene())
+        });
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
     let picture = PictureData {
@@ -170,37 +173,6 @@ pub fn eval_chain(
         picture,
         scene,
     })
-}
-
-/// [`eval_chain`] on the environment the chain's job names: the episodes, the drawn
-/// rollouts' points and the scene.
-struct EvalOn<'a> {
-    chain_dir: &'a Path,
-    chain: &'a SkillChain,
-    job: &'a PbcsJob,
-    episodes: usize,
-    seed: u64,
-}
-
-impl Visit for EvalOn<'_> {
-    type Output = (
-        Vec<EvalEpisode>,
-        Vec<Vec<(f32, f32)>>,
-        Vec<((f32, f32), f32)>,
-        Scene,
-    );
-
-    fn on<E: Planar>(self, env: E) -> Result<Self::Output> {
-        let manifest = self.chain_dir.join("manifest.toml");
-        self.chain.check_env(&env, &manifest)?;
-        let (rows, rollouts) =
-            evaluate_chain(&env, self.chain, self.job, self.episodes, self.seed)?;
-        let points = rollouts
-            .iter()
-            .map(|r| r.iter().map(|s| env.point(s)).collect())
-            .collect();
-        Ok((rows, points, ball_circles(&env, self.chain), env.scene()))
-    }
 }
 
 impl ChainEval {

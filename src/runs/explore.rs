@@ -4,14 +4,13 @@ use super::{claim, write_timing};
 use crate::config::ExploreJob;
 use crate::env::Env;
 use crate::env::Planar;
-use crate::envs::maze::Maze;
-use crate::envs::{EnvName, Visit};
-use crate::error::{Error, Result};
+use crate::envs::EnvName;
+use crate::error::Result;
 use crate::phase1::{explore, Exploration, NO_PARENT};
-use crate::plot::{render_scene, MazePicture, SVG_MAX_POINTS};
+use crate::plot::{render_scene, Picture, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
-use crate::validate::Check;
+use crate::validate::Valid;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -37,11 +36,10 @@ pub struct ExploreSummary {
     pub env: EnvName,
 }
 
-/// One phase-1 run's outcome ([`ExploreRun::compute`] on the maze, [`ExploreRun::compute_on`]
-/// on any planar environment): the summary row, everything exploration found and the
-/// wall-clock seconds; [`ExploreRun::write`] writes it.
+/// One phase-1 run's outcome ([`ExploreRun::compute`]): the summary row, everything
+/// exploration found and the wall-clock seconds; [`ExploreRun::write`] writes it.
 #[derive(Debug, Clone)]
-pub struct ExploreRun<E: Planar = Maze> {
+pub struct ExploreRun<E: Planar> {
     /// The environment explored.
     pub env: E,
     /// The one-row summary.
@@ -52,33 +50,15 @@ pub struct ExploreRun<E: Planar = Maze> {
     pub seconds: f64,
 }
 
-impl ExploreRun<Maze> {
-    /// [`ExploreRun::compute_on`] the maze of `job` (the Python package's phase 1); a job
-    /// naming another environment is refused ([`run_explore`] runs any).
-    pub fn compute(job: &ExploreJob, progress: impl FnMut(u64, usize)) -> Result<ExploreRun> {
-        if !job.env.is_maze() {
-            return Err(Error::invalid(
-                "env",
-                format!(
-                    "\"{}\": this phase 1 is of the maze only (`pbcs explore --env {0}` runs it)",
-                    job.env.name()
-                ),
-            ));
-        }
-        job.check()?;
-        ExploreRun::compute_on(Maze::new(&job.maze)?, job, progress)
-    }
-}
-
 impl<E: Planar> ExploreRun<E> {
-    /// Runs phase 1 of `job` on `env`; `progress(steps, archive_len)` is called during the
-    /// run. Writes nothing.
-    pub fn compute_on(
+    /// Runs phase 1 of `job` on `env` (the environment `job` names: [`run_explore`] makes it
+    /// from the name); `progress(steps, archive_len)` is called during the run. Writes
+    /// nothing.
+    pub fn compute(
         env: E,
-        job: &ExploreJob,
+        job: &Valid<ExploreJob>,
         progress: impl FnMut(u64, usize),
     ) -> Result<ExploreRun<E>> {
-        job.check()?;
         let mut rng = Seeds::new(job.seed).stream(Stream::Explore);
         let clock = Instant::now();
         let found = explore(&env, &job.explore, &mut rng, progress)?;
@@ -126,31 +106,20 @@ impl<E: Planar> ExploreRun<E> {
 }
 
 /// Runs phase 1 for `job` into `out` on the environment it names: claims the folder (writing
-/// `config.toml`, the resolved job) before any work, then [`ExploreRun::compute_on`] and
+/// `config.toml`, the resolved job) before any work, then [`ExploreRun::compute`] and
 /// [`ExploreRun::write`]. `progress(steps, archive_len)` is called during the run.
 pub fn run_explore(
-    job: &ExploreJob,
+    job: &Valid<ExploreJob>,
     out: &Path,
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
-    /// [`run_explore`] on the environment the job names.
-    struct Into<'a, P> {
-        job: &'a ExploreJob,
-        out: &'a Path,
-        progress: P,
-    }
-    impl<P: FnMut(u64, usize)> Visit for Into<'_, P> {
-        type Output = (ExploreSummary, f64);
-        fn on<E: Planar>(self, env: E) -> Result<(ExploreSummary, f64)> {
-            claim(self.job, self.out)?;
-            let run = ExploreRun::compute_on(env, self.job, self.progress)?;
-            run.write(self.job, self.out)?;
-            Ok((run.summary, run.seconds))
-        }
-    }
-    job.check()?;
-    let work = Into { job, out, progress };
-    job.env.visit(&job.maze, work)
+    let built = job.env.build(&job.maze)?;
+    claim(job, out)?;
+    crate::with_env!(built, |env| {
+        let run = ExploreRun::compute(env, job, progress)?;
+        run.write(job, out)?;
+        Ok((run.summary, run.seconds))
+    })
 }
 
 /// `trajectory.csv`: `t, x, y, a0, a1`, where `(a0, a1)` led from τ_t to τ_{t+1} (empty on
@@ -226,7 +195,7 @@ pub(crate) fn render_exploration<E: Planar>(
         .iter()
         .map(|s| env.point(s))
         .collect();
-    let picture = MazePicture {
+    let picture = Picture {
         title: format!(
             "phase 1, {}, seed {}: {} steps, |τ| = {}",
             job.env.label(&job.maze),
@@ -236,7 +205,7 @@ pub(crate) fn render_exploration<E: Planar>(
         ),
         points: &points,
         tau_paths: vec![&path],
-        ..MazePicture::default()
+        ..Picture::default()
     };
     render_scene(
         &env.scene(),

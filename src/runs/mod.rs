@@ -21,9 +21,10 @@ pub use explore::{run_explore, ExploreRun, ExploreSummary};
 use pbcs::ball_circles;
 pub use pbcs::DRAWN_ROLLOUTS;
 pub use pbcs::{run_outcome, run_pbcs, PbcsRun, RunOutcome, RunRecord};
-pub use train::{run_train, TrainRun, TrainSummary};
+pub use train::{run_train, train_outcome, TrainRun, TrainSummary};
 
 use crate::config::{MazeConfig, PbcsJob, Preset, TrainJob};
+use crate::envs::EnvName;
 use crate::error::Result;
 use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
@@ -55,13 +56,33 @@ pub fn write_timing(
     crate::record::Timing::now(seconds, env_steps, kernel.map(Kernel::name)).write(path)
 }
 
-/// The default output folder of a run: `out/<command>/maze<N>-m<maze seed>-s<seed><suffix>`
-/// (`pbcs explore`, `train`, `run` without `--out`).
-pub fn default_out(command: &str, maze: &MazeConfig, seed: u64, suffix: &str) -> PathBuf {
-    PathBuf::from(format!(
-        "out/{command}/maze{}-m{}-s{seed}{suffix}",
-        maze.size, maze.seed
-    ))
+/// The default output folder of a run (`pbcs explore`, `train`, `run` without `--out`):
+/// `out/<command>/<where>-s<seed><suffix>`, where is `maze<N>-m<layout seed>` for the maze and
+/// the environment's name for another; `command` may hold a subfolder (`run/fast`). The one
+/// place run folders are named.
+///
+/// ```
+/// use pbcs::config::MazeConfig;
+/// use pbcs::envs::EnvName;
+/// use pbcs::runs::default_out;
+/// let maze = MazeConfig { size: 4, seed: 1, ..MazeConfig::default() };
+/// let out = default_out("run/fast", EnvName::Maze, &maze, 2, "-exact");
+/// assert_eq!(out, std::path::Path::new("out/run/fast/maze4-m1-s2-exact"));
+/// let out = default_out("explore", EnvName::Rooms, &maze, 0, "");
+/// assert_eq!(out, std::path::Path::new("out/explore/rooms-s0"));
+/// ```
+pub fn default_out(
+    command: &str,
+    env: EnvName,
+    maze: &MazeConfig,
+    seed: u64,
+    suffix: &str,
+) -> PathBuf {
+    let place = match env {
+        EnvName::Maze => format!("maze{}-m{}", maze.size, maze.seed),
+        other => other.name().to_string(),
+    };
+    PathBuf::from(format!("out/{command}/{place}-s{seed}{suffix}"))
 }
 
 /// The part of a PBCS run's default folder that names its departures from the preset:

@@ -5,19 +5,18 @@ use super::{
 };
 use crate::config::PbcsJob;
 use crate::env::{Planar, SampleBall};
-use crate::envs::maze::Maze;
-use crate::envs::{EnvName, Visit};
-use crate::error::{Error, Result};
+use crate::envs::EnvName;
+use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase1::{explore, Exploration};
 use crate::phase2::{
-    chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, SkillChain,
+    chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, Ready, SkillChain,
     StartMode, Variant,
 };
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_atomic, write_csv, write_record};
 use crate::rng::{Seeds, Stream};
-use crate::validate::Check;
+use crate::validate::Valid;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -70,11 +69,10 @@ pub struct RunRecord {
 /// Chain rollouts drawn in the picture.
 pub const DRAWN_ROLLOUTS: usize = 10;
 
-/// One PBCS run's outcome ([`PbcsRun::compute`] on the maze, [`PbcsRun::compute_on`] on any
-/// planar environment): the record, τ, the chain and its trace, the evaluation's rollouts;
-/// [`PbcsRun::write`] writes it.
+/// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
+/// the evaluation's rollouts; [`PbcsRun::write`] writes it.
 #[derive(Debug, Clone)]
-pub struct PbcsRun<E: Planar = Maze> {
+pub struct PbcsRun<E: Planar> {
     /// The environment solved.
     pub env: E,
     /// The `record.csv` row.
@@ -95,53 +93,42 @@ pub struct PbcsRun<E: Planar = Maze> {
     pub seconds: f64,
 }
 
-impl PbcsRun<Maze> {
-    /// [`PbcsRun::compute_on`] the maze of `job` (the benchmarks and tests).
-    /// A job naming another environment is refused here; [`run_outcome`] (sweeps) and
-    /// [`run_pbcs`] (`pbcs run`) run any.
-    pub fn compute(
-        job: &PbcsJob,
-        kernel: Kernel,
-        progress: impl FnMut(usize, Progress),
-    ) -> Result<PbcsRun> {
-        if !job.env.is_maze() {
-            return Err(Error::invalid(
-                "env",
-                format!(
-                    "\"{}\": this run is of the maze only (`pbcs run --env {0}` and experiments \
-                     run any environment)",
-                    job.env.name()
-                ),
-            ));
-        }
-        job.check()?;
-        PbcsRun::compute_on(Maze::new(&job.maze)?, job, kernel, progress)
-    }
-}
-
 impl<E: Planar> PbcsRun<E> {
     /// Refuses, before any work, a `job` that needs a hook `env` lacks: phase 2's
     /// ([`crate::phase2::Phase2Config::require_hooks`]) and the evaluation's starts in
-    /// B_ε(s_0) (ball starts).
-    pub fn require_hooks(env: &E, job: &PbcsJob) -> Result<()> {
-        job.phase2.require_hooks(env)?;
+    /// B_ε(s_0) (ball starts). Returns phase 2's settings checked against `env`.
+    pub fn require_hooks<'j>(env: &E, job: &'j Valid<PbcsJob>) -> Result<Ready<'j, E>> {
+        let ready = job.phase2.ready_checked(env)?;
         crate::env::Capability::SampleBall
-            .require(env, "phase2.epsilon (the evaluation's B_ε(s_0))")
+            .require(env, "phase2.epsilon (the evaluation's B_ε(s_0))")?;
+        Ok(ready)
     }
 
-    /// Runs PBCS for `job` on `env`: phase 1, phase 2
+    /// Runs PBCS for `job` on `env` (the environment `job` names: [`run_pbcs`] and
+    /// [`run_outcome`] make it from the name): phase 1, phase 2
     /// ([`crate::phase2::chain_skills_with_starts`], with the archive's starts when the job
-    /// asks for them), then the chain's
-    /// evaluation from starts uniform in B_ε(s_0), every network on `kernel`.
-    /// `progress(skill, report)` is called during phase 2. Writes nothing.
-    pub fn compute_on(
+    /// asks for them), then the chain's evaluation from starts uniform in B_ε(s_0), every
+    /// network on `kernel`. A hook `env` lacks is refused before phase 1
+    /// ([`PbcsRun::require_hooks`]). `progress(skill, report)` is called during phase 2.
+    /// Writes nothing.
+    pub fn compute(
         env: E,
-        job: &PbcsJob,
+        job: &Valid<PbcsJob>,
         kernel: Kernel,
         progress: impl FnMut(usize, Progress),
     ) -> Result<PbcsRun<E>> {
-        job.check()?;
-        Self::require_hooks(&env, job)?;
+        let ready = Self::require_hooks(&env, job)?;
+        Self::compute_ready(env, job, ready, kernel, progress)
+    }
+
+    /// [`PbcsRun::compute`] with the hooks checked ([`PbcsRun::require_hooks`]).
+    fn compute_ready(
+        env: E,
+        job: &Valid<PbcsJob>,
+        ready: Ready<'_, E>,
+        kernel: Kernel,
+        progress: impl FnMut(usize, Progress),
+    ) -> Result<PbcsRun<E>> {
         let seeds = Seeds::new(job.seed);
         let clock = Instant::now();
         let mut rng = seeds.stream(Stream::Explore);
@@ -155,7 +142,7 @@ impl<E: Planar> PbcsRun<E> {
             &tau,
             archived.as_ref().map(|a| a as &dyn SampleBall<E::State>),
             &job.learner,
-            &job.phase2,
+            ready,
             &seeds,
             found.env_steps,
             kernel,
@@ -295,24 +282,21 @@ pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32,
 
 /// Runs PBCS for `job` into `out` on the environment it names ([`crate::envs`]): refuses a
 /// setting the environment lacks a hook for ([`PbcsRun::require_hooks`]), claims the folder
-/// (writing `config.toml`) before any work, then [`PbcsRun::compute_on`] and
+/// (writing `config.toml`) before any work, then [`PbcsRun::compute`] and
 /// [`PbcsRun::write`]. `progress(skill, report)` is called during phase 2.
 pub fn run_pbcs(
-    job: &PbcsJob,
+    job: &Valid<PbcsJob>,
     kernel: Kernel,
     out: &Path,
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
-    job.check()?;
-    job.env.visit(
-        &job.maze,
-        RunInto {
-            job,
-            kernel,
-            out,
-            progress,
-        },
-    )
+    crate::with_env!(job.env.build(&job.maze)?, |env| {
+        let ready = PbcsRun::require_hooks(&env, job)?;
+        claim(job, out)?;
+        let run = PbcsRun::compute_ready(env, job, ready, kernel, progress)?;
+        run.write(job, out)?;
+        Ok((run.record, run.seconds))
+    })
 }
 
 /// What a sweep keeps of a run ([`run_outcome`]), whatever its environment.
@@ -328,59 +312,27 @@ pub struct RunOutcome {
     pub seconds: f64,
 }
 
-/// [`PbcsRun::compute_on`] the environment `job` names, after refusing a setting it lacks a
-/// hook for ([`PbcsRun::require_hooks`]): what an experiment's (cell, seed) runs.
+impl<E: Planar> From<PbcsRun<E>> for RunOutcome {
+    fn from(run: PbcsRun<E>) -> RunOutcome {
+        RunOutcome {
+            record: run.record,
+            evaluation: run.evaluation,
+            picture: run.picture,
+            seconds: run.seconds,
+        }
+    }
+}
+
+/// [`PbcsRun::compute`] on the environment `job` names: what an experiment's (cell, seed)
+/// runs.
 pub fn run_outcome(
-    job: &PbcsJob,
+    job: &Valid<PbcsJob>,
     kernel: Kernel,
     progress: impl FnMut(usize, Progress),
 ) -> Result<RunOutcome> {
-    /// [`run_outcome`] on the environment the job names.
-    struct Outcome<'a, P> {
-        job: &'a PbcsJob,
-        kernel: Kernel,
-        progress: P,
-    }
-    impl<P: FnMut(usize, Progress)> Visit for Outcome<'_, P> {
-        type Output = RunOutcome;
-        fn on<E: Planar>(self, env: E) -> Result<RunOutcome> {
-            PbcsRun::require_hooks(&env, self.job)?;
-            let run = PbcsRun::compute_on(env, self.job, self.kernel, self.progress)?;
-            Ok(RunOutcome {
-                record: run.record,
-                evaluation: run.evaluation,
-                picture: run.picture,
-                seconds: run.seconds,
-            })
-        }
-    }
-    job.check()?;
-    let work = Outcome {
-        job,
-        kernel,
-        progress,
-    };
-    job.env.visit(&job.maze, work)
-}
-
-/// [`run_pbcs`] on the environment the job names.
-struct RunInto<'a, P> {
-    job: &'a PbcsJob,
-    kernel: Kernel,
-    out: &'a Path,
-    progress: P,
-}
-
-impl<P: FnMut(usize, Progress)> Visit for RunInto<'_, P> {
-    type Output = (RunRecord, f64);
-
-    fn on<E: Planar>(self, env: E) -> Result<(RunRecord, f64)> {
-        PbcsRun::require_hooks(&env, self.job)?;
-        claim(self.job, self.out)?;
-        let run = PbcsRun::compute_on(env, self.job, self.kernel, self.progress)?;
-        run.write(self.job, self.out)?;
-        Ok((run.record, run.seconds))
-    }
+    crate::with_env!(job.env.build(&job.maze)?, |env| {
+        PbcsRun::compute(env, job, kernel, progress).map(RunOutcome::from)
+    })
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target

@@ -1,16 +1,16 @@
-//! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on the maze's own reward.
+//! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on an environment's own reward.
 
 use super::{claim, write_timing, SOLVED_AT};
 use crate::config::TrainJob;
-use crate::env::Planar;
-use crate::envs::maze::Maze;
+use crate::env::{Planar, Scene};
+use crate::envs::EnvName;
 use crate::error::Result;
 use crate::learner::{ActorUpdate, Algo};
 use crate::nn::kernel::Kernel;
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
-use crate::validate::Check;
+use crate::validate::Valid;
 use crate::vanilla::train_vanilla;
 use serde::Serialize;
 use std::path::Path;
@@ -19,10 +19,10 @@ use std::time::Instant;
 /// The one-row summary of a vanilla training run (`summary.csv`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrainSummary {
-    /// Maze size N.
-    pub maze: usize,
-    /// Maze layout seed.
-    pub maze_seed: u64,
+    /// Maze size N (empty for another environment).
+    pub maze: Option<usize>,
+    /// Maze layout seed (empty for another environment).
+    pub maze_seed: Option<u64>,
     /// Run seed.
     pub seed: u64,
     /// DDPG or TD3 (`ddpg`, `td3` in `summary.csv`).
@@ -41,17 +41,20 @@ pub struct TrainSummary {
     pub visited_bins: usize,
     /// Environment steps at the first evaluation whose greedy success was ≥ [`SOLVED_AT`], if any.
     pub first_success_steps: Option<u64>,
+    /// The environment ([`EnvName`]; the last column, so the others keep their places).
+    pub env: EnvName,
 }
 
 /// One vanilla training run's outcome ([`TrainRun::compute`]); [`TrainRun::write`] writes it.
 pub struct TrainRun {
-    /// The maze trained on.
-    pub maze: Maze,
+    /// The picture's frame: the environment trained on.
+    pub scene: Scene,
     /// The one-row summary.
     pub summary: TrainSummary,
     /// Evaluations, visited bins, the trained learner.
     pub result: crate::vanilla::TrainOutcome,
-    /// What `train.png` draws: the visited bins as red squares.
+    /// What `train.png` draws: the visited bins (of the observation's first two components,
+    /// drawn where [`Planar::ball_point`] puts a position) as red squares.
     pub picture: PictureData,
     /// The layer kernel the learner ran on.
     pub kernel: Kernel,
@@ -60,18 +63,18 @@ pub struct TrainRun {
 }
 
 impl TrainRun {
-    /// Trains the vanilla baseline of `job` on the maze's own reward, the learner's layers on
+    /// Trains the vanilla baseline of `job` on `env`'s own reward (the environment `job`
+    /// names: [`run_train`] and the sweeps make it from the name), the learner's layers on
     /// `kernel`; `progress(steps, success)` is called at each evaluation. Writes nothing.
-    pub fn compute(
-        job: &TrainJob,
+    pub fn compute<E: Planar>(
+        env: E,
+        job: &Valid<TrainJob>,
         kernel: Kernel,
         progress: impl FnMut(u64, f32),
     ) -> Result<TrainRun> {
-        job.check()?;
-        let maze = Maze::new(&job.maze)?;
         let clock = Instant::now();
         let result = train_vanilla(
-            &maze,
+            &env,
             &job.learner,
             &job.train,
             &Seeds::new(job.seed),
@@ -79,9 +82,10 @@ impl TrainRun {
             progress,
         )?;
         let seconds = clock.elapsed().as_secs_f64();
+        let on_maze = job.env.is_maze();
         let summary = TrainSummary {
-            maze: job.maze.size,
-            maze_seed: job.maze.seed,
+            maze: on_maze.then_some(job.maze.size),
+            maze_seed: on_maze.then_some(job.maze.seed),
             seed: job.seed,
             algo: job.learner.algo,
             actor_update: job.learner.actor_update,
@@ -95,19 +99,20 @@ impl TrainRun {
                 .iter()
                 .find(|e| e.success >= SOLVED_AT)
                 .map(|e| e.steps),
+            env: job.env,
         };
         let side = job.train.visit_bin;
         let picture = PictureData {
             red_area: result
                 .visited
                 .iter()
-                .map(|b| (b[0] as f32 * side, b[1] as f32 * side))
+                .map(|b| env.ball_point(&[b[0] as f32 * side, b[1] as f32 * side]))
                 .collect(),
             red_area_side: side,
             ..PictureData::default()
         };
         Ok(TrainRun {
-            maze,
+            scene: env.scene(),
             summary,
             result,
             picture,
@@ -147,16 +152,15 @@ impl TrainRun {
             .save(&out.join("actor.safetensors"))?;
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
-            "{} on maze {} (layout {}), seed {}: {} steps, greedy success {:.0} %",
+            "{} on {}, seed {}: {} steps, greedy success {:.0} %",
             summary.algo.name(),
-            job.maze.size,
-            job.maze.seed,
+            job.env.label(&job.maze),
             job.seed,
             job.train.steps,
             100.0 * summary.final_success
         );
         render_scene(
-            &self.maze.scene(),
+            &self.scene,
             &self.picture.picture(title),
             &out.join("train.png"),
             &out.join("train.svg"),
@@ -174,29 +178,42 @@ impl TrainRun {
 /// Trains the vanilla baseline of `job` into `out`: claims the folder (writing
 /// `config.toml`) before any work, then [`TrainRun::compute`] and [`TrainRun::write`].
 pub fn run_train(
-    job: &TrainJob,
+    job: &Valid<TrainJob>,
     kernel: Kernel,
     out: &Path,
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
-    job.check()?;
+    let built = job.env.build(&job.maze)?;
     claim(job, out)?;
-    let run = TrainRun::compute(job, kernel, progress)?;
+    let run = crate::with_env!(built, |env| TrainRun::compute(env, job, kernel, progress)?);
     run.write(job, out)?;
     Ok((run.summary, run.seconds))
+}
+
+/// [`TrainRun::compute`] on the environment `job` names: what an experiment's vanilla
+/// (cell, seed) runs.
+pub fn train_outcome(
+    job: &Valid<TrainJob>,
+    kernel: Kernel,
+    progress: impl FnMut(u64, f32),
+) -> Result<TrainRun> {
+    crate::with_env!(job.env.build(&job.maze)?, |env| {
+        TrainRun::compute(env, job, kernel, progress)
+    })
 }
 
 impl TrainSummary {
     /// What `pbcs train` prints, with the wall clock `seconds` and the visit bins' side.
     pub fn summary(&self, seconds: f64, visit_bin: f32) -> String {
         format!(
-            "{} ({} actor) on maze {} (layout seed {}), run seed {}: {} env steps, {} episodes, \
-             {:.1} s ({:.0} steps/s)\ngreedy success: final {}, best {}; visited {} bins of side \
-             {}",
+            "{} ({} actor) on {}, run seed {}: {} env steps, {} episodes, {:.1} s ({:.0} \
+             steps/s)\ngreedy success: final {}, best {}; visited {} bins of side {}",
             self.algo.name(),
             self.actor_update.name(),
-            self.maze,
-            self.maze_seed,
+            match (self.maze, self.maze_seed) {
+                (Some(n), Some(m)) => format!("maze {n} (layout seed {m})"),
+                _ => self.env.name().to_string(),
+            },
             self.seed,
             self.env_steps,
             self.episodes,

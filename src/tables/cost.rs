@@ -61,7 +61,7 @@ fn hours(seconds: f64) -> String {
 
 /// The cost table in Markdown: per experiment of `exps` with a timing table under `results`,
 /// its runs, the sum of their wall clocks in core-hours (one core per run) and that over two
-/// cores (`JOBS=2`); their total; then PointMaze's learners alone (ours and Stable-Baselines3's,
+/// cores (`JOBS=2`); their total; then Stable-Baselines3's SAC+HER on PointMaze (Python,
 /// which `make results` does not run).
 pub fn cost_markdown(exps: &[Experiment], results: &Path) -> Result<String> {
     let mut s = String::from(
@@ -93,15 +93,7 @@ pub fn cost_markdown(exps: &[Experiment], results: &Path) -> Result<String> {
         hours(seconds),
         hours(seconds / 2.0)
     );
-    let point = results.join("pointmaze");
-    let (n, total) = outside_walls(&point.join("vanilla"))?;
-    let _ = writeln!(
-        s,
-        "| PointMaze: our DDPG and TD3 alone (`examples/pointmaze_vanilla.rs`) | {n} | {} | {} |",
-        hours(total),
-        hours(total / 2.0)
-    );
-    let (n, total) = outside_walls(&point.join("sb3"))?;
+    let (n, total) = outside_walls(&results.join("pointmaze").join("sb3"))?;
     let _ = writeln!(
         s,
         "| PointMaze: SB3's SAC+HER (`python/benches/sb3_pointmaze.py`, one torch thread) | {n} \

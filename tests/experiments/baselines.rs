@@ -1,10 +1,16 @@
-//! PointMaze's learner baselines (`results/pointmaze/vanilla/`, `results/pointmaze/sb3/`) are
-//! read back checked into `outside.pointmaze.csv`: the committed rows give the counts their
-//! CSVs say, SB3's evaluations give known values, and a row that disagrees with its folder or
-//! its evaluations is refused naming the file.
+//! PointMaze's learner baselines (the raw rows of `experiments/pointmaze_vanilla.toml`,
+//! `results/pointmaze/sb3/`) are read back checked into `outside.pointmaze.csv`: the committed
+//! rows give the counts their CSVs say, SB3's evaluations give known values, and a row that
+//! disagrees with its folder or its evaluations is refused naming the file.
 
+use pbcs::experiment::Experiment;
 use pbcs::tables::outside::{pointmaze_baselines, PointMazeBaseline};
 use std::path::Path;
+
+/// The experiment of our learners on PointMaze.
+fn vanilla() -> Experiment {
+    Experiment::load(Path::new("experiments/pointmaze_vanilla.toml"), None).unwrap()
+}
 
 /// The values of `column` in every `s<seed>.csv` of `dir`, as text.
 fn column(dir: &Path, column: &str) -> Vec<String> {
@@ -24,21 +30,28 @@ fn column(dir: &Path, column: &str) -> Vec<String> {
 
 #[test]
 fn the_committed_vanilla_rows_give_the_counts_their_files_say() {
-    let lines = pointmaze_baselines(Path::new("results")).unwrap();
+    let lines = pointmaze_baselines(Some(&vanilla()), Path::new("results")).unwrap();
     let ours: Vec<&PointMazeBaseline> = lines.iter().filter(|l| l.library == "ours").collect();
     assert_eq!(ours.len(), 6, "DDPG and TD3 on three maps");
     for l in ours {
-        let dir = Path::new("results/pointmaze/vanilla").join(format!("{}-{}", l.method, l.env));
-        let finals = column(&dir, "final_success");
-        let bests = column(&dir, "best_success");
+        let dir =
+            Path::new("results/raw/pointmaze_vanilla").join(format!("{}-{}", l.method, l.env));
+        let finals = column(&dir, "success_rate");
         assert_eq!(l.runs as usize, finals.len(), "{dir:?}");
         let solved = finals
             .iter()
             .filter(|v| v.parse::<f32>().unwrap() >= 1.0)
             .count();
-        let reached = bests
-            .iter()
-            .filter(|v| v.parse::<f32>().unwrap() > 0.0)
+        // Reached: a run with any evaluation that reached the goal.
+        let reached = (0..l.runs)
+            .filter(|seed| {
+                let evals = std::fs::read_to_string(dir.join(format!("s{seed}.evals.csv")));
+                evals
+                    .unwrap()
+                    .lines()
+                    .skip(1)
+                    .any(|e| e.split(',').nth(2) != Some("0.0"))
+            })
             .count();
         assert_eq!(
             (l.solved as usize, l.reached as usize),
@@ -99,7 +112,7 @@ fn sb3_evaluations_give_known_values() {
             ),
         ),
     ]);
-    let lines = pointmaze_baselines(tmp.path()).unwrap();
+    let lines = pointmaze_baselines(None, tmp.path()).unwrap();
     // Seed 3 stopped before its first evaluation: left out; seed 2 was resumed once.
     let want = PointMazeBaseline {
         method: "sac_her".into(),
@@ -187,33 +200,73 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
         let files: Vec<(&str, String)> =
             files.iter().map(|(p, t)| (p.as_str(), t.clone())).collect();
         let tmp = scratch(&files);
-        let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
+        let err = pointmaze_baselines(None, tmp.path())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains(file) && err.contains(why), "{why}: {err}");
     }
-    // Our learners' rows: one committed run copied, then contradicted.
-    let from = Path::new("results/pointmaze/vanilla/ddpg-pointmaze_umaze");
+    // Our learners' rows: one committed run copied into a scratch results folder, then
+    // contradicted (its row, then its evaluations).
+    let exp = vanilla();
+    let cell = exp.cell("ddpg-pointmaze_umaze").unwrap();
+    let from = exp.cell_dir(Path::new("results"), cell);
+    let copy = |row: &str, evals: &str| {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = exp.cell_dir(tmp.path(), cell);
+        std::fs::create_dir_all(&dir).unwrap();
+        for ext in [".toml", ".timing.toml"] {
+            let name = format!("s8{ext}");
+            std::fs::copy(from.join(&name), dir.join(&name)).unwrap();
+        }
+        std::fs::write(dir.join("s8.csv"), row).unwrap();
+        std::fs::write(dir.join("s8.evals.csv"), evals).unwrap();
+        tmp
+    };
     let row = std::fs::read_to_string(from.join("s8.csv")).unwrap();
     let evals8 = std::fs::read_to_string(from.join("s8.evals.csv")).unwrap();
-    let vdir = "vanilla/ddpg-pointmaze_umaze";
+    let tmp = copy(&row, &evals8);
+    assert_eq!(
+        pointmaze_baselines(Some(&exp), tmp.path()).unwrap().len(),
+        1
+    );
     for (bad, why) in [
-        (row.replace(",8,", ",9,"), "file's name says 8"),
-        (row.replace("ddpg,", "td3,"), "does not agree"),
-        (row.replace(",80000,", ",90000,"), "does not agree"),
+        (row.replace(",8,ddpg,", ",9,ddpg,"), "seed"),
+        (row.replace(",ddpg,vanilla,", ",td3,vanilla,"), "method"),
+        (
+            row.replace(",1000000,1000000,", ",990000,1000000,"),
+            "env_steps",
+        ),
     ] {
-        let tmp = scratch(&[
-            (&format!("{vdir}/s8.csv"), bad),
-            (&format!("{vdir}/s8.evals.csv"), evals8.clone()),
-        ]);
-        let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
-        assert!(err.contains("s8.csv") && err.contains(why), "{why}: {err}");
+        let tmp = copy(&bad, &evals8);
+        let err = pointmaze_baselines(Some(&exp), tmp.path())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("s8") && err.contains(why), "{why}: {err}");
     }
+    // Its last evaluation says the goal was reached, its row that it was not: refused.
+    let mut lines: Vec<String> = evals8.lines().map(String::from).collect();
+    let last = lines.len() - 1;
+    let mut cols: Vec<&str> = lines[last].split(',').collect();
+    assert_eq!(cols[2], "0.0", "the committed run ends unsolved");
+    cols[2] = "1.0";
+    lines[last] = cols.join(",");
+    let tmp = copy(&row, &(lines.join("\n") + "\n"));
+    let err = pointmaze_baselines(Some(&exp), tmp.path())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("s8.evals.csv") && err.contains("does not agree"),
+        "{err}"
+    );
     // Its evaluations out of order (the first two swapped): refused too.
     let mut lines: Vec<&str> = evals8.lines().collect();
     lines.swap(1, 2);
-    let tmp = scratch(&[
-        (&format!("{vdir}/s8.csv"), row.clone()),
-        (&format!("{vdir}/s8.evals.csv"), lines.join("\n") + "\n"),
-    ]);
-    let err = pointmaze_baselines(tmp.path()).unwrap_err().to_string();
-    assert!(err.contains("s8.csv") && err.contains("in order"), "{err}");
+    let tmp = copy(&row, &(lines.join("\n") + "\n"));
+    let err = pointmaze_baselines(Some(&exp), tmp.path())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("s8.evals.csv") && err.contains("in order"),
+        "{err}"
+    );
 }

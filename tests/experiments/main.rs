@@ -11,6 +11,7 @@ fn files() -> Vec<std::path::PathBuf> {
     experiment_files(Path::new("experiments")).unwrap()
 }
 
+mod absurd;
 mod baselines;
 mod committed;
 mod files;

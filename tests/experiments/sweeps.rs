@@ -287,3 +287,13 @@ fn a_registered_grid_runs_only_with_the_preset_it_was_registered_for() {
     let rows = sweep(&exp, &runs, &results, 1, kernel, |_, _| {}).unwrap();
     assert_eq!(rows.len(), runs.len());
 }
+
+/// `--jobs 1000000` on three runs starts three threads, not a million (issue 47: it used to
+/// start one per job, whatever the number of runs).
+#[test]
+fn a_sweep_starts_no_more_threads_than_runs() {
+    let threads =
+        pbcs::experiment::run_parallel(&[1, 2, 3], 1_000_000, |_| Ok(rayon::current_num_threads()))
+            .unwrap();
+    assert_eq!(threads, vec![3, 3, 3]);
+}

@@ -44,6 +44,12 @@ impl Backplayer for Scripted {
     fn gave_up(&mut self, k: usize) {
         self.calls.push(format!("dead walk at {k}"));
     }
+    fn exhausted(&self) -> bool {
+        false
+    }
+    fn ball_is_clear(&self, _k: usize) -> bool {
+        false
+    }
 }
 
 /// Backplay's walk: α, K step, early stop; the paper's fixed step.
@@ -348,6 +354,12 @@ impl Backplayer for Reach {
     fn verify(&mut self, k: usize, _policy: &(usize, usize), _episodes: usize) -> f32 {
         self.test(k)
     }
+    fn exhausted(&self) -> bool {
+        false
+    }
+    fn ball_is_clear(&self, _k: usize) -> bool {
+        false
+    }
 }
 
 #[test]
@@ -469,6 +481,9 @@ impl Backplayer for DeadTarget {
     }
     fn ball_is_clear(&self, k: usize) -> bool {
         k.is_multiple_of(2)
+    }
+    fn exhausted(&self) -> bool {
+        false
     }
 }
 

@@ -15,21 +15,10 @@ use pbcs::phase1::Trajectory;
 use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Config, StartMode};
 use pbcs::rng::Seeds;
 
-/// The error `chain_skills` on the plane gives for `config`, before any work.
+/// The error `config` gets on the plane before phase 2 runs ([`Phase2Config::ready`], which
+/// `chain_skills` needs).
 fn refusal(config: &Phase2Config) -> Error {
-    let tau: Vec<[f32; 2]> = (0..31).map(|i| [0.1 * i as f32, 0.0]).collect();
-    let learner = LearnerConfig::ddpg();
-    chain_skills(
-        &Plane,
-        &tau,
-        &learner,
-        config,
-        &Seeds::new(0),
-        0,
-        Kernel::detect(),
-        |_, _| {},
-    )
-    .expect_err("refused")
+    config.ready(&Plane).map(|_| ()).expect_err("refused")
 }
 
 fn says(e: &Error, setting: &str, hook: &str) {
@@ -59,6 +48,18 @@ fn each_setting_that_needs_a_missing_hook_is_refused_naming_both() {
     c.ideas.dead_walk = None;
     says(&refusal(&c), "phase2.shorten", "Env::connector");
     c.ideas.shorten = false;
+    // Issue 47: path limits need a step's reach, and the last skill aiming at the success
+    // region needs one (before, the smallest action bound and τ_N stood in for them).
+    says(&refusal(&c), "phase2.test_path_limit", "Env::step_reach");
+    c.ideas.episode_limit = Some(pbcs::phase2::EpisodeLimit::Every(2.0));
+    says(&refusal(&c), "phase2.path_limit", "Env::step_reach");
+    c.ideas.episode_limit = None;
+    says(
+        &refusal(&c),
+        "phase2.last_goal = \"success_region\"",
+        "Env::success_region",
+    );
+    c.last_goal = pbcs::phase2::LastGoal::Ball;
     c.require_hooks(&Plane).unwrap();
     // `shorten` itself, called on τ.
     let tau = Trajectory {
@@ -157,7 +158,7 @@ fn archive_starts_need_the_archive_and_the_ball() {
         &maze,
         &tau,
         &LearnerConfig::ddpg(),
-        &c,
+        c.ready(&maze).unwrap(),
         &Seeds::new(0),
         0,
         Kernel::detect(),
@@ -266,7 +267,7 @@ fn archive_starts_are_the_ones_backplay_draws() {
             &tau,
             starts,
             &learner,
-            c,
+            c.ready(&TwoRooms).unwrap(),
             &seeds,
             0,
             Kernel::detect(),
@@ -281,7 +282,7 @@ fn archive_starts_are_the_ones_backplay_draws() {
         &TwoRooms,
         &tau,
         &learner,
-        &c,
+        c.ready(&TwoRooms).unwrap(),
         &Seeds::new(1),
         0,
         Kernel::detect(),
@@ -381,6 +382,15 @@ fn velocity_balls_draw_backplays_starts() {
         fn start(&self) -> [f32; 2] {
             TwoRooms.start()
         }
+        fn sample_start(&self, rng: &mut pbcs::rng::Rng) -> [f32; 2] {
+            TwoRooms.sample_start(rng)
+        }
+        fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+            TwoRooms.success_region()
+        }
+        fn step_reach(&self) -> Option<f32> {
+            TwoRooms.step_reach()
+        }
         fn observe(&self, s: &[f32; 2], out: &mut [f32]) {
             TwoRooms.observe(s, out)
         }
@@ -425,7 +435,7 @@ fn velocity_balls_draw_backplays_starts() {
             env,
             &tau,
             &LearnerConfig::ddpg(),
-            c,
+            c.ready(env).unwrap(),
             &Seeds::new(1),
             0,
             Kernel::detect(),

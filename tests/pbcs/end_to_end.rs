@@ -19,7 +19,7 @@ fn pbcs_solves_maze_2_for_most_seeds() {
         j.phase2.max_env_steps = 1_000_000;
         let dir = tempfile::tempdir().unwrap();
         let (r, _) = run_pbcs(
-            &j,
+            &pbcs::validate::Check::valid(j.clone()).unwrap(),
             pbcs::nn::kernel::Kernel::detect(),
             dir.path(),
             |_, _| {},
@@ -62,7 +62,7 @@ fn a_grid_gives_pbcs_runs_rows_resumes_and_refuses_another_config() {
         single.seed = seed;
         let run_dir = tempfile::tempdir().unwrap();
         let (r, _) = run_pbcs(
-            &single,
+            &pbcs::validate::Check::valid(single.clone()).unwrap(),
             pbcs::nn::kernel::Kernel::detect(),
             run_dir.path(),
             |_, _| {},
@@ -111,8 +111,20 @@ fn pbcs_run_is_byte_identical_per_seed() {
     let mut j = job(5);
     j.phase2.max_env_steps = 30_000;
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    let (ra, _) = run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), a.path(), |_, _| {}).unwrap();
-    run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), b.path(), |_, _| {}).unwrap();
+    let (ra, _) = run_pbcs(
+        &pbcs::validate::Check::valid(j.clone()).unwrap(),
+        pbcs::nn::kernel::Kernel::detect(),
+        a.path(),
+        |_, _| {},
+    )
+    .unwrap();
+    run_pbcs(
+        &pbcs::validate::Check::valid(j.clone()).unwrap(),
+        pbcs::nn::kernel::Kernel::detect(),
+        b.path(),
+        |_, _| {},
+    )
+    .unwrap();
     assert!(ra.total_steps > 0);
     same_files(
         a.path(),
@@ -154,7 +166,7 @@ fn the_evaluation_episodes_are_written_and_a_saved_chain_gives_them_back() {
     j.maze.size = 2;
     let dir = tempfile::tempdir().unwrap();
     let (record, _) = run_pbcs(
-        &j,
+        &pbcs::validate::Check::valid(j.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         dir.path(),
         |_, _| {},
@@ -201,10 +213,20 @@ fn a_computed_run_is_what_the_written_run_holds() {
     let mut j = job(5);
     j.phase2.max_env_steps = 30_000;
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    let (written, _) =
-        run_pbcs(&j, pbcs::nn::kernel::Kernel::detect(), a.path(), |_, _| {}).unwrap();
-    let run =
-        pbcs::runs::PbcsRun::compute(&j, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
+    let (written, _) = run_pbcs(
+        &pbcs::validate::Check::valid(j.clone()).unwrap(),
+        pbcs::nn::kernel::Kernel::detect(),
+        a.path(),
+        |_, _| {},
+    )
+    .unwrap();
+    let run = pbcs::runs::PbcsRun::compute(
+        pbcs::envs::maze::Maze::new(&j.maze).unwrap(),
+        &pbcs::validate::Check::valid(j.clone()).unwrap(),
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
     assert_eq!(run.record, written);
     // The record's enums are written as the names the CSVs have always held.
     let text = std::fs::read_to_string(a.path().join("record.csv")).unwrap();

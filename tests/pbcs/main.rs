@@ -30,6 +30,9 @@ impl Env for Plane {
     fn start(&self) -> [f32; 2] {
         [0.0, 0.0]
     }
+    fn sample_start(&self, _rng: &mut pbcs::rng::Rng) -> [f32; 2] {
+        self.start()
+    }
     fn observe(&self, s: &[f32; 2], out: &mut [f32]) {
         out.copy_from_slice(s);
     }
@@ -168,6 +171,9 @@ impl Backplayer for Clear {
     fn ball_is_clear(&self, _k: usize) -> bool {
         true
     }
+    fn exhausted(&self) -> bool {
+        false
+    }
 }
 
 /// A [`SkillTask`] on maze 2 along a straight τ to the right, with a policy pushing up.
@@ -192,6 +198,12 @@ impl Backplayer for Collapsing {
     }
     fn verify(&mut self, k: usize, _policy: &usize, _episodes: usize) -> f32 {
         self.test(k)
+    }
+    fn exhausted(&self) -> bool {
+        false
+    }
+    fn ball_is_clear(&self, _k: usize) -> bool {
+        false
     }
 }
 

@@ -77,7 +77,16 @@ fn task_with<'a>(
     learner.actor = policy;
     let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
     let goal = config.goal(maze, obs, t);
-    SkillTask::new(maze, config, states, goal, t, learner, rngs, budget).unwrap()
+    SkillTask::new(
+        maze,
+        config.ready(maze).unwrap(),
+        states,
+        goal,
+        t,
+        learner,
+        rngs,
+        budget,
+    )
 }
 
 #[test]

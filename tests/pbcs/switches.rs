@@ -75,7 +75,13 @@ fn a_chain_verification_past_the_budget_is_a_budget_failure() {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
     let kernel = pbcs::nn::kernel::Kernel::detect();
-    let complete = PbcsRun::compute(&job, kernel, |_, _| {}).unwrap();
+    let complete = PbcsRun::compute(
+        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        kernel,
+        |_, _| {},
+    )
+    .unwrap();
     assert_eq!(
         complete.record.failure, None,
         "the run without verification completes its chain"
@@ -86,7 +92,13 @@ fn a_chain_verification_past_the_budget_is_a_budget_failure() {
         episodes: 100,
         repairs: 0,
     });
-    let run = PbcsRun::compute(&job, kernel, |_, _| {}).unwrap();
+    let run = PbcsRun::compute(
+        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        kernel,
+        |_, _| {},
+    )
+    .unwrap();
     assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
     assert!(!run.record.solved && run.record.total_steps > budget);
     let last = run.phase2.trace.last().unwrap();
@@ -107,7 +119,13 @@ fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
         episodes: 100,
         repairs: 5,
     });
-    let run = PbcsRun::compute(&job, pbcs::nn::kernel::Kernel::detect(), |_, _| {}).unwrap();
+    let run = PbcsRun::compute(
+        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
     let checks: Vec<_> = run
         .phase2
         .trace

@@ -3,7 +3,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use pbcs::config::{self, Check, MazeConfig, Preset, MAX_MAZE_SIZE};
+use pbcs::config::{self, Check, Located, Place, Preset, MAX_MAZE_SIZE};
 use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
 use pbcs::learner::{ActorUpdate, Algo, LearnerConfig};
@@ -30,6 +30,10 @@ pub struct RunArgs {
     /// preset); the run folder's config.toml lists every value used].
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// The environment (`pbcs::envs`); overrides `env` [default: the config's, else the maze].
+    /// --maze and --maze-seed apply to the maze only.
+    #[arg(long, value_enum)]
+    pub env: Option<EnvName>,
     /// Maze size N (2..=100); overrides `maze.size` [default: the config's, else 5].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_maze_size)]
     pub maze: Option<usize>,
@@ -39,9 +43,9 @@ pub struct RunArgs {
     /// Run seed; overrides `seed` [default: the config's, else 0].
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
-    /// Output folder [default: out/explore/maze<N>-m<maze seed>-s<seed>,
-    /// out/train/maze…-<algo>[-am], out/run/<preset or config file stem>/maze…[-nochain][-exact|-archive],
-    /// out/run/<…>/<env>-s<seed>[…] for another environment].
+    /// Output folder [default: out/explore/<where>-s<seed>, out/train/<where>-s<seed>-<algo>[-am],
+    /// out/run/<preset or config file stem>/<where>-s<seed>[-nochain][-exact|-archive][-velocity],
+    /// where is maze<N>-m<maze seed> for the maze, the environment's name for another].
     /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -51,11 +55,11 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    /// The config file (or `default()` without one) with the maze and seed flags applied.
-    pub fn load<T: DeserializeOwned + Check + Serialize>(
+    /// The config file (or `default()` without one) with `--env` and the maze and seed flags
+    /// applied ([`Place`]).
+    pub fn load<T: DeserializeOwned + Check + Serialize + Located>(
         &self,
         default: impl FnOnce() -> pbcs::Result<T>,
-        parts: impl FnOnce(&mut T) -> (&mut MazeConfig, &mut u64),
     ) -> anyhow::Result<T> {
         let mut job: T = match &self.config {
             Some(path) => {
@@ -73,15 +77,20 @@ impl RunArgs {
             }
             None => default()?,
         };
-        let (maze, seed) = parts(&mut job);
-        maze.size = self.maze.unwrap_or(maze.size);
-        maze.seed = self.maze_seed.unwrap_or(maze.seed);
-        *seed = self.seed.unwrap_or(*seed);
+        let place = Place {
+            env: self.env,
+            maze_size: self.maze,
+            maze_seed: self.maze_seed,
+            seed: self.seed,
+        };
+        place.apply(&mut job)?;
         Ok(job)
     }
 
-    pub fn out_dir(&self, command: &str, maze: &MazeConfig, seed: u64, suffix: &str) -> PathBuf {
-        let default = || runs::default_out(command, maze, seed, suffix);
+    /// `--out`, else the run's default folder ([`runs::default_out`]).
+    pub fn out_dir(&self, command: &str, job: &impl Located, suffix: &str) -> PathBuf {
+        let (seed, env, maze) = job.location();
+        let default = || runs::default_out(command, env, maze, seed, suffix);
         self.out.clone().unwrap_or_else(default)
     }
 
@@ -126,10 +135,6 @@ pub enum Command {
     Explore {
         #[command(flatten)]
         run: RunArgs,
-        /// The environment (`pbcs::envs`); overrides `env` [default: the config's, else the
-        /// maze]. --maze and --maze-seed apply to the maze only.
-        #[arg(long, value_enum)]
-        env: Option<EnvName>,
     },
     /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on the maze's own
     /// reward; write evaluations, visited states, the actor and a picture.
@@ -176,10 +181,6 @@ pub enum Command {
         /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
         #[arg(long)]
         exact_starts: bool,
-        /// The environment (`pbcs::envs`); overrides `env` [default: the config's, else the
-        /// maze]. --maze and --maze-seed apply to the maze only.
-        #[arg(long, value_enum)]
-        env: Option<EnvName>,
     },
     /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
     /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts

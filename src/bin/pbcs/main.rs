@@ -9,10 +9,10 @@ use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, PbcsJob, Preset, TrainJob};
-use pbcs::envs::EnvName;
 use pbcs::experiment::{Experiment, Pending, RawRow};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
+use pbcs::validate::Valid;
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
@@ -46,7 +46,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     // bad name is an error here, before any work.
     let kernel = Kernel::from_env()?;
     match cli.command {
-        Command::Explore { run, env } => explore(&run, env),
+        Command::Explore { run } => explore(&run),
         Command::Train {
             run,
             learner,
@@ -58,16 +58,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             learner,
             no_chaining,
             exact_starts,
-            env,
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
-            let mut job = pbcs_job(&run, preset, &learner, no_chaining, exact_starts)?;
-            job.env = env.unwrap_or(job.env);
-            refuse_maze_flags(&run, job.env)?;
+            let mut job = run.load(|| preset.job())?;
+            learner.apply(&mut job.learner);
+            if no_chaining {
+                for field in job.without_chaining() {
+                    eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
+                }
+            }
+            if exact_starts {
+                job.phase2.start = pbcs::phase2::StartMode::Exact;
+            }
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
             let label = runs::method_name(run.config.as_deref(), preset);
-            pbcs_run(&run, &job, &label, kernel)
+            pbcs_run(&run, job.valid()?, &label, kernel)
         }
         Command::Eval {
             chain,
@@ -122,47 +128,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } => exp_check(&args, &cell, seed, jobs, kernel, exact),
         },
     }
-}
-
-/// The job of `pbcs run`: the preset or `--config`, then the flags.
-fn pbcs_job(
-    run: &RunArgs,
-    preset: Preset,
-    learner: &LearnerArgs,
-    no_chaining: bool,
-    exact_starts: bool,
-) -> anyhow::Result<PbcsJob> {
-    let mut job = run.load(
-        || preset.job(),
-        |j: &mut PbcsJob| (&mut j.maze, &mut j.seed),
-    )?;
-    learner.apply(&mut job.learner);
-    if no_chaining {
-        // PBCS without chaining has one skill: what acts between skills goes with it.
-        let ideas = &mut job.phase2.ideas;
-        job.phase2.chaining = false;
-        let between = [
-            (
-                "phase2.retargets",
-                ideas.dead_walk.as_mut().map(|d| &mut d.retargets),
-            ),
-            (
-                "phase2.chain_repairs",
-                ideas.chain_check.as_mut().map(|c| &mut c.repairs),
-            ),
-        ];
-        for (field, value) in between {
-            let Some(value) = value else { continue };
-            if *value > 0 {
-                eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
-                *value = 0;
-            }
-        }
-    }
-    if exact_starts {
-        job.phase2.start = pbcs::phase2::StartMode::Exact;
-    }
-    Ok(job)
 }
 
 /// `pbcs eval`: a saved chain from its folder, into `out` (default: the chain's folder).
@@ -226,31 +191,8 @@ fn render(
     let tex = pbcs::pipeline::tex_dir(tex.as_deref(), set.profile.as_deref(), &results);
     let claims = set.experiments.join("claims.toml");
     let done = pbcs::pipeline::render(exps, &claims, &results, &figures, &tex)?;
-    for why in &done.unjudged {
-        println!("{why} (not judged under this profile)");
-    }
-    for (name, path) in &done.skipped {
-        println!("{name}: no table at {}, skipped", path.display());
-    }
-    for (exp, stats) in &done.tables {
-        print!(
-            "\n{} — {}\n{}",
-            exp.name,
-            exp.title,
-            pbcs::tables::markdown(stats)
-        );
-    }
-    println!("\nthe paper's claims against our tables:");
-    for c in &done.claims {
-        println!(
-            "- {} — {}: {}",
-            c.id,
-            c.verdict.word().to_uppercase(),
-            c.ours
-        );
-    }
-    let (n, f, t) = (done.files.len(), figures.display(), tex.display());
-    println!("\nwrote {n} files into {f} and {t}");
+    let (f, t) = (figures.display(), tex.display());
+    println!("{} into {f} and {t}", done.summary());
     Ok(())
 }
 
@@ -310,22 +252,9 @@ fn exp_list(args: &ExpArgs, make: bool, slurm: bool, skip_unavailable: bool) -> 
 
 fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
     let (exps, results) = set.load()?;
+    println!("reading raw rows in {}", results.display());
     for a in pbcs::pipeline::aggregate(&exps, &results)? {
-        match a.runs {
-            0 => println!(
-                "{}: no raw rows in {}, skipped",
-                a.experiment,
-                results.display()
-            ),
-            n => println!(
-                "{}: {n} of {} runs in {} cells → {} (polars; checked against the plain \
-                 computation)",
-                a.experiment,
-                a.expected,
-                a.cells,
-                a.table.display()
-            ),
-        }
+        println!("{a}");
     }
     for file in pbcs::pipeline::aggregate_outside(&exps, &results)? {
         println!("outside checks → {}", file.display());
@@ -383,49 +312,25 @@ fn exp_check(
     kernel: Kernel,
     exact: bool,
 ) -> anyhow::Result<()> {
-    use pbcs::reproduce::{check_cell, Reproduced};
+    use pbcs::reproduce::check_cell;
     let (exp, results) = args.load()?;
     let bar = run_bar(pbcs::experiment::plan(&exp, Some(cell), seed)?.len() as u64);
     let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, _| bar.inc(1))?;
     bar.finish_and_clear();
     println!("{}", check.report(cell));
-    let reproduced = check.reproduced();
-    if let (false, Some(note)) = (reproduced == Reproduced::Match, check.kernel_note()) {
-        println!("note: {note}");
-    }
-    let (n, differ) = (check.n(), check.n() - check.identical());
-    let ((lo, hi), rate) = (check.interval(), check.solved_now() as f64 / n as f64);
-    match reproduced {
-        Reproduced::Match => println!("MATCH: the committed rows are reproduced exactly"),
-        Reproduced::WithinInterval if exact => {
-            anyhow::bail!("--exact: {differ} of {n} rows differ from the committed bytes")
-        }
-        Reproduced::WithinInterval => println!(
-            "DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed interval"
-        ),
-        Reproduced::Outside => anyhow::bail!(
-            "the new success rate {rate:.2} lies outside the committed interval [{lo:.3}, {hi:.3}]"
-        ),
-    }
+    println!("{}", check.verdict(cell, exact)?);
     Ok(())
 }
 
-fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow::Result<()> {
-    job.check()?;
-    let suffix = runs::pbcs_suffix(job);
-    let out = match job.env {
-        EnvName::Maze => run.out_dir(&format!("run/{label}"), &job.maze, job.seed, &suffix),
-        other => (run.out.clone()).unwrap_or_else(|| {
-            format!("out/run/{label}/{}-s{}{suffix}", other.name(), job.seed).into()
-        }),
-    };
+fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> anyhow::Result<()> {
+    let out = run.out_dir(&format!("run/{label}"), &*job, &runs::pbcs_suffix(&job));
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
     // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
     let lines = !run.quiet && !std::io::stderr().is_terminal();
-    let (record, seconds) = runs::run_pbcs(job, kernel, &out, |skill, p| {
+    let (record, seconds) = runs::run_pbcs(&job, kernel, &out, |skill, p| {
         let secs = clock.elapsed().as_secs_f64();
         if skill != current_skill {
             (finished, current_skill) = (finished + current, skill);
@@ -450,30 +355,9 @@ fn pbcs_run(run: &RunArgs, job: &PbcsJob, label: &str, kernel: Kernel) -> anyhow
     Ok(())
 }
 
-/// --maze and --maze-seed name the maze: refused for a job on another environment.
-fn refuse_maze_flags(run: &RunArgs, env: EnvName) -> anyhow::Result<()> {
-    if !env.is_maze() && (run.maze.is_some() || run.maze_seed.is_some()) {
-        anyhow::bail!(
-            "--maze and --maze-seed set the maze, but the run's environment is `{}`",
-            env.name()
-        );
-    }
-    Ok(())
-}
-
-fn explore(run: &RunArgs, env: Option<EnvName>) -> anyhow::Result<()> {
-    let mut job = run.load(
-        || Ok(ExploreJob::default()),
-        |j: &mut ExploreJob| (&mut j.maze, &mut j.seed),
-    )?;
-    job.env = env.unwrap_or(job.env);
-    refuse_maze_flags(run, job.env)?;
-    job.check()?;
-    let out = match job.env {
-        EnvName::Maze => run.out_dir("explore", &job.maze, job.seed, ""),
-        other => (run.out.clone())
-            .unwrap_or_else(|| format!("out/explore/{}-s{}", other.name(), job.seed).into()),
-    };
+fn explore(run: &RunArgs) -> anyhow::Result<()> {
+    let job = run.load(|| Ok(ExploreJob::default()))?.valid()?;
+    let out = run.out_dir("explore", &*job, "");
     let template = "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]";
     let bar = run.bar(template, None);
     let (summary, seconds) = runs::run_explore(&job, &out, |steps, states| {
@@ -494,21 +378,18 @@ fn train(
     steps: Option<u64>,
     kernel: Kernel,
 ) -> anyhow::Result<()> {
-    let mut job = run.load(
-        || Ok(TrainJob::default()),
-        |j: &mut TrainJob| (&mut j.maze, &mut j.seed),
-    )?;
+    let mut job = run.load(|| Ok(TrainJob::default()))?;
     learner.apply(&mut job.learner);
     job.train.steps = steps.unwrap_or(job.train.steps);
-    job.check()?;
-    let out = run.out_dir("train", &job.maze, job.seed, &runs::train_suffix(&job));
+    let job = job.valid()?;
+    let out = run.out_dir("train", &*job, &runs::train_suffix(&job));
     let template = "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}";
     let bar = run.bar(template, Some(job.train.steps));
     let (summary, seconds) = runs::run_train(&job, kernel, &out, |steps, success| {
         bar.set_position(steps);
         bar.set_message(format!("greedy success {success}"));
     })
-    .with_context(|| format!("train on maze {} seed {}", job.maze.size, job.seed))?;
+    .with_context(|| format!("train on {} seed {}", job.env.label(&job.maze), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.train.visit_bin));
     let wrote = "{summary,evals,visited}.csv, actor.safetensors, train.png, train.svg";

@@ -297,6 +297,17 @@ impl Env for Maze {
         self.start
     }
 
+    /// Every episode starts at s_0.
+    fn sample_start(&self, _rng: &mut crate::rng::Rng) -> Point<f32> {
+        self.start
+    }
+
+    /// An action is a displacement clipped to ±`max_action` per axis: a step's reach, as the
+    /// path limits count it, is `max_action`.
+    fn step_reach(&self) -> Option<f32> {
+        Some(self.config.max_action)
+    }
+
     #[inline]
     fn observe(&self, state: &Point<f32>, out: &mut [f32]) {
         out[0] = state.x;
@@ -344,6 +355,10 @@ impl Env for Maze {
 impl Planar for Maze {
     fn point(&self, state: &Point<f32>) -> (f32, f32) {
         (state.x, state.y)
+    }
+
+    fn ball_point(&self, center: &[f32]) -> (f32, f32) {
+        (center[0], center[1])
     }
 
     /// The N × N square, each wall's box, the target disc, s_0.

@@ -210,6 +210,12 @@ impl Env for PointMaze {
         PointState::at_rest(self.start)
     }
 
+    /// Every episode of our task starts at rest at the start cell's centre (gymnasium-robotics'
+    /// resets add noise; the judge plays those, `pbcs.pointmaze`).
+    fn sample_start(&self, _rng: &mut crate::rng::Rng) -> PointState {
+        self.start()
+    }
+
     /// `observation` of gymnasium-robotics: [x, y, vx, vy] (in `f32`).
     fn observe(&self, s: &PointState, out: &mut [f32]) {
         let o = [s.qpos[0], s.qpos[1], s.qvel[0], s.qvel[1]];
@@ -239,8 +245,8 @@ impl Env for PointMaze {
     }
 
     /// The fastest step: [`MAX_SPEED`] for the model's 0.01 s.
-    fn step_reach(&self) -> f32 {
-        (MAX_SPEED * TIMESTEP) as f32
+    fn step_reach(&self) -> Option<f32> {
+        Some((MAX_SPEED * TIMESTEP) as f32)
     }
 
     /// The goal and gymnasium-robotics' success distance, in position (with goal noise, the

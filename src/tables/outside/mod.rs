@@ -406,10 +406,15 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
 
 /// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.timing.csv` and
 /// `outside.pointmaze.csv` under `<results>/tables/` from the rows under `<results>/outside/`
-/// (PointMaze's: `<results>/pointmaze/`, [`pointmaze_baselines`]) (each only where it has rows;
-/// a table without rows any more is removed); `table` is the experiment of our maze side.
+/// (PointMaze's: the raw rows of `pointmaze_vanilla` and `<results>/pointmaze/sb3/`,
+/// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
+/// removed); `table` is the experiment of our maze side.
 /// Returns the files written.
-pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<PathBuf>> {
+pub fn write_outside_tables(
+    table: &Experiment,
+    pointmaze_vanilla: Option<&Experiment>,
+    results: &Path,
+) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     let maze = maze_comparisons(table, results)?;
     put_or_remove(&outside_table(results, "maze"), &maze, &mut files)?;
@@ -417,7 +422,7 @@ pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<Pa
     put_or_remove(&outside_table(results, "pendulum"), &pendulum, &mut files)?;
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
-    let pointmaze = pointmaze_baselines(results)?;
+    let pointmaze = pointmaze_baselines(pointmaze_vanilla, results)?;
     put_or_remove(&outside_table(results, "pointmaze"), &pointmaze, &mut files)?;
     Ok(files)
 }
@@ -425,7 +430,7 @@ pub fn write_outside_tables(table: &Experiment, results: &Path) -> Result<Vec<Pa
 mod pendulum;
 pub use pendulum::{pendulum_rows, PendulumRow, PendulumRun, Published};
 mod pointmaze;
-pub use pointmaze::{pointmaze_baselines, PointMazeBaseline, Sb3Eval, VanillaRun, SB3_SOLVED};
+pub use pointmaze::{pointmaze_baselines, PointMazeBaseline, Sb3Eval, SB3_SOLVED};
 
 #[cfg(test)]
 mod tests;

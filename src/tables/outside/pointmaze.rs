@@ -1,6 +1,6 @@
 //! PointMaze's learner baselines (issue 35) as one table, `outside.pointmaze.csv`: our DDPG and
-//! TD3 alone on PBCS's PointMaze task (`examples/pointmaze_vanilla.rs`:
-//! `<results>/pointmaze/vanilla/<algo>-pointmaze_<map>/s<seed>.csv` with its `s<seed>.evals.csv`)
+//! TD3 alone on PBCS's PointMaze task (the experiment `experiments/pointmaze_vanilla.toml`, its
+//! raw rows checked as every sweep's, with each run's `s<seed>.evals.csv`)
 //! and Stable-Baselines3's SAC+HER in gymnasium-robotics' own PointMaze
 //! (`python/benches/sb3_pointmaze.py`: `<results>/pointmaze/sb3/sac_her-pointmaze_<map>/`,
 //! `s<seed>.evals.csv` as the run goes, `s<seed>.csv` once it ended). An SB3 run stopped before
@@ -10,6 +10,7 @@
 use super::{seed_files, seed_rows, seeds_text};
 use crate::error::{Error, Result};
 use crate::experiment::run_file;
+use crate::experiment::{Cell, Experiment, RawRow};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -17,29 +18,6 @@ use std::path::{Path, PathBuf};
 /// Successes of 100 evaluation episodes that count SB3's policy as solving the map (the
 /// protocol's 95, as for PBCS's chains).
 pub const SB3_SOLVED: u64 = 95;
-
-/// One run of our DDPG or TD3 alone on PointMaze (`examples/pointmaze_vanilla.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct VanillaRun {
-    /// `ddpg` or `td3`.
-    pub algo: String,
-    /// The registry's name (`pointmaze_umaze`).
-    pub env: String,
-    /// The run seed.
-    pub seed: u64,
-    /// Environment steps of training.
-    pub steps: u64,
-    /// Training episodes.
-    pub episodes: u64,
-    /// Greedy success at the last evaluation (0 or 1: one episode from the start).
-    pub final_success: f32,
-    /// Best greedy success over all evaluations.
-    pub best_success: f32,
-    /// Env steps at the first evaluation that reached the goal, if any.
-    pub first_success_steps: Option<u64>,
-    /// Training transitions that ended at the goal.
-    pub terminal_transitions: u64,
-}
 
 /// One evaluation of an SB3 run (`s<seed>.evals.csv`): 100 episodes from the env's own resets.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,15 +65,27 @@ pub struct PointMazeBaseline {
     pub seeds: String,
 }
 
-/// The lines of `outside.pointmaze.csv` from the rows under `<results>/pointmaze/` (none
-/// without that folder): our learners first, then SB3's, each by map.
-pub fn pointmaze_baselines(results: &Path) -> Result<Vec<PointMazeBaseline>> {
-    let root = results.join("pointmaze");
+/// The lines of `outside.pointmaze.csv`: our learners from the raw rows of `vanilla` (the
+/// experiment `pointmaze_vanilla`, when given) under `results`, then SB3's from
+/// `<results>/pointmaze/sb3/` (none without that folder); each learner's lines by map, sorted
+/// by `<method>-<env>`.
+pub fn pointmaze_baselines(
+    vanilla: Option<&Experiment>,
+    results: &Path,
+) -> Result<Vec<PointMazeBaseline>> {
     let mut out = Vec::new();
-    for f in folders(&root.join("vanilla"), &["ddpg", "td3"])? {
-        out.push(vanilla_line(&f)?);
+    if let Some(exp) = vanilla {
+        let rows = crate::experiment::read_raw(exp, results)?;
+        let mut cells: Vec<&Cell> = exp.cells.iter().collect();
+        cells.sort_by(|a, b| a.id.cmp(&b.id));
+        for cell in cells {
+            let runs: Vec<&RawRow> = rows.iter().filter(|r| r.cell == cell.id).collect();
+            if !runs.is_empty() {
+                out.push(vanilla_line(exp, cell, &runs, results)?);
+            }
+        }
     }
-    for f in folders(&root.join("sb3"), &["sac_her"])? {
+    for f in folders(&results.join("pointmaze").join("sb3"), &["sac_her"])? {
         out.push(sb3_line(&f)?);
     }
     Ok(out)
@@ -151,58 +141,58 @@ fn no_runs(dir: &Path) -> Error {
     )
 }
 
-/// Our learner's line from one folder: every row checked against its folder and its own
-/// evaluations (`final_success` the last, `best_success` the best, `first_success_steps` the
-/// first that reached the goal).
-fn vanilla_line(f: &Folder) -> Result<PointMazeBaseline> {
-    let (method, env, dir) = (f.method.as_str(), f.env.clone(), f.dir.as_path());
-    let runs: Vec<(PathBuf, VanillaRun)> = seed_rows(dir, |r: &VanillaRun| r.seed)?;
-    if runs.is_empty() {
-        return Err(no_runs(dir));
-    }
-    let mut best = (0.0f32, u64::MAX);
-    for (path, r) in &runs {
-        let evals: Vec<EvalRow> =
-            crate::record::read_records(&run_file(dir, r.seed, ".evals.csv"))?;
-        let at_best = evals.iter().find(|e| e.success == r.best_success);
+/// Our learner's line from one cell's raw rows `runs` (read and checked as every sweep's),
+/// each checked against its own evaluations: in order, successes in [0, 1], the last at the
+/// run's budget with the row's success rate.
+fn vanilla_line(
+    exp: &Experiment,
+    cell: &Cell,
+    runs: &[&RawRow],
+    results: &Path,
+) -> Result<PointMazeBaseline> {
+    let dir = exp.cell_dir(results, cell);
+    let (mut best, mut reached) = ((0.0f32, u64::MAX), 0);
+    for r in runs {
+        let path = run_file(&dir, r.seed, ".evals.csv");
+        let evals: Vec<EvalRow> = crate::record::read_records(&path)?;
         let in_order = evals.windows(2).all(|w| w[0].steps < w[1].steps)
             && evals.iter().all(|e| (0.0..=1.0).contains(&e.success));
         let agrees = in_order
-            && r.algo == method
-            && r.env == env
             && evals
                 .last()
-                .is_some_and(|e| e.steps == r.steps && e.success == r.final_success)
-            && evals.iter().all(|e| e.success <= r.best_success)
-            && at_best.is_some()
-            && r.first_success_steps == evals.iter().find(|e| e.success > 0.0).map(|e| e.steps);
+                .is_some_and(|e| e.steps == r.env_steps && e.success == r.success_rate);
         if !agrees {
             let why = format!(
-                "does not agree with its folder ({method}, {env}) or its evaluations (in order, \
-                 successes in [0, 1]; last at {} steps {}, best {}, first success {:?})",
-                r.steps, r.final_success, r.best_success, r.first_success_steps
+                "does not agree with its row (in order, successes in [0, 1]; the last at {} \
+                 steps with success {})",
+                r.env_steps, r.success_rate
             );
-            return Err(Error::parse(path, why));
+            return Err(Error::parse(&path, why));
         }
-        let at = at_best.map_or(u64::MAX, |e| e.steps);
-        if r.best_success > best.0 || (r.best_success == best.0 && at < best.1) {
-            best = (r.best_success, at);
+        let run_best = evals.iter().map(|e| e.success).fold(0.0, f32::max);
+        reached += u64::from(run_best > 0.0);
+        let at = evals
+            .iter()
+            .find(|e| e.success == run_best)
+            .map_or(u64::MAX, |e| e.steps);
+        if run_best > best.0 || (run_best == best.0 && at < best.1) {
+            best = (run_best, at);
         }
     }
     Ok(PointMazeBaseline {
-        method: method.to_string(),
+        method: cell.method.clone(),
         library: "ours".to_string(),
-        env,
+        env: cell.site.id(),
         runs: runs.len() as u64,
         ended: runs.len() as u64,
         resumed: 0,
-        steps_max: runs.iter().map(|(_, r)| r.steps).max().unwrap_or(0),
-        solved: runs.iter().filter(|(_, r)| r.final_success >= 1.0).count() as u64,
+        steps_max: runs.iter().map(|r| r.env_steps).max().unwrap_or(0),
+        solved: runs.iter().filter(|r| r.success_rate >= 1.0).count() as u64,
         solved_at_min: None,
-        reached: runs.iter().filter(|(_, r)| r.best_success > 0.0).count() as u64,
+        reached,
         best: f64::from(best.0),
         best_at: (best.0 > 0.0).then_some(best.1),
-        seeds: seeds_text(runs.iter().map(|(_, r)| r.seed)),
+        seeds: seeds_text(runs.iter().map(|r| r.seed)),
     })
 }
 

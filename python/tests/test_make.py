@@ -1,0 +1,76 @@
+"""Every environment of the registry by name: ``pbcs.make(name)`` and the Gymnasium ids
+``pbcs/<name>-v0`` pass Gymnasium's own checker, step as the Rust core does, and a name this
+build cannot make (PointMaze without MuJoCo) is refused saying why."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import pbcs
+
+RUNNABLE = [n for n in pbcs.ENV_NAMES if not n.startswith("pointmaze_")]
+
+
+def test_the_registry_lists_the_maze_the_rooms_and_pointmaze():
+    assert pbcs.ENV_NAMES[:2] == ("maze", "rooms")
+    assert {"pointmaze_umaze", "pointmaze_large"} <= set(pbcs.ENV_NAMES)
+
+
+@pytest.mark.parametrize("name", RUNNABLE)
+def test_every_environment_passes_gymnasiums_checker(name):
+    check_env(pbcs.make(name), skip_render_check=False)
+    check_env(pbcs.RegisteredEnv(name, render_mode="rgb_array"), skip_render_check=False)
+    env = gym.make(f"pbcs/{name}-v0")
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+
+
+def test_the_registrys_maze_steps_as_the_python_maze():
+    ours = pbcs.RegisteredEnv("maze", size=3, layout=1, max_episode_steps=50)
+    theirs = pbcs.ContinuousMaze(size=3, layout=1, max_episode_steps=50)
+    a, _ = ours.reset(seed=0)
+    b, _ = theirs.reset(seed=0)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        action = rng.uniform(-0.2, 0.2, size=2).astype(np.float32)
+        ra, rb = ours.step(action), theirs.step(action)
+        assert ra[0].tobytes() == rb[0].tobytes() and ra[1:4] == rb[1:4]
+        if ra[2] or ra[3]:
+            break
+
+
+def test_the_rooms_reward_their_target_and_render():
+    env = pbcs.make("rooms", render_mode="rgb_array", max_episode_steps=300)
+    obs, _ = env.reset(seed=0)
+    assert obs.tolist() == pytest.approx([0.3, 0.2])
+    assert env.action_space.high.tolist() == pytest.approx([0.1, 0.1])
+    done = False
+    for _ in range(300):
+        # Up to the door's height, through it, then to the target in the right room.
+        x, y = obs
+        action = [0.0, 0.1] if x < 1 and y < 0.9 else [0.1, 0.0] if x < 1.65 else [0.0, -0.1]
+        obs, reward, terminated, truncated, _ = env.step(action)
+        if terminated or truncated:
+            done = terminated
+            break
+    picture = env.render()
+    assert picture.shape == (256, 256, 3)
+    assert done, obs
+
+
+def test_names_and_arguments_this_build_refuses_say_why():
+    with pytest.raises(ValueError, match="not an environment"):
+        pbcs.make("hall")
+    with pytest.raises(ValueError, match="rooms"):
+        pbcs.make("rooms", size=4)
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        pbcs.make("rooms", max_episode_steps=0)
+    env = pbcs.make("rooms")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="2 components"):
+        env.step([0.1])
+    try:
+        pbcs.make("pointmaze_umaze")
+    except ValueError as e:
+        assert "MuJoCo" in str(e)
