@@ -174,6 +174,17 @@ impl EnvName {
         })
     }
 
+    /// What pictures draw under a run of this environment (its [`crate::env::Planar::scene`]):
+    /// PointMaze's from its map, without MuJoCo, so that committed rows draw in any build.
+    pub fn scene(self, maze: &MazeConfig) -> Result<crate::env::Scene> {
+        match self.point_map() {
+            Some(map) => Ok(point_scene(map)),
+            None => Ok(crate::with_env!(self.build(maze)?, |env| {
+                crate::env::Planar::scene(&env)
+            })),
+        }
+    }
+
     /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
     /// the map, the task's cells and gymnasium-robotics' id and time limit are in
     /// [`crate::envs::pointmaze::model`].

@@ -138,18 +138,12 @@ pub struct Cell {
 impl Cell {
     /// What a picture of the cell draws its runs over: its environment's scene.
     pub fn scene(&self) -> Result<crate::env::Scene> {
-        match &self.job {
-            Job::Vanilla(j) => Ok(crate::env::Planar::scene(&crate::envs::maze::Maze::new(
-                &j.maze,
-            )?)),
-            // PointMaze's scene is its map's (no MuJoCo needed to draw committed rows).
-            Job::Pbcs(j) => match j.env.point_map() {
-                Some(map) => Ok(crate::envs::point_scene(map)),
-                None => Ok(crate::with_env!(j.env.build(&j.maze)?, |env| {
-                    crate::env::Planar::scene(&env)
-                })),
-            },
-        }
+        use crate::config::Located;
+        let (_, env, maze) = match &self.job {
+            Job::Vanilla(j) => j.location(),
+            Job::Pbcs(j) => j.location(),
+        };
+        env.scene(maze)
     }
 }
 
