@@ -43,7 +43,8 @@ def test_bad_arguments_name_what_is_wrong():
         pbcs.run(2, preset="slow")
     with pytest.raises(ValueError, match="not an environment"):
         pbcs.run(env="hall")
-    with pytest.raises(ValueError, match="has no maze"):
+    # A maze size for another environment: refused by the same rule as `pbcs run --maze`.
+    with pytest.raises(ValueError, match="maze size or layout .* environment is `rooms`"):
         pbcs.run(2, env="rooms")
 
 

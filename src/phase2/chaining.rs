@@ -1,4 +1,4 @@
-//! Algorithm 1 on the maze's learning problems ([`chain_skills`]), and the verification and
+//! Algorithm 1 on an environment's learning problems ([`chain_skills`]), and the verification and
 //! repair of the finished chain (`repair_chain`, ours).
 //!
 //! Each skill is one learning problem ([`SkillTask`]: a learner, the shaped reward, starts in

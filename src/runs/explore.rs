@@ -91,11 +91,11 @@ impl<E: Planar> ExploreRun<E> {
     }
 
     fn write_files(&self, job: &ExploreJob, out: &Path) -> Result<()> {
-        let (maze, found) = (&self.env, &self.found);
+        let (env, found) = (&self.env, &self.found);
         write_record(&out.join("summary.csv"), &self.summary)?;
-        write_trajectory_csv(maze, found, &out.join("trajectory.csv"))?;
-        write_archive_csv(maze, found, &out.join("archive.csv"))?;
-        render_exploration(maze, found, job, out)?;
+        write_trajectory_csv(env, found, &out.join("trajectory.csv"))?;
+        write_archive_csv(env, found, &out.join("archive.csv"))?;
+        render_exploration(env, found, job, out)?;
         write_timing(
             &out.join("timing.toml"),
             self.seconds,
