@@ -247,6 +247,10 @@ impl NamedEnv {
     }
 }
 
+/// What a chain's picture draws: the environment's scene and its activation balls (centre as
+/// drawn, radius).
+pub(crate) type ChainPicture = (pbcs::env::Scene, Vec<((f32, f32), f32)>);
+
 /// A saved chain's environment, its type erased: what `pbcs.Chain` runs on it.
 pub(crate) trait ChainEnv: Send + Sync {
     /// The observations of `episodes` evaluation starts in B_ε(s_0) of `seed`.
@@ -255,7 +259,7 @@ pub(crate) trait ChainEnv: Send + Sync {
     /// One execution of `chain` from s_0: drawn points, success, skill of each step.
     fn rollout(&self, chain: &SkillChain, max_steps: usize) -> (Vec<(f32, f32)>, bool, Vec<usize>);
     /// The scene and the chain's activation balls where they are drawn.
-    fn picture(&self, chain: &SkillChain) -> (pbcs::env::Scene, Vec<((f32, f32), f32)>);
+    fn picture(&self, chain: &SkillChain) -> ChainPicture;
     /// The number of observation components.
     fn obs_dim(&self) -> usize;
 }
@@ -285,7 +289,7 @@ impl<E: Planar + Send + Sync + 'static> ChainEnv for E {
         (points, r.success, r.skill_used)
     }
 
-    fn picture(&self, chain: &SkillChain) -> (pbcs::env::Scene, Vec<((f32, f32), f32)>) {
+    fn picture(&self, chain: &SkillChain) -> ChainPicture {
         let circles = chain
             .skills
             .iter()

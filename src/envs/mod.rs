@@ -84,6 +84,9 @@ pub enum EnvName {
 /// An environment made from its name ([`EnvName::build`]); [`with_env!`](crate::with_env)
 /// runs generic code on the one it holds.
 #[derive(Debug)]
+// Made once per run and matched at once (`with_env!`), each arm taking its environment by value:
+// boxing the maze to even the sizes would put an indirection under every step.
+#[allow(clippy::large_enum_variant)]
 pub enum Built {
     /// [`EnvName::Maze`].
     Maze(Maze),
