@@ -111,7 +111,7 @@ pub trait Env {
     }
 
     /// How far one step can move the position ([`Env::position`]), which turns a path length
-    /// into steps for PBCS's path limits (`phase2.episode_path_limit`,
+    /// into steps for PBCS's path limits (`phase2.path_limit`,
     /// `phase2.test_path_limit`): the action bound where an action is a displacement (the
     /// maze, the rooms), how far the fastest step goes where actions are forces. `None` (the
     /// default): those settings are refused ([`Capability::StepReach`]).

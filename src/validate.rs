@@ -27,8 +27,8 @@ pub trait Check {
     /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.
     fn check(&self) -> Result<()>;
 
-    /// The value, checked once ([`Valid`]): what a run takes, so that nothing after it checks
-    /// again.
+    /// The value, checked once ([`Valid`]): what a run takes, so that the run need not check
+    /// it again.
     fn valid(self) -> Result<Valid<Self>>
     where
         Self: Sized,
@@ -39,7 +39,9 @@ pub trait Check {
 }
 
 /// A value whose [`Check`] passed (linfa's checked parameters): made only by [`Check::valid`],
-/// so a function that takes one knows its fields are in range without checking them again.
+/// so a function that takes one knows its fields are in range without checking them again
+/// (library functions that also take unchecked parts, `Learner::new` or `train_vanilla`, still
+/// check those).
 /// It reads as the value ([`std::ops::Deref`]) and serialises as it.
 ///
 /// ```

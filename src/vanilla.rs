@@ -294,7 +294,14 @@ impl<'a, E: Env> Vanilla<'a, E> {
     fn visit(&mut self, next: bool) {
         let o = if next { &self.next_obs } else { &self.obs };
         let side = self.train.visit_bin;
-        let bin = o.iter().map(|x| (x / side).floor() as i32).collect();
+        // Bins of the position (the whole observation of the maze and the rooms; PointMaze's
+        // without its velocity), as phase 1's archive bins.
+        let bin = self
+            .env
+            .position(o)
+            .iter()
+            .map(|x| (x / side).floor() as i32)
+            .collect();
         self.visited.insert(bin);
     }
 

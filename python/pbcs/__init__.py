@@ -4,8 +4,8 @@ Everything is computed by the Rust package pbcs-rs (the compiled module ``pbcs._
 
 * :class:`ContinuousMaze` — the paper's continuous maze as a ``gymnasium.Env``, registered as
   ``pbcs/ContinuousMaze-v0``; :class:`ContinuousMazeVec` steps N mazes in one call.
-* :func:`make` — any environment of the registry by name (``maze``, ``rooms``, PointMaze in a
-  build with MuJoCo), registered as ``pbcs/<name>-v0``.
+* :func:`make` — any environment of the registry by name (``ENV_NAMES``: ``maze``, ``rooms``,
+  ``three_rooms``, PointMaze in a build with MuJoCo), registered as ``pbcs/<name>-v0``.
 * :func:`explore` — phase 1: the trajectory τ from s_0 to the target.
 * :func:`run` — a whole PBCS run with a preset (``fast`` or ``paper``).
 * :func:`load_chain` — a chain of skills saved by ``pbcs run`` as a policy (:class:`Chain`).
@@ -31,6 +31,7 @@ __all__ = [
     "ContinuousMaze",
     "ContinuousMazeVec",
     "Chain",
+    "ENV_NAMES",
     "evaluation_starts",
     "explore",
     "load_chain",

@@ -154,8 +154,8 @@ class ContinuousMazeVec(VectorEnv):
 
 
 class RegisteredEnv(gym.Env):
-    """An environment of pbcs-rs' registry by name (``maze``, ``rooms``, ``pointmaze_<map>``
-    in a build with MuJoCo), as a ``gymnasium.Env``: the observation is the environment's
+    """An environment of pbcs-rs' registry by name (``pbcs.ENV_NAMES``: ``maze``, ``rooms``,
+    ``three_rooms``, ``pointmaze_<map>`` in a build with MuJoCo), as a ``gymnasium.Env``: the observation is the environment's
     (float32, unbounded box), the action box its bounds (out-of-range components are clipped,
     NaN counts as 0), ``reset`` starts from its start distribution (s_0 for the maze, the rooms
     and PointMaze's task), ``step`` is the Rust core's own, truncated after
@@ -189,6 +189,11 @@ class RegisteredEnv(gym.Env):
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
+        if options is not None and options.get("state") is not None:
+            raise ValueError(
+                f"invalid `options['state']`: {self.name} starts from its own start "
+                "distribution (reset-anywhere from Python is the maze's: pbcs.ContinuousMaze)"
+            )
         return self._core.reset(seed), {}
 
     def step(self, action):

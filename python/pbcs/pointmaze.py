@@ -58,7 +58,9 @@ def evaluate(chain, episodes=100, seed=0, env=None):
     own = env is None
     if own:
         env = make_env(chain)
-    limit = chain.pointmaze[3]
+    # The env's own time limit ends each episode (the rollout's cap never comes first).
+    spec = getattr(env, "spec", None)
+    limit = (spec.max_episode_steps if spec and spec.max_episode_steps else None) or chain.pointmaze[3]
     runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
             for e in range(episodes)]
     success = [r["success"] for r in runs]

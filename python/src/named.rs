@@ -34,16 +34,28 @@ pub(crate) fn env_name(name: &str) -> PyResult<EnvName> {
 /// `env`: refused for another environment, as `pbcs run --maze` is ([`Place`]).
 fn maze_for(env: EnvName, size: Option<i64>, layout: Option<i64>) -> PyResult<MazeConfig> {
     let mut job = pbcs::config::ExploreJob::default();
-    let place = Place {
-        env: Some(env),
-        maze_size: size
-            .map(|n| count("size", n).map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
-            .transpose()?,
-        maze_seed: layout.map(|m| count("layout", m)).transpose()?,
-        seed: None,
-    };
-    place.apply(&mut job).map_err(py_err)?;
+    place_of(Some(env), size, layout, None)?
+        .apply(&mut job)
+        .map_err(py_err)?;
     Ok(job.maze)
+}
+
+/// Where a Python call runs a job ([`Place`], as `pbcs run`'s flags): the environment, the
+/// maze's `size` and `layout`, the run `seed`, each checked as a count.
+pub(crate) fn place_of(
+    env: Option<EnvName>,
+    size: Option<i64>,
+    layout: Option<i64>,
+    seed: Option<i64>,
+) -> PyResult<Place> {
+    Ok(Place {
+        env,
+        maze_size: size
+            .map(|n| count("maze.size", n).map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+            .transpose()?,
+        maze_seed: layout.map(|m| count("maze.seed", m)).transpose()?,
+        seed: seed.map(|s| count("seed", s)).transpose()?,
+    })
 }
 
 /// A picture of `scene` with `picture` over it, as an RGB array of `side` × `side` pixels.
@@ -79,20 +91,23 @@ trait Episode {
     fn picture(&self) -> (pbcs::env::Scene, Vec<(f32, f32)>);
 }
 
-/// An environment, its current state, the episode's drawn path and its start stream.
+/// An environment, its current state, the episode's drawn path (at most `cap` points: stepping
+/// on past the time limit draws no more) and its start stream.
 struct Running<E: Planar> {
     env: E,
     state: E::State,
     path: Vec<(f32, f32)>,
+    cap: usize,
     rng: pbcs::rng::Rng,
 }
 
 impl<E: Planar> Running<E> {
-    fn new(env: E) -> Self {
+    fn new(env: E, cap: usize) -> Self {
         let state = env.start();
         Running {
             path: vec![env.point(&state)],
             state,
+            cap,
             rng: Seeds::new(0).stream(Stream::Start),
             env,
         }
@@ -128,7 +143,9 @@ impl<E: Planar> Episode for Running<E> {
     fn step(&mut self, action: &[f32]) -> (Vec<f32>, f32, bool) {
         let s = self.env.step(&self.state, action);
         self.state = s.state;
-        self.path.push(self.env.point(&self.state));
+        if self.path.len() < self.cap {
+            self.path.push(self.env.point(&self.state));
+        }
         (self.obs(), s.reward, s.terminal)
     }
 
@@ -167,7 +184,8 @@ impl NamedEnv {
         }
         let built = env.build(&maze).map_err(py_err)?;
         let episode: Box<dyn Episode> =
-            pbcs::with_env!(built, |e| Box::new(Running::new(e)) as Box<dyn Episode>);
+            pbcs::with_env!(built, |e| Box::new(Running::new(e, max_episode_steps + 1))
+                as Box<dyn Episode>);
         Ok(NamedEnv {
             name: env,
             bounds: episode.action_bounds(),

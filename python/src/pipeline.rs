@@ -3,9 +3,8 @@
 use crate::{count, invalid, maze_of, py_err};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
-use pbcs::config::{ExploreJob, PbcsJob, Place, Preset};
+use pbcs::config::{ExploreJob, PbcsJob, Preset};
 use pbcs::env::{EvalEpisode, Planar};
-use pbcs::envs::EnvName;
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs::{PbcsRun, RunRecord};
 use pbcs::validate::Check;
@@ -131,27 +130,8 @@ pub(crate) fn run<'py>(
         None => Preset::named(preset).and_then(Preset::job),
     }
     .map_err(py_err)?;
-    let env = env
-        .map(|name| {
-            name.parse::<EnvName>().map_err(|_| {
-                invalid(
-                    "env",
-                    format!(
-                        "`{name}` is not an environment (maze, {})",
-                        EnvName::others()
-                    ),
-                )
-            })
-        })
-        .transpose()?;
-    let place = Place {
-        env,
-        maze_size: size
-            .map(|n| count("maze.size", n).map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
-            .transpose()?,
-        maze_seed: layout.map(|m| count("maze.seed", m)).transpose()?,
-        seed: Some(count("seed", seed)?),
-    };
+    let env = env.map(crate::named::env_name).transpose()?;
+    let place = crate::named::place_of(env, size, layout, Some(seed))?;
     place.apply(&mut job).map_err(py_err)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;

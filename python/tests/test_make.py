@@ -70,6 +70,9 @@ def test_names_and_arguments_this_build_refuses_say_why():
     env.reset(seed=0)
     with pytest.raises(ValueError, match="2 components"):
         env.step([0.1])
+    # Reset-anywhere from Python is the maze's: a start state elsewhere is refused, not ignored.
+    with pytest.raises(ValueError, match="options"):
+        env.reset(options={"state": (0.5, 0.5)})
     try:
         pbcs.make("pointmaze_umaze")
     except ValueError as e:

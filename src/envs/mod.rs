@@ -11,7 +11,8 @@
 //!
 //! Adding an environment: its own module here (`three_rooms.rs` is the example), and in this
 //! file its `mod` line, a variant of [`EnvName`], its arm in [`EnvName::build`], a variant of
-//! [`Built`] and its arm in `with_env!`: five lines, nothing else in the package.
+//! [`Built`] and its arm in `with_env!`: five lines of code (and the variants' doc lines),
+//! nothing else in the package.
 //!
 //! ```
 //! use pbcs::config::MazeConfig;

@@ -459,7 +459,8 @@ impl Experiment {
             Some(p) => format!("profile.{p}.seeds"),
             None => "seeds".to_string(),
         };
-        check_seeds(&field, spec.first_seed, seed_count, &[])?;
+        let own_pictures = prof.picture_seeds.as_deref().unwrap_or(&[]);
+        check_seeds(&field, spec.first_seed, seed_count, own_pictures)?;
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
         let envs = prof.envs.clone().unwrap_or(spec.envs.clone());
         let sites: Vec<Site> = (mazes.iter().map(|&n| Site::Maze(n)))

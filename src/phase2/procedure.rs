@@ -388,6 +388,7 @@ impl Phase2Config {
         self.require_hooks(env)?;
         Ok(Ready {
             config: self,
+            reach: env.step_reach(),
             env: std::marker::PhantomData,
         })
     }
@@ -509,6 +510,9 @@ impl Phase2Config {
 #[derive(Debug)]
 pub struct Ready<'a, E: ?Sized> {
     config: &'a Phase2Config,
+    /// The checked environment's [`Env::step_reach`]: present where the settings' path limits
+    /// need it (checked), taken from the instance checked.
+    reach: Option<f32>,
     env: std::marker::PhantomData<fn(&E)>,
 }
 
@@ -524,5 +528,11 @@ impl<'a, E: ?Sized> Ready<'a, E> {
     /// The settings.
     pub fn settings(self) -> &'a Phase2Config {
         self.config
+    }
+
+    /// How far one step of the checked environment goes ([`Env::step_reach`]); `Some` whenever
+    /// the settings have a path limit.
+    pub fn step_reach(self) -> Option<f32> {
+        self.reach
     }
 }

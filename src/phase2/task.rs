@@ -44,20 +44,19 @@ fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
 /// The step limit of an episode from each τ_k towards the goal of τ_T, given L_k
 /// ([`lengths_to_goal`]): `max_steps`, or with a path limit p > 0
 /// ([`crate::phase2::EpisodeLimit`], [`Phase2Config::path_limits`]) at most
-/// ⌈p (L_k + 2ε) / a⌉, a being how far one step can go ([`Env::step_reach`]).
+/// ⌈p (L_k + 2ε) / a⌉, a being how far one step can go ([`Env::step_reach`], as `ready`
+/// took it from the environment it checked).
 fn episode_limits<E: Env>(
-    env: &E,
-    config: &Phase2Config,
+    ready: super::Ready<'_, E>,
     p: Option<f32>,
     lengths: &[f32],
 ) -> Vec<usize> {
-    let Some(p) = p else {
+    let config = ready.settings();
+    // With a path limit, `Ready` holds the reach (its construction refuses the settings
+    // otherwise, `Capability::StepReach`); without one, no reach is needed.
+    let (Some(p), Some(a)) = (p, ready.step_reach()) else {
         return vec![config.max_steps; lengths.len()];
     };
-    // Checked before any work ([`Phase2Config::require_hooks`]): path limits need the reach.
-    let a = env
-        .step_reach()
-        .expect("path limits need Env::step_reach (checked by Ready)");
     lengths
         .iter()
         .map(|l| {
@@ -121,7 +120,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         env: &'a E,
-        config: super::Ready<'a, E>,
+        ready: super::Ready<'a, E>,
         states: &'a [E::State],
         goal: Goal,
         t: usize,
@@ -129,7 +128,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         rngs: [Rng; 3],
         budget: u64,
     ) -> Self {
-        let config = config.settings();
+        let config = ready.settings();
         let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
@@ -167,8 +166,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
             budget,
             bounds: config.learner_bounds(env),
             entries: Vec::new(),
-            limits: episode_limits(env, config, train_limit, &lengths),
-            test_limits: episode_limits(env, config, greedy_limit, &lengths),
+            limits: episode_limits(ready, train_limit, &lengths),
+            test_limits: episode_limits(ready, greedy_limit, &lengths),
             on_event: None,
         }
     }

@@ -130,14 +130,15 @@ impl LearnerArgs {
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Phase 1: explore a maze until the target is reached; write the trajectory, the archive
-    /// and a picture.
+    /// Phase 1: explore an environment (the maze unless --env) until the target is reached;
+    /// write the trajectory, the archive and a picture.
     Explore {
         #[command(flatten)]
         run: RunArgs,
     },
-    /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on the maze's own
-    /// reward; write evaluations, visited states, the actor and a picture.
+    /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on an environment's
+    /// own reward (the maze unless --env); write evaluations, visited states, the actor and a
+    /// picture.
     Train {
         #[command(flatten)]
         run: RunArgs,

@@ -16,7 +16,8 @@
 //! - **Update cost** (`update_cost.csv`, wall clock, copied as `outside.timing.csv`): the time
 //!   per environment step of SB3's and our updates measured in the same run on one machine.
 //! - **PointMaze** ([`pointmaze_baselines`]): our DDPG and TD3 alone and SB3's SAC+HER on
-//!   PBCS's PointMaze tasks (`<results>/pointmaze/vanilla/`, `<results>/pointmaze/sb3/`).
+//!   PBCS's PointMaze tasks (the experiment `pointmaze_vanilla`'s raw rows,
+//!   `<results>/pointmaze/sb3/`).
 
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};

@@ -150,10 +150,9 @@ fn vanilla_line(
     runs: &[&RawRow],
     results: &Path,
 ) -> Result<PointMazeBaseline> {
-    let dir = exp.cell_dir(results, cell);
     let (mut best, mut reached) = ((0.0f32, u64::MAX), 0);
     for r in runs {
-        let path = run_file(&dir, r.seed, ".evals.csv");
+        let path = crate::experiment::evals_file(exp, results, cell, r.seed);
         let evals: Vec<EvalRow> = crate::record::read_records(&path)?;
         let in_order = evals.windows(2).all(|w| w[0].steps < w[1].steps)
             && evals.iter().all(|e| (0.0..=1.0).contains(&e.success));
