@@ -77,3 +77,16 @@ def test_names_and_arguments_this_build_refuses_say_why():
         pbcs.make("pointmaze_umaze")
     except ValueError as e:
         assert "MuJoCo" in str(e)
+
+
+def test_a_three_rooms_chain_rolls_out_in_python_as_in_the_core(tmp_path):
+    # The environment issue 47 added through the registry alone: a run, its chain, and that
+    # chain stepped through pbcs.make's environment, the same episode as the core's.
+    record = pbcs.run(env="three_rooms", seed=0, out=str(tmp_path / "run"))
+    assert record["env"] == "three_rooms" and record["solved"]
+    chain = pbcs.load_chain(record["chain"])
+    core = chain.core_rollout()
+    ours = chain.rollout()
+    assert (ours["success"], ours["steps"]) == (core["success"], core["steps"])
+    assert ours["states"][-1].tobytes() == core["states"][-1].tobytes()
+    assert chain.render([core["states"]]).shape == (256, 256, 3)
