@@ -35,6 +35,7 @@ pub mod pointmaze;
 pub mod rooms;
 pub mod three_rooms;
 pub mod toy;
+mod walled;
 
 use crate::error::Result;
 use maze::{Maze, MazeConfig};

@@ -24,11 +24,11 @@
 //! assert_eq!((done.reward, done.terminal), (1.0, true));
 //! ```
 
+use super::walled::Walled;
 use crate::env::{BallIsClear, Connect, Env, Planar, SampleBall, Scene, Step};
 use crate::rng::Rng;
 use parry2d::math::{Isometry, Point};
 use parry2d::shape::Segment;
-use rand::Rng as _;
 
 /// Two rooms and a door; the state is the point (x, y).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -45,6 +45,15 @@ pub const MAX_ACTION: f32 = 0.1;
 /// The rooms' extent: x in [0, WIDTH], y in [0, HEIGHT].
 const WIDTH: f32 = 2.0;
 const HEIGHT: f32 = 1.0;
+/// The box, the moves and the target ([`Walled`]: the step, ball starts and connections the
+/// rooms' environments share).
+const ROOMS: Walled = Walled {
+    width: WIDTH,
+    height: HEIGHT,
+    max_action: MAX_ACTION,
+    target: TARGET,
+    target_radius: TARGET_RADIUS,
+};
 
 impl TwoRooms {
     /// Whether the segment from `s` to `n` crosses the wall x = 1 outside the door.
@@ -60,10 +69,7 @@ impl TwoRooms {
     /// Whether the segment from `a` to `b` keeps `clearance` from the wall between the rooms
     /// and from the outer walls.
     fn clear_segment(a: &[f32; 2], b: &[f32; 2], clearance: f32) -> bool {
-        let inside = |p: &[f32; 2]| {
-            (clearance..=WIDTH - clearance).contains(&p[0])
-                && (clearance..=HEIGHT - clearance).contains(&p[1])
-        };
+        let inside = |p: &[f32; 2]| ROOMS.inside(p, clearance);
         if !(inside(a) && inside(b)) {
             return false; // the rooms are convex: a segment between inside points stays inside
         }
@@ -115,24 +121,7 @@ impl Env for TwoRooms {
     /// Pure: moves by the clipped action (NaN counts as 0) unless the wall blocks it; reward 1
     /// and the end of the episode in the target disc.
     fn step(&self, s: &[f32; 2], a: &[f32]) -> Step<[f32; 2]> {
-        let clip = |v: f32| {
-            if v.is_nan() {
-                0.0
-            } else {
-                v.clamp(-MAX_ACTION, MAX_ACTION)
-            }
-        };
-        let n = [
-            (s[0] + clip(a[0])).clamp(0.0, WIDTH),
-            (s[1] + clip(a[1])).clamp(0.0, HEIGHT),
-        ];
-        let n = if Self::blocked(s, &n) { *s } else { n };
-        let done = (n[0] - TARGET[0]).hypot(n[1] - TARGET[1]) < TARGET_RADIUS;
-        Step {
-            state: n,
-            reward: f32::from(u8::from(done)),
-            terminal: done,
-        }
+        ROOMS.step(s, a, Self::blocked)
     }
 
     fn obs_names(&self) -> Vec<String> {
@@ -185,17 +174,7 @@ impl SampleBall<[f32; 2]> for TwoRooms {
     /// across the wall from the centre is replaced by the centre (a start is reachable from
     /// the ball's centre).
     fn sample_ball(&self, center: &[f32; 2], radius: f32, rng: &mut Rng) -> [f32; 2] {
-        let r = radius * rng.random::<f32>().sqrt();
-        let phi = std::f32::consts::TAU * rng.random::<f32>();
-        let p = [
-            (center[0] + r * phi.cos()).clamp(0.0, WIDTH),
-            (center[1] + r * phi.sin()).clamp(0.0, HEIGHT),
-        ];
-        if Self::blocked(center, &p) {
-            *center
-        } else {
-            p
-        }
+        ROOMS.sample_ball(center, radius, rng, Self::blocked)
     }
 }
 
@@ -210,11 +189,6 @@ impl Connect<[f32; 2]> for TwoRooms {
     /// The straight line in equal steps of at most [`MAX_ACTION`] per axis, when it keeps
     /// `clearance` from every wall and is at most 2 long (as the maze's).
     fn connect(&self, from: &[f32; 2], to: &[f32; 2], clearance: f32) -> Option<Vec<Vec<f32>>> {
-        let d = [to[0] - from[0], to[1] - from[1]];
-        if d[0].hypot(d[1]) > 2.0 || !Self::clear_segment(from, to, clearance) {
-            return None;
-        }
-        let steps = (d[0].abs().max(d[1].abs()) / MAX_ACTION).ceil().max(1.0);
-        Some(vec![vec![d[0] / steps, d[1] / steps]; steps as usize])
+        ROOMS.connect(from, to, clearance, Self::clear_segment)
     }
 }
