@@ -7,42 +7,54 @@
 //! each action, one line is written: `x y vx vy w0 w1 reward success terminal`, numbers in
 //! Rust's shortest round-trip form (Python's `float()` reads them back exactly), then an empty
 //! line ends the episode. A line `task <map>` is answered with the task's cells instead:
-//! `start_row start_col goal_row goal_col`. Bad input ends the program with a message naming
-//! the line.
+//! `start_row start_col goal_row goal_col`. A line `map <name> <row> <row> ...` (rows of `0`
+//! and `1`, as a job's `[pointmaze] map`) adds a map of one's own under that name, answered
+//! with an empty line. Bad input ends the program with a message naming the line.
 //!
 //! `cargo run --release --features mujoco --example pointmaze_step < episodes.txt`
 
 use pbcs::env::Env;
-use pbcs::envs::pointmaze::{MapName, PointMaze, PointState};
+use pbcs::envs::pointmaze::{MapName, PointMap, PointMaze, PointMazeConfig, PointState};
 use std::io::{BufRead, Write};
 use strum::IntoEnumIterator;
 
 fn main() -> anyhow::Result<()> {
-    let envs: Vec<(String, PointMaze)> = MapName::iter()
+    let mut envs: Vec<(String, PointMaze)> = MapName::iter()
         .map(|m| Ok((<&str>::from(m).to_lowercase(), PointMaze::named(m)?)))
         .collect::<pbcs::Result<_>>()?;
     let stdin = std::io::stdin();
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    let find = |name: &str, line: usize| {
-        envs.iter()
-            .find(|(m, _)| m == name)
-            .map(|(_, env)| env)
-            .ok_or_else(|| {
-                anyhow::anyhow!("line {line}: unknown map {name:?} (umaze, open, medium, large)")
-            })
+    let find = |envs: &[(String, PointMaze)], name: &str, line: usize| {
+        let i = envs.iter().position(|(m, _)| m == name).ok_or_else(|| {
+            anyhow::anyhow!("line {line}: unknown map {name:?} (umaze, open, medium, large, or one added)")
+        })?;
+        anyhow::Ok(i)
     };
     for (n, line) in stdin.lock().lines().enumerate() {
         let line = line?;
         let mut words = line.split_whitespace();
         let Some(map) = words.next() else { continue };
+        if map == "map" {
+            let name = words.next().unwrap_or("").to_string();
+            let own = PointMazeConfig {
+                map: words.map(String::from).collect(),
+                ..PointMazeConfig::default()
+            };
+            let env = PointMaze::on(PointMap::from_config(&own)?)?;
+            envs.retain(|(m, _)| *m != name);
+            envs.push((name, env));
+            writeln!(out)?;
+            out.flush()?;
+            continue;
+        }
         if map == "task" {
-            let env = find(words.next().unwrap_or(""), n + 1)?;
+            let env = &envs[find(&envs, words.next().unwrap_or(""), n + 1)?].1;
             let ((a, b), (c, d)) = env.map().farthest_cells();
             writeln!(out, "{a} {b} {c} {d}")?;
             out.flush()?;
             continue;
         }
-        let env = find(map, n + 1)?;
+        let env = &envs[find(&envs, map, n + 1)?].1;
         let numbers: Vec<f64> = words
             .map(|w| w.parse::<f64>())
             .collect::<Result<_, _>>()

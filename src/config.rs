@@ -16,7 +16,8 @@
 //! assert!(bad.check().unwrap_err().to_string().contains("maze.size"));
 //! ```
 
-use crate::envs::EnvName;
+use crate::envs::pointmaze::PointMazeConfig;
+use crate::envs::{EnvName, EnvSpec};
 use crate::error::Result;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
@@ -42,56 +43,57 @@ pub struct ExploreJob {
     pub env: EnvName,
     /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
+    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
+    pub pointmaze: PointMazeConfig,
     /// Phase 1 settings.
     pub explore: ExploreConfig,
 }
 
 impl Check for ExploreJob {
     fn check(&self) -> Result<()> {
-        refuse_maze_of_other_env(self.env, &self.maze)?;
-        self.maze.check()?;
+        self.env_spec().check()?;
         self.explore.check()
     }
 }
 
-/// Where a job runs, to set: its run seed, its environment's name and the maze (used when the
-/// environment is the maze). Every job has them; a grid's cell and the command's flags set
-/// them through this.
+/// Where a job runs: its run seed and its environment with its parameters (`env`, `[maze]`,
+/// `[pointmaze]`), read and set as one [`EnvSpec`]. Every job has them; a grid's cell, the
+/// command's flags and Python's arguments set them through this.
 pub trait Located {
-    /// The run seed, the environment and the maze.
-    fn location(&self) -> (u64, EnvName, &MazeConfig);
-    /// The same, to set.
-    fn location_mut(&mut self) -> (&mut u64, &mut EnvName, &mut MazeConfig);
+    /// The run seed.
+    fn seed(&self) -> u64;
+    /// The run seed, to set.
+    fn seed_mut(&mut self) -> &mut u64;
+    /// The environment and its parameters.
+    fn env_spec(&self) -> EnvSpec;
+    /// Sets the environment and its parameters.
+    fn set_env_spec(&mut self, spec: EnvSpec);
 }
 
 macro_rules! located {
     ($($job:ty),*) => {$(
         impl Located for $job {
-            fn location(&self) -> (u64, EnvName, &MazeConfig) {
-                (self.seed, self.env, &self.maze)
+            fn seed(&self) -> u64 {
+                self.seed
             }
-            fn location_mut(&mut self) -> (&mut u64, &mut EnvName, &mut MazeConfig) {
-                (&mut self.seed, &mut self.env, &mut self.maze)
+            fn seed_mut(&mut self) -> &mut u64 {
+                &mut self.seed
+            }
+            fn env_spec(&self) -> EnvSpec {
+                EnvSpec {
+                    name: self.env,
+                    maze: self.maze.clone(),
+                    pointmaze: self.pointmaze.clone(),
+                }
+            }
+            fn set_env_spec(&mut self, spec: EnvSpec) {
+                (self.env, self.maze, self.pointmaze) = (spec.name, spec.maze, spec.pointmaze);
             }
         }
     )*};
 }
 located!(ExploreJob, TrainJob, PbcsJob);
-
-/// A job naming an environment other than the maze must leave `[maze]` at its defaults.
-fn refuse_maze_of_other_env(env: EnvName, maze: &MazeConfig) -> Result<()> {
-    if !env.is_maze() && *maze != MazeConfig::default() {
-        return Err(crate::error::Error::invalid(
-            "maze",
-            format!(
-                "sets the maze, but env = \"{}\" runs another environment (leave [maze] \
-                 out, or set env = \"maze\")",
-                env.name()
-            ),
-        ));
-    }
-    Ok(())
-}
 
 /// What `pbcs train` runs: a vanilla baseline (DDPG, TD3, or the argmax actor) on one
 /// environment's own reward (the maze unless `env` names another).
@@ -106,6 +108,9 @@ pub struct TrainJob {
     pub env: EnvName,
     /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
+    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
+    pub pointmaze: PointMazeConfig,
     /// The learner's hyper-parameters.
     pub learner: LearnerConfig,
     /// The training schedule.
@@ -114,8 +119,7 @@ pub struct TrainJob {
 
 impl Check for TrainJob {
     fn check(&self) -> Result<()> {
-        refuse_maze_of_other_env(self.env, &self.maze)?;
-        self.maze.check()?;
+        self.env_spec().check()?;
         self.learner.check()?;
         self.train.check()
     }
@@ -142,6 +146,9 @@ pub struct PbcsJob {
     /// The maze (the environment's size and layout when `env` is the maze; left at its
     /// defaults otherwise).
     pub maze: MazeConfig,
+    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
+    pub pointmaze: PointMazeConfig,
     /// Phase 1.
     pub explore: ExploreConfig,
     /// The learner trained by each Backplay (DDPG by default, as in the paper).
@@ -156,6 +163,7 @@ impl Default for PbcsJob {
             seed: 0,
             env: EnvName::Maze,
             maze: MazeConfig::default(),
+            pointmaze: PointMazeConfig::default(),
             explore: ExploreConfig::default(),
             learner: LearnerConfig {
                 gamma: 0.9,
@@ -168,8 +176,7 @@ impl Default for PbcsJob {
 
 impl Check for PbcsJob {
     fn check(&self) -> Result<()> {
-        refuse_maze_of_other_env(self.env, &self.maze)?;
-        self.maze.check()?;
+        self.env_spec().check()?;
         self.explore.check()?;
         self.learner.check()?;
         self.phase2.check()
@@ -207,8 +214,8 @@ impl PbcsJob {
 /// What a command line or a Python call changes in a job before it runs: where it runs and
 /// its seed, each left as the job has it when `None` (the same call in both, so a job means
 /// the same from either). [`Place::apply`] refuses a maze size or layout for a job on another
-/// environment.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// environment, and a map for any but `pointmaze`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Place {
     /// The environment (`--env`, `env=`).
     pub env: Option<EnvName>,
@@ -218,6 +225,9 @@ pub struct Place {
     pub maze_seed: Option<u64>,
     /// The run seed (`--seed`, `seed=`).
     pub seed: Option<u64>,
+    /// The rows of a PointMaze map of one's own (`--map FILE`, `map=`, `map_file=`), for
+    /// `pointmaze` (its time limit stays the job's).
+    pub map: Option<Vec<String>>,
 }
 
 impl Place {
@@ -235,20 +245,34 @@ impl Place {
     /// assert!(maze.apply(&mut job).unwrap_err().to_string().contains("rooms"));
     /// ```
     pub fn apply(&self, job: &mut impl Located) -> Result<()> {
-        let (seed, env, maze) = job.location_mut();
-        *env = self.env.unwrap_or(*env);
-        if !env.is_maze() && (self.maze_size.is_some() || self.maze_seed.is_some()) {
+        let mut spec = job.env_spec();
+        spec.name = self.env.unwrap_or(spec.name);
+        let env = spec.name.name();
+        if !spec.name.is_maze() && (self.maze_size.is_some() || self.maze_seed.is_some()) {
             return Err(crate::error::Error::invalid(
                 "maze",
                 format!(
                     "a maze size or layout (--maze, --maze-seed; Python's size=, layout=) sets \
-                     the maze, but the run's environment is `{}`",
-                    env.name()
+                     the maze, but the run's environment is `{env}`",
                 ),
             ));
         }
-        maze.size = self.maze_size.unwrap_or(maze.size);
-        maze.seed = self.maze_seed.unwrap_or(maze.seed);
+        if spec.name != EnvName::Pointmaze && self.map.is_some() {
+            return Err(crate::error::Error::invalid(
+                "pointmaze.map",
+                format!(
+                    "a map (--map; Python's map=, map_file=) is for env `pointmaze`, but the \
+                     run's environment is `{env}`"
+                ),
+            ));
+        }
+        spec.maze.size = self.maze_size.unwrap_or(spec.maze.size);
+        spec.maze.seed = self.maze_seed.unwrap_or(spec.maze.seed);
+        if let Some(map) = &self.map {
+            spec.pointmaze.map = map.clone();
+        }
+        job.set_env_spec(spec);
+        let seed = job.seed_mut();
         *seed = self.seed.unwrap_or(*seed);
         Ok(())
     }

@@ -385,3 +385,75 @@ fn every_committed_phase2_table_reads_into_the_procedure_and_back_unchanged() {
     }
     assert!(checked > 1000, "{checked} tables");
 }
+
+/// A PointMaze map of one's own (`env = "pointmaze"`, `[pointmaze]`, `--map FILE`): every bad
+/// map or misplaced map gets an error naming its field, in any build (the map is checked
+/// before MuJoCo is needed).
+#[test]
+fn a_map_of_ones_own_is_checked_naming_its_field() {
+    use pbcs::config::Check;
+    let job = |text: &str| -> Result<ExploreJob, String> {
+        let (_dir, path) = write(text);
+        let job: ExploreJob = load(&path).map_err(|e| e.to_string())?;
+        job.check().map_err(|e| e.to_string())?;
+        Ok(job)
+    };
+    let ok = "env = \"pointmaze\"\n[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n";
+    let good = job(ok).unwrap();
+    assert_eq!(good.pointmaze.map.len(), 3);
+    for (text, says) in [
+        ("env = \"pointmaze\"\n", "pointmaze.map"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"121\", \"111\"]\n", "row 1"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"10\", \"111\"]\n", "row 1 has 2"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"001\", \"111\"]\n", "border"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"101\", \"111\"]\n", "one free cell"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"111\", \"111\"]\n", "no free cell"),
+        (&format!("{ok}time_limit = 0\n"), "pointmaze.time_limit"),
+        (&format!("{ok}colour = 1\n"), "colour"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap_file = \"/nonexistent/map.txt\"\n", "/nonexistent/map.txt"),
+        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\"]\nmap_file = \"m.txt\"\n", "not both"),
+        ("env = \"rooms\"\n[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n", "env = \"rooms\""),
+        ("[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n", "env = \"maze\""),
+    ] {
+        let err = job(text).unwrap_err();
+        assert!(err.contains(says), "{text:?}: {err}");
+    }
+    let side = pbcs::envs::pointmaze::MAX_MAP_SIDE + 1;
+    let wide: Vec<String> = (0..3)
+        .map(|i| match i {
+            1 => format!("1{}1", "0".repeat(side - 2)),
+            _ => "1".repeat(side),
+        })
+        .collect();
+    let err = job(&format!("env = \"pointmaze\"\n[pointmaze]\nmap = {wide:?}\n")).unwrap_err();
+    assert!(err.contains("at most"), "{err}");
+    // A file of rows: comments, spaces between cells; a bad character names its line.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("map.txt");
+    std::fs::write(&file, "# mine\n1 1 1 1\n1 0 0 1\n\n1 1 1 1  # end\n").unwrap();
+    let from_file = job(&format!(
+        "env = \"pointmaze\"\n[pointmaze]\nmap_file = {:?}\ntime_limit = 50\n",
+        file.to_str().unwrap()
+    ))
+    .unwrap();
+    assert_eq!(from_file.pointmaze.map, ["1111", "1001", "1111"]);
+    assert_eq!(from_file.pointmaze.time_limit, 50);
+    // Written back, the job holds the rows, not the file.
+    let written = toml::to_string(&from_file).unwrap();
+    assert!(written.contains("map = [") && !written.contains("map_file"), "{written}");
+    std::fs::write(&file, "1111\n1x01\n1111\n").unwrap();
+    let err = job(&format!(
+        "env = \"pointmaze\"\n[pointmaze]\nmap_file = {:?}\n",
+        file.to_str().unwrap()
+    ))
+    .unwrap_err();
+    assert!(err.contains("line 2") && err.contains("'x'"), "{err}");
+    // On the command line: --map with another environment is refused before any work.
+    std::fs::write(&file, "1111\n1001\n1111\n").unwrap();
+    let out = dir.path().join("out");
+    let (code, err) = pbcs(&[
+        "explore", "--env", "rooms", "--map", file.to_str().unwrap(), "--out", out.to_str().unwrap(),
+    ]);
+    assert!(code != 0 && err.contains("is for env `pointmaze`"), "{code} {err}");
+    assert!(!out.exists());
+}

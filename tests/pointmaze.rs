@@ -3,7 +3,11 @@
 //! gymnasium-robotics' own environment is `python/tests/test_pointmaze.py`.
 
 use pbcs::env::{Env, Planar};
-use pbcs::envs::pointmaze::{MapName, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE};
+use pbcs::envs::pointmaze::{
+    MapName, PointMazeConfig, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE,
+};
+use pbcs::envs::{EnvName, EnvSpec};
+use std::path::Path;
 use strum::IntoEnumIterator;
 
 fn medium() -> PointMaze {
@@ -247,16 +251,29 @@ fn phase_1_bins_positions_and_its_trajectory_replays() {
     assert!(env.success(&s));
 }
 
-/// Figures of committed rows draw PointMaze without MuJoCo (`pbcs::envs::point_scene`): the
-/// same scene as the registry's environment draws.
+/// Figures of committed rows draw PointMaze without MuJoCo (`EnvSpec::scene`, from the map):
+/// the same scene as the registry's environment draws, on the four maps and one of one's own.
 #[test]
 fn the_scene_drawn_without_mujoco_is_the_environments() {
+    let mut specs: Vec<EnvSpec> = EnvName::all()
+        .iter()
+        .filter(|e| e.point_map().is_some())
+        .map(|&e| EnvSpec::named(e))
+        .collect();
+    assert_eq!(specs.len(), 4);
+    let mut own = EnvSpec::named(EnvName::Pointmaze);
+    own.pointmaze = PointMazeConfig::from_file(Path::new("experiments/maps/pointmaze_own.txt")).unwrap();
+    specs.push(own);
+    for spec in specs {
+        let drawn = spec.scene().unwrap();
+        let built = spec.build().unwrap();
+        assert_eq!(drawn, pbcs::with_env!(built, |env| env.scene()), "{}", spec.label());
+    }
+    // The registry's environment is the named map's task with the goal-noise region.
     for m in MapName::iter() {
-        let env = PointMaze::named(m)
-            .unwrap()
-            .for_goal_noise(GOAL_NOISE)
-            .unwrap();
-        assert_eq!(pbcs::envs::point_scene(m), env.scene(), "{m:?}");
+        let env = PointMaze::named(m).unwrap().for_goal_noise(GOAL_NOISE).unwrap();
+        let spec = EnvSpec::named(EnvName::all().iter().copied().find(|e| e.point_map() == Some(m)).unwrap());
+        assert_eq!(spec.scene().unwrap(), env.scene(), "{m:?}");
     }
 }
 

@@ -55,18 +55,20 @@ def explore(size, layout=0, seed=0, bin_side=None, budget=None):
 
 
 def run(size=None, layout=None, seed=0, preset="fast", config=None, out=None,
-        max_env_steps=None, env=None):
+        max_env_steps=None, env=None, map=None, map_file=None):
     """A whole PBCS run (phase 1, phase 2, the chain's evaluation from B_ε(s_0)), run seed
     ``seed``, with the preset ``fast`` or ``paper``, or the job in the TOML file ``config``, on
     the environment ``env`` names (a registry name, ``ENV_NAMES``; default: the config's, else
-    the maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0). With
+    the maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0),
+    the PointMaze map of one's own of ``env="pointmaze"`` (``map``: rows as strings of 0 and 1
+    or as lists of 0 and 1; or ``map_file``: a file of rows; default: the config's). With
     ``out`` (a folder), the run's files are written there as ``pbcs run --out`` writes them,
     the chain in ``out/chain`` (load it with :func:`load_chain`). Returns the run's record as a
     dict (``env``, ``solved``, ``success_rate``, ``skills``, step counts, ``tau`` as points of
     the plane, each evaluation episode's success and steps, ``chain``). The same bytes as
     ``pbcs run`` for the same job and seed.
     """
-    return _pbcs.run(size, layout, seed, preset, config, out, max_env_steps, env)
+    return _pbcs.run(size, layout, seed, preset, config, out, max_env_steps, env, map, map_file)
 
 
 def evaluation_starts(size, layout=0, seed=0, episodes=100, epsilon=0.1):

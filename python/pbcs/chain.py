@@ -51,6 +51,12 @@ class Chain:
         return self._core.pointmaze
 
     @property
+    def pointmaze_map(self):
+        """For a chain of PointMaze on a map of one's own (``env == "pointmaze"``): the map as
+        gymnasium-robotics' ``maze_map`` takes it (rows of 0 and 1); None otherwise."""
+        return self._core.pointmaze_map
+
+    @property
     def active_skill(self):
         """The skill that chose the last action."""
         return self._core.active_skill

@@ -160,7 +160,8 @@ class RegisteredEnv(gym.Env):
     NaN counts as 0), ``reset`` starts from its start distribution (s_0 for the maze, the rooms
     and PointMaze's task), ``step`` is the Rust core's own, truncated after
     ``max_episode_steps``. ``size`` and ``layout`` are the maze's and refused for another
-    environment. ``render()`` (with ``render_mode="rgb_array"``) draws the environment with
+    environment; ``map`` (rows as strings of 0 and 1, or lists of 0 and 1) or ``map_file`` (a
+    file of rows) is ``pointmaze``'s map of one's own, and refused for another. ``render()`` (with ``render_mode="rgb_array"``) draws the environment with
     the episode's path.
 
     >>> env = RegisteredEnv("rooms")
@@ -172,13 +173,13 @@ class RegisteredEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
 
     def __init__(self, name="maze", size=None, layout=None, max_episode_steps=1000,
-                 render_mode=None, render_size=256):
+                 render_mode=None, render_size=256, map=None, map_file=None):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"invalid `render_mode`: must be one of {self.metadata['render_modes']} or None, "
                 f"got {render_mode!r}"
             )
-        self._core = _pbcs.NamedEnv(name, size, layout, max_episode_steps)
+        self._core = _pbcs.NamedEnv(name, size, layout, max_episode_steps, map, map_file)
         self.name = self._core.name
         n = self._core.obs_dim
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)

@@ -1,7 +1,9 @@
 """A PBCS chain of PointMaze judged by gymnasium-robotics itself (issue 35's protocol).
 
-The chain (``pbcs run --env pointmaze_<map>``, built with ``--features mujoco``) acts in
-gymnasium-robotics' own ``PointMaze_<Map>-v3`` with ``continuing_task=False``: every episode
+The chain (``pbcs run --env pointmaze_<map>``, or ``--env pointmaze --map FILE`` for a map of
+one's own, built with ``--features mujoco``) acts in gymnasium-robotics' own
+``PointMaze_<Map>-v3`` (a map of one's own: ``PointMaze_UMaze-v3`` with ``maze_map=`` its rows
+and ``max_episode_steps=`` the job's ``pointmaze.time_limit``) with ``continuing_task=False``: every episode
 starts from the env's own reset for the task's cells (start and goal drawn within ±0.25 of
 the cells' centres, at rest) and runs within the env's time limit; success is the env's
 ``info["success"]`` on the episode's last step. The chain sees ``obs["observation"]`` =
@@ -43,8 +45,13 @@ def make_env(chain, **kwargs):
             "pbcs.pointmaze needs gymnasium-robotics: pip install gymnasium-robotics==1.4.2"
         ) from e
     gym.register_envs(gymnasium_robotics)
-    gym_id, start, goal, _ = task
+    gym_id, start, goal, time_limit = task
     kwargs.setdefault("continuing_task", False)
+    own = chain.pointmaze_map
+    if own is not None:
+        # A map of one's own: the same env class on those rows, with the job's time limit.
+        kwargs.setdefault("maze_map", own)
+        kwargs.setdefault("max_episode_steps", time_limit)
     return FixedCells(gym.make(gym_id, **kwargs), start, goal)
 
 

@@ -4,7 +4,7 @@ use crate::named::{chain_env, obs_array, rgb_of, ChainEnv};
 use crate::{count, invalid, py_err, state_of};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
-use pbcs::config::PbcsJob;
+use pbcs::config::{Located, PbcsJob};
 use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::nn::Workspace;
@@ -211,12 +211,36 @@ impl ChainCore {
     }
 
     /// For a chain of PointMaze: gymnasium-robotics' id, the start and goal cells (row,
-    /// column) of the task and the env's time limit; None for another environment.
+    /// column) of the task and the env's time limit; None for another environment. On a map
+    /// of one's own: `PointMaze_UMaze-v3`, made with `maze_map=` [`Self::pointmaze_map`] and
+    /// `max_episode_steps=` the job's `pointmaze.time_limit`.
     #[getter]
-    fn pointmaze(&self) -> Option<PointTask> {
-        let map = self.job.env.point_map()?;
-        let (start, goal) = pbcs::envs::pointmaze::PointMap::named(map).farthest_cells();
-        Some((map.gym_id(), start, goal, map.time_limit()))
+    fn pointmaze(&self) -> PyResult<Option<PointTask>> {
+        use pbcs::envs::pointmaze::MapName;
+        let Some(map) = self.job.env_spec().point_map().map_err(py_err)? else {
+            return Ok(None);
+        };
+        let (start, goal) = map.farthest_cells();
+        Ok(Some(match self.job.env.point_map() {
+            Some(named) => (named.gym_id(), start, goal, named.time_limit()),
+            None => (MapName::UMaze.gym_id(), start, goal, self.job.pointmaze.time_limit),
+        }))
+    }
+
+    /// For a chain of PointMaze on a map of one's own: the map as gymnasium-robotics'
+    /// `maze_map` takes it (rows of 0 and 1); None otherwise.
+    #[getter]
+    fn pointmaze_map(&self) -> PyResult<Option<Vec<Vec<u8>>>> {
+        if self.job.env != pbcs::envs::EnvName::Pointmaze {
+            return Ok(None);
+        }
+        let map = pbcs::envs::pointmaze::PointMap::from_config(&self.job.pointmaze);
+        let rows = map.map_err(py_err)?.to_rows();
+        Ok(Some(
+            rows.iter()
+                .map(|r| r.bytes().map(|b| b - b'0').collect())
+                .collect(),
+        ))
     }
 
     /// The run seed of the job that built the chain.

@@ -1,16 +1,15 @@
 //! Any environment of the registry, by name, for Python: one episode (`NamedEnv`, the core of
 //! `pbcs.make`) and a saved chain's environment (`ChainEnv`, behind `pbcs.Chain`'s rollouts,
 //! evaluation and pictures). Each environment is made once by the registry
-//! (`pbcs::envs::EnvName::build`) and kept behind a trait object, its type erased at that one
+//! (`pbcs::envs::EnvSpec::build`) and kept behind a trait object, its type erased at that one
 //! door ([`pbcs::with_env!`]); every step below is the environment's own.
 
 use crate::{count, invalid, py_err};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
-use pbcs::config::{PbcsJob, Place};
+use pbcs::config::{Located, PbcsJob, Place};
 use pbcs::env::{Env, Planar};
-use pbcs::envs::maze::MazeConfig;
-use pbcs::envs::EnvName;
+use pbcs::envs::{EnvName, EnvSpec};
 use pbcs::phase2::SkillChain;
 use pbcs::plot::{render_rgb, Picture};
 use pbcs::rng::{Seeds, Stream};
@@ -30,23 +29,75 @@ pub(crate) fn env_name(name: &str) -> PyResult<EnvName> {
     })
 }
 
-/// The maze of `size` and `layout` (the defaults where not given) for an environment named
-/// `env`: refused for another environment, as `pbcs run --maze` is ([`Place`]).
-fn maze_for(env: EnvName, size: Option<i64>, layout: Option<i64>) -> PyResult<MazeConfig> {
+/// The environment `env` with the maze of `size` and `layout` or the PointMaze `map` (the
+/// defaults where not given), checked: a maze for another environment, or a map for any but
+/// `pointmaze`, is refused, as `pbcs run --maze` and `--map` are ([`Place`]).
+fn spec_for(env: EnvName, size: Option<i64>, layout: Option<i64>, map: Map) -> PyResult<EnvSpec> {
     let mut job = pbcs::config::ExploreJob::default();
-    place_of(Some(env), size, layout, None)?
+    place_of(Some(env), size, layout, None, map)?
         .apply(&mut job)
         .map_err(py_err)?;
-    Ok(job.maze)
+    let spec = job.env_spec();
+    spec.check().map_err(py_err)?;
+    Ok(spec)
+}
+
+/// A PointMaze map of one's own as Python gives it: `map` (rows as strings of `0`/`1`, or as
+/// sequences of 0 and 1, gymnasium-robotics' `maze_map`) or `map_file` (a file of rows), not
+/// both.
+pub(crate) struct Map<'a, 'py> {
+    pub(crate) rows: Option<&'a Bound<'py, PyAny>>,
+    pub(crate) file: Option<std::path::PathBuf>,
+}
+
+impl Map<'_, '_> {
+    /// The rows, read from whichever was given.
+    fn rows(&self) -> PyResult<Option<Vec<String>>> {
+        match (self.rows, &self.file) {
+            (Some(_), Some(_)) => Err(invalid(
+                "map",
+                "give the map's rows (map=) or a file of them (map_file=), not both",
+            )),
+            (None, Some(file)) => Ok(Some(
+                pbcs::envs::pointmaze::PointMazeConfig::from_file(file)
+                    .map_err(py_err)?
+                    .map,
+            )),
+            (Some(rows), None) => {
+                if let Ok(text) = rows.extract::<Vec<String>>() {
+                    return Ok(Some(text));
+                }
+                let cells: Vec<Vec<i64>> = rows.extract().map_err(|_| {
+                    invalid(
+                        "map",
+                        "rows as strings of 0 and 1 ([\"111\", \"101\", ...]) or as lists of \
+                         0 and 1 ([[1, 1, 1], [1, 0, 1], ...])",
+                    )
+                })?;
+                let row = |r: &Vec<i64>| -> PyResult<String> {
+                    r.iter()
+                        .map(|&c| match c {
+                            0 => Ok('0'),
+                            1 => Ok('1'),
+                            _ => Err(invalid("map", format!("cells are 0 (free) or 1 (wall), got {c}"))),
+                        })
+                        .collect()
+                };
+                Ok(Some(cells.iter().map(row).collect::<PyResult<_>>()?))
+            }
+            (None, None) => Ok(None),
+        }
+    }
 }
 
 /// Where a Python call runs a job ([`Place`], as `pbcs run`'s flags): the environment, the
-/// maze's `size` and `layout`, the run `seed`, each checked as a count.
+/// maze's `size` and `layout`, the run `seed`, each checked as a count, and a PointMaze map.
 pub(crate) fn place_of(
     env: Option<EnvName>,
     size: Option<i64>,
     layout: Option<i64>,
     seed: Option<i64>,
+    map: Map,
 ) -> PyResult<Place> {
     Ok(Place {
         env,
@@ -55,6 +106,7 @@ pub(crate) fn place_of(
             .transpose()?,
         maze_seed: layout.map(|m| count("maze.seed", m)).transpose()?,
         seed: seed.map(|s| count("seed", s)).transpose()?,
+        map: map.rows()?,
     })
 }
 
@@ -169,20 +221,26 @@ pub(crate) struct NamedEnv {
 #[pymethods]
 impl NamedEnv {
     #[new]
-    #[pyo3(signature = (name, size = None, layout = None, max_episode_steps = 1000))]
+    #[pyo3(signature = (name, size = None, layout = None, max_episode_steps = 1000, map = None, map_file = None))]
     fn new(
         name: &str,
         size: Option<i64>,
         layout: Option<i64>,
         max_episode_steps: i64,
+        map: Option<&Bound<'_, PyAny>>,
+        map_file: Option<std::path::PathBuf>,
     ) -> PyResult<Self> {
         let env = env_name(name)?;
-        let maze = maze_for(env, size, layout)?;
+        let map = Map {
+            rows: map,
+            file: map_file,
+        };
+        let spec = spec_for(env, size, layout, map)?;
         let max_episode_steps = count("max_episode_steps", max_episode_steps)? as usize;
         if max_episode_steps == 0 {
             return Err(invalid("max_episode_steps", "must be at least 1"));
         }
-        let built = env.build(&maze).map_err(py_err)?;
+        let built = spec.build().map_err(py_err)?;
         let episode: Box<dyn Episode> =
             pbcs::with_env!(built, |e| Box::new(Running::new(e, max_episode_steps + 1))
                 as Box<dyn Episode>);
@@ -324,7 +382,7 @@ impl<E: Planar + Send + Sync + 'static> ChainEnv for E {
 /// The environment of a chain's job, erased; the registry's error where this build cannot
 /// make it (PointMaze without MuJoCo), which acting alone does not need.
 pub(crate) fn chain_env(job: &PbcsJob) -> pbcs::Result<Box<dyn ChainEnv>> {
-    let built = job.env.build(&job.maze)?;
+    let built = job.env_spec().build()?;
     Ok(pbcs::with_env!(built, |e| Box::new(e) as Box<dyn ChainEnv>))
 }
 

@@ -3,7 +3,7 @@
 use crate::{count, invalid, maze_of, py_err};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
-use pbcs::config::{ExploreJob, PbcsJob, Preset};
+use pbcs::config::{ExploreJob, Located, PbcsJob, Preset};
 use pbcs::env::{EvalEpisode, Planar};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs::{PbcsRun, RunRecord};
@@ -107,12 +107,13 @@ pub(crate) fn evaluation_starts<'py>(
 
 /// A whole PBCS run (phase 1, phase 2, the chain's evaluation) of a preset (`fast` or `paper`)
 /// or of a config file, on the environment it names (`env`, else the config's, else the
-/// maze: of size `size` and layout `layout`, else the config's); with `out`, its files
+/// maze: of size `size` and layout `layout`, else the config's; `pointmaze`: on the map
+/// `map` or `map_file`, else the config's); with `out`, its files
 /// (record, trace, chain/, picture) are written there, as `pbcs run --out` does. Returns the
 /// run's record as a dict, τ as an array of points, and the chain folder when one was
 /// written.
 #[pyfunction]
-#[pyo3(signature = (size = None, layout = None, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, env = None))]
+#[pyo3(signature = (size = None, layout = None, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, env = None, map = None, map_file = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run<'py>(
     py: Python<'py>,
@@ -124,6 +125,8 @@ pub(crate) fn run<'py>(
     out: Option<PathBuf>,
     max_env_steps: Option<i64>,
     env: Option<&str>,
+    map: Option<&Bound<'py, PyAny>>,
+    map_file: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut job: PbcsJob = match &config {
         Some(p) => pbcs::config::load(p),
@@ -131,14 +134,18 @@ pub(crate) fn run<'py>(
     }
     .map_err(py_err)?;
     let env = env.map(crate::named::env_name).transpose()?;
-    let place = crate::named::place_of(env, size, layout, Some(seed))?;
+    let map = crate::named::Map {
+        rows: map,
+        file: map_file,
+    };
+    let place = crate::named::place_of(env, size, layout, Some(seed), map)?;
     place.apply(&mut job).map_err(py_err)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
     }
     let job = job.valid().map_err(py_err)?;
     let kernel = Kernel::from_env().map_err(py_err)?;
-    let built = job.env.build(&job.maze).map_err(py_err)?;
+    let built = job.env_spec().build().map_err(py_err)?;
     let done = py
         .detach(|| {
             pbcs::with_env!(built, |env| {

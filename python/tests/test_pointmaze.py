@@ -19,7 +19,16 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
-MAPS = ["UMaze", "Open", "Medium", "Large"]
+MAPS = ["UMaze", "Open", "Medium", "Large", "Own"]
+
+# A map of one's own (10 × 10 cells, the grid experiments/pointmaze_own.toml runs): gymnasium-
+# robotics builds it from `maze_map=` these rows, ours from the same rows.
+OWN_MAP = ROOT / "experiments/maps/pointmaze_own.txt"
+
+
+def own_rows():
+    rows = [line.split("#")[0].replace(" ", "").strip() for line in OWN_MAP.read_text().splitlines()]
+    return [r for r in rows if r]
 
 
 @pytest.fixture(scope="module")
@@ -41,6 +50,9 @@ def ask(proc, line):
 
 
 def task(proc, name):
+    if name == "Own":
+        ask(proc, "map own " + " ".join(own_rows()))
+        assert proc.stdout.readline().strip() == ""
     ask(proc, f"task {name.lower()}")
     a, b, c, d = map(int, proc.stdout.readline().split())
     return (a, b), (c, d)
@@ -87,7 +99,12 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
     mujoco = pytest.importorskip("mujoco")
     assert mujoco.__version__ == "3.17.0"
     gym.register_envs(gymnasium_robotics)
-    env = gym.make(f"PointMaze_{name}-v3", continuing_task=False).unwrapped
+    if name == "Own":
+        rows = [[int(c) for c in r] for r in own_rows()]
+        assert len(rows) >= 10 and len(rows[0]) >= 10
+        env = gym.make("PointMaze_UMaze-v3", maze_map=rows, continuing_task=False).unwrapped
+    else:
+        env = gym.make(f"PointMaze_{name}-v3", continuing_task=False).unwrapped
     start, goal = task(ours, name)
     maze = env.maze
     env.reset(seed=0, options={"reset_cell": np.array(start), "goal_cell": np.array(goal)})
@@ -125,7 +142,7 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
         point = env.point_env
         state = [*point.data.qpos, *point.data.qvel, *point.data.qacc_warmstart]
         env.goal = maze.cell_rowcol_to_xy(np.array(goal))
-        n = {"UMaze": 300, "Open": 300, "Medium": 600, "Large": 800}[name]
+        n = {"UMaze": 300, "Open": 300, "Medium": 600, "Large": 800, "Own": 800}[name]
         actions = rng.uniform(-1, 1, (n, 2)).astype(np.float32)
         same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} reset {seed}")
         checked += len(actions)

@@ -2,26 +2,25 @@
 //! one module per environment.
 //!
 //! A job names its environment (`env = "rooms"`; none: the maze, so every config written
-//! before the registry means what it meant). [`EnvName::build`] makes the environment a name
-//! stands for, once per run, as a [`Built`]; [`with_env!`](crate::with_env) hands it to generic
+//! before the registry means what it meant). [`EnvSpec::build`] makes the environment a name
+//! (with its parameters) stands for, once per run, as a [`Built`]; [`with_env!`](crate::with_env) hands it to generic
 //! code, which sees only [`Planar`] (an [`crate::env::Env`] that can be drawn) and is compiled
 //! once per environment, so the step loops inside stay monomorphic. A closure cannot be generic
 //! over `E`, and a visitor struct per command (what this registry had) repeats each command's
 //! arguments as fields; the macro is the one `match` over [`Built`].
 //!
 //! Adding an environment: its own module here (`three_rooms.rs` is the example), and in this
-//! file its `mod` line, a variant of [`EnvName`], its arm in [`EnvName::build`], a variant of
+//! file its `mod` line, a variant of [`EnvName`], its arm in [`EnvSpec::build`], a variant of
 //! [`Built`] and its arm in `with_env!`: five lines of code (and the variants' doc lines),
 //! nothing else in the package.
 //!
 //! ```
-//! use pbcs::config::MazeConfig;
 //! use pbcs::env::{Env, Planar};
-//! use pbcs::envs::EnvName;
+//! use pbcs::envs::{EnvName, EnvSpec};
 //!
 //! /// The start of whichever environment is named.
 //! fn start(name: EnvName) -> pbcs::Result<(f32, f32)> {
-//!     let built = name.build(&MazeConfig::default())?;
+//!     let built = EnvSpec::named(name).build()?;
 //!     Ok(pbcs::with_env!(built, |env| env.point(&env.start())))
 //! }
 //! assert_eq!(start(EnvName::Maze).unwrap(), (0.5, 0.5));
@@ -37,9 +36,9 @@ pub mod three_rooms;
 pub mod toy;
 mod walled;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use maze::{Maze, MazeConfig};
-use pointmaze::{MapName, PointMaze};
+use pointmaze::{MapName, PointMap, PointMaze, PointMazeConfig};
 use rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
 
@@ -81,9 +80,12 @@ pub enum EnvName {
     PointmazeMedium,
     /// gymnasium-robotics' `PointMaze_Large-v3`, the same way.
     PointmazeLarge,
+    /// gymnasium-robotics' PointMaze on a map of one's own (the job's `[pointmaze]`,
+    /// [`PointMazeConfig`]), the task and success as on the four named maps.
+    Pointmaze,
 }
 
-/// An environment made from its name ([`EnvName::build`]); [`with_env!`](crate::with_env)
+/// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
 /// runs generic code on the one it holds.
 #[derive(Debug)]
 // Made once per run and matched at once (`with_env!`), each arm taking its environment by value:
@@ -97,7 +99,7 @@ pub enum Built {
     /// [`EnvName::ThreeRooms`].
     ThreeRooms(three_rooms::ThreeRooms),
     /// The four PointMaze names (with MuJoCo; a build without it refuses them in
-    /// [`EnvName::build`], and its `PointMaze` has no values).
+    /// [`EnvSpec::build`], and its `PointMaze` has no values).
     PointMaze(PointMaze),
 }
 
@@ -108,7 +110,7 @@ pub enum Built {
 /// ```
 /// use pbcs::env::Env;
 /// use pbcs::envs::EnvName;
-/// let rooms = EnvName::Rooms.build(&Default::default()).unwrap();
+/// let rooms = pbcs::envs::EnvSpec::named(EnvName::Rooms).build().unwrap();
 /// assert_eq!(pbcs::with_env!(rooms, |env| env.action_dim()), 2);
 /// ```
 #[macro_export]
@@ -134,16 +136,6 @@ impl EnvName {
         self.into()
     }
 
-    /// How titles and messages name the environment: `maze 5 (layout 0)`, `rooms`,
-    /// `PointMaze Medium`.
-    pub fn label(self, maze: &MazeConfig) -> String {
-        match (self, self.point_map()) {
-            (EnvName::Maze, _) => format!("maze {} (layout {})", maze.size, maze.seed),
-            (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
-            (other, None) => other.name().to_string(),
-        }
-    }
-
     /// Every environment of the registry, in order.
     pub fn all() -> &'static [EnvName] {
         <EnvName as clap::ValueEnum>::value_variants()
@@ -162,32 +154,6 @@ impl EnvName {
     /// Whether this is the maze (the default, left out of written jobs).
     pub fn is_maze(&self) -> bool {
         *self == EnvName::Maze
-    }
-
-    /// Makes the environment this name stands for (the maze from `maze`): once per run.
-    pub fn build(self, maze: &MazeConfig) -> Result<Built> {
-        Ok(match self {
-            EnvName::Maze => Built::Maze(Maze::new(maze)?),
-            EnvName::Rooms => Built::Rooms(TwoRooms),
-            EnvName::ThreeRooms => Built::ThreeRooms(three_rooms::ThreeRooms),
-            EnvName::PointmazeUmaze
-            | EnvName::PointmazeOpen
-            | EnvName::PointmazeMedium
-            | EnvName::PointmazeLarge => {
-                Built::PointMaze(point_maze(self.point_map().expect("a PointMaze"))?)
-            }
-        })
-    }
-
-    /// What pictures draw under a run of this environment (its [`crate::env::Planar::scene`]):
-    /// PointMaze's from its map, without MuJoCo, so that committed rows draw in any build.
-    pub fn scene(self, maze: &MazeConfig) -> Result<crate::env::Scene> {
-        match self.point_map() {
-            Some(map) => Ok(point_scene(map)),
-            None => Ok(crate::with_env!(self.build(maze)?, |env| {
-                crate::env::Planar::scene(&env)
-            })),
-        }
     }
 
     /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
@@ -213,35 +179,178 @@ impl EnvName {
     /// assert_eq!(EnvName::PointmazeLarge.missing_feature(), lacks);
     /// ```
     pub fn missing_feature(self) -> Option<&'static str> {
-        (self.point_map().is_some() && !cfg!(feature = "mujoco")).then_some("mujoco")
+        (self.is_pointmaze() && !cfg!(feature = "mujoco")).then_some("mujoco")
+    }
+
+    /// Whether this is a PointMaze: one of the four named maps or a map of one's own.
+    pub fn is_pointmaze(self) -> bool {
+        self.point_map().is_some() || self == EnvName::Pointmaze
+    }
+}
+
+/// Where a run runs: an environment's name and its parameters, as every job holds them
+/// (`env`, `[maze]`, `[pointmaze]`) and [`crate::config::Located::env_spec`] gives them. The
+/// one value that checks, builds, names and draws an environment.
+///
+/// ```
+/// use pbcs::envs::{EnvName, EnvSpec};
+/// let spec = EnvSpec::named(EnvName::Rooms);
+/// assert_eq!(spec.label(), "rooms");
+/// let mut maze = EnvSpec::default();
+/// maze.maze.size = 4;
+/// assert_eq!(maze.label(), "maze 4 (layout 0)");
+/// let mut rooms_with_maze = maze.clone();
+/// rooms_with_maze.name = EnvName::Rooms;
+/// assert!(rooms_with_maze.check().unwrap_err().to_string().contains("[maze]"));
+/// ```
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EnvSpec {
+    /// The environment.
+    pub name: EnvName,
+    /// The maze's size and layout (the maze only; the defaults for any other).
+    pub maze: MazeConfig,
+    /// A PointMaze map of one's own (`pointmaze` only; the default, no map, for any other).
+    pub pointmaze: PointMazeConfig,
+}
+
+impl EnvSpec {
+    /// The environment `name` with default parameters.
+    pub fn named(name: EnvName) -> EnvSpec {
+        EnvSpec {
+            name,
+            ..EnvSpec::default()
+        }
+    }
+
+    /// Checks the parameters against the name: the maze's for the maze, a map for
+    /// `pointmaze`; parameters of another environment are refused (they would be ignored).
+    pub fn check(&self) -> Result<()> {
+        let name = self.name.name();
+        if !self.name.is_maze() && self.maze != MazeConfig::default() {
+            return Err(Error::invalid(
+                "maze",
+                format!(
+                    "sets the maze, but env = \"{name}\" runs another environment (leave \
+                     [maze] out, or set env = \"maze\")"
+                ),
+            ));
+        }
+        if self.name != EnvName::Pointmaze && !self.pointmaze.is_default() {
+            return Err(Error::invalid(
+                "pointmaze",
+                format!(
+                    "sets a PointMaze map of one's own, but env = \"{name}\" (leave \
+                     [pointmaze] out, or set env = \"pointmaze\")"
+                ),
+            ));
+        }
+        crate::validate::Check::check(&self.maze)?;
+        match self.name {
+            EnvName::Pointmaze => self.pointmaze.check(),
+            _ => Ok(()),
+        }
+    }
+
+    /// How titles and messages name the environment: `maze 5 (layout 0)`, `rooms`,
+    /// `PointMaze Medium`, `PointMaze (own map, 10×12)`.
+    pub fn label(&self) -> String {
+        match (self.name, self.name.point_map()) {
+            (EnvName::Maze, _) => format!("maze {} (layout {})", self.maze.size, self.maze.seed),
+            (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
+            (EnvName::Pointmaze, None) => {
+                let (h, w) = (self.pointmaze.map.len(), self.pointmaze.map.first().map_or(0, String::len));
+                format!("PointMaze (own map, {h}×{w})")
+            }
+            (other, None) => other.name().to_string(),
+        }
+    }
+
+    /// How run folders name where they ran ([`crate::runs::default_out`]): `maze<N>-m<layout>`
+    /// for the maze, `pointmaze-<H>x<W>-<hash>` for a map of one's own (the first 8 hex
+    /// digits of its rows' SHA-256, so that two maps never share a folder), the name for
+    /// another.
+    ///
+    /// ```
+    /// use pbcs::envs::{EnvName, EnvSpec};
+    /// let mut own = EnvSpec::named(EnvName::Pointmaze);
+    /// own.pointmaze.map = vec!["111".into(), "101".into(), "111".into()];
+    /// assert!(own.folder_name().starts_with("pointmaze-3x3-"));
+    /// assert_eq!(EnvSpec::named(EnvName::PointmazeLarge).folder_name(), "pointmaze_large");
+    /// ```
+    pub fn folder_name(&self) -> String {
+        use sha2::Digest;
+        match self.name {
+            EnvName::Maze => format!("maze{}-m{}", self.maze.size, self.maze.seed),
+            EnvName::Pointmaze => {
+                let rows = &self.pointmaze.map;
+                let digest = sha2::Sha256::digest(rows.join("\n").as_bytes());
+                let hex: String = digest[..4].iter().map(|b| format!("{b:02x}")).collect();
+                let w = rows.first().map_or(0, String::len);
+                format!("pointmaze-{}x{w}-{hex}", rows.len())
+            }
+            other => other.name().to_string(),
+        }
+    }
+
+    /// The PointMaze map, for a PointMaze (named or of one's own), else None.
+    pub fn point_map(&self) -> Result<Option<PointMap>> {
+        Ok(match (self.name, self.name.point_map()) {
+            (_, Some(named)) => Some(PointMap::named(named)),
+            (EnvName::Pointmaze, None) => Some(PointMap::from_config(&self.pointmaze)?),
+            _ => None,
+        })
+    }
+
+    /// Makes the environment: once per run.
+    pub fn build(&self) -> Result<Built> {
+        Ok(match self.name {
+            EnvName::Maze => Built::Maze(Maze::new(&self.maze)?),
+            EnvName::Rooms => Built::Rooms(TwoRooms),
+            EnvName::ThreeRooms => Built::ThreeRooms(three_rooms::ThreeRooms),
+            EnvName::PointmazeUmaze
+            | EnvName::PointmazeOpen
+            | EnvName::PointmazeMedium
+            | EnvName::PointmazeLarge
+            | EnvName::Pointmaze => {
+                let map = self.point_map()?.expect("a PointMaze has a map");
+                Built::PointMaze(point_maze(map, self.name.name())?)
+            }
+        })
+    }
+
+    /// What pictures draw under a run of this environment (its [`crate::env::Planar::scene`]):
+    /// PointMaze's from its map, without MuJoCo, so that committed rows draw in any build.
+    pub fn scene(&self) -> Result<crate::env::Scene> {
+        match self.point_map()? {
+            Some(map) => Ok(point_scene(&map)),
+            None => Ok(crate::with_env!(self.build()?, |env| {
+                crate::env::Planar::scene(&env)
+            })),
+        }
     }
 }
 
 /// What pictures draw of the registry's task on `map` (the same as its [`Planar::scene`],
 /// without MuJoCo): the map, the start cell and the success region of [`point_maze`].
-pub fn point_scene(map: MapName) -> crate::env::Scene {
-    use crate::envs::pointmaze::{sure_radius, PointMap, GOAL_NOISE};
-    let m = PointMap::named(map);
-    let (start, goal) = m.farthest_cells();
-    m.scene(start, goal, sure_radius(GOAL_NOISE) as f32)
+pub fn point_scene(map: &PointMap) -> crate::env::Scene {
+    use crate::envs::pointmaze::{sure_radius, GOAL_NOISE};
+    let (start, goal) = map.farthest_cells();
+    map.scene(start, goal, sure_radius(GOAL_NOISE) as f32)
 }
 
 /// A PointMaze task ([`crate::envs::pointmaze::PointMaze::named`]) whose success holds for
 /// every goal gymnasium-robotics' reset may draw ([`pointmaze::GOAL_NOISE`]): one fixed chain
 /// is judged there from the env's own resets, which move the goal up to 0.25 along each axis.
 #[cfg(feature = "mujoco")]
-fn point_maze(map: MapName) -> Result<PointMaze> {
-    PointMaze::named(map)?.for_goal_noise(pointmaze::GOAL_NOISE)
+fn point_maze(map: PointMap, _name: &str) -> Result<PointMaze> {
+    PointMaze::on(map)?.for_goal_noise(pointmaze::GOAL_NOISE)
 }
 
 /// Without MuJoCo: refused, saying how to build with it.
 #[cfg(not(feature = "mujoco"))]
-fn point_maze(map: MapName) -> Result<PointMaze> {
-    Err(crate::error::Error::invalid(
+fn point_maze(_map: PointMap, name: &str) -> Result<PointMaze> {
+    Err(Error::invalid(
         "env",
-        format!(
-            "{} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`",
-            map.gym_id()
-        ),
+        format!("{name} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`"),
     ))
 }

@@ -139,11 +139,10 @@ impl Cell {
     /// What a picture of the cell draws its runs over: its environment's scene.
     pub fn scene(&self) -> Result<crate::env::Scene> {
         use crate::config::Located;
-        let (_, env, maze) = match &self.job {
-            Job::Vanilla(j) => j.location(),
-            Job::Pbcs(j) => j.location(),
-        };
-        env.scene(maze)
+        match &self.job {
+            Job::Vanilla(j) => j.env_spec().scene(),
+            Job::Pbcs(j) => j.env_spec().scene(),
+        }
     }
 }
 

@@ -5,6 +5,7 @@ use super::declared::{check_figures, check_report};
 use super::site::paper_run;
 use super::{check_seeds, Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
 use crate::config::{Located, PbcsJob, TrainJob};
+use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::validate::Check;
@@ -114,6 +115,10 @@ pub(crate) struct ExperimentSpec {
     /// every PBCS method runs on each, its job's `env` set to it.
     #[serde(default)]
     envs: Vec<EnvName>,
+    /// The map of the site `pointmaze` (a PointMaze map of one's own), as a job's
+    /// `[pointmaze]` writes it; a `map_file` is read relative to this file's folder.
+    #[serde(default)]
+    pointmaze: Option<toml::Table>,
     #[serde(rename = "method")]
     pub(super) methods: Vec<MethodSpec>,
     /// Fields set on one maze size or environment only (`[by_maze."15"]`, e.g. a budget per
@@ -328,6 +333,39 @@ impl ExperimentSpec {
         Ok(())
     }
 
+    /// The map of the site `pointmaze` (`[pointmaze]`, its `map_file` relative to the file's
+    /// folder), checked; required exactly when `sites` has `pointmaze`.
+    fn own_map(&self, path: &Path, sites: &[Site]) -> Result<Option<PointMazeConfig>> {
+        let has_site = sites.contains(&Site::Env(EnvName::Pointmaze));
+        let Some(table) = &self.pointmaze else {
+            return match has_site {
+                true => Err(Error::invalid(
+                    "pointmaze",
+                    "the site `pointmaze` runs a map of one's own: give it in the file's \
+                     [pointmaze] (`map = [\"111\", ...]` or `map_file = \"maps/x.txt\"`)",
+                )),
+                false => Ok(None),
+            };
+        };
+        if !self.sites().contains(&Site::Env(EnvName::Pointmaze)) {
+            return Err(Error::invalid(
+                "pointmaze",
+                "gives a map, but `pointmaze` is not one of the file's `envs` (add it)",
+            ));
+        }
+        let mut table = table.clone();
+        if let Some(toml::Value::String(file)) = table.get("map_file") {
+            let folder = path.parent().unwrap_or(Path::new("."));
+            let file = folder.join(file).to_string_lossy().into_owned();
+            table.insert("map_file".into(), toml::Value::String(file));
+        }
+        let map: PointMazeConfig = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e| Error::parse(path, format!("[pointmaze]: {e}")))?;
+        map.check()?;
+        Ok(Some(map))
+    }
+
     /// The methods (name, label) and the cells of the grid: each method's base file with its
     /// `set` merged once, then per maze size the file's `by_maze`, the profile's tables and
     /// the profile's `by_maze`, resolved into a validated job.
@@ -348,6 +386,7 @@ impl ExperimentSpec {
             methods.push((m.name.clone(), label.clone()));
             resolved.push((m, label, table));
         }
+        let own_map = self.own_map(path, sites)?;
         let mut cells = Vec::new();
         for &site in sites {
             let key = site.to_string();
@@ -372,7 +411,7 @@ impl ExperimentSpec {
                     method: m.name.clone(),
                     label: label.clone(),
                     site,
-                    job: cell_job(path, m, table, site)?,
+                    job: cell_job(path, m, table, site, own_map.as_ref())?,
                     paper_steps: m.paper_steps.get(&key).copied(),
                     paper_solved: m.paper_solved.get(&key).copied(),
                 });
@@ -384,28 +423,44 @@ impl ExperimentSpec {
 
 /// A job of a grid runs where its site says: the site sets `env` (and the maze's size), so a
 /// job that names an environment itself is refused, naming `env` and `what` (the method).
-fn place(job: &mut impl Located, site: Site, what: &str) -> Result<()> {
-    let (seed, env, maze) = job.location_mut();
-    if !env.is_maze() {
+fn place(
+    job: &mut impl Located,
+    site: Site,
+    what: &str,
+    own_map: Option<&PointMazeConfig>,
+) -> Result<()> {
+    let mut spec = job.env_spec();
+    if !spec.name.is_maze() || !spec.pointmaze.is_default() {
         return Err(Error::invalid(
             "env",
             format!(
                 "{what}: \"{}\" — a grid's rows say where its methods run: list the \
-                 environment in the experiment's `envs` instead",
-                env.name()
+                 environment in the experiment's `envs` (and a map of one's own in its \
+                 [pointmaze]) instead",
+                spec.name.name()
             ),
         ));
     }
     match site {
-        Site::Maze(n) => maze.size = n,
-        Site::Env(e) => *env = e,
+        Site::Maze(n) => spec.maze.size = n,
+        Site::Env(e) => spec.name = e,
     }
-    *seed = 0;
+    if site == Site::Env(EnvName::Pointmaze) {
+        spec.pointmaze = own_map.cloned().unwrap_or_default();
+    }
+    job.set_env_spec(spec);
+    *job.seed_mut() = 0;
     Ok(())
 }
 
 /// The validated job of method `m` on `site` from its merged `table` (seed 0).
-fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, site: Site) -> Result<Job> {
+fn cell_job(
+    path: &Path,
+    m: &MethodSpec,
+    table: toml::Table,
+    site: Site,
+    own_map: Option<&PointMazeConfig>,
+) -> Result<Job> {
     let where_ = format!("method `{}`, {}", m.name, site.title());
     let what = |e: toml::de::Error| {
         Error::parse(
@@ -422,12 +477,12 @@ fn cell_job(path: &Path, m: &MethodSpec, table: toml::Table, site: Site) -> Resu
     let job = match m.kind {
         Kind::Vanilla => {
             let mut j: TrainJob = toml::Value::Table(table).try_into().map_err(what)?;
-            place(&mut j, site, &method)?;
+            place(&mut j, site, &method, own_map)?;
             Job::Vanilla(j)
         }
         Kind::Pbcs => {
             let mut j: PbcsJob = toml::Value::Table(table).try_into().map_err(what)?;
-            place(&mut j, site, &method)?;
+            place(&mut j, site, &method, own_map)?;
             Job::Pbcs(j)
         }
     };
@@ -532,7 +587,7 @@ impl Experiment {
             .iter()
             .map(|&site| {
                 let mut j = job.clone();
-                place(&mut j, site, &format!("method `{name}`"))?;
+                place(&mut j, site, &format!("method `{name}`"), None)?;
                 j.check().map_err(|e| located(e, &site.title()))?;
                 let (paper_steps, paper_solved) = paper_run(job.phase2.variant(), site);
                 Ok(Cell {

@@ -2,7 +2,7 @@
 //! `pbcs eval` (a saved chain re-run).
 
 use super::{ball_circles, DRAWN_ROLLOUTS};
-use crate::config::PbcsJob;
+use crate::config::{Located, PbcsJob};
 use crate::env::Planar;
 use crate::env::{evaluation_starts, Env, Scene};
 use crate::envs::maze::Maze;
@@ -146,7 +146,7 @@ pub fn eval_chain(
     let seed = seed.unwrap_or(job.seed);
     let manifest = chain_dir.join("manifest.toml");
     let (rows, rollout_paths, circles, scene) =
-        crate::with_env!(job.env.build(&job.maze)?, |env| {
+        crate::with_env!(job.env_spec().build()?, |env| {
             chain.check_env(&env, &manifest)?;
             let (rows, rollouts) = evaluate_chain(&env, &chain, &job, episodes, seed)?;
             let points: Vec<Vec<(f32, f32)>> = rollouts
@@ -185,7 +185,7 @@ impl ChainEval {
         crate::record::write_records(&out.join(format!("eval-s{seed}.csv")), &self.rows)?;
         let title = format!(
             "saved chain, {}, eval seed {seed}: success {}/{}",
-            self.job.env.label(&self.job.maze),
+            self.job.env_spec().label(),
             self.successes,
             self.episodes
         );

@@ -1,7 +1,7 @@
 //! `pbcs explore`: phase 1 alone, its trajectory, archive and picture.
 
 use super::{claim, write_timing};
-use crate::config::ExploreJob;
+use crate::config::{ExploreJob, Located};
 use crate::env::Env;
 use crate::env::Planar;
 use crate::envs::EnvName;
@@ -113,7 +113,7 @@ pub fn run_explore(
     out: &Path,
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
-    let built = job.env.build(&job.maze)?;
+    let built = job.env_spec().build()?;
     claim(job, out)?;
     crate::with_env!(built, |env| {
         let run = ExploreRun::compute(env, job, progress)?;
@@ -198,7 +198,7 @@ pub(crate) fn render_exploration<E: Planar>(
     let picture = Picture {
         title: format!(
             "phase 1, {}, seed {}: {} steps, |τ| = {}",
-            job.env.label(&job.maze),
+            job.env_spec().label(),
             job.seed,
             found.env_steps,
             found.trajectory.len()

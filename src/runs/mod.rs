@@ -23,8 +23,8 @@ pub use pbcs::DRAWN_ROLLOUTS;
 pub use pbcs::{run_outcome, run_pbcs, PbcsRun, RunOutcome, RunRecord};
 pub use train::{run_train, train_outcome, TrainRun, TrainSummary};
 
-use crate::config::{MazeConfig, PbcsJob, Preset, TrainJob};
-use crate::envs::EnvName;
+use crate::config::{PbcsJob, Preset, TrainJob};
+use crate::envs::EnvSpec;
 use crate::error::Result;
 use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
@@ -57,32 +57,22 @@ pub fn write_timing(
 }
 
 /// The default output folder of a run (`pbcs explore`, `train`, `run` without `--out`):
-/// `out/<command>/<where>-s<seed><suffix>`, where is `maze<N>-m<layout seed>` for the maze and
-/// the environment's name for another; `command` may hold a subfolder (`run/fast`). The one
-/// place run folders are named.
+/// `out/<command>/<where>-s<seed><suffix>`, where is [`EnvSpec::folder_name`] (`maze4-m1`,
+/// `rooms`); `command` may hold a subfolder (`run/fast`). The one place run folders are
+/// named.
 ///
 /// ```
-/// use pbcs::config::MazeConfig;
-/// use pbcs::envs::EnvName;
+/// use pbcs::envs::{EnvName, EnvSpec};
 /// use pbcs::runs::default_out;
-/// let maze = MazeConfig { size: 4, seed: 1, ..MazeConfig::default() };
-/// let out = default_out("run/fast", EnvName::Maze, &maze, 2, "-exact");
+/// let mut maze = EnvSpec::default();
+/// (maze.maze.size, maze.maze.seed) = (4, 1);
+/// let out = default_out("run/fast", &maze, 2, "-exact");
 /// assert_eq!(out, std::path::Path::new("out/run/fast/maze4-m1-s2-exact"));
-/// let out = default_out("explore", EnvName::Rooms, &maze, 0, "");
+/// let out = default_out("explore", &EnvSpec::named(EnvName::Rooms), 0, "");
 /// assert_eq!(out, std::path::Path::new("out/explore/rooms-s0"));
 /// ```
-pub fn default_out(
-    command: &str,
-    env: EnvName,
-    maze: &MazeConfig,
-    seed: u64,
-    suffix: &str,
-) -> PathBuf {
-    let place = match env {
-        EnvName::Maze => format!("maze{}-m{}", maze.size, maze.seed),
-        other => other.name().to_string(),
-    };
-    PathBuf::from(format!("out/{command}/{place}-s{seed}{suffix}"))
+pub fn default_out(command: &str, env: &EnvSpec, seed: u64, suffix: &str) -> PathBuf {
+    PathBuf::from(format!("out/{command}/{}-s{seed}{suffix}", env.folder_name()))
 }
 
 /// The part of a PBCS run's default folder that names its departures from the preset:

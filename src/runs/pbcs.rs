@@ -3,7 +3,7 @@
 use super::{
     claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
 };
-use crate::config::PbcsJob;
+use crate::config::{Located, PbcsJob};
 use crate::env::{Planar, SampleBall};
 use crate::envs::EnvName;
 use crate::error::Result;
@@ -214,7 +214,7 @@ impl<E: Planar> PbcsRun<E> {
             "{} {}, {}, seed {}: {} steps, {} skills, chain success {:.0} %",
             record.variant.name(),
             record.learner,
-            job.env.label(&job.maze),
+            job.env_spec().label(),
             job.seed,
             record.total_steps,
             record.skills,
@@ -290,7 +290,7 @@ pub fn run_pbcs(
     out: &Path,
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
-    crate::with_env!(job.env.build(&job.maze)?, |env| {
+    crate::with_env!(job.env_spec().build()?, |env| {
         let ready = PbcsRun::require_hooks(&env, job)?;
         claim(job, out)?;
         let run = PbcsRun::compute_ready(env, job, ready, kernel, progress)?;
@@ -330,7 +330,7 @@ pub fn run_outcome(
     kernel: Kernel,
     progress: impl FnMut(usize, Progress),
 ) -> Result<RunOutcome> {
-    crate::with_env!(job.env.build(&job.maze)?, |env| {
+    crate::with_env!(job.env_spec().build()?, |env| {
         PbcsRun::compute(env, job, kernel, progress).map(RunOutcome::from)
     })
 }

@@ -1,7 +1,7 @@
 //! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on an environment's own reward.
 
 use super::{claim, write_timing, SOLVED_AT};
-use crate::config::TrainJob;
+use crate::config::{Located, TrainJob};
 use crate::env::{Planar, Scene};
 use crate::envs::EnvName;
 use crate::error::Result;
@@ -154,7 +154,7 @@ impl TrainRun {
         let title = format!(
             "{} on {}, seed {}: {} steps, greedy success {:.0} %",
             summary.algo.name(),
-            job.env.label(&job.maze),
+            job.env_spec().label(),
             job.seed,
             job.train.steps,
             100.0 * summary.final_success
@@ -183,7 +183,7 @@ pub fn run_train(
     out: &Path,
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
-    let built = job.env.build(&job.maze)?;
+    let built = job.env_spec().build()?;
     claim(job, out)?;
     let run = crate::with_env!(built, |env| TrainRun::compute(env, job, kernel, progress)?);
     run.write(job, out)?;
@@ -197,7 +197,7 @@ pub fn train_outcome(
     kernel: Kernel,
     progress: impl FnMut(u64, f32),
 ) -> Result<TrainRun> {
-    crate::with_env!(job.env.build(&job.maze)?, |env| {
+    crate::with_env!(job.env_spec().build()?, |env| {
         TrainRun::compute(env, job, kernel, progress)
     })
 }

@@ -4,6 +4,7 @@
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, Located, Place, Preset, MAX_MAZE_SIZE};
+use pbcs::envs::pointmaze::PointMazeConfig;
 use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
 use pbcs::learner::{ActorUpdate, Algo, LearnerConfig};
@@ -43,6 +44,11 @@ pub struct RunArgs {
     /// Run seed; overrides `seed` [default: the config's, else 0].
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// A PointMaze map of one's own, for `--env pointmaze`: a file of rows of 0 (free) and 1
+    /// (wall), one row per line, `#` comments; overrides `[pointmaze] map` (the run folder's
+    /// config.toml keeps the rows).
+    #[arg(long)]
+    pub map: Option<PathBuf>,
     /// Output folder [default: out/explore/<where>-s<seed>, out/train/<where>-s<seed>-<algo>[-am],
     /// out/run/<preset or config file stem>/<where>-s<seed>[-nochain][-exact|-archive][-velocity],
     /// where is maze<N>-m<maze seed> for the maze, the environment's name for another].
@@ -82,6 +88,10 @@ impl RunArgs {
             maze_size: self.maze,
             maze_seed: self.maze_seed,
             seed: self.seed,
+            map: match &self.map {
+                Some(file) => Some(PointMazeConfig::from_file(file)?.map),
+                None => None,
+            },
         };
         place.apply(&mut job)?;
         Ok(job)
@@ -89,8 +99,7 @@ impl RunArgs {
 
     /// `--out`, else the run's default folder ([`runs::default_out`]).
     pub fn out_dir(&self, command: &str, job: &impl Located, suffix: &str) -> PathBuf {
-        let (seed, env, maze) = job.location();
-        let default = || runs::default_out(command, env, maze, seed, suffix);
+        let default = || runs::default_out(command, &job.env_spec(), job.seed(), suffix);
         self.out.clone().unwrap_or_else(default)
     }
 

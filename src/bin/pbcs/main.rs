@@ -8,7 +8,7 @@ use anyhow::Context;
 use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
-use pbcs::config::{self, Check, ExploreJob, PbcsJob, Preset, TrainJob};
+use pbcs::config::{self, Check, ExploreJob, Located, PbcsJob, Preset, TrainJob};
 use pbcs::experiment::{Experiment, Pending, RawRow};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
@@ -347,7 +347,7 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
         bar.set_message(p.status(skill, total, total as f64 / secs.max(1e-9)));
         bar.tick();
     })
-    .with_context(|| format!("PBCS on {} seed {}", job.env.label(&job.maze), job.seed))?;
+    .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", record.summary(job.phase2.eval_episodes, seconds));
     let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";
@@ -364,7 +364,7 @@ fn explore(run: &RunArgs) -> anyhow::Result<()> {
         bar.set_position(steps);
         bar.set_message(format!("{states} archived states"));
     })
-    .with_context(|| format!("explore {} seed {}", job.env.label(&job.maze), job.seed))?;
+    .with_context(|| format!("explore {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.explore.bin_side));
     let wrote = "{summary,trajectory,archive}.csv, explore.png, explore.svg";
@@ -389,7 +389,7 @@ fn train(
         bar.set_position(steps);
         bar.set_message(format!("greedy success {success}"));
     })
-    .with_context(|| format!("train on {} seed {}", job.env.label(&job.maze), job.seed))?;
+    .with_context(|| format!("train on {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.train.visit_bin));
     let wrote = "{summary,evals,visited}.csv, actor.safetensors, train.png, train.svg";

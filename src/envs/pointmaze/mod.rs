@@ -15,7 +15,10 @@ pub mod model;
 #[cfg(feature = "mujoco")]
 mod sim;
 
-pub use model::{sure_radius, MapName, PointMap, GOAL_NOISE, SUCCESS_DISTANCE};
+pub use model::{
+    sure_radius, MapName, PointMap, PointMazeConfig, GOAL_NOISE, MAX_MAP_SIDE, OWN_TIME_LIMIT,
+    SUCCESS_DISTANCE,
+};
 #[cfg(feature = "mujoco")]
 pub use sim::{PointMaze, PointState, MAX_SPEED, RADIUS};
 

@@ -80,7 +80,12 @@ impl PointMaze {
     /// A map's task of this package: from its two free cells farthest apart
     /// ([`PointMap::farthest_cells`]).
     pub fn named(name: MapName) -> Result<PointMaze> {
-        let map = PointMap::named(name);
+        PointMaze::on(PointMap::named(name))
+    }
+
+    /// The task of this package on any map (a map of one's own, [`PointMap::from_config`]):
+    /// from its two free cells farthest apart.
+    pub fn on(map: PointMap) -> Result<PointMaze> {
         let (start, goal) = map.farthest_cells();
         PointMaze::new(map, start, goal)
     }
