@@ -77,7 +77,8 @@ test-mujoco: mujoco
 	PBCS_POINTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/pointmaze_step \
 	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py
 
-# The PointMaze grid and its held-out grid (their runs need MuJoCo), then every chain judged
+# The PointMaze grids (the named maps', the held-out seeds', the velocity comparison, the learners
+# alone, a map of one's own: their runs need MuJoCo), then every chain judged
 # by gymnasium-robotics (each run re-made from its job file, its chain played in
 # PointMaze_<Map>-v3): the rows `make figures` then draws. The Python package first: its
 # build rebuilds `pbcs` without MuJoCo.
@@ -87,12 +88,15 @@ pointmaze: mujoco python
 	$(PBCS) exp run experiments/pointmaze_heldout.toml --jobs $(JOBS)
 	$(PBCS) exp run experiments/pointmaze_velocity.toml --jobs $(JOBS)
 	$(PBCS) exp run experiments/pointmaze_vanilla.toml --jobs $(JOBS)
+	$(PBCS) exp run experiments/pointmaze_own.toml --jobs $(JOBS)
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
 	  --raw results/raw/pointmaze_heldout --summary results/pointmaze/gym_cells_heldout.csv
 	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
 	  --raw results/raw/pointmaze_velocity --summary results/pointmaze/gym_cells_velocity.csv
+	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
+	  --raw results/raw/pointmaze_own --summary results/pointmaze/gym_cells_own.csv
 
 # Aggregation with polars, then plotters; trains nothing (27 s measured after the build).
 figures:

@@ -26,7 +26,9 @@ fn main() -> anyhow::Result<()> {
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let find = |envs: &[(String, PointMaze)], name: &str, line: usize| {
         let i = envs.iter().position(|(m, _)| m == name).ok_or_else(|| {
-            anyhow::anyhow!("line {line}: unknown map {name:?} (umaze, open, medium, large, or one added)")
+            anyhow::anyhow!(
+                "line {line}: unknown map {name:?} (umaze, open, medium, large, or one added)"
+            )
         })?;
         anyhow::Ok(i)
     };

@@ -403,17 +403,44 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
     assert_eq!(good.pointmaze.map.len(), 3);
     for (text, says) in [
         ("env = \"pointmaze\"\n", "pointmaze.map"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"121\", \"111\"]\n", "row 1"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"10\", \"111\"]\n", "row 1 has 2"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"001\", \"111\"]\n", "border"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"101\", \"111\"]\n", "one free cell"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"111\", \"111\"]\n", "no free cell"),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"121\", \"111\"]\n",
+            "row 1",
+        ),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"10\", \"111\"]\n",
+            "row 1 has 2",
+        ),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"001\", \"111\"]\n",
+            "border",
+        ),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"101\", \"111\"]\n",
+            "one free cell",
+        ),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"111\", \"111\"]\n",
+            "no free cell",
+        ),
         (&format!("{ok}time_limit = 0\n"), "pointmaze.time_limit"),
         (&format!("{ok}colour = 1\n"), "colour"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap_file = \"/nonexistent/map.txt\"\n", "/nonexistent/map.txt"),
-        ("env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\"]\nmap_file = \"m.txt\"\n", "not both"),
-        ("env = \"rooms\"\n[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n", "env = \"rooms\""),
-        ("[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n", "env = \"maze\""),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap_file = \"/nonexistent/map.txt\"\n",
+            "/nonexistent/map.txt",
+        ),
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\"]\nmap_file = \"m.txt\"\n",
+            "not both",
+        ),
+        (
+            "env = \"rooms\"\n[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n",
+            "env = \"rooms\"",
+        ),
+        (
+            "[pointmaze]\nmap = [\"11111\", \"10001\", \"11111\"]\n",
+            "env = \"maze\"",
+        ),
     ] {
         let err = job(text).unwrap_err();
         assert!(err.contains(says), "{text:?}: {err}");
@@ -425,7 +452,10 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
             _ => "1".repeat(side),
         })
         .collect();
-    let err = job(&format!("env = \"pointmaze\"\n[pointmaze]\nmap = {wide:?}\n")).unwrap_err();
+    let err = job(&format!(
+        "env = \"pointmaze\"\n[pointmaze]\nmap = {wide:?}\n"
+    ))
+    .unwrap_err();
     assert!(err.contains("at most"), "{err}");
     // A file of rows: comments, spaces between cells; a bad character names its line.
     let dir = tempfile::tempdir().unwrap();
@@ -440,7 +470,10 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
     assert_eq!(from_file.pointmaze.time_limit, 50);
     // Written back, the job holds the rows, not the file.
     let written = toml::to_string(&from_file).unwrap();
-    assert!(written.contains("map = [") && !written.contains("map_file"), "{written}");
+    assert!(
+        written.contains("map = [") && !written.contains("map_file"),
+        "{written}"
+    );
     std::fs::write(&file, "1111\n1x01\n1111\n").unwrap();
     let err = job(&format!(
         "env = \"pointmaze\"\n[pointmaze]\nmap_file = {:?}\n",
@@ -452,8 +485,17 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
     std::fs::write(&file, "1111\n1001\n1111\n").unwrap();
     let out = dir.path().join("out");
     let (code, err) = pbcs(&[
-        "explore", "--env", "rooms", "--map", file.to_str().unwrap(), "--out", out.to_str().unwrap(),
+        "explore",
+        "--env",
+        "rooms",
+        "--map",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
     ]);
-    assert!(code != 0 && err.contains("is for env `pointmaze`"), "{code} {err}");
+    assert!(
+        code != 0 && err.contains("is for env `pointmaze`"),
+        "{code} {err}"
+    );
     assert!(!out.exists());
 }

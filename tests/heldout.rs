@@ -114,6 +114,60 @@ fn the_held_out_pointmaze_grid_runs_the_grids_jobs_on_unused_seeds() {
     }
 }
 
+/// The PointMaze grid on a map of one's own (`experiments/pointmaze_own.toml`) was registered
+/// before it ran, choosing nothing on that map: its PBCS cell runs the PointMaze grid's job and
+/// its DDPG cell the vanilla grid's (Large's episode length, the map's time limit), each with
+/// only the environment changed to the map of `experiments/maps/pointmaze_own.txt`.
+#[test]
+fn the_own_map_grid_runs_the_named_maps_jobs_on_its_map() {
+    use pbcs::config::Located;
+    use pbcs::envs::{pointmaze::PointMazeConfig, EnvName, EnvSpec};
+    use pbcs::experiment::Job;
+    let load = |f: &str| Experiment::load(&Path::new("experiments").join(f), None).unwrap();
+    let (own, grid, vanilla) = (
+        load("pointmaze_own.toml"),
+        load("pointmaze.toml"),
+        load("pointmaze_vanilla.toml"),
+    );
+    let (reg, hash) = registration(&own);
+    assert_eq!(
+        hash, reg.sha256,
+        "experiments/{} changed since the own-map PointMaze grid was registered on {}: \
+         register a new one (and say so); do not update this hash.",
+        reg.preset, reg.date
+    );
+    let map = PointMazeConfig::from_file(Path::new("experiments/maps/pointmaze_own.txt")).unwrap();
+    assert!(map.map.len() >= 10 && map.map[0].len() >= 10);
+    let on_map = EnvSpec {
+        pointmaze: map,
+        ..EnvSpec::named(EnvName::Pointmaze)
+    };
+    let find = |exp: &Experiment, id: &str| exp.cells.iter().find(|c| c.id == id).unwrap().clone();
+    for (mine, theirs) in [
+        (
+            find(&own, "pbcs_pm-pointmaze"),
+            find(&grid, "pbcs_pm-pointmaze_large"),
+        ),
+        (
+            find(&own, "ddpg-pointmaze"),
+            find(&vanilla, "ddpg-pointmaze_large"),
+        ),
+    ] {
+        let mut job = theirs.job.clone();
+        match &mut job {
+            Job::Pbcs(j) => j.set_env_spec(on_map.clone()),
+            Job::Vanilla(j) => j.set_env_spec(on_map.clone()),
+        }
+        assert_eq!(
+            mine.job, job,
+            "{}: not {}'s job on the map",
+            mine.id, theirs.id
+        );
+        assert_eq!(own.seeds_of(&mine), (0..10).collect::<Vec<u64>>());
+    }
+    assert_eq!(own.cells.len(), 2);
+}
+
 /// The registered comparison of balls in position and in position and velocity
 /// (`experiments/pointmaze_velocity.toml`) runs, map by map, the PointMaze grid's job and that
 /// job with only `phase2.velocity_scale` set, on seeds no other PointMaze grid used, for the

@@ -4,7 +4,7 @@
 
 use pbcs::env::{Env, Planar};
 use pbcs::envs::pointmaze::{
-    MapName, PointMazeConfig, PointMaze, PointState, GOAL_NOISE, SUCCESS_DISTANCE,
+    MapName, PointMaze, PointMazeConfig, PointState, GOAL_NOISE, SUCCESS_DISTANCE,
 };
 use pbcs::envs::{EnvName, EnvSpec};
 use std::path::Path;
@@ -262,17 +262,32 @@ fn the_scene_drawn_without_mujoco_is_the_environments() {
         .collect();
     assert_eq!(specs.len(), 4);
     let mut own = EnvSpec::named(EnvName::Pointmaze);
-    own.pointmaze = PointMazeConfig::from_file(Path::new("experiments/maps/pointmaze_own.txt")).unwrap();
+    own.pointmaze =
+        PointMazeConfig::from_file(Path::new("experiments/maps/pointmaze_own.txt")).unwrap();
     specs.push(own);
     for spec in specs {
         let drawn = spec.scene().unwrap();
         let built = spec.build().unwrap();
-        assert_eq!(drawn, pbcs::with_env!(built, |env| env.scene()), "{}", spec.label());
+        assert_eq!(
+            drawn,
+            pbcs::with_env!(built, |env| env.scene()),
+            "{}",
+            spec.label()
+        );
     }
     // The registry's environment is the named map's task with the goal-noise region.
     for m in MapName::iter() {
-        let env = PointMaze::named(m).unwrap().for_goal_noise(GOAL_NOISE).unwrap();
-        let spec = EnvSpec::named(EnvName::all().iter().copied().find(|e| e.point_map() == Some(m)).unwrap());
+        let env = PointMaze::named(m)
+            .unwrap()
+            .for_goal_noise(GOAL_NOISE)
+            .unwrap();
+        let spec = EnvSpec::named(
+            EnvName::all()
+                .iter()
+                .copied()
+                .find(|e| e.point_map() == Some(m))
+                .unwrap(),
+        );
         assert_eq!(spec.scene().unwrap(), env.scene(), "{m:?}");
     }
 }

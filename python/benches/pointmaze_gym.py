@@ -4,7 +4,8 @@ For every finished run of the grid (``pbcs exp run experiments/pointmaze.toml``:
 ``results/raw/pointmaze/<cell>/``), the run is done again from its own job file (``s<seed>.toml``) with
 ``pbcs run --config``, which saves the chain; the re-run must give the same env steps as the
 grid's row (the runs are deterministic: a difference stops the script). The chain then acts in
-gymnasium-robotics' ``PointMaze_<Map>-v3`` (``continuing_task=False``) for 100 episodes from
+gymnasium-robotics' ``PointMaze_<Map>-v3`` (``continuing_task=False``; a map of one's own,
+experiments/pointmaze_own.toml: ``maze_map=`` its rows) for 100 episodes from
 the env's own resets of the task's cells (start and goal within ±0.25 of the cells' centres),
 each within the env's time limit; success is the env's ``info["success"]``
 (:func:`pbcs.pointmaze.evaluate`, the first reset seeded with 1 000 000 + the run seed).
@@ -13,7 +14,7 @@ Solved = at least 95 of 100.
     python python/benches/pointmaze_gym.py --pbcs <pbcs built with --features mujoco>
 
 Writes ``s<seed>.gym.csv`` beside each row (atomically; a seed already judged is skipped), and
-``results/pointmaze/gym_cells.csv`` (``--summary``): per cell, the seeds solved by gymnasium-robotics and the env steps
+``results/pointmaze/gym_cells.csv`` (``--summary``): per PBCS cell, the seeds solved by gymnasium-robotics and the env steps
 (phase 1 included; median and quartiles, numpy's linear interpolation) of all seeds. Needs gymnasium-robotics and mujoco beside this package.
 """
 
@@ -60,6 +61,9 @@ def judge(pbcs_bin, row_path):
         r = pm.evaluate(chain, episodes=EPISODES, seed=1_000_000 + seed)
         seconds = time.perf_counter() - clock
     gym_id, start, goal, limit = chain.pointmaze
+    if chain.pointmaze_map is not None:
+        # A map of one's own: that env class made with `maze_map=` the job's rows.
+        gym_id += " maze_map=" + row_path.parent.parent.name
     return (
         "cell,seed,gym_id,start_cell,goal_cell,time_limit,env_steps,skills,solved_own_env,"
         "own_success_rate,gym_successes,gym_episodes,gym_solved,gym_mean_steps\n"
@@ -81,6 +85,8 @@ def main():
     for cell in cells:
         rows = sorted(cell.glob("s[0-9]*.csv"), key=lambda p: int(p.stem[1:].split(".")[0]))
         rows = [r for r in rows if r.name.count(".") == 1]
+        # PBCS cells only: a vanilla learner's run (a grid's DDPG cell) leaves no chain.
+        rows = [r for r in rows if next(csv.DictReader(r.open()))["kind"] == "pbcs"]
         wins, steps = 0, []
         for row_path in rows:
             gym_path = row_path.with_suffix(".gym.csv")

@@ -223,7 +223,12 @@ impl ChainCore {
         let (start, goal) = map.farthest_cells();
         Ok(Some(match self.job.env.point_map() {
             Some(named) => (named.gym_id(), start, goal, named.time_limit()),
-            None => (MapName::UMaze.gym_id(), start, goal, self.job.pointmaze.time_limit),
+            None => (
+                MapName::UMaze.gym_id(),
+                start,
+                goal,
+                self.job.pointmaze.time_limit,
+            ),
         }))
     }
 

@@ -79,7 +79,10 @@ impl Map<'_, '_> {
                         .map(|&c| match c {
                             0 => Ok('0'),
                             1 => Ok('1'),
-                            _ => Err(invalid("map", format!("cells are 0 (free) or 1 (wall), got {c}"))),
+                            _ => Err(invalid(
+                                "map",
+                                format!("cells are 0 (free) or 1 (wall), got {c}"),
+                            )),
                         })
                         .collect()
                 };

@@ -2,6 +2,8 @@
 ``pbcs/<name>-v0`` pass Gymnasium's own checker, step as the Rust core does, and a name this
 build cannot make (PointMaze without MuJoCo) is refused saying why."""
 
+import re
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -9,12 +11,12 @@ from gymnasium.utils.env_checker import check_env
 
 import pbcs
 
-RUNNABLE = [n for n in pbcs.ENV_NAMES if not n.startswith("pointmaze_")]
+RUNNABLE = [n for n in pbcs.ENV_NAMES if not n.startswith("pointmaze")]
 
 
 def test_the_registry_lists_the_maze_the_rooms_and_pointmaze():
     assert pbcs.ENV_NAMES[:2] == ("maze", "rooms")
-    assert {"pointmaze_umaze", "pointmaze_large"} <= set(pbcs.ENV_NAMES)
+    assert {"pointmaze_umaze", "pointmaze_large", "pointmaze"} <= set(pbcs.ENV_NAMES)
 
 
 @pytest.mark.parametrize("name", RUNNABLE)
@@ -77,6 +79,40 @@ def test_names_and_arguments_this_build_refuses_say_why():
         pbcs.make("pointmaze_umaze")
     except ValueError as e:
         assert "MuJoCo" in str(e)
+
+
+def test_a_pointmaze_map_of_ones_own_is_checked_before_mujoco_is_needed(tmp_path):
+    """``pbcs.make("pointmaze", map=...)``: a bad or misplaced map is a ValueError naming its
+    field in any build; a good one (rows as strings, as lists, or a file) is the registry's
+    PointMaze on that map where this build has MuJoCo, else refused saying why."""
+    bad = [
+        (dict(), "pointmaze.map"),
+        (dict(map=["111", "121", "111"]), "0 (free) or 1"),
+        (dict(map=[[1, 1, 1], [1, 2, 1], [1, 1, 1]]), "0 (free) or 1"),
+        (dict(map=["111", "101", "111"]), "one free cell"),
+        (dict(map=["1111", "1001", "111"]), "row 2 has 3"),
+        (dict(map=["1111", "1001", "1111"], map_file="m.txt"), "not both"),
+        (dict(map=3), "rows as strings"),
+        (dict(map_file=str(tmp_path / "none.txt")), "none.txt"),
+    ]
+    for kwargs, says in bad:
+        with pytest.raises(ValueError, match=re.escape(says)):
+            pbcs.make("pointmaze", **kwargs)
+    with pytest.raises(ValueError, match="is for env `pointmaze`"):
+        pbcs.make("rooms", map=["1111", "1001", "1111"])
+    file = tmp_path / "map.txt"
+    file.write_text("# mine\n1 1 1 1\n1 0 0 1\n1 1 1 1\n")
+    for kwargs in [dict(map=["1111", "1001", "1111"]), dict(map=[[1, 1, 1, 1], [1, 0, 0, 1], [1, 1, 1, 1]]),
+                   dict(map_file=str(file))]:
+        try:
+            env = pbcs.make("pointmaze", **kwargs)
+        except ValueError as e:
+            assert "MuJoCo" in str(e)
+            continue
+        check_env(env)
+        obs, _ = env.reset(seed=0)
+        # The task's start: the first free cell's centre, at rest (x = (j + 0.5) − W/2).
+        assert obs.tolist()[:4] == [-0.5, 0.0, 0.0, 0.0]
 
 
 def test_a_three_rooms_chain_rolls_out_in_python_as_in_the_core(tmp_path):

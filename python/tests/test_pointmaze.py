@@ -154,14 +154,16 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
     [
         ("pointmaze/pbcs_pm-pointmaze_umaze", 1, None),
         ("pointmaze_velocity/pbcs_pm_velocity-pointmaze_umaze", 21, [1.0, 1.0, 0.1, 0.1]),
+        ("pointmaze_own/pbcs_pm-pointmaze", 7, None),
     ],
 )
 def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
     tmp_path, cell, seed, weights
 ):
     """The table's number, re-made: UMaze seed 1 of experiments/pointmaze.toml (balls in
-    position) and seed 21 of experiments/pointmaze_velocity.toml's velocity arm (balls in
-    position and velocity, whose weights the manifest keeps) run again from their job files
+    position), seed 21 of experiments/pointmaze_velocity.toml's velocity arm (balls in
+    position and velocity, whose weights the manifest keeps) and seed 7 on the map of one's
+    own (experiments/pointmaze_own.toml, judged with `maze_map=` its rows) run again from their job files
     (the same env steps as their rows), each chain loaded in Python and judged by
     gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as the
     committed s<seed>.gym.csv. Needs `pbcs` built with --features mujoco:
@@ -187,6 +189,17 @@ def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
     manifest = tomllib.loads((out / "chain" / "manifest.toml").read_text())
     assert all(s.get("weights") == weights for s in manifest["skills"])
     chain = pbcs.load_chain(out / "chain")
-    assert chain.pointmaze == ("PointMaze_UMaze-v3", (1, 1), (3, 1), 300)
+    gym_id, start, goal, limit = chain.pointmaze
+    assert (gym_id, start, goal) == ("PointMaze_UMaze-v3", *{
+        "pbcs_pm-pointmaze_umaze": ((1, 1), (3, 1)),
+        "pbcs_pm_velocity-pointmaze_umaze": ((1, 1), (3, 1)),
+        "pbcs_pm-pointmaze": ((1, 3), (8, 7)),
+    }[row["cell"]])
+    assert str(limit) == judged["time_limit"]
+    # A map of one's own is judged on its rows (`maze_map=`), the named maps on their own.
+    own = chain.pointmaze_map
+    assert (own is not None) == ("maze_map=" in judged["gym_id"])
+    if own is not None:
+        assert ["".join(map(str, r)) for r in own] == own_rows()
     r = pm.evaluate(chain, episodes=100, seed=1_000_000 + seed)
     assert r["successes"] == int(judged["gym_successes"]) >= 95

@@ -258,7 +258,10 @@ impl EnvSpec {
             (EnvName::Maze, _) => format!("maze {} (layout {})", self.maze.size, self.maze.seed),
             (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
             (EnvName::Pointmaze, None) => {
-                let (h, w) = (self.pointmaze.map.len(), self.pointmaze.map.first().map_or(0, String::len));
+                let (h, w) = (
+                    self.pointmaze.map.len(),
+                    self.pointmaze.map.first().map_or(0, String::len),
+                );
                 format!("PointMaze (own map, {h}×{w})")
             }
             (other, None) => other.name().to_string(),
@@ -289,6 +292,16 @@ impl EnvSpec {
                 format!("pointmaze-{}x{w}-{hex}", rows.len())
             }
             other => other.name().to_string(),
+        }
+    }
+
+    /// The maze's size and layout seed as records write them (`record.csv`'s `maze` and
+    /// `maze_seed`): empty for any environment but the maze. The one place a record says
+    /// where its run ran, with its `env` column.
+    pub fn maze_columns(&self) -> (Option<usize>, Option<u64>) {
+        match self.name {
+            EnvName::Maze => (Some(self.maze.size), Some(self.maze.seed)),
+            _ => (None, None),
         }
     }
 

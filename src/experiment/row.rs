@@ -1,7 +1,7 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
 use super::{Cell, Experiment, Job, Kind, Site};
-use crate::config::{PbcsJob, TrainJob};
+use crate::config::{Located, PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
 use crate::runs::{RunRecord, TrainSummary};
@@ -82,8 +82,8 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Vanilla,
-            site: Site::of(job.env, &job.maze),
-            maze_seed: layout_seed(job.env, &job.maze),
+            site: Site::of(&job.env_spec()),
+            maze_seed: layout_seed(job),
             seed: job.seed,
             learner: job.learner.record_name(),
             gamma: job.learner.gamma,
@@ -111,8 +111,8 @@ impl RawRow {
             cell: cell.id.clone(),
             method: cell.method.clone(),
             kind: Kind::Pbcs,
-            site: Site::of(job.env, &job.maze),
-            maze_seed: layout_seed(job.env, &job.maze),
+            site: Site::of(&job.env_spec()),
+            maze_seed: layout_seed(job),
             seed: r.seed,
             learner: r.learner,
             gamma: r.gamma,
@@ -132,13 +132,10 @@ impl RawRow {
     }
 }
 
-/// The maze layout seed of a job on `env`; 0 for another environment.
-fn layout_seed(env: crate::envs::EnvName, maze: &crate::envs::maze::MazeConfig) -> u64 {
-    if env.is_maze() {
-        maze.seed
-    } else {
-        0
-    }
+/// A raw row's `maze_seed` of a job: the maze's layout seed ([`crate::envs::EnvSpec::maze_columns`]),
+/// 0 for another environment.
+fn layout_seed(job: &impl Located) -> u64 {
+    job.env_spec().maze_columns().1.unwrap_or(0)
 }
 
 /// Reads one raw row file: a header and exactly one record, every value in range (a rate in
@@ -162,7 +159,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
     let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
         Job::Vanilla(j) => (
             Kind::Vanilla,
-            layout_seed(j.env, &j.maze),
+            layout_seed(j),
             j.learner.record_name(),
             j.learner.gamma,
             false,
@@ -171,7 +168,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ),
         Job::Pbcs(j) => (
             Kind::Pbcs,
-            layout_seed(j.env, &j.maze),
+            layout_seed(j),
             j.learner.record_name(),
             j.learner.gamma,
             j.phase2.chaining,

@@ -18,6 +18,8 @@
 //! assert!("maze".parse::<Site>().is_err()); // the maze is written by its size
 //! ```
 
+use crate::config::Located;
+use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::phase2::Variant;
@@ -35,9 +37,9 @@ pub enum Site {
 
 impl Site {
     /// Where a job runs: its environment, and the maze's size when that is the maze.
-    pub fn of(env: EnvName, maze: &crate::envs::maze::MazeConfig) -> Site {
-        match env {
-            EnvName::Maze => Site::Maze(maze.size),
+    pub fn of(env: &crate::envs::EnvSpec) -> Site {
+        match env.name {
+            EnvName::Maze => Site::Maze(env.maze.size),
             other => Site::Env(other),
         }
     }
@@ -153,6 +155,38 @@ impl<'de> Deserialize<'de> for Site {
         }
         d.deserialize_any(SiteVisitor)
     }
+}
+
+/// A job of a grid runs where its site says: the site sets `env` (and the maze's size), so a
+/// job that names an environment itself is refused, naming `env` and `what` (the method).
+pub(crate) fn place(
+    job: &mut impl Located,
+    site: Site,
+    what: &str,
+    own_map: Option<&PointMazeConfig>,
+) -> Result<()> {
+    let mut spec = job.env_spec();
+    if !spec.name.is_maze() || !spec.pointmaze.is_default() {
+        return Err(Error::invalid(
+            "env",
+            format!(
+                "{what}: \"{}\" — a grid's rows say where its methods run: list the \
+                 environment in the experiment's `envs` (and a map of one's own in its \
+                 [pointmaze]) instead",
+                spec.name.name()
+            ),
+        ));
+    }
+    match site {
+        Site::Maze(n) => spec.maze.size = n,
+        Site::Env(e) => spec.name = e,
+    }
+    if site == Site::Env(EnvName::Pointmaze) {
+        spec.pointmaze = own_map.cloned().unwrap_or_default();
+    }
+    job.set_env_spec(spec);
+    *job.seed_mut() = 0;
+    Ok(())
 }
 
 /// The paper's single run of `variant` on a site (results table, one seed each): its

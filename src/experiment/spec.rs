@@ -2,9 +2,9 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::declared::{check_figures, check_report};
-use super::site::paper_run;
+use super::site::{paper_run, place};
 use super::{check_seeds, Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
-use crate::config::{Located, PbcsJob, TrainJob};
+use crate::config::{PbcsJob, TrainJob};
 use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
@@ -419,38 +419,6 @@ impl ExperimentSpec {
         }
         Ok((methods, cells))
     }
-}
-
-/// A job of a grid runs where its site says: the site sets `env` (and the maze's size), so a
-/// job that names an environment itself is refused, naming `env` and `what` (the method).
-fn place(
-    job: &mut impl Located,
-    site: Site,
-    what: &str,
-    own_map: Option<&PointMazeConfig>,
-) -> Result<()> {
-    let mut spec = job.env_spec();
-    if !spec.name.is_maze() || !spec.pointmaze.is_default() {
-        return Err(Error::invalid(
-            "env",
-            format!(
-                "{what}: \"{}\" — a grid's rows say where its methods run: list the \
-                 environment in the experiment's `envs` (and a map of one's own in its \
-                 [pointmaze]) instead",
-                spec.name.name()
-            ),
-        ));
-    }
-    match site {
-        Site::Maze(n) => spec.maze.size = n,
-        Site::Env(e) => spec.name = e,
-    }
-    if site == Site::Env(EnvName::Pointmaze) {
-        spec.pointmaze = own_map.cloned().unwrap_or_default();
-    }
-    job.set_env_spec(spec);
-    *job.seed_mut() = 0;
-    Ok(())
 }
 
 /// The validated job of method `m` on `site` from its merged `table` (seed 0).

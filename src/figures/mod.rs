@@ -102,6 +102,8 @@ pub fn summary(s: &CellStats) -> String {
     }
 }
 
+/// `text` centred in `area` at `size` pixels, or smaller (down to 8) where it would not fit
+/// its width (a long row label, `three_rooms`, beside a grid's narrow left margin).
 fn centred_text<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     text: &str,
@@ -109,6 +111,12 @@ fn centred_text<DB: DrawingBackend>(
     colour: &RGBColor,
 ) -> DrawResult<DB> {
     let (w, h) = area.dim_in_pixel();
+    let fits = |size: u32| {
+        let style = TextStyle::from(("sans-serif", size).into_font());
+        area.estimate_text_size(text, &style)
+            .is_ok_and(|(tw, _)| tw + 4 <= w)
+    };
+    let size = (8..=size).rev().find(|&s| fits(s)).unwrap_or(8);
     let style = TextStyle::from(("sans-serif", size).into_font())
         .color(colour)
         .pos(plotters::style::text_anchor::Pos::new(

@@ -145,16 +145,15 @@ pub fn eval_chain(
     let (job, chain) = load_saved_job(chain_dir, kernel)?;
     let seed = seed.unwrap_or(job.seed);
     let manifest = chain_dir.join("manifest.toml");
-    let (rows, rollout_paths, circles, scene) =
-        crate::with_env!(job.env_spec().build()?, |env| {
-            chain.check_env(&env, &manifest)?;
-            let (rows, rollouts) = evaluate_chain(&env, &chain, &job, episodes, seed)?;
-            let points: Vec<Vec<(f32, f32)>> = rollouts
-                .iter()
-                .map(|r| r.iter().map(|s| env.point(s)).collect())
-                .collect();
-            (rows, points, ball_circles(&env, &chain), env.scene())
-        });
+    let (rows, rollout_paths, circles, scene) = crate::with_env!(job.env_spec().build()?, |env| {
+        chain.check_env(&env, &manifest)?;
+        let (rows, rollouts) = evaluate_chain(&env, &chain, &job, episodes, seed)?;
+        let points: Vec<Vec<(f32, f32)>> = rollouts
+            .iter()
+            .map(|r| r.iter().map(|s| env.point(s)).collect())
+            .collect();
+        (rows, points, ball_circles(&env, &chain), env.scene())
+    });
     let successes = rows.iter().filter(|r| r.success).count();
     let interval = crate::stats::wilson(successes as u64, episodes as u64, crate::stats::Z95);
     let picture = PictureData {

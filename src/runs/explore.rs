@@ -63,10 +63,10 @@ impl<E: Planar> ExploreRun<E> {
         let clock = Instant::now();
         let found = explore(&env, &job.explore, &mut rng, progress)?;
         let seconds = clock.elapsed().as_secs_f64();
-        let on_maze = job.env.is_maze();
+        let (maze, maze_seed) = job.env_spec().maze_columns();
         let summary = ExploreSummary {
-            maze: on_maze.then_some(job.maze.size),
-            maze_seed: on_maze.then_some(job.maze.seed),
+            maze,
+            maze_seed,
             seed: job.seed,
             env_steps: found.env_steps,
             trajectory_len: found.trajectory.len(),

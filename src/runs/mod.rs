@@ -72,7 +72,10 @@ pub fn write_timing(
 /// assert_eq!(out, std::path::Path::new("out/explore/rooms-s0"));
 /// ```
 pub fn default_out(command: &str, env: &EnvSpec, seed: u64, suffix: &str) -> PathBuf {
-    PathBuf::from(format!("out/{command}/{}-s{seed}{suffix}", env.folder_name()))
+    PathBuf::from(format!(
+        "out/{command}/{}-s{seed}{suffix}",
+        env.folder_name()
+    ))
 }
 
 /// The part of a PBCS run's default folder that names its departures from the preset:

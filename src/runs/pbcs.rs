@@ -246,11 +246,11 @@ impl RunRecord {
         success_rate: f32,
     ) -> RunRecord {
         let lc = &job.learner;
-        let maze = job.env.is_maze().then_some(&job.maze);
+        let (maze, maze_seed) = job.env_spec().maze_columns();
         RunRecord {
             env: job.env,
-            maze: maze.map(|m| m.size),
-            maze_seed: maze.map(|m| m.seed),
+            maze,
+            maze_seed,
             seed: job.seed,
             variant: job.phase2.variant(),
             learner: lc.record_name(),

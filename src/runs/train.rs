@@ -82,10 +82,10 @@ impl TrainRun {
             progress,
         )?;
         let seconds = clock.elapsed().as_secs_f64();
-        let on_maze = job.env.is_maze();
+        let (maze, maze_seed) = job.env_spec().maze_columns();
         let summary = TrainSummary {
-            maze: on_maze.then_some(job.maze.size),
-            maze_seed: on_maze.then_some(job.maze.seed),
+            maze,
+            maze_seed,
             seed: job.seed,
             algo: job.learner.algo,
             actor_update: job.learner.actor_update,
