@@ -5,7 +5,8 @@ Everything is computed by the Rust package pbcs-rs (the compiled module ``pbcs._
 * :class:`ContinuousMaze` — the paper's continuous maze as a ``gymnasium.Env``, registered as
   ``pbcs/ContinuousMaze-v0``; :class:`ContinuousMazeVec` steps N mazes in one call.
 * :func:`make` — any environment of the registry by name (``ENV_NAMES``: ``maze``, ``rooms``,
-  ``three_rooms``, PointMaze in a build with MuJoCo), registered as ``pbcs/<name>-v0``.
+  ``three_rooms``, PointMaze's maps and ``pointmaze`` on a map of one's own in a build with
+  MuJoCo, ``MUJOCO``), registered as ``pbcs/<name>-v0``.
 * :func:`explore` — phase 1: the trajectory τ from s_0 to the target.
 * :func:`run` — a whole PBCS run with a preset (``fast`` or ``paper``).
 * :func:`load_chain` — a chain of skills saved by ``pbcs run`` as a policy (:class:`Chain`).
@@ -39,10 +40,14 @@ __all__ = [
     "RegisteredEnv",
     "run",
     "MAX_MAZE_SIZE",
+    "MUJOCO",
 ]
 
 MAX_MAZE_SIZE = _pbcs.MAX_MAZE_SIZE
 ENV_NAMES = tuple(_pbcs.ENV_NAMES)
+#: Whether this build runs PointMaze (built with the ``mujoco`` feature:
+#: ``MATURIN_PEP517_ARGS="--features mujoco" pip install ./python`` after ``make mujoco``).
+MUJOCO = bool(_pbcs.MUJOCO)
 
 
 def explore(size, layout=0, seed=0, bin_side=None, budget=None):

@@ -235,7 +235,7 @@ impl ChainCore {
     /// For a chain of PointMaze on a map of one's own: the map as gymnasium-robotics'
     /// `maze_map` takes it (rows of 0 and 1); None otherwise.
     #[getter]
-    fn pointmaze_map(&self) -> PyResult<Option<Vec<Vec<u8>>>> {
+    fn pointmaze_map(&self) -> PyResult<Option<Vec<Vec<u32>>>> {
         if self.job.env != pbcs::envs::EnvName::Pointmaze {
             return Ok(None);
         }
@@ -243,7 +243,7 @@ impl ChainCore {
         let rows = map.map_err(py_err)?.to_rows();
         Ok(Some(
             rows.iter()
-                .map(|r| r.bytes().map(|b| b - b'0').collect())
+                .map(|r| r.bytes().map(|b| u32::from(b - b'0')).collect())
                 .collect(),
         ))
     }

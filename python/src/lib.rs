@@ -128,5 +128,6 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
         .map(|e| e.name())
         .collect();
     m.add("ENV_NAMES", names)?;
+    m.add("MUJOCO", cfg!(feature = "mujoco"))?;
     Ok(())
 }
