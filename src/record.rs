@@ -21,6 +21,28 @@ fn temp_builder<'a>(prefix: &'a str, suffix: &'a str) -> tempfile::Builder<'a, '
     b
 }
 
+/// The SHA-256 of `bytes` in lower-case hex (a registered preset, a chain's files).
+///
+/// ```
+/// assert_eq!(
+///     pbcs::record::sha256_hex(b"abc"),
+///     "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+/// );
+/// ```
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The SHA-256 of the file at `path` ([`sha256_hex`]), an error naming it if unreadable.
+pub fn file_sha256(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    Ok(sha256_hex(&bytes))
+}
+
 /// Writes `path` atomically: `fill` writes the content into a buffered temporary file in the
 /// same folder, which then replaces `path`. Parent folders are created.
 pub fn write_atomic(

@@ -68,3 +68,26 @@ def test_the_protocols_starts_are_the_chains(chain_dir):
     starts = pbcs.evaluation_starts(2, seed=5, episodes=30, epsilon=chain._core.epsilon)
     assert starts.tobytes() == chain.eval_starts(30, seed=5).tobytes()
     assert (np.linalg.norm(starts - np.array([0.5, 0.5]), axis=1) <= chain._core.epsilon + 1e-6).all()
+
+
+def test_a_chain_whose_files_do_not_match_its_manifest_is_refused(chain_dir, tmp_path, pbcs_bin):
+    """The manifest records the skills' count and the SHA-256 of each policy file and of
+    run.toml: ``pbcs.load_chain`` and ``pbcs eval`` refuse another run's job or a policy file
+    edited, naming the manifest's field; the chain as saved loads."""
+    import shutil
+
+    manifest = (chain_dir / "chain" / "manifest.toml").read_text()
+    assert manifest.startswith("skill_count = ") and "sha256 = " in manifest
+    bad = tmp_path / "chain"
+    shutil.copytree(chain_dir / "chain", bad)
+    (bad / "run.toml").write_text((bad / "run.toml").read_text().replace("seed = 0", "seed = 1"))
+    with pytest.raises(ValueError, match="job_sha256"):
+        pbcs.load_chain(bad)
+    done = subprocess.run([pbcs_bin, "eval", "--chain", str(bad), "--out", str(tmp_path / "e")],
+                          capture_output=True, text=True)
+    assert done.returncode != 0 and "job_sha256" in done.stderr
+    shutil.copy(chain_dir / "chain" / "run.toml", bad / "run.toml")
+    policy = bad / "skill0.safetensors"
+    policy.write_bytes(policy.read_bytes()[:-1] + b"\0")
+    with pytest.raises(ValueError, match=r"skills\[0\]\.sha256"):
+        pbcs.load_chain(bad)

@@ -281,13 +281,12 @@ impl EnvSpec {
     /// assert_eq!(EnvSpec::named(EnvName::PointmazeLarge).folder_name(), "pointmaze_large");
     /// ```
     pub fn folder_name(&self) -> String {
-        use sha2::Digest;
         match self.name {
             EnvName::Maze => format!("maze{}-m{}", self.maze.size, self.maze.seed),
             EnvName::Pointmaze => {
                 let rows = &self.pointmaze.map;
-                let digest = sha2::Sha256::digest(rows.join("\n").as_bytes());
-                let hex: String = digest[..4].iter().map(|b| format!("{b:02x}")).collect();
+                let hex = crate::record::sha256_hex(rows.join("\n").as_bytes());
+                let hex = &hex[..8];
                 let w = rows.first().map_or(0, String::len);
                 format!("pointmaze-{}x{w}-{hex}", rows.len())
             }

@@ -249,13 +249,7 @@ pub struct Registration {
 impl Registration {
     /// The SHA-256 (lower-case hex) of the preset file as it is now.
     pub fn preset_sha256(&self) -> Result<String> {
-        use sha2::{Digest, Sha256};
-        let bytes =
-            std::fs::read(&self.preset_path).map_err(|e| Error::io(&self.preset_path, e))?;
-        Ok(Sha256::digest(&bytes)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect())
+        crate::record::file_sha256(&self.preset_path)
     }
 
     /// Ok when the preset file still has the registered hash; else an error naming the

@@ -86,14 +86,30 @@ pub struct Rollout<S> {
     pub success: bool,
 }
 
+/// `manifest.toml`. Since issue 48 it says what belongs to the chain: the number of skills,
+/// each policy file's SHA-256 and, for a chain saved by `pbcs run`, the job file beside it and
+/// its SHA-256; [`SkillChain::load`] refuses a folder whose files do not match. A manifest
+/// written before has none of them and loads as it did, its files unchecked.
 #[derive(Serialize, Deserialize)]
 pub(crate) struct Manifest {
+    /// The number of skills (`[[skills]]` tables): a manifest cut short is refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    skill_count: Option<usize>,
+    /// The job file in the chain's folder (`run.toml`), for a chain saved with its job.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    job_file: Option<String>,
+    /// That file's SHA-256.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    job_sha256: Option<String>,
     skills: Vec<ManifestSkill>,
 }
 
 #[derive(Serialize, Deserialize)]
 pub(crate) struct ManifestSkill {
     file: String,
+    /// The policy file's SHA-256 (absent in manifests written before issue 48).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sha256: Option<String>,
     center: Vec<f32>,
     radius: f32,
     /// [`Ball::weights`] (absent: a ball in position).
@@ -198,18 +214,38 @@ impl SkillChain {
     }
 
     /// Saves the chain into `dir`: `skill{i}.safetensors` per policy and `manifest.toml`
-    /// (activation balls, trajectory indices, network shapes).
+    /// (activation balls, trajectory indices, network shapes, the number of skills and each
+    /// policy file's SHA-256), written last.
     pub fn save(&self, dir: &Path) -> Result<()> {
-        let mut manifest = Manifest { skills: Vec::new() };
+        self.save_with_job(dir, None)
+    }
+
+    /// [`SkillChain::save`], with the job that built the chain written beside it first
+    /// (`job` = (file name, its text): `run.toml`), its SHA-256 in the manifest, so that a job
+    /// file copied in from another run is refused when the chain is loaded.
+    pub fn save_with_job(&self, dir: &Path, job: Option<(&str, &str)>) -> Result<()> {
+        let mut manifest = Manifest {
+            skill_count: Some(self.skills.len()),
+            job_file: None,
+            job_sha256: None,
+            skills: Vec::new(),
+        };
+        if let Some((name, text)) = job {
+            crate::record::write_atomic(&dir.join(name), |w| w.write_all(text.as_bytes()))?;
+            manifest.job_file = Some(name.to_string());
+            manifest.job_sha256 = Some(crate::record::sha256_hex(text.as_bytes()));
+        }
         for (i, skill) in self.skills.iter().enumerate() {
             let file = format!("skill{i}.safetensors");
             skill.policy.save(&dir.join(&file))?;
+            let sha256 = Some(crate::record::file_sha256(&dir.join(&file))?);
             let bounds = match skill.policy.head() {
                 crate::nn::Head::Tanh(b) => b.clone(),
                 crate::nn::Head::Linear => Vec::new(),
             };
             manifest.skills.push(ManifestSkill {
                 file,
+                sha256,
                 center: skill.activation.center.clone(),
                 radius: skill.activation.radius,
                 weights: skill.activation.weights.clone(),
@@ -240,13 +276,17 @@ impl SkillChain {
     /// value of the manifest is checked before a weight is read: at least one skill; finite
     /// numbers; radius, action scales and action bounds positive; sizes, centre, origin and
     /// scales of agreeing lengths; `start_index <= target_index`; a policy file inside the
-    /// folder holding at least the parameters its sizes say. Then the weights (their shapes,
-    /// all finite). An error names `manifest.toml` (or the weights' file) and the field
-    /// (`skills[2].center`).
+    /// folder holding at least the parameters its sizes say. Then what belongs to the chain
+    /// (where the manifest says it, as every manifest since issue 48 does): as many skills as
+    /// `skill_count`, each policy file and the job file with the SHA-256 recorded, so that a
+    /// manifest cut short, policy files swapped or copied in from another run, or another
+    /// run's job are refused. Then the weights (their shapes, all finite). An error names
+    /// `manifest.toml` (or the file) and the field (`skills[2].center`).
     pub fn load(dir: &Path, kernel: Kernel) -> Result<Self> {
         let path = dir.join("manifest.toml");
         let manifest: Manifest = crate::validate::read_toml(&path)?;
         manifest.check(&path)?;
+        manifest.check_files(dir, &path)?;
         let mut skills = Vec::new();
         for (i, m) in manifest.skills.into_iter().enumerate() {
             // Sizes that promise more parameters than the file holds are refused before the
@@ -352,7 +392,71 @@ fn parameters(sizes: &[usize]) -> Option<usize> {
     })
 }
 
+/// Refuses `file` (named `what` in the manifest at `manifest`) unless its SHA-256 is `want`.
+fn check_sha256(manifest: &Path, what: &str, file: &Path, want: &str) -> Result<()> {
+    let got = crate::record::file_sha256(file)?;
+    if got == want {
+        return Ok(());
+    }
+    Err(Error::parse(
+        manifest,
+        format!(
+            "{what}: {} has SHA-256 {got}, the manifest records {want}: not the file this \
+             chain was saved with (swapped, edited, or copied from another run)",
+            file.display()
+        ),
+    ))
+}
+
 impl Manifest {
+    /// The files of a chain saved since issue 48 are the ones it was saved with: as many
+    /// skills as `skill_count`, the job file and each policy file with the SHA-256 recorded.
+    /// (An older manifest records none of them: nothing to check.)
+    fn check_files(&self, dir: &Path, path: &Path) -> Result<()> {
+        if let Some(n) = self.skill_count {
+            if n != self.skills.len() {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "skill_count: {n} skills recorded, {} [[skills]] tables found (a \
+                         manifest cut short or added to)",
+                        self.skills.len()
+                    ),
+                ));
+            }
+        }
+        match (&self.job_file, &self.job_sha256) {
+            (Some(file), Some(want)) => {
+                let plain = Path::new(file).file_name() == Some(std::ffi::OsStr::new(file));
+                if !plain {
+                    return Err(Error::parse(
+                        path,
+                        format!("job_file: must name a file in the chain's folder, got {file:?}"),
+                    ));
+                }
+                check_sha256(path, "job_sha256", &dir.join(file), want)?;
+            }
+            (None, None) => {}
+            _ => {
+                return Err(Error::parse(
+                    path,
+                    "job_file and job_sha256: one without the other",
+                ))
+            }
+        }
+        for (i, s) in self.skills.iter().enumerate() {
+            if let Some(want) = &s.sha256 {
+                check_sha256(
+                    path,
+                    &format!("skills[{i}].sha256"),
+                    &dir.join(&s.file),
+                    want,
+                )?;
+            }
+        }
+        Ok(())
+    }
+
     /// Checks every value of the manifest read from `path` before a file it names is read:
     /// at least one skill, and each skill's values ([`ManifestSkill::check`]). An error names
     /// `path` and the field.

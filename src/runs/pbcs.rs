@@ -14,7 +14,7 @@ use crate::phase2::{
     StartMode, Variant,
 };
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
-use crate::record::{write_atomic, write_csv, write_record};
+use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Valid;
 use serde::Serialize;
@@ -202,13 +202,13 @@ impl<E: Planar> PbcsRun<E> {
             &["seconds".to_string()],
             phase2.trace.iter().map(|r| [format!("{:.3}", r.seconds)]),
         )?;
-        phase2.chain.save(&out.join("chain"))?;
         // The chain folder describes itself: the job (maze, ε, evaluation settings) beside the
-        // manifest, so `pbcs eval --chain DIR` needs nothing else.
+        // manifest, so `pbcs eval --chain DIR` needs nothing else; the manifest records its
+        // SHA-256 and each policy file's.
         let job_text = crate::validate::to_toml(job, &out.join("chain").join(CHAIN_JOB))?;
-        write_atomic(&out.join("chain").join(CHAIN_JOB), |w| {
-            w.write_all(job_text.as_bytes())
-        })?;
+        phase2
+            .chain
+            .save_with_job(&out.join("chain"), Some((CHAIN_JOB, &job_text)))?;
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
             "{} {}, {}, seed {}: {} steps, {} skills, chain success {:.0} %",

@@ -148,7 +148,11 @@ fn indices_bounds_files_and_parameter_counts_are_checked() {
         assert_names(&err, field);
     }
     // The second skill is named by its index.
-    let two = format!("{text}\n{text}");
+    let skills = &text[text.find("[[skills]]").unwrap()..];
+    let two = format!(
+        "{}\n{skills}",
+        text.replace("skill_count = 1", "skill_count = 2")
+    );
     std::fs::write(dir.path().join("manifest.toml"), &two).unwrap();
     SkillChain::load(dir.path(), Kernel::detect()).unwrap();
     let second = two.rfind("center = [0.5, 0.5]").unwrap();
@@ -162,11 +166,17 @@ fn indices_bounds_files_and_parameter_counts_are_checked() {
         .unwrap_err()
         .to_string();
     assert_names(&err, "skills[1].center");
-    // A non-finite weight: an error naming the policy's file.
-    std::fs::write(dir.path().join("manifest.toml"), &text).unwrap();
+    // A non-finite weight, its file's SHA-256 recorded as it is now: an error naming the
+    // policy's file.
     let mut policy = constant_policy([1.0, 0.0]);
     policy.params[3] = f32::NAN;
-    policy.save(&dir.path().join("skill0.safetensors")).unwrap();
+    let file = dir.path().join("skill0.safetensors");
+    policy.save(&file).unwrap();
+    let new = format!("sha256 = \"{}\"", pbcs::record::file_sha256(&file).unwrap());
+    let recorded = text.lines().find(|l| l.starts_with("sha256 = ")).unwrap();
+    assert_ne!(recorded, new, "the NaN file is another file");
+    let text = text.replace(recorded, &new);
+    std::fs::write(dir.path().join("manifest.toml"), &text).unwrap();
     let err = SkillChain::load(dir.path(), Kernel::detect())
         .unwrap_err()
         .to_string();
@@ -322,4 +332,99 @@ fn a_ball_in_position_and_velocity_keeps_its_weights() {
         assert_names(&err, "skills[0].weights");
         assert!(err.contains(why), "{bad}: {err}");
     }
+}
+
+/// A chain's files are the ones it was saved with (issue 48's probe: a manifest cut before its
+/// second skill evaluated as a one-skill chain, swapped or foreign policy files and another
+/// run's `run.toml` ran, all with exit 0). The manifest records the number of skills and the
+/// SHA-256 of each policy file and of the job beside it; each mismatch is refused naming the
+/// field. A manifest written before it (none of those fields) still loads, unchecked.
+#[test]
+fn a_chain_whose_files_do_not_match_its_manifest_is_refused() {
+    let policy = |seed: u64| {
+        let mut rng = Seeds::new(seed).stream(Stream::Init);
+        Mlp::new(&[2, 8, 2], Head::Tanh(vec![0.1; 2]), &mut rng)
+    };
+    let chain = |seeds: [u64; 2]| SkillChain {
+        skills: seeds
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| Skill {
+                policy: policy(s),
+                activation: Ball::new(vec![0.5 + i as f32, 0.5], 0.1),
+                start_index: 5 * i,
+                target_index: 5 * i + 5,
+                inputs: Inputs::new(vec![0.0, 0.0], vec![1.0, 1.0]),
+            })
+            .collect(),
+        kernel: Kernel::detect(),
+    };
+    let saved = |seeds: [u64; 2], job: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        chain(seeds)
+            .save_with_job(dir.path(), Some(("run.toml", job)))
+            .unwrap();
+        dir
+    };
+    let load = |dir: &Path| SkillChain::load(dir, Kernel::detect()).map(|c| c.skills.len());
+    let (ours, theirs) = (saved([1, 2], "seed = 1\n"), saved([3, 4], "seed = 2\n"));
+    assert_eq!(load(ours.path()).unwrap(), 2);
+    let manifest = std::fs::read_to_string(ours.path().join("manifest.toml")).unwrap();
+    assert!(manifest.starts_with("skill_count = 2\njob_file = \"run.toml\"\njob_sha256 = \""));
+    let refused = |edit: &dyn Fn(&Path), field: &str| {
+        let dir = saved([1, 2], "seed = 1\n");
+        edit(dir.path());
+        let err = load(dir.path()).expect_err("a chain whose files do not match must not load");
+        assert_names(&err.to_string(), field);
+    };
+    // The manifest cut just before its second [[skills]].
+    refused(
+        &|d| {
+            let cut = manifest.rfind("[[skills]]").unwrap();
+            std::fs::write(d.join("manifest.toml"), &manifest[..cut]).unwrap();
+        },
+        "skill_count",
+    );
+    // The two policy files swapped.
+    refused(
+        &|d| {
+            let (a, b) = (d.join("skill0.safetensors"), d.join("skill1.safetensors"));
+            let tmp = d.join("tmp");
+            std::fs::rename(&a, &tmp).unwrap();
+            std::fs::rename(&b, &a).unwrap();
+            std::fs::rename(&tmp, &b).unwrap();
+        },
+        "skills[0].sha256",
+    );
+    // A policy file copied in from another run's chain.
+    refused(
+        &|d| {
+            let other = theirs.path().join("skill1.safetensors");
+            std::fs::copy(other, d.join("skill1.safetensors")).unwrap();
+        },
+        "skills[1].sha256",
+    );
+    // Another run's job.
+    refused(
+        &|d| {
+            std::fs::copy(theirs.path().join("run.toml"), d.join("run.toml")).unwrap();
+        },
+        "job_sha256",
+    );
+    // A manifest written before issue 48 (no count, no hashes) loads as it did: its files are
+    // not checked (swapped here, and loaded).
+    let legacy: String = manifest
+        .lines()
+        .filter(|l| {
+            !l.starts_with("skill_count") && !l.starts_with("job_") && !l.starts_with("sha256")
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(ours.path().join("manifest.toml"), legacy).unwrap();
+    std::fs::copy(
+        theirs.path().join("skill0.safetensors"),
+        ours.path().join("skill0.safetensors"),
+    )
+    .unwrap();
+    assert_eq!(load(ours.path()).unwrap(), 2);
 }
