@@ -67,6 +67,7 @@ pub mod phase1;
 pub mod phase2;
 pub mod pipeline;
 pub mod plot;
+pub mod policy;
 pub mod record;
 pub mod report;
 pub mod reproduce;

@@ -87,8 +87,8 @@ fn finite_floats(
 fn shared_dims(chain: &SkillChain, manifest: &std::path::Path) -> PyResult<(usize, usize)> {
     let dims = |i: usize| {
         let s = &chain.skills[i];
-        let sizes = s.policy.sizes();
-        (sizes[0], sizes[sizes.len() - 1], s.activation.center.len())
+        let p = &s.policy;
+        (p.obs_dim(), p.action_dim(), s.activation.center.len())
     };
     let first = dims(0);
     match (1..chain.skills.len()).find(|&i| dims(i) != first) {

@@ -188,7 +188,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
             .map(|(k, t, policy)| {
                 let goal = self.config.goal(self.env, &self.obs, lo + t);
                 Skill {
-                    policy,
+                    policy: Box::new(policy),
                     activation: Ball::around(
                         self.env,
                         &self.obs[lo + k],

@@ -21,6 +21,7 @@ pub mod backplay;
 pub mod chaining;
 pub mod flat;
 pub mod goal;
+mod manifest;
 pub mod procedure;
 pub mod skill_chain;
 pub mod starts;

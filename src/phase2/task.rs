@@ -11,6 +11,7 @@ use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
 use crate::nn::Mlp;
+use crate::policy::Policy;
 use crate::rng::Rng;
 use crate::rollout::{lockstep, Agent, Tally, Verdict};
 
@@ -234,6 +235,12 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// policy is greedy (a test). Returns the fraction of episodes that reached the goal (a
     /// lower bound for a test cut short by [`Phase2Config::fast_tests`]).
     fn episodes(&mut self, k: usize, n: usize, learn: bool) -> f32 {
+        self.episodes_of(k, n, learn, None)
+    }
+
+    /// [`Self::episodes`], greedy episodes acted by `policy` instead of the learner's π when
+    /// one is given (a saved skill's policy, verified: the learner is not touched).
+    fn episodes_of(&mut self, k: usize, n: usize, learn: bool, policy: Option<&dyn Policy>) -> f32 {
         let starts = self.starts(k, n);
         if learn {
             for noise in &mut self.noise {
@@ -247,8 +254,11 @@ impl<'a, E: Env> SkillTask<'a, E> {
         };
         let fast = !learn && self.config.ideas.fast_tests;
         let env = self.env;
+        let ws = crate::nn::Workspace::with_kernel(self.learner.kernel());
         let mut agent = Episodes {
             task: self,
+            policy,
+            ws,
             learn,
             fast,
             view: Vec::new(),
@@ -262,15 +272,19 @@ impl<'a, E: Env> SkillTask<'a, E> {
         tally.successes as f32 / n as f32
     }
 
-    /// `episodes` greedy episodes of a saved `policy` from B_ε(τ_k) (swapped in for π, then
-    /// swapped back), reported as `kind`.
-    fn greedy_with(&mut self, k: usize, policy: &Mlp, episodes: usize, kind: EventKind) -> f32 {
+    /// `episodes` greedy episodes of a saved `policy` from B_ε(τ_k), acted by that policy
+    /// (the learner is not touched), reported as `kind`.
+    fn greedy_with(
+        &mut self,
+        k: usize,
+        policy: &dyn Policy,
+        episodes: usize,
+        kind: EventKind,
+    ) -> f32 {
         if self.spent_budget() {
             return 0.0;
         }
-        let current = std::mem::replace(&mut self.learner.actor, policy.clone());
-        let p = self.episodes(k, episodes, false);
-        self.learner.actor = current;
+        let p = self.episodes_of(k, episodes, false, Some(policy));
         self.report(k, kind, p);
         p
     }
@@ -314,7 +328,7 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         self.learner.actor.clone()
     }
 
-    /// Runs `episodes` greedy episodes of `policy` (swapped in for π, then swapped back).
+    /// Runs `episodes` greedy episodes of `policy` (acted by it; the learner is not touched).
     fn verify(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
         self.greedy_with(k, policy, episodes, EventKind::Verify)
     }
@@ -345,8 +359,12 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
 /// [`SkillTask::episodes`]' agent: the task's learner acting on the skill's view of the
 /// observations ([`Inputs`]), with noise and learning when training, judged by the skill's
 /// goal.
-struct Episodes<'t, 'a, E: Env> {
+struct Episodes<'t, 'a, 'p, E: Env> {
     task: &'t mut SkillTask<'a, E>,
+    /// Who acts in greedy episodes: a saved policy being verified, or (None) the learner's π.
+    policy: Option<&'p dyn Policy>,
+    /// The saved policy's scratch, on the learner's kernel.
+    ws: crate::nn::Workspace,
     learn: bool,
     /// A greedy episode that does not move is stuck for good (deterministic policy, pure
     /// step): with fast tests it ends as a failure at once.
@@ -358,7 +376,7 @@ struct Episodes<'t, 'a, E: Env> {
     next_view: Vec<f32>,
 }
 
-impl<E: Env> Agent<E> for Episodes<'_, '_, E> {
+impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
     fn act(&mut self, lanes: &[usize], obs: &[f32], env_actions: &mut [f32]) {
         let t = &mut *self.task;
         let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
@@ -370,8 +388,15 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, E> {
             t.inputs.observation(r, o);
         }
         self.actions.clear();
-        self.actions
-            .extend_from_slice(t.learner.act(&self.view, lanes.len()));
+        match self.policy {
+            Some(p) => {
+                let a = p.act(&self.view, lanes.len(), &mut self.ws);
+                self.actions.extend_from_slice(a);
+            }
+            None => self
+                .actions
+                .extend_from_slice(t.learner.act(&self.view, lanes.len())),
+        }
         for (j, &lane) in lanes.iter().enumerate() {
             let a = &mut self.actions[j * act_dim..(j + 1) * act_dim];
             if self.learn {

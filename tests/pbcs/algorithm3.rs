@@ -146,7 +146,7 @@ fn homing_policy() -> Mlp {
 #[test]
 fn a_chain_feeds_each_skill_its_own_inputs_also_after_reloading() {
     let skill = Skill {
-        policy: homing_policy(),
+        policy: Box::new(homing_policy()),
         activation: Ball::new(vec![0.0, 0.0], 0.1),
         start_index: 0,
         target_index: 1,
@@ -171,7 +171,7 @@ fn a_chain_feeds_each_skill_its_own_inputs_also_after_reloading() {
 fn a_malformed_manifest_is_an_error_naming_the_field() {
     let chain = SkillChain {
         skills: vec![Skill {
-            policy: constant_policy([1.0, 0.0]),
+            policy: Box::new(constant_policy([1.0, 0.0])),
             activation: Ball::new(vec![0.0, 0.0], 0.1),
             start_index: 0,
             target_index: 1,

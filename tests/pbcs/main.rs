@@ -60,7 +60,7 @@ fn constant_policy(dir: [f32; 2]) -> Mlp {
 
 fn two_skill_chain() -> SkillChain {
     let skill = |dir, center: Vec<f32>, k| Skill {
-        policy: constant_policy(dir),
+        policy: Box::new(constant_policy(dir)),
         activation: Ball::new(center, 0.25),
         start_index: k,
         target_index: k + 1,
@@ -253,7 +253,7 @@ fn a_limited_chain_run_stops_a_stuck_or_slow_skill() {
     // A skill pushing into nothing forever: on the plane a zero action never moves, so the
     // limited run stops after one step (stuck); the plain run spends its whole budget.
     let mut chain = two_skill_chain();
-    chain.skills[0].policy = constant_policy([0.0, 0.0]);
+    chain.skills[0].policy = Box::new(constant_policy([0.0, 0.0]));
     let plain = chain.run(&Plane, [0.0, 0.0], 40);
     assert_eq!(plain.skill_used.len(), 40);
     let limited = chain.run_limited(&Plane, [0.0, 0.0], 40, Some(1000));
