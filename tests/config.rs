@@ -419,6 +419,11 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
             "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"101\", \"111\"]\n",
             "one free cell",
         ),
+        // Free cells, but no two connected.
+        (
+            "env = \"pointmaze\"\n[pointmaze]\nmap = [\"11111\", \"10101\", \"11111\"]\n",
+            "no two connected",
+        ),
         (
             "env = \"pointmaze\"\n[pointmaze]\nmap = [\"111\", \"111\", \"111\"]\n",
             "no free cell",

@@ -20,6 +20,7 @@ Writes ``s<seed>.gym.csv`` beside each row (atomically; a seed already judged is
 
 import argparse
 import csv
+import hashlib
 import os
 import subprocess
 import tempfile
@@ -61,9 +62,13 @@ def judge(pbcs_bin, row_path):
         r = pm.evaluate(chain, episodes=EPISODES, seed=1_000_000 + seed)
         seconds = time.perf_counter() - clock
     gym_id, start, goal, limit = chain.pointmaze
-    if chain.pointmaze_map is not None:
-        # A map of one's own: that env class made with `maze_map=` the job's rows.
-        gym_id += " maze_map=" + row_path.parent.parent.name
+    own = chain.pointmaze_map
+    if own is not None:
+        # A map of one's own: that env class made with `maze_map=` the job's rows, named as
+        # its run folders name it (`EnvSpec::folder_name`: size and the rows' SHA-256).
+        rows = ["".join(str(c) for c in r) for r in own]
+        digest = hashlib.sha256("\n".join(rows).encode()).hexdigest()[:8]
+        gym_id += f" maze_map=pointmaze-{len(rows)}x{len(rows[0])}-{digest}"
     return (
         "cell,seed,gym_id,start_cell,goal_cell,time_limit,env_steps,skills,solved_own_env,"
         "own_success_rate,gym_successes,gym_episodes,gym_solved,gym_mean_steps\n"

@@ -213,5 +213,10 @@ def make(name, **kwargs):
     as :class:`ContinuousMaze`, which adds reset-anywhere); ``kwargs`` go to its constructor.
     Every name also has a Gymnasium id, ``pbcs/<name>-v0``."""
     if name == "maze":
+        if "map" in kwargs or "map_file" in kwargs:
+            raise ValueError(
+                "invalid `pointmaze.map`: a map (map=, map_file=) is for env `pointmaze`, "
+                "but the environment is `maze`"
+            )
         return ContinuousMaze(**kwargs)
     return RegisteredEnv(name, **kwargs)

@@ -88,6 +88,7 @@ def test_a_chain_whose_files_do_not_match_its_manifest_is_refused(chain_dir, tmp
     assert done.returncode != 0 and "job_sha256" in done.stderr
     shutil.copy(chain_dir / "chain" / "run.toml", bad / "run.toml")
     policy = bad / "skill0.safetensors"
-    policy.write_bytes(policy.read_bytes()[:-1] + b"\0")
+    data = policy.read_bytes()
+    policy.write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
     with pytest.raises(ValueError, match=r"skills\[0\]\.sha256"):
         pbcs.load_chain(bad)

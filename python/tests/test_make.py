@@ -102,8 +102,9 @@ def test_a_pointmaze_map_of_ones_own_is_checked_before_mujoco_is_needed(tmp_path
     for kwargs, says in bad:
         with pytest.raises(ValueError, match=re.escape(says)):
             pbcs.make("pointmaze", **kwargs)
-    with pytest.raises(ValueError, match="is for env `pointmaze`"):
-        pbcs.make("rooms", map=["1111", "1001", "1111"])
+    for other in ["rooms", "maze"]:
+        with pytest.raises(ValueError, match="is for env `pointmaze`"):
+            pbcs.make(other, map=["1111", "1001", "1111"])
     file = tmp_path / "map.txt"
     file.write_text("# mine\n1 1 1 1\n1 0 0 1\n1 1 1 1\n")
     for kwargs in [dict(map=["1111", "1001", "1111"]), dict(map=[[1, 1, 1, 1], [1, 0, 0, 1], [1, 1, 1, 1]]),

@@ -98,7 +98,7 @@ pub enum Built {
     Rooms(TwoRooms),
     /// [`EnvName::ThreeRooms`].
     ThreeRooms(three_rooms::ThreeRooms),
-    /// The four PointMaze names (with MuJoCo; a build without it refuses them in
+    /// The PointMaze names, the four maps and `pointmaze` (with MuJoCo; a build without it refuses them in
     /// [`EnvSpec::build`], and its `PointMaze` has no values).
     PointMaze(PointMaze),
 }
@@ -156,7 +156,8 @@ impl EnvName {
         *self == EnvName::Maze
     }
 
-    /// The PointMaze map this name stands for (None for the maze and rooms). Needs no MuJoCo:
+    /// The named PointMaze map this name stands for (None for the maze, the rooms and
+    /// `pointmaze`, whose map is the job's: [`EnvSpec::point_map`]). Needs no MuJoCo:
     /// the map, the task's cells and gymnasium-robotics' id and time limit are in
     /// [`crate::envs::pointmaze::model`].
     pub fn point_map(self) -> Option<MapName> {
@@ -270,8 +271,9 @@ impl EnvSpec {
 
     /// How run folders name where they ran ([`crate::runs::default_out`]): `maze<N>-m<layout>`
     /// for the maze, `pointmaze-<H>x<W>-<hash>` for a map of one's own (the first 8 hex
-    /// digits of its rows' SHA-256, so that two maps never share a folder), the name for
-    /// another.
+    /// digits of its rows' SHA-256, so that two maps do not share a folder; a clash of those
+    /// 32 bits would be refused by the folder's claim, which compares the whole job), the name
+    /// for another.
     ///
     /// ```
     /// use pbcs::envs::{EnvName, EnvSpec};

@@ -166,14 +166,22 @@ pub(crate) fn place(
     own_map: Option<&PointMazeConfig>,
 ) -> Result<()> {
     let mut spec = job.env_spec();
-    if !spec.name.is_maze() || !spec.pointmaze.is_default() {
+    if !spec.name.is_maze() {
         return Err(Error::invalid(
             "env",
             format!(
                 "{what}: \"{}\" — a grid's rows say where its methods run: list the \
-                 environment in the experiment's `envs` (and a map of one's own in its \
-                 [pointmaze]) instead",
+                 environment in the experiment's `envs` instead",
                 spec.name.name()
+            ),
+        ));
+    }
+    if !spec.pointmaze.is_default() {
+        return Err(Error::invalid(
+            "pointmaze",
+            format!(
+                "{what}: sets [pointmaze] — a grid's map of one's own (its rows and time limit) \
+                 is the experiment file's own [pointmaze], for its site `pointmaze`"
             ),
         ));
     }

@@ -116,7 +116,7 @@ fn centred_text<DB: DrawingBackend>(
         area.estimate_text_size(text, &style)
             .is_ok_and(|(tw, _)| tw + 4 <= w)
     };
-    let size = (8..=size).rev().find(|&s| fits(s)).unwrap_or(8);
+    let size = (8..=size).rev().find(|&s| fits(s)).unwrap_or(size.min(8));
     let style = TextStyle::from(("sans-serif", size).into_font())
         .color(colour)
         .pos(plotters::style::text_anchor::Pos::new(

@@ -10,6 +10,10 @@ use crate::policy::load_policy;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The file in a saved chain's folder that holds the job that built it (what `pbcs eval` and
+/// `pbcs.load_chain` read, and the only job file a manifest may name).
+pub const CHAIN_JOB: &str = "run.toml";
+
 /// `manifest.toml`. Since issue 48 it says what belongs to the chain: the number of skills,
 /// each policy file's SHA-256 and, for a chain saved by `pbcs run`, the job file beside it and
 /// its SHA-256; [`SkillChain::load`] refuses a folder whose files do not match. A manifest
@@ -216,11 +220,13 @@ impl Manifest {
         }
         match (&self.job_file, &self.job_sha256) {
             (Some(file), Some(want)) => {
-                let plain = Path::new(file).file_name() == Some(std::ffi::OsStr::new(file));
-                if !plain {
+                if file != CHAIN_JOB {
                     return Err(Error::parse(
                         path,
-                        format!("job_file: must name a file in the chain's folder, got {file:?}"),
+                        format!(
+                            "job_file: must be {:?}, the job `pbcs eval` reads, got {file:?}",
+                            CHAIN_JOB
+                        ),
                     ));
                 }
                 check_sha256(path, "job_sha256", &dir.join(file), want)?;
@@ -234,13 +240,17 @@ impl Manifest {
             }
         }
         for (i, s) in self.skills.iter().enumerate() {
-            if let Some(want) = &s.sha256 {
-                check_sha256(
-                    path,
-                    &format!("skills[{i}].sha256"),
-                    &dir.join(&s.file),
-                    want,
-                )?;
+            let field = format!("skills[{i}].sha256");
+            match (&s.sha256, self.skill_count) {
+                (Some(want), _) => check_sha256(path, &field, &dir.join(&s.file), want)?,
+                // A manifest that records its count records every file's hash.
+                (None, Some(_)) => {
+                    return Err(Error::parse(
+                        path,
+                        format!("{field}: missing (the manifest records skill_count)"),
+                    ))
+                }
+                (None, None) => {}
             }
         }
         Ok(())

@@ -27,6 +27,7 @@ pub mod skill_chain;
 pub mod starts;
 pub mod task;
 
+pub use manifest::CHAIN_JOB;
 pub use procedure::{
     ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, Phase2Config, Ready, SkillInit,
     Stopping,

@@ -241,6 +241,10 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// [`Self::episodes`], greedy episodes acted by `policy` instead of the learner's π when
     /// one is given (a saved skill's policy, verified: the learner is not touched).
     fn episodes_of(&mut self, k: usize, n: usize, learn: bool, policy: Option<&dyn Policy>) -> f32 {
+        debug_assert!(
+            !(learn && policy.is_some()),
+            "a saved policy is only verified"
+        );
         let starts = self.starts(k, n);
         if learn {
             for noise in &mut self.noise {

@@ -46,8 +46,7 @@ pub fn evaluate_chain<E: Env>(
     Ok((rows, rollouts))
 }
 
-/// The file in a saved chain's folder that holds the job that built it.
-pub const CHAIN_JOB: &str = "run.toml";
+pub use crate::phase2::CHAIN_JOB;
 
 /// What `pbcs eval` measured: a saved chain re-run from starts uniform in B_ε(s_0).
 #[derive(Debug, Clone)]

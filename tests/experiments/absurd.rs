@@ -52,6 +52,20 @@ fn absurd_values_are_refused_naming_their_field() {
             ),
             "invalid `train.learning_starts`: 6000 of train.steps = 5000: the learner would never update",
         ),
+        // A map of one's own set by a method rather than the file's [pointmaze], a site
+        // `pointmaze` without a map, and a map with no such site (issue 47).
+        (
+            format!("{head}{}", method("a", "pointmaze.time_limit = 500")),
+            "invalid `pointmaze`: method `a`: sets [pointmaze]",
+        ),
+        (
+            format!("title = \"t\"\nseeds = 2\nenvs = [\"pointmaze\"]\n{}", method("a", "")),
+            "invalid `pointmaze`: the site `pointmaze` runs a map of one's own",
+        ),
+        (
+            format!("{head}[pointmaze]\nmap = [\"1111\", \"1001\", \"1111\"]\n{}", method("a", "")),
+            "is not one of the file's `envs`",
+        ),
     ];
     for (i, (text, needle)) in cases.iter().enumerate() {
         let path = dir.path().join(format!("bad{i}.toml"));

@@ -413,6 +413,27 @@ fn a_chain_whose_files_do_not_match_its_manifest_is_refused() {
         },
         "job_sha256",
     );
+    // A manifest that records its count but not a file's hash (the line deleted).
+    refused(
+        &|d| {
+            let first = manifest
+                .lines()
+                .find(|l| l.starts_with("sha256 = "))
+                .unwrap();
+            let cut = manifest.replacen(&format!("{first}\n"), "", 1);
+            std::fs::write(d.join("manifest.toml"), cut).unwrap();
+        },
+        "skills[0].sha256",
+    );
+    // A job file other than the run.toml `pbcs eval` reads, hashed: refused all the same.
+    refused(
+        &|d| {
+            std::fs::copy(d.join("run.toml"), d.join("other.toml")).unwrap();
+            let moved = manifest.replace("job_file = \"run.toml\"", "job_file = \"other.toml\"");
+            std::fs::write(d.join("manifest.toml"), moved).unwrap();
+        },
+        "job_file",
+    );
     // A manifest written before issue 48 (no count, no hashes) loads as it did: its files are
     // not checked (swapped here, and loaded).
     let legacy: String = manifest

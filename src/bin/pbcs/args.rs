@@ -51,7 +51,8 @@ pub struct RunArgs {
     pub map: Option<PathBuf>,
     /// Output folder [default: out/explore/<where>-s<seed>, out/train/<where>-s<seed>-<algo>[-am],
     /// out/run/<preset or config file stem>/<where>-s<seed>[-nochain][-exact|-archive][-velocity],
-    /// where is maze<N>-m<maze seed> for the maze, the environment's name for another].
+    /// where is maze<N>-m<maze seed> for the maze, pointmaze-<H>x<W>-<8 hex of the rows' SHA-256>
+    /// for a map of one's own, the environment's name for another].
     /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -89,7 +90,11 @@ impl RunArgs {
             maze_seed: self.maze_seed,
             seed: self.seed,
             map: match &self.map {
-                Some(file) => Some(PointMazeConfig::from_file(file)?.map),
+                Some(file) => Some(
+                    PointMazeConfig::from_file(file)
+                        .map_err(|e| anyhow::anyhow!("--map {}: {e}", file.display()))?
+                        .map,
+                ),
                 None => None,
             },
         };

@@ -72,14 +72,15 @@ impl PointMazeConfig {
     }
 
     /// Checks the map ([`PointMap::from_config`]: rows of 0/1, walled border, at most
-    /// [`MAX_MAP_SIDE`] cells a side, two free cells for a task) and the time limit.
+    /// [`MAX_MAP_SIDE`] cells a side, two connected free cells for a task) and the time limit.
     pub fn check(&self) -> Result<()> {
         let map = PointMap::from_config(self)?;
         let (start, goal) = map.farthest_cells();
         if start == goal {
             return Err(Error::invalid(
                 "pointmaze.map",
-                "has one free cell: the task goes from one free cell to another",
+                "has no two connected free cells (one free cell, or free cells walled off \
+                 from each other): the task goes from one free cell to another",
             ));
         }
         if self.time_limit == 0 {
