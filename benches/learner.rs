@@ -5,7 +5,8 @@
 //! (portable, matrixmultiply — the earlier path —, AVX2, AVX-512; see `pbcs::nn::kernel`) and
 //! with a straightforward candle implementation, and the matmul FLOPs per second each reaches
 //! as a percentage of this run's single-core f32 matmul rate (a 512³ product with
-//! matrixmultiply). Then end-to-end environment steps per second of `pbcs run --maze 10
+//! matrixmultiply). Then the learners side by side on the best kernel: µs per DDPG, TD3 and SAC
+//! update at the same widths and batches. Then end-to-end environment steps per second of `pbcs run --maze 10
 //! --seed 0` (the fast preset) over its first 200k steps with the earlier and the best kernel,
 //! µs per single-state action, and the update cost over 100k updates (the subnormal-moment
 //! hazard). One thread throughout. `PBCS_BENCH_QUICK=1` skips the end-to-end part.
@@ -14,7 +15,7 @@ use candle_core::{Device, Tensor, Var};
 use candle_nn::{Module, Optimizer};
 use pbcs::config::Preset;
 use pbcs::learner::replay::{Batch, Replay};
-use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::candle_ref::{self, CandleMlp};
 use pbcs::nn::kernel::{Kernel, Post};
 use pbcs::nn::Mlp;
@@ -106,11 +107,59 @@ fn random_batch(b: usize, seed: u32) -> Batch {
     }
 }
 
-fn config(h: usize, b: usize) -> LearnerConfig {
-    LearnerConfig {
+fn config(h: usize, b: usize) -> Td3Config {
+    Td3Config {
         hidden: vec![h, h],
         batch_size: b,
-        ..LearnerConfig::ddpg()
+        ..Td3Config::ddpg()
+    }
+}
+
+/// µs per update of each learner family on `kernel`: DDPG, TD3 (its critic-only updates
+/// included: the mean over a run of updates) and SAC, at widths 64 and 256, batches 64 and 256.
+fn learners_side_by_side(kernel: Kernel) {
+    use pbcs::learner::sac::SacConfig;
+    use pbcs::learner::LearnerConfig;
+    println!();
+    println!(
+        "learners, obs 2, act 2, {} kernel, one thread (best of 5 rounds): µs per update",
+        kernel.name()
+    );
+    println!("| hidden | batch | ddpg | td3 | sac |");
+    println!("| --- | --- | --- | --- | --- |");
+    for h in [64, 256] {
+        for b in [64, 256] {
+            let batch = random_batch(b, 0);
+            let configs: [LearnerConfig; 3] = [
+                config(h, b).into(),
+                Td3Config {
+                    algo: pbcs::learner::td3::Algo::Td3,
+                    ..config(h, b)
+                }
+                .into(),
+                SacConfig {
+                    hidden: vec![h, h],
+                    batch_size: b,
+                    ..SacConfig::default()
+                }
+                .into(),
+            ];
+            let mut row = format!("| {h} | {b} |");
+            for c in &configs {
+                let mut l = c.build(OBS, &[1.0, 1.0], &Seeds::new(0), kernel).unwrap();
+                for _ in 0..20 {
+                    l.update(&batch);
+                }
+                let n = if h * b >= 256 * 64 { 100 } else { 1000 };
+                let t = best_of(5, || {
+                    for _ in 0..n {
+                        black_box(l.update(&batch));
+                    }
+                }) / n as f64;
+                row += &format!(" {:.0} |", t * 1e6);
+            }
+            println!("{row}");
+        }
     }
 }
 
@@ -125,7 +174,7 @@ struct CandleDdpg {
 }
 
 impl CandleDdpg {
-    fn new(l: &Learner) -> Self {
+    fn new(l: &Td3) -> Self {
         let params =
             |v: &[(Var, Var)]| v.iter().flat_map(|(w, b)| [w.clone(), b.clone()]).collect();
         let adam = |v: &[(Var, Var)]| {
@@ -224,14 +273,14 @@ fn main() {
             let mut row = format!("| {h} | {b} |");
             // Kernels measured in interleaved rounds (each round times every kernel once), so a
             // slow spell of a shared machine hits them all alike; the best round counts.
-            let mut learners: Vec<(Kernel, Learner, usize)> = kernels
+            let mut learners: Vec<(Kernel, Td3, usize)> = kernels
                 .iter()
                 .map(|&k| {
                     // The portable kernel is slow enough that fewer updates give a stable number.
                     let scale = if k == Kernel::Portable { 10 } else { 1 };
                     let n = (if h * b >= 256 * 64 { 100 } else { 1000 }) / scale;
                     let mut l =
-                        Learner::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0), k).unwrap();
+                        Td3::new(&config(h, b), OBS, &[1.0, 1.0], &Seeds::new(0), k).unwrap();
                     for _ in 0..20 {
                         l.update(&batch);
                     }
@@ -277,6 +326,8 @@ fn main() {
         }
     }
 
+    learners_side_by_side(best);
+
     if std::env::var_os("PBCS_BENCH_QUICK").is_none() {
         println!();
         println!(
@@ -304,7 +355,7 @@ fn main() {
     }
 
     // Action selection: one state, one forward pass.
-    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(0), best).unwrap();
+    let mut l = Td3::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(0), best).unwrap();
     let obs = [1.5f32, 2.5];
     let n = 100_000;
     let s = best_of(3, || {
@@ -344,7 +395,7 @@ fn main() {
         };
         replay.push(&s, &a, r, &[s[0] + a[0], s[1] + a[1]], false);
     }
-    let mut l = Learner::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(2), best).unwrap();
+    let mut l = Td3::new(&config(64, 64), OBS, &[1.0, 1.0], &Seeds::new(2), best).unwrap();
     let mut batch = Batch::default();
     let mut blocks = Vec::new();
     for _ in 0..10 {

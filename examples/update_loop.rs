@@ -4,7 +4,7 @@
 //! `PBCS_KERNEL` picks the kernel. Prints µs per update.
 
 use pbcs::learner::replay::Batch;
-use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::rng::{Seeds, Stream};
 use rand::Rng;
 
@@ -30,12 +30,12 @@ fn main() -> anyhow::Result<()> {
         next_obs: v(b * 2, 5.0),
         done: vec![0.0; b],
     };
-    let config = LearnerConfig {
+    let config = Td3Config {
         hidden: vec![h, h],
         batch_size: b,
-        ..LearnerConfig::ddpg()
+        ..Td3Config::ddpg()
     };
-    let mut l = Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(0), kernel)?;
+    let mut l = Td3::new(&config, 2, &[1.0, 1.0], &Seeds::new(0), kernel)?;
     let t = std::time::Instant::now();
     for _ in 0..n {
         std::hint::black_box(l.update(&batch));

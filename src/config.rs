@@ -19,6 +19,7 @@
 use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::{EnvName, EnvSpec};
 use crate::error::Result;
+use crate::learner::td3::Td3Config;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
 use crate::validate::parse_toml;
@@ -165,10 +166,11 @@ impl Default for PbcsJob {
             maze: MazeConfig::default(),
             pointmaze: PointMazeConfig::default(),
             explore: ExploreConfig::default(),
-            learner: LearnerConfig {
+            learner: Td3Config {
                 gamma: 0.9,
-                ..LearnerConfig::ddpg()
-            },
+                ..Td3Config::ddpg()
+            }
+            .into(),
             phase2: Phase2Config::default(),
         }
     }

@@ -1,8 +1,8 @@
 //! What acts. A skill of a chain, a chain's evaluation and a Python rollout need one thing of a
 //! policy: greedy actions for a batch of observations. [`Policy`] says that and what a saved
 //! chain records of it (its kind, its network's sizes and its actions' bounds, its weights
-//! file); each learner's actor implements it. [`load_policy`] is the one place policy kinds
-//! are named: a new learner's actor is its file plus one line there.
+//! file); each learner's actor implements it. `crate::learner::load_policy` reads a saved one
+//! back by its kind, through the learner family whose policy it is.
 //!
 //! ```
 //! use pbcs::nn::{Head, Mlp, Workspace};
@@ -18,15 +18,15 @@
 //! assert!(policy == policy.clone());
 //! ```
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::nn::{Head, Mlp, Workspace};
-use crate::rng::{Seeds, Stream};
 use std::any::Any;
 use std::path::Path;
 
 /// A policy: greedy actions for a batch of observations, and what a saved chain records of it.
 pub trait Policy: std::fmt::Debug + Send + Sync + 'static {
-    /// Its kind as a manifest names it ([`load_policy`] reads it back): `mlp`.
+    /// Its kind as a manifest names it (`crate::learner::load_policy` reads it back): `mlp`,
+    /// `sac`.
     fn kind(&self) -> &'static str;
     /// Its network's layer sizes, input first and output last (the manifest's `sizes`).
     fn sizes(&self) -> &[usize];
@@ -94,32 +94,5 @@ impl Policy for Mlp {
     }
     fn as_any(&self) -> &dyn Any {
         self
-    }
-}
-
-/// The policy of kind `kind` saved at `path` (a skill's weights file), of network `sizes` and
-/// action `bounds` as the manifest records them: the one place policy kinds are named. An
-/// unknown kind, or weights that do not fit, are errors naming the kind or the file.
-pub fn load_policy(
-    kind: &str,
-    sizes: &[usize],
-    bounds: &[f32],
-    path: &Path,
-) -> Result<Box<dyn Policy>> {
-    match kind {
-        "mlp" => {
-            let head = if bounds.is_empty() {
-                Head::Linear
-            } else {
-                Head::Tanh(bounds.to_vec())
-            };
-            let mut mlp = Mlp::new(sizes, head, &mut Seeds::new(0).stream(Stream::Init));
-            mlp.load(path)?;
-            Ok(Box::new(mlp))
-        }
-        other => Err(Error::invalid(
-            "policy",
-            format!("`{other}` is not a policy kind this build knows (mlp)"),
-        )),
     }
 }

@@ -143,7 +143,7 @@ pub fn lockstep<E: Env + ?Sized, A: Agent<E> + ?Sized>(
 /// judged by the environment ([`Verdict::of_terminal`]); it adds up the reward and counts the
 /// steps of what it runs. The vanilla baselines' evaluations.
 pub struct Greedy<'a> {
-    learner: &'a mut Learner,
+    learner: &'a mut dyn Learner,
     bounds: Vec<f32>,
     /// Sum of the rewards met.
     pub reward: f32,
@@ -153,7 +153,7 @@ pub struct Greedy<'a> {
 
 impl<'a> Greedy<'a> {
     /// `learner`'s greedy policy on `env`.
-    pub fn new<E: Env + ?Sized>(env: &E, learner: &'a mut Learner) -> Greedy<'a> {
+    pub fn new<E: Env + ?Sized>(env: &E, learner: &'a mut dyn Learner) -> Greedy<'a> {
         Greedy {
             learner,
             bounds: (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),

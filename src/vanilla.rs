@@ -5,7 +5,6 @@
 
 use crate::env::{evaluation_starts, random_action, Env, EvalEpisode};
 use crate::error::{Error, Result};
-use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
@@ -142,7 +141,7 @@ pub struct TrainOutcome {
     /// Episodes cut by the step limit (their last transition is stored as non-terminal).
     pub truncated_episodes: u64,
     /// The trained learner.
-    pub learner: Learner,
+    pub learner: Box<dyn Learner>,
     /// PBCS's protocol after training (`train.final_eval_episodes` episodes; empty when off).
     pub final_eval: Vec<EvalEpisode>,
 }
@@ -152,7 +151,7 @@ pub struct TrainOutcome {
 /// reached a positive terminal reward, and the mean return and length per episode.
 pub fn evaluate<E: Env>(
     env: &E,
-    learner: &mut Learner,
+    learner: &mut dyn Learner,
     episodes: usize,
     max_steps: usize,
     seeds: &Seeds,
@@ -173,7 +172,7 @@ pub fn evaluate<E: Env>(
 /// steps: whether it reached a positive terminal reward, and in how many steps.
 pub fn greedy_episodes<E: Env>(
     env: &E,
-    learner: &mut Learner,
+    learner: &mut dyn Learner,
     starts: Vec<E::State>,
     max_steps: usize,
 ) -> Vec<EvalEpisode> {
@@ -220,10 +219,9 @@ struct Vanilla<'a, E: Env> {
     env: &'a E,
     train: &'a TrainConfig,
     seeds: &'a Seeds,
-    learner: Learner,
+    learner: Box<dyn Learner>,
     replay: Replay,
     batch: Batch,
-    noise: Noise,
     rng_start: crate::rng::Rng,
     rng_noise: crate::rng::Rng,
     rng_replay: crate::rng::Rng,
@@ -257,9 +255,8 @@ impl<'a, E: Env> Vanilla<'a, E> {
         kernel: Kernel,
     ) -> Result<Self> {
         let (obs_dim, act_dim) = (env.obs_dim(), env.action_dim());
-        let learner = Learner::new(lc, obs_dim, &vec![1.0; act_dim], seeds, kernel)?;
-        let replay = Replay::new(lc.replay_size, obs_dim, act_dim);
-        let noise = Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, act_dim);
+        let learner = lc.build(obs_dim, &vec![1.0; act_dim], seeds, kernel)?;
+        let replay = Replay::new(lc.replay_size(), obs_dim, act_dim);
         let mut rng_start = seeds.stream(Stream::Start);
         let state = env.sample_start(&mut rng_start);
         let mut run = Vanilla {
@@ -269,7 +266,6 @@ impl<'a, E: Env> Vanilla<'a, E> {
             learner,
             replay,
             batch: Batch::default(),
-            noise,
             rng_start,
             rng_noise: seeds.stream(Stream::Noise),
             rng_replay: seeds.stream(Stream::Replay),
@@ -307,7 +303,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
 
     /// The noise restarts and the episode's first state is observed.
     fn begin_episode(&mut self) {
-        self.noise.reset();
+        self.learner.begin_episodes(1);
         self.env.observe(&self.state, &mut self.obs);
         self.visit(false);
     }
@@ -326,18 +322,15 @@ impl<'a, E: Env> Vanilla<'a, E> {
                 *a = e / b;
             }
         } else {
-            self.action.copy_from_slice(self.learner.act(&self.obs, 1));
-            self.noise.add(&mut self.rng_noise, &mut self.action);
-            for a in self.action.iter_mut() {
-                *a = a.clamp(-1.0, 1.0);
-            }
+            let a = self.learner.explore(&self.obs, &[0], &mut self.rng_noise);
+            self.action.copy_from_slice(a);
         }
         scale(&self.action, &self.bounds, &mut self.env_action);
     }
 
     /// One learner update from a sampled batch, once the replay holds a batch.
     fn update(&mut self) {
-        let batch_size = self.learner.config().batch_size;
+        let batch_size = self.learner.batch_size();
         if self.replay.len() >= batch_size {
             self.replay
                 .sample(batch_size, &mut self.rng_replay, &mut self.batch);
@@ -389,7 +382,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
         let round = self.evals.len() as u32;
         let (success, mean_return, mean_length) = evaluate(
             self.env,
-            &mut self.learner,
+            self.learner.as_mut(),
             self.train.eval_episodes,
             self.train.max_episode_steps,
             self.seeds,
@@ -418,7 +411,12 @@ impl<'a, E: Env> Vanilla<'a, E> {
                 t.final_eval_episodes,
                 self.seeds,
             )?;
-            greedy_episodes(self.env, &mut self.learner, starts, t.final_eval_max_steps)
+            greedy_episodes(
+                self.env,
+                self.learner.as_mut(),
+                starts,
+                t.final_eval_max_steps,
+            )
         } else {
             Vec::new()
         };

@@ -158,8 +158,14 @@ fn train_rejects_bad_learner_settings_and_runs_a_small_case() {
     let o = out.to_str().unwrap();
     let (code, err) = pbcs(&["train", "--config", path.to_str().unwrap(), "--out", o]);
     assert!(code != 0 && err.contains("learner.gamma"), "{code} {err}");
-    let (code, err) = pbcs(&["train", "--algo", "sac", "--out", o]);
-    assert!(code != 0 && err.contains("sac"), "{code} {err}");
+    let (code, err) = pbcs(&["train", "--algo", "ppo", "--out", o]);
+    assert!(
+        code != 0 && err.contains("ppo") && err.contains("sac"),
+        "{code} {err}"
+    );
+    // TD3's actor switch under SAC: refused, naming the flag.
+    let (code, err) = pbcs(&["train", "--algo", "sac", "--actor", "argmax", "--out", o]);
+    assert!(code != 0 && err.contains("--actor"), "{code} {err}");
     // `--steps` below the config's `train.learning_starts` (10 000 by default) would never
     // update the learner: refused, naming the field.
     let small = [
@@ -236,7 +242,7 @@ fn epsilon_is_a_radius_in_cells() {
 #[test]
 fn enum_names_are_their_serde_names() {
     use pbcs::config::Preset;
-    use pbcs::learner::{ActorUpdate, Algo};
+    use pbcs::learner::td3::{ActorUpdate, Algo};
     use pbcs::phase2::{EventKind, Failure, Variant};
     fn serde_name<T: serde::Serialize>(v: &T) -> String {
         #[derive(serde::Serialize)]

@@ -7,7 +7,7 @@
 //! kernel this CPU cannot run are skipped (each says so on stderr).
 
 use pbcs::learner::replay::Batch;
-use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::kernel::{transpose, Kernel, Post};
 use pbcs::rng::{Seeds, Stream};
 use proptest::prelude::*;
@@ -293,8 +293,8 @@ fn batch(n: usize, seed: u32) -> Batch {
 }
 
 /// Parameters of actor and critics after `updates` updates with `kernel`.
-fn trained(kernel: Kernel, config: &LearnerConfig, updates: u32) -> Vec<f32> {
-    let mut l = Learner::new(
+fn trained(kernel: Kernel, config: &Td3Config, updates: u32) -> Vec<f32> {
+    let mut l = Td3::new(
         config,
         2,
         &[1.0, 1.0],
@@ -317,26 +317,26 @@ fn trained(kernel: Kernel, config: &LearnerConfig, updates: u32) -> Vec<f32> {
 /// every product, Adam step and soft update runs there, and `kernel()` says so.
 #[test]
 fn a_learner_switched_to_a_kernel_equals_one_built_on_it() {
-    let config = LearnerConfig {
+    let config = Td3Config {
         hidden: vec![24, 40],
         batch_size: 37,
-        ..LearnerConfig::td3()
+        ..Td3Config::td3()
     };
     for kernel in kernels() {
-        let mut built = Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), kernel).unwrap();
+        let mut built = Td3::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), kernel).unwrap();
         assert_eq!(built.kernel(), kernel);
         for i in 0..20 {
             built.update(&batch(config.batch_size, i));
         }
         // (the targets are private: their soft updates show in the critics' next updates)
-        let params = |l: &Learner| -> Vec<f32> {
+        let params = |l: &Td3| -> Vec<f32> {
             let mut p = l.actor.params.clone();
             l.critics.iter().for_each(|c| p.extend(&c.params));
             p
         };
         let p = params(&built);
         let mut switched =
-            Learner::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), Kernel::detect()).unwrap();
+            Td3::new(&config, 2, &[1.0, 1.0], &Seeds::new(7), Kernel::detect()).unwrap();
         switched.set_kernel(kernel);
         assert_eq!(switched.kernel(), kernel, "{}", kernel.name());
         for i in 0..20 {
@@ -357,14 +357,14 @@ fn a_learner_switched_to_a_kernel_equals_one_built_on_it() {
 #[test]
 fn learner_updates_do_not_depend_on_the_kernel() {
     for config in [
-        LearnerConfig {
+        Td3Config {
             hidden: vec![64, 64],
-            ..LearnerConfig::ddpg()
+            ..Td3Config::ddpg()
         },
-        LearnerConfig {
+        Td3Config {
             hidden: vec![24, 40],
             batch_size: 37,
-            ..LearnerConfig::td3()
+            ..Td3Config::td3()
         },
     ] {
         let reference = trained(Kernel::Portable, &config, 30);

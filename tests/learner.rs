@@ -3,7 +3,13 @@
 use pbcs::config::Check;
 use pbcs::envs::toy::Toy1D;
 use pbcs::learner::replay::Batch;
-use pbcs::learner::{ActorUpdate, Learner, LearnerConfig};
+use pbcs::learner::td3::{ActorUpdate, Td3, Td3Config};
+use pbcs::learner::{Learner, LearnerConfig};
+
+/// The TD3 learner inside a trained outcome.
+fn td3(l: &mut Box<dyn Learner>) -> &mut Td3 {
+    l.as_any_mut().downcast_mut::<Td3>().expect("a TD3 learner")
+}
 use pbcs::rng::Seeds;
 use pbcs::vanilla::{train_vanilla, TrainConfig};
 
@@ -20,8 +26,8 @@ fn batch_of_two(done: [f32; 2]) -> Batch {
 
 #[test]
 fn terminal_transitions_stop_bootstrapping() {
-    for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
-        let mut l = Learner::new(
+    for cfg in [Td3Config::ddpg(), Td3Config::td3()] {
+        let mut l = Td3::new(
             &cfg,
             2,
             &[0.1, 0.1],
@@ -51,7 +57,7 @@ fn time_limit_truncation_is_not_terminal() {
     };
     let out = train_vanilla(
         &Toy1D,
-        &LearnerConfig::ddpg(),
+        &LearnerConfig::from(Td3Config::ddpg()),
         &train,
         &Seeds::new(1),
         pbcs::nn::kernel::Kernel::detect(),
@@ -69,8 +75,8 @@ fn target_smoothing_noise_is_clipped() {
     let next_obs: Vec<f32> = (0..200).map(|i| (i % 17) as f32 * 0.1).collect();
     let n = 100;
     let plain = {
-        let mut ddpg = Learner::new(
-            &LearnerConfig::ddpg(),
+        let mut ddpg = Td3::new(
+            &Td3Config::ddpg(),
             2,
             &[0.1, 0.3],
             &Seeds::new(2),
@@ -80,13 +86,13 @@ fn target_smoothing_noise_is_clipped() {
         ddpg.smoothed_target_actions(&next_obs, n).to_vec()
     };
     // Same weights (same seed), TD3 with a huge σ: every sample is clipped to ±c·bound.
-    let cfg = LearnerConfig {
+    let cfg = Td3Config {
         n_critics: Some(1),
         target_noise: Some(10.0),
         target_noise_clip: Some(0.5),
-        ..LearnerConfig::td3()
+        ..Td3Config::td3()
     };
-    let mut td3 = Learner::new(
+    let mut td3 = Td3::new(
         &cfg,
         2,
         &[0.1, 0.3],
@@ -125,13 +131,13 @@ fn ddpg_and_td3_learn_the_1d_toy() {
         visit_bin: 0.05,
         ..Default::default()
     };
-    for cfg in [LearnerConfig::ddpg(), LearnerConfig::td3()] {
+    for cfg in [Td3Config::ddpg(), Td3Config::td3()] {
         let solved = |steps| {
             (0..10)
                 .filter(|&seed| {
                     let out = train_vanilla(
                         &Toy1D,
-                        &cfg,
+                        &LearnerConfig::from(cfg.clone()),
                         &schedule(steps),
                         &Seeds::new(seed),
                         pbcs::nn::kernel::Kernel::detect(),
@@ -158,10 +164,10 @@ fn ddpg_and_td3_learn_the_1d_toy() {
 
 #[test]
 fn the_argmax_actor_learns_the_1d_toy_too() {
-    let cfg = LearnerConfig {
+    let cfg = Td3Config {
         actor_update: ActorUpdate::Argmax,
         argmax_samples: 16,
-        ..LearnerConfig::ddpg()
+        ..Td3Config::ddpg()
     };
     let train = TrainConfig {
         steps: 3_000,
@@ -176,7 +182,7 @@ fn the_argmax_actor_learns_the_1d_toy_too() {
         .filter(|&seed| {
             let out = train_vanilla(
                 &Toy1D,
-                &cfg,
+                &LearnerConfig::from(cfg.clone()),
                 &train,
                 &Seeds::new(seed),
                 pbcs::nn::kernel::Kernel::detect(),
@@ -203,7 +209,7 @@ fn same_seed_same_weights_and_evaluations() {
     let run = || {
         train_vanilla(
             &Toy1D,
-            &LearnerConfig::td3(),
+            &LearnerConfig::from(Td3Config::td3()),
             &train,
             &Seeds::new(7),
             pbcs::nn::kernel::Kernel::detect(),
@@ -211,84 +217,87 @@ fn same_seed_same_weights_and_evaluations() {
         )
         .unwrap()
     };
-    let (a, b) = (run(), run());
+    let (mut a, mut b) = (run(), run());
     assert_eq!(a.evals, b.evals);
     assert_eq!(a.visited, b.visited);
-    assert_eq!(a.learner.actor.params, b.learner.actor.params);
-    assert_eq!(a.learner.critics[1].params, b.learner.critics[1].params);
+    assert!(a.learner.policy().same(&*b.learner.policy()));
+    assert_eq!(
+        td3(&mut a.learner).critics[1].params,
+        td3(&mut b.learner).critics[1].params
+    );
     let c = train_vanilla(
         &Toy1D,
-        &LearnerConfig::td3(),
+        &LearnerConfig::from(Td3Config::td3()),
         &train,
         &Seeds::new(8),
         pbcs::nn::kernel::Kernel::detect(),
         |_, _| {},
     )
     .unwrap();
-    assert_ne!(a.learner.actor.params, c.learner.actor.params);
+    assert!(!a.learner.policy().same(&*c.learner.policy()));
 }
 
 #[test]
 fn invalid_hyper_parameters_are_rejected_with_the_field() {
-    let cases: Vec<(LearnerConfig, &str)> = vec![
+    let cases: Vec<(Td3Config, &str)> = vec![
         (
-            LearnerConfig {
+            Td3Config {
                 actor_lr: -1e-3,
                 ..Default::default()
             },
             "learner.actor_lr",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 critic_lr: 0.0,
                 ..Default::default()
             },
             "learner.critic_lr",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 gamma: 1.0,
                 ..Default::default()
             },
             "learner.gamma",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 gamma: -0.1,
                 ..Default::default()
             },
             "learner.gamma",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 batch_size: 0,
                 ..Default::default()
             },
             "learner.batch_size",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 tau: 0.0,
                 ..Default::default()
             },
             "learner.tau",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 hidden: vec![64, 0],
                 ..Default::default()
             },
             "learner.hidden",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 n_critics: Some(3),
                 ..Default::default()
             },
             "learner.n_critics",
         ),
         (
-            LearnerConfig {
+            Td3Config {
                 actor_update: ActorUpdate::Argmax,
                 argmax_samples: 0,
                 ..Default::default()
@@ -299,7 +308,7 @@ fn invalid_hyper_parameters_are_rejected_with_the_field() {
     for (cfg, field) in cases {
         let msg = cfg.check().unwrap_err().to_string();
         assert!(msg.contains(field), "{field}: {msg}");
-        let err = Learner::new(
+        let err = Td3::new(
             &cfg,
             2,
             &[0.1, 0.1],
@@ -377,7 +386,7 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
     let run = |train: &TrainConfig| {
         train_vanilla(
             &maze,
-            &LearnerConfig::ddpg(),
+            &LearnerConfig::from(Td3Config::ddpg()),
             train,
             &Seeds::new(3),
             pbcs::nn::kernel::Kernel::detect(),
@@ -389,14 +398,14 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
     assert!(a.final_eval.is_empty());
     assert_eq!(a.evals, b.evals);
     assert_eq!(a.visited, b.visited);
-    assert_eq!(a.learner.actor.params, b.learner.actor.params);
+    assert!(a.learner.policy().same(&*b.learner.policy()));
     assert_eq!(b.final_eval.len(), 20);
     // The same episodes, replayed by hand from the protocol's starts.
     let starts = evaluation_starts(&maze, 0.1, 20, &Seeds::new(3)).unwrap();
     assert!(starts
         .iter()
         .all(|s| (s - maze.start()).norm() <= 0.1 + 1e-6));
-    let again = pbcs::vanilla::greedy_episodes(&maze, &mut a.learner, starts, 30);
+    let again = pbcs::vanilla::greedy_episodes(&maze, a.learner.as_mut(), starts, 30);
     assert_eq!(again, b.final_eval);
     for e in &b.final_eval {
         assert!(e.steps >= 1 && e.steps <= 30);
@@ -423,10 +432,10 @@ fn episode_updates_come_at_episode_ends_as_many_as_steps() {
     let run = |updates| {
         train_vanilla(
             &pbcs::envs::pendulum::Pendulum,
-            &LearnerConfig {
+            &LearnerConfig::from(Td3Config {
                 batch_size: 32,
-                ..LearnerConfig::td3()
-            },
+                ..Td3Config::td3()
+            }),
             &schedule(updates),
             &Seeds::new(1),
             pbcs::nn::kernel::Kernel::detect(),
@@ -439,5 +448,5 @@ fn episode_updates_come_at_episode_ends_as_many_as_steps() {
     assert_eq!(step.learner.updates(), 700);
     // Episodes ending at steps 400, 500, …, 1000 are past the warm-up: 7 × 100 updates.
     assert_eq!(episode.learner.updates(), 700);
-    assert_ne!(step.learner.actor.params, episode.learner.actor.params);
+    assert!(!step.learner.policy().same(&*episode.learner.policy()));
 }

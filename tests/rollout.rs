@@ -6,7 +6,7 @@ use pbcs::config::MazeConfig;
 use pbcs::env::{Env, Step};
 use pbcs::envs::maze::Maze;
 use pbcs::envs::toy::Toy1D;
-use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::kernel::Kernel;
 use pbcs::rng::{Seeds, Stream};
 use pbcs::rollout::{lockstep, Agent, Tally, Verdict};
@@ -86,7 +86,7 @@ fn lockstep_stops_when_the_tally_says_so() {
 
 /// The loop `train::greedy_episodes` was before the engine: one episode at a time, the
 /// learner's action scaled to the bounds, success at a positive terminal reward.
-fn plain_greedy(env: &Maze, learner: &mut Learner, start: <Maze as Env>::State) -> (bool, usize) {
+fn plain_greedy(env: &Maze, learner: &mut Td3, start: <Maze as Env>::State) -> (bool, usize) {
     let mut obs = vec![0.0; env.obs_dim()];
     let mut action = vec![0.0; env.action_dim()];
     let mut s = start;
@@ -120,8 +120,8 @@ fn greedy_episodes_through_the_engine_equal_the_plain_loop() {
     for seed in 0..6 {
         let unit = [1.0, 1.0];
         let learner = |s| {
-            Learner::new(
-                &LearnerConfig::ddpg(),
+            Td3::new(
+                &Td3Config::ddpg(),
                 2,
                 &unit,
                 &Seeds::new(s),

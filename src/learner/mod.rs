@@ -1,475 +1,462 @@
-//! Off-policy actor-critic learning: TD3, with DDPG as a preset and the argmax actor as a
-//! variant of the same update.
+//! Off-policy learners behind one [`Learner`] trait: TD3 (with DDPG as a preset and the
+//! argmax actor as a variant of the same update, [`td3`]) and SAC ([`sac`]).
 //!
-//! As in Stable-Baselines3, DDPG is TD3 with three knobs turned off: one critic instead of
-//! two (no clipped double-Q), a policy delay of 1, and no target-policy smoothing. The argmax
-//! actor ("(am)" in the paper, from "The problem with DDPG", Matheron et al. 2019) replaces
-//! the deterministic policy gradient by a regression of π(s) onto argmax_a Q(s, a) estimated
-//! from uniformly sampled actions. [`Learner::update`] is the whole algorithm on one screen.
+//! A learner acts (greedily, or with its own exploration), learns from mini-batches of
+//! transitions and gives its policy ([`crate::policy::Policy`]) for a chain's skill. The
+//! replay buffer stays with the caller: a skill's replay is its learning problem's (a warm
+//! start keeps the learner, not the replay), and how transitions are stored (whole episodes
+//! for HER) is the caller's to say. [`LearnerConfig`] is a job's `[learner]` table: its `algo`
+//! names the family, and each family's settings are its own (TD3's exploration noise is not
+//! writable under `algo = "sac"`).
+//!
+//! The families are named in one place, the `learners!` line below: a new learner is its
+//! file (its settings implementing [`Family`], its learner implementing [`Learner`], its
+//! policy implementing [`crate::policy::Policy`]) plus one entry there.
+//!
+//! ```
+//! use pbcs::learner::{Learner, LearnerConfig};
+//! use pbcs::nn::kernel::Kernel;
+//! use pbcs::rng::{Seeds, Stream};
+//! let sac: LearnerConfig = toml::from_str("algo = \"sac\"\nhidden = [16, 16]").unwrap();
+//! assert_eq!(sac.record_name(), "sac");
+//! let mut learner = sac.build(2, &[0.1, 0.1], &Seeds::new(0), Kernel::detect()).unwrap();
+//! learner.begin_episodes(1);
+//! let mut rng = Seeds::new(0).stream(Stream::Noise);
+//! let a = learner.explore(&[0.5, 0.5], &[0], &mut rng).to_vec();
+//! assert!(a.iter().all(|x| x.abs() <= 0.1));
+//! // TD3's settings are refused under SAC, by name.
+//! let err = toml::from_str::<LearnerConfig>("algo = \"sac\"\nnoise_sigma = 0.2").unwrap_err();
+//! assert!(err.to_string().contains("noise_sigma"), "{err}");
+//! ```
 
 pub mod noise;
 pub mod replay;
-mod update;
 
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
-use crate::nn::{Adam, Head, Mlp, Workspace};
-use crate::rng::{Rng, Seeds, Stream};
+use crate::policy::Policy;
+use crate::rng::{Rng, Seeds};
 use crate::validate::Check;
-use noise::NoiseKind;
-use rand_distr::{Distribution, StandardNormal};
 use replay::Batch;
-use serde::{Deserialize, Serialize};
-
-/// The base algorithm.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr, clap::ValueEnum,
-)]
-#[serde(rename_all = "snake_case")]
-#[strum(serialize_all = "snake_case")]
-pub enum Algo {
-    /// DDPG (Lillicrap et al. 2015): TD3 with 1 critic, policy delay 1, no target smoothing.
-    Ddpg,
-    /// TD3 (Fujimoto et al. 2018): 2 critics, policy delay 2, target smoothing 0.2 / 0.5.
-    Td3,
-}
-
-impl Algo {
-    /// The config spelling: `ddpg` or `td3`.
-    pub fn name(&self) -> &'static str {
-        (*self).into()
-    }
-}
-
-/// How the actor is trained.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr, clap::ValueEnum,
-)]
-#[serde(rename_all = "snake_case")]
-#[strum(serialize_all = "snake_case")]
-pub enum ActorUpdate {
-    /// Deterministic policy gradient: ascend Q(s, π(s)).
-    Gradient,
-    /// Regress π(s) onto argmax over `argmax_samples` uniform actions of Q(s, a).
-    Argmax,
-}
-
-impl ActorUpdate {
-    /// The config spelling: `gradient` or `argmax`.
-    pub fn name(&self) -> &'static str {
-        (*self).into()
-    }
-}
-
-/// Hyper-parameters of the learner (validated by [`Check::check`]). Noise levels are
-/// fractions of the action bound.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct LearnerConfig {
-    /// DDPG or TD3: sets the defaults of the four TD3 knobs below when they are left unset.
-    pub algo: Algo,
-    /// Hidden layer widths of actor and critics.
-    pub hidden: Vec<usize>,
-    /// Adam learning rate of the actor.
-    pub actor_lr: f32,
-    /// Adam learning rate of the critics.
-    pub critic_lr: f32,
-    /// Discount γ ∈ [0, 1).
-    pub gamma: f32,
-    /// Target networks' soft-update rate τ ∈ (0, 1].
-    pub tau: f32,
-    /// Mini-batch size.
-    pub batch_size: usize,
-    /// Replay capacity (transitions).
-    pub replay_size: usize,
-    /// Critics (1: DDPG, 2: TD3's clipped double-Q).
-    pub n_critics: Option<usize>,
-    /// Critic updates per actor and target update (1: DDPG, 2: TD3).
-    pub policy_delay: Option<usize>,
-    /// σ of the target-policy smoothing noise (0: DDPG, 0.2: TD3).
-    pub target_noise: Option<f32>,
-    /// Clip of the target-policy smoothing noise (TD3: 0.5).
-    pub target_noise_clip: Option<f32>,
-    /// Gradient (DDPG/TD3) or argmax actor update.
-    pub actor_update: ActorUpdate,
-    /// Uniform action samples per state for the argmax actor.
-    pub argmax_samples: usize,
-    /// Exploration noise process.
-    pub noise: NoiseKind,
-    /// σ of the exploration noise.
-    pub noise_sigma: f32,
-    /// θ of the Ornstein–Uhlenbeck process.
-    pub noise_theta: f32,
-}
-
-impl Default for LearnerConfig {
-    fn default() -> Self {
-        LearnerConfig {
-            algo: Algo::Ddpg,
-            hidden: vec![64, 64],
-            actor_lr: 1e-3,
-            critic_lr: 1e-3,
-            gamma: 0.99,
-            tau: 0.005,
-            batch_size: 64,
-            replay_size: 1_000_000,
-            n_critics: None,
-            policy_delay: None,
-            target_noise: None,
-            target_noise_clip: None,
-            actor_update: ActorUpdate::Gradient,
-            argmax_samples: 64,
-            noise: NoiseKind::Gaussian,
-            noise_sigma: 0.1,
-            noise_theta: 0.15,
-        }
-    }
-}
-
-impl LearnerConfig {
-    /// The learner's name in result rows: `ddpg` or `td3`, with `_am` for the argmax actor.
-    pub fn record_name(&self) -> String {
-        let suffix = match self.actor_update {
-            ActorUpdate::Argmax => "_am",
-            ActorUpdate::Gradient => "",
-        };
-        format!("{}{suffix}", self.algo.name())
-    }
-
-    /// The DDPG preset.
-    pub fn ddpg() -> Self {
-        LearnerConfig::default()
-    }
-
-    /// The TD3 preset.
-    pub fn td3() -> Self {
-        LearnerConfig {
-            algo: Algo::Td3,
-            ..LearnerConfig::default()
-        }
-    }
-
-    /// The four TD3 knobs, from the preset where unset:
-    /// `(n_critics, policy_delay, target_noise, target_noise_clip)`.
-    pub fn knobs(&self) -> (usize, usize, f32, f32) {
-        let (c, d, s, k) = match self.algo {
-            Algo::Ddpg => (1, 1, 0.0, 0.0),
-            Algo::Td3 => (2, 2, 0.2, 0.5),
-        };
-        (
-            self.n_critics.unwrap_or(c),
-            self.policy_delay.unwrap_or(d),
-            self.target_noise.unwrap_or(s),
-            self.target_noise_clip.unwrap_or(k),
-        )
-    }
-}
-
-impl Check for LearnerConfig {
-    fn check(&self) -> Result<()> {
-        let pos = |field: &str, v: f32| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(field, format!("must be positive, got {v}")))
-            }
-        };
-        pos("learner.actor_lr", self.actor_lr)?;
-        pos("learner.critic_lr", self.critic_lr)?;
-        if !(self.gamma >= 0.0 && self.gamma < 1.0) {
-            return Err(Error::invalid(
-                "learner.gamma",
-                format!("must be in [0, 1), got {}", self.gamma),
-            ));
-        }
-        if !(self.tau > 0.0 && self.tau <= 1.0) {
-            return Err(Error::invalid(
-                "learner.tau",
-                format!("must be in (0, 1], got {}", self.tau),
-            ));
-        }
-        if self.batch_size == 0 {
-            return Err(Error::invalid("learner.batch_size", "must be at least 1"));
-        }
-        if self.replay_size < self.batch_size {
-            return Err(Error::invalid(
-                "learner.replay_size",
-                "must be at least learner.batch_size",
-            ));
-        }
-        if self.hidden.is_empty() || self.hidden.contains(&0) {
-            return Err(Error::invalid(
-                "learner.hidden",
-                "needs at least one layer, all widths positive",
-            ));
-        }
-        let (critics, delay, smooth, clip) = self.knobs();
-        if !(1..=2).contains(&critics) {
-            return Err(Error::invalid("learner.n_critics", "must be 1 or 2"));
-        }
-        if delay == 0 {
-            return Err(Error::invalid("learner.policy_delay", "must be at least 1"));
-        }
-        for (field, v) in [
-            ("learner.target_noise", smooth),
-            ("learner.target_noise_clip", clip),
-            ("learner.noise_sigma", self.noise_sigma),
-            ("learner.noise_theta", self.noise_theta),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(field, format!("must be ≥ 0, got {v}")));
-            }
-        }
-        if self.argmax_samples == 0 {
-            // Unused by the gradient actor, but a job that says 0 says something it cannot
-            // mean: refused whatever the actor, so switching the actor never makes it bad.
-            return Err(Error::invalid(
-                "learner.argmax_samples",
-                "must be at least 1 (the argmax actor's sampled actions)",
-            ));
-        }
-        Ok(())
-    }
-}
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Deserializer, Serialize};
+use std::path::Path;
 
 /// Losses of one update (for logging).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Losses {
     /// Mean squared TD error of the first critic.
     pub critic: f32,
-    /// Actor loss (−mean Q, or the argmax regression error); `None` on delayed steps.
+    /// Actor loss; `None` on steps that do not update the actor (TD3's delay).
     pub actor: Option<f32>,
 }
 
-/// Scratch buffers of the update, kept to allocate nothing per step.
-#[derive(Debug, Clone)]
-struct Scratch {
-    ws_actor: Workspace,
-    ws_actor_target: Workspace,
-    ws_critic: Workspace,
-    ws_act: Workspace,
-    sa: Vec<f32>,
-    y: Vec<f32>,
-    q_next: Vec<f32>,
-    dq: Vec<f32>,
-    dsa: Vec<f32>,
-    da: Vec<f32>,
-    grad_actor: Vec<f32>,
-    grad_critic: Vec<f32>,
-    target_a: Vec<f32>,
-    pi: Vec<f32>,
+/// An off-policy learner: acts, learns from mini-batches, gives its policy.
+///
+/// Actions live in the bounds the learner was made with (`[-b_i, b_i]`); exploration state
+/// (TD3's noise processes) is kept per lane, a lane being one of the episodes run in lockstep.
+pub trait Learner: std::fmt::Debug + Send {
+    /// Its settings.
+    fn config(&self) -> LearnerConfig;
+    /// Greedy actions for `n` observations (row-major; one forward pass).
+    fn act(&mut self, obs: &[f32], n: usize) -> &[f32];
+    /// Resets the exploration state of lanes `0..lanes` (new episodes begin).
+    fn begin_episodes(&mut self, lanes: usize);
+    /// Exploratory actions for the running `lanes` (one observation row each, in order),
+    /// drawn from `rng`, within the bounds.
+    fn explore(&mut self, obs: &[f32], lanes: &[usize], rng: &mut Rng) -> &[f32];
+    /// One update on a mini-batch.
+    fn update(&mut self, batch: &Batch) -> Losses;
+    /// Its current greedy policy, as a chain's skill holds it.
+    fn policy(&self) -> Box<dyn Policy>;
+    /// Mini-batch size of [`Learner::update`].
+    fn batch_size(&self) -> usize;
+    /// Updates done so far.
+    fn updates(&self) -> u64;
+    /// The kernel of every product, optimiser step and soft update.
+    fn kernel(&self) -> Kernel;
+    /// Runs every later product, optimiser step and soft update on `kernel`.
+    ///
+    /// # Panics
+    /// If this CPU cannot run `kernel` (see [`Kernel::available`]).
+    fn set_kernel(&mut self, kernel: Kernel);
+    /// Subnormal values among all Adam moments (0 while the flush works; see
+    /// [`crate::nn::Adam`]).
+    fn subnormal_moments(&self) -> usize;
+    /// A boxed copy.
+    fn boxed(&self) -> Box<dyn Learner>;
+    /// As `Any` (tests and benchmarks reach a family's own methods through it).
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
 
-impl Scratch {
-    fn new(kernel: Kernel) -> Self {
-        Scratch {
-            ws_actor: Workspace::with_kernel(kernel),
-            ws_actor_target: Workspace::with_kernel(kernel),
-            ws_critic: Workspace::with_kernel(kernel),
-            ws_act: Workspace::with_kernel(kernel),
-            sa: Vec::new(),
-            y: Vec::new(),
-            q_next: Vec::new(),
-            dq: Vec::new(),
-            dsa: Vec::new(),
-            da: Vec::new(),
-            grad_actor: Vec::new(),
-            grad_critic: Vec::new(),
-            target_a: Vec::new(),
-            pi: Vec::new(),
-        }
+impl Clone for Box<dyn Learner> {
+    fn clone(&self) -> Self {
+        self.boxed()
     }
 }
 
-/// Actor, critics, their targets and optimisers.
-#[derive(Debug, Clone)]
-pub struct Learner {
-    config: LearnerConfig,
-    obs_dim: usize,
-    bounds: Vec<f32>,
-    /// The policy π.
-    pub actor: Mlp,
-    actor_target: Mlp,
-    actor_opt: Adam,
-    /// The critics Q_1 (and Q_2 for TD3).
-    pub critics: Vec<Mlp>,
-    critic_targets: Vec<Mlp>,
-    critic_opts: Vec<Adam>,
-    rng: Rng,
-    updates: u64,
-    s: Scratch,
-    /// The kernel of every product, Adam step and soft update.
-    kernel: Kernel,
+/// A learner family's settings: what a job's `[learner]` table holds when its `algo` is one
+/// of [`Family::ALGOS`].
+pub trait Family:
+    Check + Clone + std::fmt::Debug + PartialEq + Serialize + DeserializeOwned + Default
+{
+    /// The `algo` values that select this family (`ddpg`, `td3`; `sac`).
+    const ALGOS: &'static [&'static str];
+    /// The kind of its policy in a chain's manifest ([`load_policy`]).
+    const POLICY: &'static str;
+    /// These settings' `algo`.
+    fn algo(&self) -> &'static str;
+    /// This family's default settings under `algo` (one of [`Family::ALGOS`]).
+    fn preset(algo: &str) -> Self;
+    /// The learner's name in result rows (`ddpg`, `td3_am`, `sac`).
+    fn record_name(&self) -> String;
+    /// The discount γ.
+    fn gamma(&self) -> f32;
+    /// The discount γ, to change.
+    fn gamma_mut(&mut self) -> &mut f32;
+    /// Replay capacity (transitions).
+    fn replay_size(&self) -> usize;
+    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`;
+    /// all its randomness comes from `seeds`.
+    fn build(
+        &self,
+        obs_dim: usize,
+        bounds: &[f32],
+        seeds: &Seeds,
+        kernel: Kernel,
+    ) -> Result<Box<dyn Learner>>;
+    /// Its policy saved at `path`, of network `sizes` and action `bounds` as the manifest
+    /// records them.
+    fn load_policy(sizes: &[usize], bounds: &[f32], path: &Path) -> Result<Box<dyn Policy>>;
+}
+
+/// Declares the learner families: each entry `Variant(module::Settings)` is a module of this
+/// folder whose `Settings` implement [`Family`].
+macro_rules! learners {
+    ($($family:ident($module:ident::$settings:ident)),+ $(,)?) => {
+        $(pub mod $module;)+
+
+        /// A job's `[learner]` table: one family's settings, chosen by `algo` (absent: `ddpg`).
+        #[derive(Debug, Clone, PartialEq, Serialize)]
+        #[serde(untagged)]
+        pub enum LearnerConfig {
+            $(
+                #[allow(missing_docs)]
+                $family($module::$settings),
+            )+
+        }
+
+        $(impl From<$module::$settings> for LearnerConfig {
+            fn from(s: $module::$settings) -> Self {
+                LearnerConfig::$family(s)
+            }
+        })+
+
+        impl LearnerConfig {
+            /// Every `algo` value, family by family.
+            pub const ALGOS: &'static [&'static [&'static str]] =
+                &[$(<$module::$settings as Family>::ALGOS),+];
+
+            /// The default settings of the family `algo` names, under that `algo`.
+            pub fn preset(algo: &str) -> Result<Self> {
+                $(if <$module::$settings as Family>::ALGOS.contains(&algo) {
+                    return Ok(<$module::$settings as Family>::preset(algo).into());
+                })+
+                Err(unknown_algo(algo))
+            }
+
+            /// A `[learner]` table read as the family its `algo` names.
+            fn from_table(algo: &str, table: toml::Table) -> std::result::Result<Self, String> {
+                $(if <$module::$settings as Family>::ALGOS.contains(&algo) {
+                    return toml::Value::Table(table)
+                        .try_into::<$module::$settings>()
+                        .map(LearnerConfig::$family)
+                        .map_err(|e| e.message().to_string());
+                })+
+                Err(unknown_algo(algo).to_string())
+            }
+
+            /// Whether `other` is of the same family.
+            pub fn same_family(&self, other: &LearnerConfig) -> bool {
+                std::mem::discriminant(self) == std::mem::discriminant(other)
+            }
+
+            /// These settings as their family's (object-safe) methods.
+            fn get(&self) -> &dyn Settings {
+                match self {
+                    $(LearnerConfig::$family(s) => s,)+
+                }
+            }
+
+            fn get_mut(&mut self) -> &mut dyn Settings {
+                match self {
+                    $(LearnerConfig::$family(s) => s,)+
+                }
+            }
+        }
+
+        /// The policy of `kind` saved at `path`: the family whose policy it is loads it.
+        fn load_policy_of(
+            kind: &str,
+            sizes: &[usize],
+            bounds: &[f32],
+            path: &Path,
+        ) -> Option<Result<Box<dyn Policy>>> {
+            $(if kind == <$module::$settings as Family>::POLICY {
+                return Some(<$module::$settings as Family>::load_policy(sizes, bounds, path));
+            })+
+            None
+        }
+
+        /// Every policy kind, in the families' order.
+        const POLICY_KINDS: &[&str] = &[$(<$module::$settings as Family>::POLICY),+];
+    };
+}
+
+// The one place learner families are named.
+learners! {
+    Td3(td3::Td3Config),
+    Sac(sac::SacConfig),
+}
+
+/// The object-safe part of [`Family`].
+trait Settings: Check {
+    fn algo(&self) -> &'static str;
+    fn record_name(&self) -> String;
+    fn gamma(&self) -> f32;
+    fn gamma_mut(&mut self) -> &mut f32;
+    fn replay_size(&self) -> usize;
+    fn build(
+        &self,
+        obs_dim: usize,
+        bounds: &[f32],
+        seeds: &Seeds,
+        kernel: Kernel,
+    ) -> Result<Box<dyn Learner>>;
+}
+
+impl<F: Family> Settings for F {
+    fn algo(&self) -> &'static str {
+        Family::algo(self)
+    }
+    fn record_name(&self) -> String {
+        Family::record_name(self)
+    }
+    fn gamma(&self) -> f32 {
+        Family::gamma(self)
+    }
+    fn gamma_mut(&mut self) -> &mut f32 {
+        Family::gamma_mut(self)
+    }
+    fn replay_size(&self) -> usize {
+        Family::replay_size(self)
+    }
+    fn build(
+        &self,
+        obs_dim: usize,
+        bounds: &[f32],
+        seeds: &Seeds,
+        kernel: Kernel,
+    ) -> Result<Box<dyn Learner>> {
+        Family::build(self, obs_dim, bounds, seeds, kernel)
+    }
+}
+
+fn unknown_algo(algo: &str) -> Error {
+    Error::invalid(
+        "learner.algo",
+        format!(
+            "`{algo}` is not a learner (one of: {})",
+            LearnerConfig::algo_names().join(", ")
+        ),
+    )
+}
+
+impl Default for LearnerConfig {
+    /// DDPG.
+    fn default() -> Self {
+        td3::Td3Config::ddpg().into()
+    }
+}
+
+impl<'de> Deserialize<'de> for LearnerConfig {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let table = toml::Table::deserialize(d)?;
+        let algo = match table.get("algo") {
+            None => "ddpg".to_string(),
+            Some(toml::Value::String(s)) => s.clone(),
+            Some(other) => {
+                return Err(D::Error::custom(format!(
+                    "learner.algo must be a string, got {other}"
+                )))
+            }
+        };
+        LearnerConfig::from_table(&algo, table).map_err(D::Error::custom)
+    }
+}
+
+impl LearnerConfig {
+    /// The DDPG preset.
+    pub fn ddpg() -> Self {
+        td3::Td3Config::ddpg().into()
+    }
+
+    /// The TD3 preset.
+    pub fn td3() -> Self {
+        td3::Td3Config::td3().into()
+    }
+
+    /// The SAC preset (Stable-Baselines3's defaults).
+    pub fn sac() -> Self {
+        sac::SacConfig::default().into()
+    }
+
+    /// The `algo` value: `ddpg`, `td3`, `sac`.
+    pub fn algo(&self) -> &'static str {
+        self.get().algo()
+    }
+
+    /// The learner's name in result rows: `ddpg` or `td3`, with `_am` for the argmax actor;
+    /// `sac`.
+    pub fn record_name(&self) -> String {
+        self.get().record_name()
+    }
+
+    /// The discount γ.
+    pub fn gamma(&self) -> f32 {
+        self.get().gamma()
+    }
+
+    /// Sets the discount γ.
+    pub fn set_gamma(&mut self, gamma: f32) {
+        *self.get_mut().gamma_mut() = gamma;
+    }
+
+    /// Every `algo` value.
+    pub fn algo_names() -> Vec<&'static str> {
+        LearnerConfig::ALGOS
+            .iter()
+            .flat_map(|a| a.iter().copied())
+            .collect()
+    }
+
+    /// Replay capacity (transitions).
+    pub fn replay_size(&self) -> usize {
+        self.get().replay_size()
+    }
+
+    /// The TD3 family's settings, if these are.
+    pub fn as_td3(&self) -> Option<&td3::Td3Config> {
+        match self {
+            LearnerConfig::Td3(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// Switches to `algo`: within a family only `algo` changes (DDPG ↔ TD3 keep every other
+    /// setting); another family's learner starts from that family's defaults (a family's
+    /// settings do not carry over to another's).
+    pub fn switch_to(&mut self, algo: &str) -> Result<()> {
+        let preset = LearnerConfig::preset(algo)?;
+        match (self, preset) {
+            (LearnerConfig::Td3(c), LearnerConfig::Td3(p)) => c.algo = p.algo,
+            (me, preset) if me.same_family(&preset) => {}
+            (me, preset) => *me = preset,
+        }
+        Ok(())
+    }
+
+    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`,
+    /// whose layer arithmetic runs on `kernel` (an input of the run like the seed: kernels
+    /// other than AVX2/AVX-512 give other bytes). All its randomness comes from `seeds`.
+    pub fn build(
+        &self,
+        obs_dim: usize,
+        bounds: &[f32],
+        seeds: &Seeds,
+        kernel: Kernel,
+    ) -> Result<Box<dyn Learner>> {
+        self.check()?;
+        self.get().build(obs_dim, bounds, seeds, kernel)
+    }
+}
+
+impl Check for LearnerConfig {
+    fn check(&self) -> Result<()> {
+        self.get().check()
+    }
+}
+
+/// The policy of kind `kind` saved at `path` (a skill's weights file), of network `sizes` and
+/// action `bounds` as the manifest records them: the learner family whose policy it is loads
+/// it. An unknown kind, or weights that do not fit, are errors naming the kind or the file.
+pub fn load_policy(
+    kind: &str,
+    sizes: &[usize],
+    bounds: &[f32],
+    path: &Path,
+) -> Result<Box<dyn Policy>> {
+    load_policy_of(kind, sizes, bounds, path).unwrap_or_else(|| {
+        Err(Error::invalid(
+            "policy",
+            format!(
+                "`{kind}` is not a policy kind this build knows ({})",
+                POLICY_KINDS.join(", ")
+            ),
+        ))
+    })
 }
 
 /// Concatenates row-major `x` (n × dx) and `y` (n × dy) into `out` (n × (dx + dy)).
-fn concat_rows(x: &[f32], dx: usize, y: &[f32], dy: usize, out: &mut Vec<f32>) {
+pub(crate) fn concat_rows(x: &[f32], dx: usize, y: &[f32], dy: usize, out: &mut Vec<f32>) {
     out.clear();
     for (xr, yr) in x.chunks_exact(dx).zip(y.chunks_exact(dy)) {
         out.extend(xr.iter().chain(yr).copied());
     }
 }
 
-impl Learner {
-    /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`,
-    /// whose layer arithmetic runs on `kernel` (an input of the run like the seed: kernels
-    /// other than AVX2/AVX-512 give other bytes). All weights come from the [`Stream::Init`]
-    /// stream of `seeds`; the update's own noise from [`Stream::Update`].
-    pub fn new(
-        config: &LearnerConfig,
-        obs_dim: usize,
-        bounds: &[f32],
-        seeds: &Seeds,
-        kernel: Kernel,
-    ) -> Result<Self> {
-        config.check()?;
-        let act_dim = bounds.len();
-        let mut init = seeds.stream(Stream::Init);
-        let mut sizes = vec![obs_dim];
-        sizes.extend(&config.hidden);
-        sizes.push(act_dim);
-        let actor = Mlp::new(&sizes, Head::Tanh(bounds.to_vec()), &mut init);
-        sizes[0] = obs_dim + act_dim;
-        *sizes.last_mut().unwrap() = 1;
-        let (n_critics, ..) = config.knobs();
-        let critics: Vec<Mlp> = (0..n_critics)
-            .map(|_| Mlp::new(&sizes, Head::Linear, &mut init))
-            .collect();
-        Ok(Learner {
-            config: config.clone(),
-            obs_dim,
-            bounds: bounds.to_vec(),
-            actor_target: actor.clone(),
-            actor_opt: Adam::new(actor.params.len(), config.actor_lr, kernel),
-            critic_targets: critics.clone(),
-            critic_opts: critics
-                .iter()
-                .map(|c| Adam::new(c.params.len(), config.critic_lr, kernel))
-                .collect(),
-            actor,
-            critics,
-            rng: seeds.stream(Stream::Update),
-            updates: 0,
-            s: Scratch::new(kernel),
-            kernel,
-        })
-    }
-
-    /// The configuration.
-    pub fn config(&self) -> &LearnerConfig {
-        &self.config
-    }
-
-    /// Updates done so far.
-    pub fn updates(&self) -> u64 {
-        self.updates
-    }
-
-    /// Subnormal values among all Adam moments (0 while the flush works; see [`Adam`]).
-    pub fn subnormal_moments(&self) -> usize {
-        self.actor_opt.subnormal_moments()
-            + self
-                .critic_opts
-                .iter()
-                .map(Adam::subnormal_moments)
-                .sum::<usize>()
-    }
-
-    /// Runs every later product, optimiser step and soft update on `kernel` (AVX-512 and
-    /// AVX2 give the same bytes; `portable` and `matrixmultiply` round differently; see
-    /// [`crate::nn::kernel`]).
-    ///
-    /// # Panics
-    /// If this CPU cannot run `kernel` (see [`Kernel::available`]).
-    pub fn set_kernel(&mut self, kernel: Kernel) {
-        assert!(
-            kernel.available(),
-            "the {} kernel does not run here",
-            kernel.name()
-        );
-        let s = &mut self.s;
-        for ws in [
-            &mut s.ws_actor,
-            &mut s.ws_actor_target,
-            &mut s.ws_critic,
-            &mut s.ws_act,
-        ] {
-            ws.set_kernel(kernel);
+/// Checks shared by the families: positive learning rates, γ ∈ [0, 1), τ ∈ (0, 1], a batch, a
+/// replay that holds one, and layers.
+pub(crate) fn check_common(
+    rates: &[(&str, f32)],
+    gamma: f32,
+    tau: f32,
+    batch_size: usize,
+    replay_size: usize,
+    hidden: &[usize],
+) -> Result<()> {
+    for &(field, v) in rates {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::invalid(field, format!("must be positive, got {v}")));
         }
-        self.actor_opt.kernel = kernel;
-        for o in &mut self.critic_opts {
-            o.kernel = kernel;
-        }
-        self.kernel = kernel;
     }
-
-    /// The kernel the update runs on (products, optimiser steps and soft updates alike).
-    pub fn kernel(&self) -> Kernel {
-        self.kernel
-    }
-
-    /// Greedy actions π(s) for a batch of `n` observations (one forward pass).
-    pub fn act(&mut self, obs: &[f32], n: usize) -> &[f32] {
-        self.actor.forward(obs, n, &mut self.s.ws_act)
-    }
-
-    /// TD3's target actions for a batch of next observations: π'(s') plus the smoothing
-    /// noise clip(σ·b·z, −c·b, c·b) per component (b the bound), clipped to the bounds. With
-    /// σ = 0 (DDPG) this is π'(s').
-    pub fn smoothed_target_actions(&mut self, next_obs: &[f32], n: usize) -> &[f32] {
-        let (_, _, sigma, clip) = self.config.knobs();
-        let s = &mut self.s;
-        s.target_a.clear();
-        s.target_a.extend_from_slice(self.actor_target.forward(
-            next_obs,
-            n,
-            &mut s.ws_actor_target,
+    if !(0.0..1.0).contains(&gamma) {
+        return Err(Error::invalid(
+            "learner.gamma",
+            format!("must be in [0, 1), got {gamma}"),
         ));
-        if sigma > 0.0 {
-            for row in s.target_a.chunks_exact_mut(self.bounds.len()) {
-                for (x, &b) in row.iter_mut().zip(&self.bounds) {
-                    let z: f32 = StandardNormal.sample(&mut self.rng);
-                    *x = (*x + (sigma * b * z).clamp(-clip * b, clip * b)).clamp(-b, b);
-                }
-            }
-        }
-        &s.target_a
     }
-
-    /// Fills the scratch `y` with y = r + γ·(1 − done)·min_i Q'_i(s', a'), where a' are the
-    /// smoothed target actions (`smooth`) or plain π'(s').
-    fn compute_td_targets(&mut self, b: &Batch, smooth: bool) {
-        let (n, o, a) = (b.len, self.obs_dim, self.bounds.len());
-        if smooth {
-            self.smoothed_target_actions(&b.next_obs, n);
-        } else {
-            let s = &mut self.s;
-            s.target_a.clear();
-            s.target_a.extend_from_slice(self.actor_target.forward(
-                &b.next_obs,
-                n,
-                &mut s.ws_actor_target,
-            ));
-        }
-        let s = &mut self.s;
-        concat_rows(&b.next_obs, o, &s.target_a, a, &mut s.sa);
-        s.q_next.clear();
-        s.q_next.resize(n, f32::INFINITY);
-        for target in &self.critic_targets {
-            let q = target.forward(&s.sa, n, &mut s.ws_critic);
-            for (m, q) in s.q_next.iter_mut().zip(q) {
-                *m = m.min(*q);
-            }
-        }
-        let gamma = self.config.gamma;
-        s.y.clear();
-        s.y.extend((0..n).map(|i| b.rew[i] + gamma * (1.0 - b.done[i]) * s.q_next[i]));
+    if !(tau > 0.0 && tau <= 1.0) {
+        return Err(Error::invalid(
+            "learner.tau",
+            format!("must be in (0, 1], got {tau}"),
+        ));
     }
-
-    /// The TD targets y of a batch under the current target networks, without smoothing
-    /// noise (exposed for tests of the terminal mask).
-    pub fn td_targets(&mut self, b: &Batch) -> Vec<f32> {
-        self.compute_td_targets(b, false);
-        self.s.y.clone()
+    if batch_size == 0 {
+        return Err(Error::invalid("learner.batch_size", "must be at least 1"));
     }
+    if replay_size < batch_size {
+        return Err(Error::invalid(
+            "learner.replay_size",
+            "must be at least learner.batch_size",
+        ));
+    }
+    if hidden.is_empty() || hidden.contains(&0) {
+        return Err(Error::invalid(
+            "learner.hidden",
+            "needs at least one layer, all widths positive",
+        ));
+    }
+    Ok(())
 }

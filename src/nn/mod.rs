@@ -63,6 +63,8 @@ pub struct Workspace {
     delta: Vec<f32>,
     delta_prev: Vec<f32>,
     scratch: Vec<f32>,
+    /// Where a policy puts the actions it makes of the network's output ([`Workspace::output_and_buffer`]).
+    out: Vec<f32>,
     batch: usize,
     kernel: Kernel,
 }
@@ -75,9 +77,18 @@ impl Workspace {
             delta: Vec::new(),
             delta_prev: Vec::new(),
             scratch: Vec::new(),
+            out: Vec::new(),
             batch: 0,
             kernel,
         }
+    }
+
+    /// The output of the last [`Mlp::forward`] run in this workspace and a buffer beside it:
+    /// for a policy whose actions are a function of its network's output (SAC's tanh of the
+    /// mean), so acting allocates nothing.
+    pub fn output_and_buffer(&mut self) -> (&[f32], &mut Vec<f32>) {
+        let last = self.acts.last().map_or(&[][..], |a| a.as_slice());
+        (last, &mut self.out)
     }
 
     /// The kernel this workspace's products run on.

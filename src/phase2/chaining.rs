@@ -110,7 +110,7 @@ pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
     /// Learning problems made so far (skills, restarts, repairs).
     made: Cell<usize>,
     /// The last learning problem's learner and its target's index on τ (warm start).
-    last: RefCell<Option<(usize, Learner)>>,
+    last: RefCell<Option<(usize, Box<dyn Learner>)>>,
     steps: Cell<StepCounts>,
     trace: RefCell<Vec<TraceRow>>,
     clock: Instant,
@@ -188,7 +188,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
             .map(|(k, t, policy)| {
                 let goal = self.config.goal(self.env, &self.obs, lo + t);
                 Skill {
-                    policy: Box::new(policy),
+                    policy,
                     activation: Ball::around(
                         self.env,
                         &self.obs[lo + k],
@@ -218,8 +218,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let (env, config) = (self.env, self.config);
         let last = self.last.borrow_mut().take();
         let learner = warm_or_fresh(last, config.warm_start(), lo + t, || {
-            Learner::new(
-                self.learner,
+            self.learner.build(
                 env.obs_dim(),
                 &config.learner_bounds(env),
                 &self.seeds.skill(n32),
@@ -518,11 +517,11 @@ pub const MAX_HANDOVER_TRIES: usize = 4;
 /// learner; a restart (same target), a repair of a later section, and every problem without
 /// the switch start from `fresh()`.
 fn warm_or_fresh(
-    last: Option<(usize, Learner)>,
+    last: Option<(usize, Box<dyn Learner>)>,
     warm_start: bool,
     target: usize,
-    fresh: impl FnOnce() -> Result<Learner>,
-) -> Result<Learner> {
+    fresh: impl FnOnce() -> Result<Box<dyn Learner>>,
+) -> Result<Box<dyn Learner>> {
     match last {
         Some((last_t, learner)) if warm_start && last_t > target => Ok(learner),
         _ => fresh(),

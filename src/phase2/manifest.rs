@@ -5,8 +5,8 @@
 use super::goal::Inputs;
 use super::skill_chain::{Ball, Skill, SkillChain};
 use crate::error::{Error, Result};
+use crate::learner::load_policy;
 use crate::nn::kernel::Kernel;
-use crate::policy::load_policy;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -7,10 +7,8 @@ use super::backplay::Backplayer;
 use super::goal::{dist, BallMetric, Goal, Inputs};
 use super::{EventKind, Phase2Config, StartMode};
 use crate::env::{Env, SampleBall, VelocityBalls};
-use crate::learner::noise::Noise;
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
-use crate::nn::Mlp;
 use crate::policy::Policy;
 use crate::rng::Rng;
 use crate::rollout::{lockstep, Agent, Tally, Verdict};
@@ -87,10 +85,9 @@ pub struct SkillTask<'a, E: Env> {
     pub inputs: Inputs,
     /// The learner being trained: a fresh one for each skill, as in the paper, or the previous
     /// problem's with a warm start ([`crate::phase2::SkillInit::Warm`]).
-    pub learner: Learner,
+    pub learner: Box<dyn Learner>,
     replay: Replay,
     batch: Batch,
-    noise: Vec<Noise>,
     rng_start: Rng,
     rng_noise: Rng,
     rng_replay: Rng,
@@ -98,9 +95,6 @@ pub struct SkillTask<'a, E: Env> {
     pub steps: StepCounts,
     /// Steps this task may spend; once spent, tests and rounds return 0 without running.
     budget: u64,
-    /// The learner's action bounds (1 with goal-relative inputs, the environment's with raw
-    /// ones): noise is added in units of the bound and actions are clipped to it.
-    bounds: Vec<f32>,
     /// States where an executed chain entered this skill's section (chain repair): half of
     /// the starts at K = 0 are drawn from them, half uniformly in B_ε(τ_0). Empty otherwise.
     entries: Vec<E::State>,
@@ -125,12 +119,11 @@ impl<'a, E: Env> SkillTask<'a, E> {
         states: &'a [E::State],
         goal: Goal,
         t: usize,
-        learner: Learner,
+        learner: Box<dyn Learner>,
         rngs: [Rng; 3],
         budget: u64,
     ) -> Self {
         let config = ready.settings();
-        let lc = learner.config().clone();
         let [rng_start, rng_noise, rng_replay] = rngs;
         let inputs = config.inputs(env, &goal);
         let lengths = lengths_to_goal(env, &states[..=t]);
@@ -151,21 +144,18 @@ impl<'a, E: Env> SkillTask<'a, E> {
             t,
             goal,
             inputs,
-            replay: Replay::new(lc.replay_size, env.obs_dim(), env.action_dim()),
+            replay: Replay::new(
+                learner.config().replay_size(),
+                env.obs_dim(),
+                env.action_dim(),
+            ),
             batch: Batch::default(),
-            noise: (0..config.beta)
-                .map(|_| {
-                    // σ in the learner's [−1, 1] action space.
-                    Noise::new(lc.noise, lc.noise_sigma, lc.noise_theta, env.action_dim())
-                })
-                .collect(),
             learner,
             rng_start,
             rng_noise,
             rng_replay,
             steps: StepCounts::default(),
             budget,
-            bounds: config.learner_bounds(env),
             entries: Vec::new(),
             limits: episode_limits(ready, train_limit, &lengths),
             test_limits: episode_limits(ready, greedy_limit, &lengths),
@@ -247,9 +237,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         );
         let starts = self.starts(k, n);
         if learn {
-            for noise in &mut self.noise {
-                noise.reset();
-            }
+            self.learner.begin_episodes(n);
         }
         let limit = if learn {
             self.limits[k]
@@ -308,7 +296,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
 }
 
 impl<E: Env> Backplayer for SkillTask<'_, E> {
-    type Policy = Mlp;
+    type Policy = Box<dyn Policy>;
 
     fn test(&mut self, k: usize) -> f32 {
         if self.spent_budget() {
@@ -328,18 +316,18 @@ impl<E: Env> Backplayer for SkillTask<'_, E> {
         p
     }
 
-    fn policy(&self) -> Mlp {
-        self.learner.actor.clone()
+    fn policy(&self) -> Box<dyn Policy> {
+        self.learner.policy()
     }
 
     /// Runs `episodes` greedy episodes of `policy` (acted by it; the learner is not touched).
-    fn verify(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
-        self.greedy_with(k, policy, episodes, EventKind::Verify)
+    fn verify(&mut self, k: usize, policy: &Box<dyn Policy>, episodes: usize) -> f32 {
+        self.greedy_with(k, policy.as_ref(), episodes, EventKind::Verify)
     }
 
     /// [`Self::verify`], reported as a `retarget` row.
-    fn verify_handover(&mut self, k: usize, policy: &Mlp, episodes: usize) -> f32 {
-        self.greedy_with(k, policy, episodes, EventKind::Retarget)
+    fn verify_handover(&mut self, k: usize, policy: &Box<dyn Policy>, episodes: usize) -> f32 {
+        self.greedy_with(k, policy.as_ref(), episodes, EventKind::Retarget)
     }
 
     /// A `dead_walk` trace row at K, success 0.
@@ -392,27 +380,15 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
             t.inputs.observation(r, o);
         }
         self.actions.clear();
-        match self.policy {
-            Some(p) => {
-                let a = p.act(&self.view, lanes.len(), &mut self.ws);
-                self.actions.extend_from_slice(a);
-            }
-            None => self
-                .actions
-                .extend_from_slice(t.learner.act(&self.view, lanes.len())),
-        }
-        for (j, &lane) in lanes.iter().enumerate() {
+        let actions = match (self.policy, self.learn) {
+            (Some(p), _) => p.act(&self.view, lanes.len(), &mut self.ws),
+            // Exploration within the learner's bounds (TD3's noise, SAC's sampling).
+            (None, true) => t.learner.explore(&self.view, lanes, &mut t.rng_noise),
+            (None, false) => t.learner.act(&self.view, lanes.len()),
+        };
+        self.actions.extend_from_slice(actions);
+        for j in 0..lanes.len() {
             let a = &mut self.actions[j * act_dim..(j + 1) * act_dim];
-            if self.learn {
-                // σ is a fraction of the bound: noise is added in units of the bound.
-                for (x, b) in a.iter_mut().zip(&t.bounds) {
-                    *x /= b;
-                }
-                t.noise[lane].add(&mut t.rng_noise, a);
-                for (x, b) in a.iter_mut().zip(&t.bounds) {
-                    *x = x.clamp(-1.0, 1.0) * b;
-                }
-            }
             t.inputs
                 .env_action(a, &mut env_actions[j * act_dim..(j + 1) * act_dim]);
         }
@@ -438,7 +414,7 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
             let a = &self.actions[j * act_dim..(j + 1) * act_dim];
             let done = t.goal.terminal(reached, step.terminal);
             t.replay.push(o, a, r, &self.next_view, done);
-            let batch_size = t.learner.config().batch_size;
+            let batch_size = t.learner.batch_size();
             if t.replay.len() >= batch_size {
                 t.replay.sample(batch_size, &mut t.rng_replay, &mut t.batch);
                 t.learner.update(&t.batch);

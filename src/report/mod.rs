@@ -503,7 +503,14 @@ pub fn settings_tex(
                 put("pbcsbudget", human_steps(p.max_env_steps as f64));
                 put("evalepisodes", p.eval_episodes.to_string());
                 put("evalmaxsteps", p.eval_max_steps.to_string());
-                put("pbcsgamma", l.gamma.to_string());
+                put("pbcsgamma", l.gamma().to_string());
+            }
+            _ => {}
+        }
+        // The preset's learner is TD3's family (DDPG): its own settings.
+        match &c.job {
+            Job::Pbcs(j) if c.method == settings.pbcs && j.learner.as_td3().is_some() => {
+                let l = j.learner.as_td3().expect("matched");
                 put(
                     "hidden",
                     l.hidden
@@ -519,30 +526,36 @@ pub fn settings_tex(
                 put("replay", human_steps(l.replay_size as f64));
                 put("noisesigma", l.noise_sigma.to_string());
                 put("argmaxsamples", l.argmax_samples.to_string());
+            }
+            _ => {}
+        }
+        match &c.job {
+            Job::Pbcs(j) if c.method == settings.pbcs => {
                 put("mazeseed", j.maze.seed.to_string());
             }
             Job::Vanilla(j) if c.method == settings.vanilla => {
                 put("vanillabudget", human_steps(j.train.steps as f64));
-                put("vanillagamma", j.learner.gamma.to_string());
+                put("vanillagamma", j.learner.gamma().to_string());
                 put("episodesteps", j.train.max_episode_steps.to_string());
                 put(
                     "learningstarts",
                     human_steps(j.train.learning_starts as f64),
                 );
-                let l = &j.learner;
-                put(
-                    "vanillahidden",
-                    l.hidden
-                        .iter()
-                        .map(|h| h.to_string())
-                        .collect::<Vec<_>>()
-                        .join("×"),
-                );
-                put("vanillaactorlr", l.actor_lr.to_string());
-                put("vanillacriticlr", l.critic_lr.to_string());
-                put("vanillatau", l.tau.to_string());
-                put("vanillabatch", l.batch_size.to_string());
-                put("vanillanoisesigma", l.noise_sigma.to_string());
+                if let Some(l) = j.learner.as_td3() {
+                    put(
+                        "vanillahidden",
+                        l.hidden
+                            .iter()
+                            .map(|h| h.to_string())
+                            .collect::<Vec<_>>()
+                            .join("×"),
+                    );
+                    put("vanillaactorlr", l.actor_lr.to_string());
+                    put("vanillacriticlr", l.critic_lr.to_string());
+                    put("vanillatau", l.tau.to_string());
+                    put("vanillabatch", l.batch_size.to_string());
+                    put("vanillanoisesigma", l.noise_sigma.to_string());
+                }
             }
             _ => {}
         }

@@ -26,7 +26,6 @@ pub use train::{run_train, train_outcome, TrainRun, TrainSummary};
 use crate::config::{PbcsJob, Preset, TrainJob};
 use crate::envs::EnvSpec;
 use crate::error::Result;
-use crate::learner::ActorUpdate;
 use crate::nn::kernel::Kernel;
 use crate::phase2::goal::BallMetric;
 use crate::phase2::StartMode;
@@ -98,14 +97,9 @@ pub fn pbcs_suffix(job: &PbcsJob) -> String {
 }
 
 /// The part of a vanilla run's default folder that names its learner: `-ddpg`, `-td3`, with
-/// `-am` for the argmax actor.
+/// `-am` for the argmax actor; `-sac`.
 pub fn train_suffix(job: &TrainJob) -> String {
-    let am = if job.learner.actor_update == ActorUpdate::Argmax {
-        "-am"
-    } else {
-        ""
-    };
-    format!("-{}{am}", job.learner.algo.name())
+    format!("-{}", job.learner.record_name().replace('_', "-"))
 }
 
 /// The name of a procedure given as a config file or a preset (`pbcs run`'s folder,

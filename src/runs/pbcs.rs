@@ -255,7 +255,7 @@ impl RunRecord {
             variant: job.phase2.variant(),
             learner: lc.record_name(),
             starts: job.phase2.start,
-            gamma: lc.gamma,
+            gamma: lc.gamma(),
             epsilon: job.phase2.epsilon,
             solved: phase2.failure.is_none() && success_rate >= SOLVED_AT,
             success_rate,

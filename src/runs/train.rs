@@ -5,7 +5,7 @@ use crate::config::{Located, TrainJob};
 use crate::env::{Planar, Scene};
 use crate::envs::EnvName;
 use crate::error::Result;
-use crate::learner::{ActorUpdate, Algo};
+use crate::learner::td3::ActorUpdate;
 use crate::nn::kernel::Kernel;
 use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
 use crate::record::{write_csv, write_record};
@@ -25,10 +25,10 @@ pub struct TrainSummary {
     pub maze_seed: Option<u64>,
     /// Run seed.
     pub seed: u64,
-    /// DDPG or TD3 (`ddpg`, `td3` in `summary.csv`).
-    pub algo: Algo,
-    /// The actor update (`gradient`, `argmax`).
-    pub actor_update: ActorUpdate,
+    /// The learner's `algo` (`ddpg`, `td3`, `sac` in `summary.csv`).
+    pub algo: &'static str,
+    /// TD3's actor update (`gradient`, `argmax`; empty for another learner).
+    pub actor_update: Option<ActorUpdate>,
     /// Environment steps.
     pub env_steps: u64,
     /// Training episodes begun.
@@ -87,8 +87,8 @@ impl TrainRun {
             maze,
             maze_seed,
             seed: job.seed,
-            algo: job.learner.algo,
-            actor_update: job.learner.actor_update,
+            algo: job.learner.algo(),
+            actor_update: job.learner.as_td3().map(|l| l.actor_update),
             env_steps: job.train.steps,
             episodes: result.episodes,
             final_success: result.evals.last().map_or(0.0, |e| e.success),
@@ -148,12 +148,12 @@ impl TrainRun {
         )?;
         self.result
             .learner
-            .actor
+            .policy()
             .save(&out.join("actor.safetensors"))?;
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
             "{} on {}, seed {}: {} steps, greedy success {:.0} %",
-            summary.algo.name(),
+            summary.algo,
             job.env_spec().label(),
             job.seed,
             job.train.steps,
@@ -206,10 +206,12 @@ impl TrainSummary {
     /// What `pbcs train` prints, with the wall clock `seconds` and the visit bins' side.
     pub fn summary(&self, seconds: f64, visit_bin: f32) -> String {
         format!(
-            "{} ({} actor) on {}, run seed {}: {} env steps, {} episodes, {:.1} s ({:.0} \
+            "{}{} on {}, run seed {}: {} env steps, {} episodes, {:.1} s ({:.0} \
              steps/s)\ngreedy success: final {}, best {}; visited {} bins of side {}",
-            self.algo.name(),
-            self.actor_update.name(),
+            self.algo,
+            self.actor_update
+                .map(|a| format!(" ({} actor)", a.name()))
+                .unwrap_or_default(),
             match (self.maze, self.maze_seed) {
                 (Some(n), Some(m)) => format!("maze {n} (layout seed {m})"),
                 _ => self.env.name().to_string(),

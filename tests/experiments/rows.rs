@@ -38,7 +38,7 @@ fn made_up_row(exp: &Experiment, cell: &Cell, seed: u64) -> RawRow {
         maze_seed: j.maze.seed,
         seed,
         learner: j.learner.record_name(),
-        gamma: j.learner.gamma,
+        gamma: j.learner.gamma(),
         chaining: j.phase2.chaining,
         starts: Some(j.phase2.start),
         solved: true,

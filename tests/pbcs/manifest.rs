@@ -117,8 +117,8 @@ fn indices_bounds_files_and_parameter_counts_are_checked() {
             "skills[0].start_index",
         ),
         ("radius = 0.1", "radius = inf", "skills[0].radius"),
-        // A policy kind this build does not know (`pbcs::policy::load_policy`).
-        ("policy = \"mlp\"", "policy = \"sac\"", "skills[0].policy"),
+        // A policy kind this build does not know (`pbcs::learner::load_policy`).
+        ("policy = \"mlp\"", "policy = \"ppo\"", "skills[0].policy"),
         (
             "action_bounds = [0.1, 0.1]",
             "action_bounds = [0.1, -0.1]",
@@ -149,6 +149,12 @@ fn indices_bounds_files_and_parameter_counts_are_checked() {
         let err = load_error(dir.path(), &text, from, to);
         assert_names(&err, field);
     }
+    // A kind this build knows whose network the file's is not: refused naming the file.
+    let err = load_error(dir.path(), &text, "policy = \"mlp\"", "policy = \"sac\"");
+    assert!(
+        err.contains("skill0.safetensors") && err.contains("sac"),
+        "{err}"
+    );
     // The second skill is named by its index.
     let skills = &text[text.find("[[skills]]").unwrap()..];
     let two = format!(

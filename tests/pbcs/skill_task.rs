@@ -4,7 +4,7 @@ use pbcs::config::MazeConfig;
 use pbcs::config::PbcsJob;
 use pbcs::env::Env;
 use pbcs::envs::maze::Maze;
-use pbcs::learner::{Learner, LearnerConfig};
+use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::phase2::backplay::Backplayer;
 use pbcs::phase2::task::SkillTask;
 use pbcs::phase2::{EpisodeLimit, Ideas, StartMode};
@@ -66,8 +66,8 @@ fn task_with<'a>(
     budget: u64,
 ) -> SkillTask<'a, Maze> {
     let seeds = Seeds::new(3);
-    let mut learner = Learner::new(
-        &LearnerConfig::ddpg(),
+    let mut learner = Td3::new(
+        &Td3Config::ddpg(),
         2,
         &[1.0, 1.0],
         &seeds,
@@ -83,7 +83,7 @@ fn task_with<'a>(
         states,
         goal,
         t,
-        learner,
+        Box::new(learner),
         rngs,
         budget,
     )

@@ -7,7 +7,8 @@ use pbcs::config::{self, Check, Located, Place, Preset, MAX_MAZE_SIZE};
 use pbcs::envs::pointmaze::PointMazeConfig;
 use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
-use pbcs::learner::{ActorUpdate, Algo, LearnerConfig};
+use pbcs::learner::td3::ActorUpdate;
+use pbcs::learner::LearnerConfig;
 use pbcs::runs;
 use serde::{de::DeserializeOwned, Serialize};
 use std::path::PathBuf;
@@ -122,10 +123,12 @@ impl RunArgs {
 /// Learner flags shared by `train` and `run`.
 #[derive(Args)]
 pub struct LearnerArgs {
-    /// Learner preset; overrides `learner.algo` [default: the config's, else ddpg].
-    #[arg(long, value_enum)]
-    pub algo: Option<Algo>,
-    /// Actor update; overrides `learner.actor_update` [default: the config's, else gradient].
+    /// Learner; overrides `learner.algo` [default: the config's, else ddpg]. Between ddpg and
+    /// td3 only `algo` changes; another family starts from its own defaults.
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(LearnerConfig::algo_names()))]
+    pub algo: Option<String>,
+    /// TD3's actor update (ddpg, td3); overrides `learner.actor_update` [default: the config's,
+    /// else gradient].
     #[arg(long, value_enum)]
     pub actor: Option<ActorUpdate>,
     /// Discount γ in [0, 1); overrides `learner.gamma` [default: the config's, else 0.9 for
@@ -135,10 +138,28 @@ pub struct LearnerArgs {
 }
 
 impl LearnerArgs {
-    pub fn apply(&self, l: &mut LearnerConfig) {
-        l.algo = self.algo.unwrap_or(l.algo);
-        l.actor_update = self.actor.unwrap_or(l.actor_update);
-        l.gamma = self.gamma.unwrap_or(l.gamma);
+    pub fn apply(&self, l: &mut LearnerConfig) -> pbcs::error::Result<()> {
+        if let Some(algo) = &self.algo {
+            l.switch_to(algo)?;
+        }
+        if let Some(actor) = self.actor {
+            match l {
+                LearnerConfig::Td3(c) => c.actor_update = actor,
+                other => {
+                    return Err(pbcs::error::Error::invalid(
+                        "--actor",
+                        format!(
+                            "is TD3's actor update (ddpg, td3); {} has none",
+                            other.algo()
+                        ),
+                    ))
+                }
+            }
+        }
+        if let Some(gamma) = self.gamma {
+            l.set_gamma(gamma);
+        }
+        Ok(())
     }
 }
 

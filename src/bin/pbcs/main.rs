@@ -61,7 +61,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         } => {
             let preset = preset.unwrap_or(Preset::Fast);
             let mut job = run.load(|| preset.job())?;
-            learner.apply(&mut job.learner);
+            learner.apply(&mut job.learner)?;
             if no_chaining {
                 for field in job.without_chaining() {
                     eprintln!("--no-chaining: {field} = 0 (it acts between skills)");
@@ -379,7 +379,7 @@ fn train(
     kernel: Kernel,
 ) -> anyhow::Result<()> {
     let mut job = run.load(|| Ok(TrainJob::default()))?;
-    learner.apply(&mut job.learner);
+    learner.apply(&mut job.learner)?;
     job.train.steps = steps.unwrap_or(job.train.steps);
     let job = job.valid()?;
     let out = run.out_dir("train", &*job, &runs::train_suffix(&job));

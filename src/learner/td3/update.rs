@@ -1,11 +1,12 @@
-//! One TD3 update ([`Learner::update`]): the TD targets, the critics, the actor (by the
+//! One TD3 update ([`Td3::update`]): the TD targets, the critics, the actor (by the
 //! critic's gradient or the appendix's argmax), the target networks.
 
-use super::replay::Batch;
-use super::{concat_rows, ActorUpdate, Learner, Losses};
+use super::{ActorUpdate, Td3};
+use crate::learner::replay::Batch;
+use crate::learner::{concat_rows, Losses};
 use rand::Rng as _;
 
-impl Learner {
+impl Td3 {
     /// One TD3 update on a mini-batch (DDPG when the knobs say so; argmax actor when
     /// configured). Returns the losses.
     pub fn update(&mut self, b: &Batch) -> Losses {
@@ -36,7 +37,7 @@ impl Learner {
         }
     }
 
-    /// Step 2 of [`Learner::update`]: one optimiser step of each critic on mean (Q_i(s, a) −
+    /// Step 2 of [`Td3::update`]: one optimiser step of each critic on mean (Q_i(s, a) −
     /// y)², y the TD targets already computed. Returns the first critic's loss.
     fn update_critics(&mut self, b: &Batch) -> f32 {
         let (n, o, a) = (b.len, self.obs_dim, self.bounds.len());
@@ -67,7 +68,7 @@ impl Learner {
         critic_loss
     }
 
-    /// Step 3 of [`Learner::update`]: one optimiser step of the actor, its gradient at π(s)
+    /// Step 3 of [`Td3::update`]: one optimiser step of the actor, its gradient at π(s)
     /// from [`ActorUpdate`]. Returns the actor's loss.
     fn update_actor(&mut self, b: &Batch) -> f32 {
         let (n, a) = (b.len, self.bounds.len());
