@@ -86,6 +86,12 @@ pub trait Env {
         None
     }
 
+    /// The task as reaching a goal ([`Goals`]), for hindsight experience replay: `Some(self)`
+    /// from an environment that implements it. Needed by `train.her`.
+    fn goals(&self) -> Option<&dyn Goals<Self::State>> {
+        None
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 
@@ -166,6 +172,27 @@ pub trait BallIsClear<S> {
     fn ball_is_clear(&self, center: &S, radius: f32) -> bool;
 }
 
+/// A capability: the task as reaching a goal, for hindsight experience replay (HER, Andrychowicz et
+/// al. 2017), in gymnasium-robotics' `GoalEnv` terms. A goal is a point of a goal space; an
+/// observation achieves one ([`Goals::achieved_goal`], the maze's: its position), an episode
+/// aims at one ([`Goals::desired_goal`], the maze's target), and [`Goals::goal_reward`] is the
+/// part of [`Env::step`]'s reward that the goal decides, computed from the two goals alone (the
+/// maze: 1 inside the target disc, by the same comparison its step makes). Whatever else the
+/// step's reward holds (the maze's −1 on a wall) does not depend on the goal and is kept when HER
+/// puts another goal in a stored transition (`learner::her`). An environment offers it through
+/// [`Env::goals`]; tests/her.rs checks, for each one that does, that the step's reward is
+/// `goal_reward(achieved, desired)` plus a part that does not depend on the goal.
+pub trait Goals<S> {
+    /// The goal space's dimension.
+    fn goal_dim(&self) -> usize;
+    /// The goal observation `obs` achieves, into `out` ([`Goals::goal_dim`] long).
+    fn achieved_goal(&self, obs: &[f32], out: &mut [f32]);
+    /// The goal of the episode in `state` (fixed tasks: the same for every state).
+    fn desired_goal(&self, state: &S, out: &mut [f32]);
+    /// The reward for having achieved `achieved` when the goal is `desired`.
+    fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32;
+}
+
 /// A capability: a short sequence of actions that takes `from` to (within rounding of) `to`
 /// while staying at least `clearance` away from anything that blocks, when the environment
 /// knows one (a straight line in the maze); `None` for a pair it cannot join. Used only to
@@ -191,6 +218,8 @@ pub enum Capability {
     SuccessRegion,
     /// [`Env::step_reach`].
     StepReach,
+    /// [`Env::goals`] ([`Goals`]).
+    Goals,
 }
 
 impl Capability {
@@ -203,6 +232,7 @@ impl Capability {
             Capability::Connect => "Env::connector (Connect)",
             Capability::SuccessRegion => "Env::success_region",
             Capability::StepReach => "Env::step_reach",
+            Capability::Goals => "Env::goals (Goals)",
         }
     }
 
@@ -215,6 +245,7 @@ impl Capability {
             Capability::Connect => env.connector().is_some(),
             Capability::SuccessRegion => env.success_region().is_some(),
             Capability::StepReach => env.step_reach().is_some(),
+            Capability::Goals => env.goals().is_some(),
         }
     }
 

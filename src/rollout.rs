@@ -145,6 +145,9 @@ pub fn lockstep<E: Env + ?Sized, A: Agent<E> + ?Sized>(
 pub struct Greedy<'a> {
     learner: &'a mut dyn Learner,
     bounds: Vec<f32>,
+    /// A goal appended to every observation (a learner trained with HER), empty otherwise.
+    pub goal: Vec<f32>,
+    input: Vec<f32>,
     /// Sum of the rewards met.
     pub reward: f32,
     /// Steps taken.
@@ -157,6 +160,8 @@ impl<'a> Greedy<'a> {
         Greedy {
             learner,
             bounds: (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
+            goal: Vec::new(),
+            input: Vec::new(),
             reward: 0.0,
             steps: 0,
         }
@@ -170,6 +175,15 @@ impl<'a> Greedy<'a> {
 
 impl<E: Env + ?Sized> Agent<E> for Greedy<'_> {
     fn act(&mut self, lanes: &[usize], obs: &[f32], actions: &mut [f32]) {
+        let obs = if self.goal.is_empty() {
+            obs
+        } else {
+            self.input.clear();
+            for row in obs.chunks(obs.len() / lanes.len()) {
+                self.input.extend(row.iter().chain(&self.goal));
+            }
+            &self.input
+        };
         let a = self.learner.act(obs, lanes.len());
         for (row, out) in a
             .chunks(self.bounds.len())

@@ -1,10 +1,13 @@
 //! Vanilla off-policy training on an environment's own reward (the paper's DDPG and TD3
 //! baselines): episodes with a step limit, one update per environment step, periodic greedy
 //! evaluation, the set of visited state bins for the "explored area" picture, and optionally
-//! PBCS's evaluation protocol after training.
+//! PBCS's evaluation protocol after training. With `[train.her]`, hindsight experience replay
+//! ([`crate::learner::her`]) on an environment that offers goals: the networks see the
+//! observation followed by the episode's goal.
 
-use crate::env::{evaluation_starts, random_action, Env, EvalEpisode};
+use crate::env::{evaluation_starts, random_action, Capability, Env, EvalEpisode, Goals};
 use crate::error::{Error, Result};
+use crate::learner::her::{HerConfig, HerReplay};
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
@@ -41,6 +44,10 @@ pub struct TrainConfig {
     pub final_eval_max_steps: usize,
     /// When the learner updates (after `learning_starts`).
     pub updates: Updates,
+    /// Hindsight experience replay (`[train.her]`; absent: off). Needs an environment that
+    /// offers goals ([`crate::env::Env::goals`]: the maze, the rooms, PointMaze).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub her: Option<HerConfig>,
 }
 
 /// When a vanilla learner updates.
@@ -68,6 +75,7 @@ impl Default for TrainConfig {
             final_eval_epsilon: 0.1,
             final_eval_max_steps: 5000,
             updates: Updates::Step,
+            her: None,
         }
     }
 }
@@ -108,7 +116,10 @@ impl Check for TrainConfig {
                 format!("must be positive, got {}", self.final_eval_epsilon),
             ));
         }
-        Ok(())
+        match &self.her {
+            Some(her) => her.check(),
+            None => Ok(()),
+        }
     }
 }
 
@@ -149,9 +160,13 @@ pub struct TrainOutcome {
 /// Runs the greedy policy for `episodes` episodes from [`Env::sample_start`] (stream
 /// [`Stream::Eval`], so evaluation never shifts training's randomness): the fraction that
 /// reached a positive terminal reward, and the mean return and length per episode.
+///
+/// With `goals` (a learner trained with HER), the policy sees each observation followed by
+/// the episode's goal.
 pub fn evaluate<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
+    goals: Option<&dyn Goals<E::State>>,
     episodes: usize,
     max_steps: usize,
     seeds: &Seeds,
@@ -162,6 +177,7 @@ pub fn evaluate<E: Env>(
     let mut wins = 0usize;
     for _ in 0..episodes {
         let start = env.sample_start(&mut rng);
+        aim(&mut greedy, goals, &start);
         wins += usize::from(greedy.episode(env, start, max_steps));
     }
     let e = episodes as f32;
@@ -173,6 +189,7 @@ pub fn evaluate<E: Env>(
 pub fn greedy_episodes<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
+    goals: Option<&dyn Goals<E::State>>,
     starts: Vec<E::State>,
     max_steps: usize,
 ) -> Vec<EvalEpisode> {
@@ -180,6 +197,7 @@ pub fn greedy_episodes<E: Env>(
     starts
         .into_iter()
         .map(|start| {
+            aim(&mut greedy, goals, &start);
             let before = greedy.steps;
             let success = greedy.episode(env, start, max_steps);
             EvalEpisode {
@@ -188,6 +206,14 @@ pub fn greedy_episodes<E: Env>(
             }
         })
         .collect()
+}
+
+/// With `goals`, the goal of the episode starting in `start` appended to what `greedy` sees.
+fn aim<S>(greedy: &mut Greedy<'_>, goals: Option<&dyn Goals<S>>, start: &S) {
+    if let Some(g) = goals {
+        greedy.goal.resize(g.goal_dim(), 0.0);
+        g.desired_goal(start, &mut greedy.goal);
+    }
 }
 
 /// Trains a fresh learner on `env`'s own reward for `train.steps` environment steps.
@@ -212,6 +238,14 @@ pub fn train_vanilla<E: Env>(
     run.finish()
 }
 
+/// Where a vanilla run keeps its transitions.
+enum Store<'a, S> {
+    /// Uniform replay.
+    Plain(Replay),
+    /// Whole episodes with their goals ([`HerReplay`]), and the environment's goals.
+    Her(&'a dyn Goals<S>, HerReplay),
+}
+
 /// A vanilla training run between two environment steps: one episode at a time, each step's
 /// transition stored, the learner updated every step (or every episode's end, as many times
 /// as it had steps), an episode ended by a terminal step or the step limit.
@@ -220,7 +254,12 @@ struct Vanilla<'a, E: Env> {
     train: &'a TrainConfig,
     seeds: &'a Seeds,
     learner: Box<dyn Learner>,
-    replay: Replay,
+    replay: Store<'a, E::State>,
+    /// With HER: the episode's goal, the observations followed by it (what the learner sees),
+    /// and the goal the next observation achieved.
+    desired: Vec<f32>,
+    input: Vec<f32>,
+    achieved: Vec<f32>,
     batch: Batch,
     rng_start: crate::rng::Rng,
     rng_noise: crate::rng::Rng,
@@ -255,8 +294,27 @@ impl<'a, E: Env> Vanilla<'a, E> {
         kernel: Kernel,
     ) -> Result<Self> {
         let (obs_dim, act_dim) = (env.obs_dim(), env.action_dim());
-        let learner = lc.build(obs_dim, &vec![1.0; act_dim], seeds, kernel)?;
-        let replay = Replay::new(lc.replay_size(), obs_dim, act_dim);
+        let replay = match &train.her {
+            Some(config) => {
+                Capability::Goals.require(env, "train.her")?;
+                let goals = env.goals().expect("required");
+                if lc.replay_size() < train.max_episode_steps {
+                    return Err(Error::invalid(
+                        "learner.replay_size",
+                        "must hold a whole episode (train.max_episode_steps) with train.her",
+                    ));
+                }
+                let g = goals.goal_dim();
+                let buffer = HerReplay::new(lc.replay_size(), obs_dim, act_dim, g, config.clone());
+                Store::Her(goals, buffer)
+            }
+            None => Store::Plain(Replay::new(lc.replay_size(), obs_dim, act_dim)),
+        };
+        let goal_dim = match &replay {
+            Store::Her(g, _) => g.goal_dim(),
+            Store::Plain(_) => 0,
+        };
+        let learner = lc.build(obs_dim + goal_dim, &vec![1.0; act_dim], seeds, kernel)?;
         let mut rng_start = seeds.stream(Stream::Start);
         let state = env.sample_start(&mut rng_start);
         let mut run = Vanilla {
@@ -265,6 +323,9 @@ impl<'a, E: Env> Vanilla<'a, E> {
             seeds,
             learner,
             replay,
+            desired: vec![0.0; goal_dim],
+            input: Vec::new(),
+            achieved: vec![0.0; goal_dim],
             batch: Batch::default(),
             rng_start,
             rng_noise: seeds.stream(Stream::Noise),
@@ -301,11 +362,22 @@ impl<'a, E: Env> Vanilla<'a, E> {
         self.visited.insert(bin);
     }
 
-    /// The noise restarts and the episode's first state is observed.
+    /// The noise restarts and the episode's first state is observed (with HER, its goal too).
     fn begin_episode(&mut self) {
         self.learner.begin_episodes(1);
         self.env.observe(&self.state, &mut self.obs);
+        if let Some(goals) = self.goals() {
+            goals.desired_goal(&self.state, &mut self.desired);
+        }
         self.visit(false);
+    }
+
+    /// The environment's goals when training with HER.
+    fn goals(&self) -> Option<&'a dyn Goals<E::State>> {
+        match &self.replay {
+            Store::Her(goals, _) => Some(*goals),
+            Store::Plain(_) => None,
+        }
     }
 
     /// Step `step_i`'s action: uniformly random during `learning_starts`, else the policy's
@@ -322,19 +394,61 @@ impl<'a, E: Env> Vanilla<'a, E> {
                 *a = e / b;
             }
         } else {
-            let a = self.learner.explore(&self.obs, &[0], &mut self.rng_noise);
+            let input = match self.replay {
+                Store::Plain(_) => &self.obs,
+                Store::Her(..) => {
+                    self.input.clear();
+                    self.input.extend(self.obs.iter().chain(&self.desired));
+                    &self.input
+                }
+            };
+            let a = self.learner.explore(input, &[0], &mut self.rng_noise);
             self.action.copy_from_slice(a);
         }
         scale(&self.action, &self.bounds, &mut self.env_action);
     }
 
-    /// One learner update from a sampled batch, once the replay holds a batch.
+    /// One learner update from a sampled batch, once the replay holds a batch (with HER: once
+    /// an episode has ended).
     fn update(&mut self) {
         let batch_size = self.learner.batch_size();
-        if self.replay.len() >= batch_size {
-            self.replay
-                .sample(batch_size, &mut self.rng_replay, &mut self.batch);
-            self.learner.update(&self.batch);
+        match &mut self.replay {
+            Store::Plain(replay) => {
+                if replay.len() >= batch_size {
+                    replay.sample(batch_size, &mut self.rng_replay, &mut self.batch);
+                    self.learner.update(&self.batch);
+                }
+            }
+            Store::Her(goals, her) => {
+                let reward = |a: &[f32], d: &[f32]| goals.goal_reward(a, d);
+                if her.sample(batch_size, &mut self.rng_replay, &reward, &mut self.batch) {
+                    self.learner.update(&self.batch);
+                }
+            }
+        }
+    }
+
+    /// Stores the transition from `self.obs` by `self.action` to `self.next_obs`; with HER,
+    /// with the episode's goal, the goal achieved and the reward's part that is not the goal's.
+    fn store(&mut self, reward: f32, terminal: bool) {
+        match &mut self.replay {
+            Store::Plain(replay) => {
+                replay.push(&self.obs, &self.action, reward, &self.next_obs, terminal)
+            }
+            Store::Her(goals, her) => {
+                goals.achieved_goal(&self.next_obs, &mut self.achieved);
+                let rest = reward - goals.goal_reward(&self.achieved, &self.desired);
+                her.push(
+                    &self.obs,
+                    &self.action,
+                    reward,
+                    &self.next_obs,
+                    terminal,
+                    &self.desired,
+                    &self.achieved,
+                    rest,
+                );
+            }
         }
     }
 
@@ -346,15 +460,16 @@ impl<'a, E: Env> Vanilla<'a, E> {
         let step = self.env.step(&self.state, &self.env_action);
         self.env.observe(&step.state, &mut self.next_obs);
         self.visit(true);
-        self.replay.push(
-            &self.obs,
-            &self.action,
-            step.reward,
-            &self.next_obs,
-            step.terminal,
-        );
+        self.store(step.reward, step.terminal);
         self.terminal_transitions += u64::from(step.terminal);
         let learning = step_i > self.train.learning_starts;
+        if let Store::Her(_, her) = &mut self.replay {
+            // The episode ends with this transition: it is sampled from this step's update on
+            // (as Stable-Baselines3 ends it when the transition is stored).
+            if step.terminal || self.t_episode + 1 >= self.train.max_episode_steps {
+                her.end_episode();
+            }
+        }
         if learning && self.train.updates == Updates::Step {
             self.update();
         }
@@ -380,9 +495,11 @@ impl<'a, E: Env> Vanilla<'a, E> {
     /// The greedy evaluation after step `step_i`, kept as a row; its success rate.
     fn evaluate(&mut self, step_i: u64) -> f32 {
         let round = self.evals.len() as u32;
+        let goals = self.goals();
         let (success, mean_return, mean_length) = evaluate(
             self.env,
             self.learner.as_mut(),
+            goals,
             self.train.eval_episodes,
             self.train.max_episode_steps,
             self.seeds,
@@ -401,6 +518,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
     /// The outcome, after PBCS's protocol if it is on (it reads only the Eval stream, so it
     /// changes nothing of the training: a run with it and one without train the same bytes).
     fn finish(mut self) -> Result<TrainOutcome> {
+        let goals = self.goals();
         let mut visited: Vec<Vec<i32>> = self.visited.into_iter().collect();
         visited.sort();
         let t = self.train;
@@ -414,6 +532,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
             greedy_episodes(
                 self.env,
                 self.learner.as_mut(),
+                goals,
                 starts,
                 t.final_eval_max_steps,
             )

@@ -25,7 +25,7 @@
 //! ```
 
 use super::walled::Walled;
-use crate::env::{BallIsClear, Connect, Env, Planar, SampleBall, Scene, Step};
+use crate::env::{BallIsClear, Connect, Env, Goals, Planar, SampleBall, Scene, Step};
 use crate::rng::Rng;
 use parry2d::math::{Isometry, Point};
 use parry2d::shape::Segment;
@@ -138,6 +138,26 @@ impl Env for TwoRooms {
 
     fn connector(&self) -> Option<&dyn Connect<[f32; 2]>> {
         Some(self)
+    }
+
+    fn goals(&self) -> Option<&dyn Goals<[f32; 2]>> {
+        Some(self)
+    }
+}
+
+/// Goals: positions; the episode's is the target; reward 1 inside the target's radius of it.
+impl Goals<[f32; 2]> for TwoRooms {
+    fn goal_dim(&self) -> usize {
+        2
+    }
+    fn achieved_goal(&self, obs: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&obs[..2]);
+    }
+    fn desired_goal(&self, _: &[f32; 2], out: &mut [f32]) {
+        out.copy_from_slice(&ROOMS.target);
+    }
+    fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32 {
+        f32::from(u8::from(ROOMS.in_disc(achieved, desired)))
     }
 }
 

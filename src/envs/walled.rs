@@ -39,12 +39,18 @@ impl Walled {
             (s[1] + clip(a[1])).clamp(0.0, self.height),
         ];
         let n = if blocked(s, &n) { *s } else { n };
-        let done = (n[0] - self.target[0]).hypot(n[1] - self.target[1]) < self.target_radius;
+        let done = self.in_disc(&n, &self.target);
         Step {
             state: n,
             reward: f32::from(u8::from(done)),
             terminal: done,
         }
+    }
+
+    /// Whether `p` lies in the target disc's radius around `center` (the target itself for the
+    /// step; any goal for HER's [`crate::env::Goals::goal_reward`]).
+    pub fn in_disc(&self, p: &[f32], center: &[f32]) -> bool {
+        (p[0] - center[0]).hypot(p[1] - center[1]) < self.target_radius
     }
 
     /// Uniform in the disc (r = radius·√u, angle uniform), clamped to the box; a point across a

@@ -29,6 +29,7 @@
 //! assert!(err.to_string().contains("noise_sigma"), "{err}");
 //! ```
 
+pub mod her;
 pub mod noise;
 pub mod replay;
 

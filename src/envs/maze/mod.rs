@@ -34,7 +34,7 @@ mod walls;
 pub use layout::{Layout, Side};
 pub use walls::{Wall, Walls};
 
-use crate::env::{BallIsClear, Connect, Env, Planar, SampleBall, Scene, Step};
+use crate::env::{BallIsClear, Connect, Env, Goals, Planar, SampleBall, Scene, Step};
 use crate::error::{Error, Result};
 use crate::validate::{positive_finite, Check};
 use parry2d::math::{Point, Vector};
@@ -264,8 +264,14 @@ impl Maze {
     /// Whether `p` is in the success region: ‖p − target‖ < radius (0.2 in the paper).
     #[inline]
     pub fn reached(&self, p: &Point<f32>) -> bool {
+        self.within(p, &self.target)
+    }
+
+    /// Whether `p` lies within the target's radius of `goal` ([`Maze::reached`] for the
+    /// target; HER's [`Goals::goal_reward`] for any goal).
+    fn within(&self, p: &Point<f32>, goal: &Point<f32>) -> bool {
         let r = self.config.target_radius;
-        (p - self.target).norm_squared() < r * r
+        (p - goal).norm_squared() < r * r
     }
 
     /// The action actually applied: each component clipped to [−max_action, max_action],
@@ -349,6 +355,31 @@ impl Env for Maze {
 
     fn connector(&self) -> Option<&dyn Connect<Point<f32>>> {
         Some(self)
+    }
+
+    fn goals(&self) -> Option<&dyn Goals<Point<f32>>> {
+        Some(self)
+    }
+}
+
+/// Goals: positions; the episode's is the target; the goal's part of the reward is 1 inside
+/// the target's radius of it (the −1 of a wall is not the goal's).
+impl Goals<Point<f32>> for Maze {
+    fn goal_dim(&self) -> usize {
+        2
+    }
+    fn achieved_goal(&self, obs: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&obs[..2]);
+    }
+    fn desired_goal(&self, _: &Point<f32>, out: &mut [f32]) {
+        out.copy_from_slice(&[self.target.x, self.target.y]);
+    }
+    fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32 {
+        let (p, g) = (
+            Point::new(achieved[0], achieved[1]),
+            Point::new(desired[0], desired[1]),
+        );
+        f32::from(u8::from(self.within(&p, &g)))
     }
 }
 

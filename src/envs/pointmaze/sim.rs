@@ -2,7 +2,7 @@
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{sure_radius, MapName, PointMap, SUCCESS_DISTANCE};
-use crate::env::{BallIsClear, Env, Planar, SampleBall, Scene, Step, VelocityBalls};
+use crate::env::{BallIsClear, Env, Goals, Planar, SampleBall, Scene, Step, VelocityBalls};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Mutex;
@@ -267,6 +267,10 @@ impl Env for PointMaze {
         Some(self)
     }
 
+    fn goals(&self) -> Option<&dyn Goals<PointState>> {
+        Some(self)
+    }
+
     fn velocity_balls(&self) -> Option<&dyn VelocityBalls<PointState>> {
         Some(self)
     }
@@ -376,5 +380,32 @@ impl Planar for PointMaze {
     fn scene(&self) -> Scene {
         let (start, goal) = self.cells;
         self.map.scene(start, goal, self.sure_radius() as f32)
+    }
+}
+
+/// Goals: positions (x, y); the episode's is the goal; the reward 1 where [`PointMaze::success`]
+/// would say so of a point at `achieved` (its `f64` test on the observation's `f32` position: at
+/// the very edge of the disc the two can differ by the rounding of a position to `f32`).
+impl Goals<PointState> for PointMaze {
+    fn goal_dim(&self) -> usize {
+        2
+    }
+    fn achieved_goal(&self, obs: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&obs[..2]);
+    }
+    fn desired_goal(&self, _: &PointState, out: &mut [f32]) {
+        out.copy_from_slice(&self.goal.map(|g| g as f32));
+    }
+    fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32 {
+        let (dx, dy) = (
+            f64::from(achieved[0]) - f64::from(desired[0]),
+            f64::from(achieved[1]) - f64::from(desired[1]),
+        );
+        let n = self.goal_noise;
+        if (dx.abs() + n).hypot(dy.abs() + n) <= SUCCESS_DISTANCE {
+            1.0
+        } else {
+            0.0
+        }
     }
 }

@@ -1,0 +1,301 @@
+//! Hindsight experience replay (Andrychowicz et al. 2017) as Stable-Baselines3's
+//! `HerReplayBuffer` does it.
+//!
+//! Episodes are stored whole, each transition with the goal the episode aimed at and the goal its
+//! next observation achieved ([`crate::env::Goals`]). Only finished episodes are sampled. Of a
+//! mini-batch of n, the first n − ⌊n·(1 − 1/(k + 1))⌋ transitions keep their goal and reward;
+//! each of the others gets a goal achieved later in its own episode (`future`: the next
+//! observation's achieved goal at a step drawn uniformly from the transition's own to the
+//! episode's last; `final`: the last one's; `episode`: any step of it) and the reward the
+//! environment's own rule gives for it ([`crate::env::Goals::goal_reward`], plus the part of the
+//! stored reward that is not the goal's: the maze's −1 on a wall). The stored end of episode is
+//! kept (Stable-Baselines3 keeps `done` too). The networks see the observation followed by the
+//! goal. When the ring overwrites the first transition of an old episode, the rest of that
+//! episode stops being sampled.
+//!
+//! ```
+//! use pbcs::learner::her::{HerConfig, HerReplay};
+//! use pbcs::learner::replay::Batch;
+//! use pbcs::rng::{Seeds, Stream};
+//! // A 1-D goal space: the goal is the observation; reward 1 exactly at the goal.
+//! let reward = |achieved: &[f32], desired: &[f32]| f32::from(u8::from(achieved == desired));
+//! let mut her = HerReplay::new(100, 1, 1, 1, HerConfig::default());
+//! for t in 0..3 {
+//!     let (obs, next) = ([t as f32], [t as f32 + 1.0]);
+//!     // Aiming at 10, never reached: every stored reward is 0.
+//!     her.push(&obs, &[1.0], 0.0, &next, false, &[10.0], &next, 0.0);
+//! }
+//! assert_eq!(her.sampleable(), 0); // the episode is not over
+//! her.end_episode();
+//! let mut batch = Batch::default();
+//! assert!(her.sample(50, &mut Seeds::new(0).stream(Stream::Replay), &reward, &mut batch));
+//! // 10 real rows (goal 10, reward 0), 40 relabelled with goals the episode reached.
+//! assert!(batch.obs.chunks(2).take(10).all(|r| r[1] == 10.0));
+//! assert!(batch.obs.chunks(2).skip(10).all(|r| r[1] > r[0] && r[1] <= 3.0));
+//! assert!(batch.rew.iter().skip(10).any(|&r| r == 1.0));
+//! ```
+
+use super::replay::Batch;
+use crate::error::{Error, Result};
+use crate::rng::Rng;
+use crate::validate::Check;
+use rand::Rng as _;
+use serde::{Deserialize, Serialize};
+
+/// Which achieved goal a relabelled transition gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalSelection {
+    /// One achieved at a step from the transition's own to the episode's last.
+    Future,
+    /// The one achieved at the episode's last step.
+    Final,
+    /// One achieved at any step of the episode.
+    Episode,
+}
+
+/// HER's settings (`[train.her]`): Stable-Baselines3's defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HerConfig {
+    /// k: virtual goals per real transition; a sampled transition is relabelled with
+    /// probability 1 − 1/(k + 1).
+    pub n_sampled_goal: usize,
+    /// Where the new goals come from.
+    pub goal_selection_strategy: GoalSelection,
+}
+
+impl Default for HerConfig {
+    fn default() -> Self {
+        HerConfig {
+            n_sampled_goal: 4,
+            goal_selection_strategy: GoalSelection::Future,
+        }
+    }
+}
+
+impl Check for HerConfig {
+    fn check(&self) -> Result<()> {
+        if self.n_sampled_goal == 0 {
+            return Err(Error::invalid(
+                "train.her.n_sampled_goal",
+                "must be at least 1 (0 relabels nothing: leave [train.her] out)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl HerConfig {
+    /// How many of a batch of `n` are relabelled: ⌊n·(1 − 1/(k + 1))⌋, as SB3's
+    /// `int(her_ratio * batch_size)`.
+    pub fn virtual_count(&self, n: usize) -> usize {
+        let ratio = 1.0 - 1.0 / (self.n_sampled_goal as f64 + 1.0);
+        (ratio * n as f64) as usize
+    }
+}
+
+/// Whole episodes of transitions with their goals, sampled with relabelled goals.
+#[derive(Debug, Clone)]
+pub struct HerReplay {
+    config: HerConfig,
+    capacity: usize,
+    obs_dim: usize,
+    act_dim: usize,
+    goal_dim: usize,
+    /// Per transition: s, a, r, s', done, desired goal, goal achieved in s', the reward's part
+    /// that is not the goal's.
+    rows: Vec<f32>,
+    /// Per transition: where its episode began (ring index).
+    ep_start: Vec<usize>,
+    /// Per transition: its episode's length once the episode ended, 0 before (or once the ring
+    /// overwrote the episode's beginning).
+    ep_len: Vec<usize>,
+    /// Transitions written (≤ capacity).
+    len: usize,
+    /// The next index to write.
+    next: usize,
+    /// The episode being written: its first index and length.
+    current: (usize, usize),
+    /// Transitions with `ep_len > 0`.
+    sampleable: usize,
+    /// Scratch: the goal a relabelled transition gets.
+    goal: Vec<f32>,
+}
+
+impl HerReplay {
+    /// An empty buffer of `capacity` transitions.
+    pub fn new(
+        capacity: usize,
+        obs_dim: usize,
+        act_dim: usize,
+        goal_dim: usize,
+        config: HerConfig,
+    ) -> Self {
+        HerReplay {
+            config,
+            capacity,
+            obs_dim,
+            act_dim,
+            goal_dim,
+            rows: Vec::new(),
+            ep_start: Vec::new(),
+            ep_len: Vec::new(),
+            len: 0,
+            next: 0,
+            current: (0, 0),
+            sampleable: 0,
+            goal: vec![0.0; goal_dim],
+        }
+    }
+
+    fn width(&self) -> usize {
+        2 * self.obs_dim + self.act_dim + 3 + 2 * self.goal_dim
+    }
+
+    /// Transitions that can be sampled (those of finished episodes still whole in the ring).
+    pub fn sampleable(&self) -> usize {
+        self.sampleable
+    }
+
+    /// Stores one transition of the current episode: s, a, r, s', whether s' is terminal, the
+    /// episode's goal, the goal s' achieved, and the part of r that is not the goal's.
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(
+        &mut self,
+        obs: &[f32],
+        act: &[f32],
+        rew: f32,
+        next_obs: &[f32],
+        done: bool,
+        desired: &[f32],
+        achieved_next: &[f32],
+        rest: f32,
+    ) {
+        let w = self.width();
+        let i = self.next;
+        // Overwriting a finished episode (the ring writes in order: at its first transition):
+        // the rest of it is not whole any more and stops being sampled.
+        if i < self.len && self.ep_len[i] > 0 {
+            let (start, len) = (self.ep_start[i], self.ep_len[i]);
+            let left = len - (i + self.capacity - start) % self.capacity;
+            for t in 0..left {
+                self.ep_len[(i + t) % self.capacity] = 0;
+            }
+            self.sampleable -= left;
+        }
+        let row = [
+            obs,
+            act,
+            &[rew],
+            next_obs,
+            &[f32::from(u8::from(done))],
+            desired,
+            achieved_next,
+            &[rest],
+        ]
+        .concat();
+        debug_assert_eq!(row.len(), w);
+        if i == self.len {
+            self.rows.extend_from_slice(&row);
+            self.ep_start.push(self.current.0);
+            self.ep_len.push(0);
+            self.len += 1;
+        } else {
+            self.rows[i * w..(i + 1) * w].copy_from_slice(&row);
+            self.ep_start[i] = self.current.0;
+            self.ep_len[i] = 0;
+        }
+        self.next = (i + 1) % self.capacity;
+        self.current.1 += 1;
+    }
+
+    /// Ends the current episode (a terminal step or the time limit): its transitions can be
+    /// sampled from now on.
+    ///
+    /// # Panics
+    /// If the episode is longer than the buffer (a job's check refuses a replay smaller than
+    /// the episode limit).
+    pub fn end_episode(&mut self) {
+        let (start, len) = self.current;
+        assert!(
+            len <= self.capacity,
+            "an episode longer than the HER buffer"
+        );
+        for t in 0..len {
+            let j = (start + t) % self.capacity;
+            self.ep_len[j] = len;
+        }
+        self.sampleable += len;
+        self.current = (self.next, 0);
+    }
+
+    /// A mini-batch of `n` into `out` (observations and next observations followed by the
+    /// goal), `reward(achieved, desired)` the environment's goal reward; `false` (and nothing
+    /// written) while no episode has ended.
+    pub fn sample(
+        &mut self,
+        n: usize,
+        rng: &mut Rng,
+        reward: &dyn Fn(&[f32], &[f32]) -> f32,
+        out: &mut Batch,
+    ) -> bool {
+        if self.sampleable == 0 {
+            return false;
+        }
+        let (o, a, g, w) = (self.obs_dim, self.act_dim, self.goal_dim, self.width());
+        out.len = n;
+        for v in [
+            &mut out.obs,
+            &mut out.act,
+            &mut out.rew,
+            &mut out.next_obs,
+            &mut out.done,
+        ] {
+            v.clear();
+        }
+        let real = n - self.config.virtual_count(n);
+        for k in 0..n {
+            // Uniform over the sampleable transitions (rejection keeps it uniform).
+            let i = loop {
+                let i = rng.random_range(0..self.len);
+                if self.ep_len[i] > 0 {
+                    break i;
+                }
+            };
+            let row = &self.rows[i * w..(i + 1) * w];
+            let (s, rest) = row.split_at(o);
+            let (act, rest) = rest.split_at(a);
+            let (r, rest) = rest.split_at(1);
+            let (s2, rest) = rest.split_at(o);
+            let (done, rest) = rest.split_at(1);
+            let (desired, rest) = rest.split_at(g);
+            let (achieved, other) = rest.split_at(g);
+            let goal_and_reward = if k < real {
+                None
+            } else {
+                let (start, len) = (self.ep_start[i], self.ep_len[i]);
+                let t = (i + self.capacity - start) % self.capacity;
+                let t2 = match self.config.goal_selection_strategy {
+                    GoalSelection::Future => rng.random_range(t..len),
+                    GoalSelection::Final => len - 1,
+                    GoalSelection::Episode => rng.random_range(0..len),
+                };
+                let j = (start + t2) % self.capacity;
+                let at = j * w + 2 * o + a + 2 + g;
+                self.goal.copy_from_slice(&self.rows[at..at + g]);
+                Some(reward(achieved, &self.goal) + other[0])
+            };
+            let goal = match goal_and_reward {
+                Some(_) => &self.goal[..],
+                None => desired,
+            };
+            out.obs.extend(s.iter().chain(goal));
+            out.act.extend_from_slice(act);
+            out.rew.push(goal_and_reward.unwrap_or(r[0]));
+            out.next_obs.extend(s2.iter().chain(goal));
+            out.done.push(done[0]);
+        }
+        true
+    }
+}

@@ -1,0 +1,294 @@
+//! Hindsight experience replay: the environments' goal rewards against their own steps, the
+//! buffer's sampling (Stable-Baselines3's `HerReplayBuffer` semantics), and training with it.
+
+use pbcs::env::Env;
+use pbcs::envs::maze::{Maze, MazeConfig};
+use pbcs::envs::rooms::TwoRooms;
+use pbcs::envs::three_rooms::ThreeRooms;
+use pbcs::envs::toy::Toy1D;
+use pbcs::learner::her::{GoalSelection, HerConfig, HerReplay};
+use pbcs::learner::replay::Batch;
+use pbcs::learner::LearnerConfig;
+use pbcs::nn::kernel::Kernel;
+use pbcs::rng::{Seeds, Stream};
+use pbcs::vanilla::{train_vanilla, TrainConfig};
+use rand::Rng as _;
+
+/// From random states near and far from the target, with random actions: the goal's part of
+/// the step's reward is what `goal_reward` gives for the goal the next observation achieved
+/// and the episode's goal, and it is 1 exactly when the step ends the episode (these tasks end
+/// on success only); whatever else the reward holds (the maze's −1 on a wall) is not 1.
+fn goal_reward_is_the_steps<E: Env>(env: &E, near: impl Fn(&mut pbcs::rng::Rng) -> E::State) {
+    let goals = env.goals().expect("offers goals");
+    let g = goals.goal_dim();
+    let (mut obs, mut achieved, mut desired) =
+        (vec![0.0; env.obs_dim()], vec![0.0; g], vec![0.0; g]);
+    let mut rng = Seeds::new(3).stream(Stream::Start);
+    let mut reached = 0;
+    for i in 0..4000 {
+        let s = if i % 2 == 0 {
+            near(&mut rng)
+        } else {
+            env.sample_start(&mut rng)
+        };
+        let a: Vec<f32> = (0..env.action_dim())
+            .map(|j| rng.random_range(-1.0..1.0) * env.action_bound(j))
+            .collect();
+        let step = env.step(&s, &a);
+        env.observe(&step.state, &mut obs);
+        goals.achieved_goal(&obs, &mut achieved);
+        goals.desired_goal(&s, &mut desired);
+        let r = goals.goal_reward(&achieved, &desired);
+        assert_eq!(r, f32::from(u8::from(step.terminal)), "step {i}: {step:?}");
+        assert!(
+            step.reward - r != 1.0,
+            "step {i}: the rest is not the goal's"
+        );
+        reached += usize::from(step.terminal);
+    }
+    assert!(reached > 100, "the target was reached {reached} times");
+}
+
+#[test]
+fn the_environments_goal_rewards_are_their_steps() {
+    let maze = Maze::new(&MazeConfig {
+        size: 3,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    let t = maze.target();
+    goal_reward_is_the_steps(&maze, |rng| {
+        nalgebra::Point2::new(
+            t.x + rng.random_range(-0.3..0.3),
+            t.y + rng.random_range(-0.3..0.3),
+        )
+    });
+    let near = |target: [f32; 2]| {
+        move |rng: &mut pbcs::rng::Rng| {
+            [
+                target[0] + rng.random_range(-0.3f32..0.3),
+                (target[1] + rng.random_range(-0.3f32..0.3)).max(0.0),
+            ]
+        }
+    };
+    goal_reward_is_the_steps(&TwoRooms, near(pbcs::envs::rooms::TARGET));
+    let three = ThreeRooms.success_region().unwrap().0;
+    goal_reward_is_the_steps(&ThreeRooms, near([three[0], three[1]]));
+}
+
+/// PointMaze (the MuJoCo build): the same, from rest near the goal and from its start.
+#[cfg(feature = "mujoco")]
+#[test]
+fn pointmaze_goal_rewards_are_its_steps() {
+    use pbcs::envs::pointmaze::{MapName, PointMaze, PointState};
+    let env = PointMaze::named(MapName::UMaze).unwrap();
+    let goal = env.goal();
+    goal_reward_is_the_steps(&env, |rng| {
+        PointState::at_rest([
+            goal[0] + rng.random_range(-0.6..0.6),
+            goal[1] + rng.random_range(-0.6..0.6),
+        ])
+    });
+}
+
+/// One push per step of an episode of `len` transitions along a line: observation t, next
+/// observation and achieved goal t + 1, goal `aim`, reward 1 − 1 (a wall) at odd steps.
+fn episode(her: &mut HerReplay, from: f32, len: usize, aim: f32) {
+    for t in 0..len {
+        let (s, s2) = (from + t as f32, from + t as f32 + 1.0);
+        let rest = if t % 2 == 1 { -1.0 } else { 0.0 };
+        let r = f32::from(u8::from(s2 == aim)) + rest;
+        her.push(&[s], &[0.5], r, &[s2], s2 == aim, &[aim], &[s2], rest);
+    }
+    her.end_episode();
+}
+
+fn exact(achieved: &[f32], desired: &[f32]) -> f32 {
+    f32::from(u8::from(achieved == desired))
+}
+
+/// Real rows keep their goal and reward; relabelled ones (⌊0.8·n⌋ of them with 4 sampled goals,
+/// after the real ones) take a goal achieved later in their own episode and the reward for it
+/// plus the stored part that is not the goal's; unfinished episodes are never sampled.
+#[test]
+fn future_goals_come_from_later_in_the_same_episode() {
+    let mut her = HerReplay::new(1000, 1, 1, 1, HerConfig::default());
+    episode(&mut her, 0.0, 10, 100.0);
+    episode(&mut her, 200.0, 5, 100.0);
+    // An unfinished episode: never in a batch.
+    her.push(
+        &[500.0],
+        &[0.5],
+        0.0,
+        &[501.0],
+        false,
+        &[100.0],
+        &[501.0],
+        0.0,
+    );
+    assert_eq!(her.sampleable(), 15);
+    let mut b = Batch::default();
+    let mut rng = Seeds::new(1).stream(Stream::Replay);
+    let mut relabelled_hits = 0;
+    for _ in 0..50 {
+        assert!(her.sample(256, &mut rng, &exact, &mut b));
+        let real = 256 - 204;
+        assert_eq!(HerConfig::default().virtual_count(256), 204);
+        for k in 0..256 {
+            let (s, goal, s2) = (b.obs[2 * k], b.obs[2 * k + 1], b.next_obs[2 * k]);
+            assert!(s < 500.0, "an unfinished episode was sampled");
+            assert_eq!(b.next_obs[2 * k + 1], goal);
+            assert_eq!(b.act[k], 0.5);
+            let rest = if (s as usize % 200) % 2 == 1 {
+                -1.0
+            } else {
+                0.0
+            };
+            if k < real {
+                assert_eq!((goal, b.rew[k]), (100.0, rest));
+            } else {
+                let end = if s < 200.0 { 10.0 } else { 205.0 };
+                assert!(goal >= s2 && goal <= end, "{s} → goal {goal}");
+                assert_eq!(b.rew[k], f32::from(u8::from(goal == s2)) + rest);
+                relabelled_hits += usize::from(goal == s2);
+            }
+        }
+    }
+    assert!(relabelled_hits > 500, "{relabelled_hits}");
+}
+
+/// `final` gives every relabelled row its episode's last achieved goal; `episode` any of them.
+#[test]
+fn final_and_episode_strategies() {
+    for (strategy, check) in [
+        (
+            GoalSelection::Final,
+            (|s: f32, g: f32| g == if s < 200.0 { 10.0 } else { 205.0 }) as fn(f32, f32) -> bool,
+        ),
+        (GoalSelection::Episode, |s: f32, g: f32| {
+            if s < 200.0 {
+                (1.0..=10.0).contains(&g)
+            } else {
+                (201.0..=205.0).contains(&g)
+            }
+        }),
+    ] {
+        let config = HerConfig {
+            n_sampled_goal: 1,
+            goal_selection_strategy: strategy,
+        };
+        let mut her = HerReplay::new(100, 1, 1, 1, config.clone());
+        episode(&mut her, 0.0, 10, 100.0);
+        episode(&mut her, 200.0, 5, 100.0);
+        let mut b = Batch::default();
+        let mut rng = Seeds::new(2).stream(Stream::Replay);
+        assert!(her.sample(100, &mut rng, &exact, &mut b));
+        assert_eq!(config.virtual_count(100), 50);
+        let mut earlier = 0;
+        for k in 50..100 {
+            let (s, g) = (b.obs[2 * k], b.obs[2 * k + 1]);
+            assert!(check(s, g), "{strategy:?}: {s} → {g}");
+            earlier += usize::from(g <= s);
+        }
+        assert_eq!(
+            earlier > 0,
+            strategy == GoalSelection::Episode,
+            "{strategy:?}: goals before the transition"
+        );
+    }
+}
+
+/// When the ring overwrites an old episode's first transition, the rest of that episode is
+/// never sampled again.
+#[test]
+fn an_overwritten_episode_is_not_sampled() {
+    let mut her = HerReplay::new(12, 1, 1, 1, HerConfig::default());
+    episode(&mut her, 0.0, 8, 100.0);
+    episode(&mut her, 200.0, 4, 100.0);
+    assert_eq!(her.sampleable(), 12);
+    // A new episode writes over the first one's first transitions.
+    episode(&mut her, 400.0, 2, 100.0);
+    assert_eq!(her.sampleable(), 4 + 2);
+    let mut b = Batch::default();
+    let mut rng = Seeds::new(3).stream(Stream::Replay);
+    for _ in 0..20 {
+        assert!(her.sample(64, &mut rng, &exact, &mut b));
+        assert!(b.obs.chunks(2).all(|r| r[0] >= 200.0), "{:?}", b.obs);
+    }
+    // Nothing finished: no batch.
+    let mut empty = HerReplay::new(10, 1, 1, 1, HerConfig::default());
+    assert!(!empty.sample(4, &mut rng, &exact, &mut b));
+}
+
+/// Training with HER is deterministic, its policy sees the goal, and an environment without
+/// goals, or a replay smaller than an episode, is refused naming the setting.
+#[test]
+fn training_with_her_is_deterministic_and_refused_where_it_cannot_run() {
+    let maze = Maze::new(&MazeConfig {
+        size: 2,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    let train = TrainConfig {
+        steps: 3_000,
+        max_episode_steps: 200,
+        learning_starts: 1_000,
+        eval_every: 1_000,
+        eval_episodes: 2,
+        her: Some(HerConfig::default()),
+        ..TrainConfig::default()
+    };
+    for learner in [LearnerConfig::td3(), small_sac()] {
+        let run = || {
+            train_vanilla(
+                &maze,
+                &learner,
+                &train,
+                &Seeds::new(4),
+                Kernel::detect(),
+                |_, _| {},
+            )
+            .unwrap()
+        };
+        let (a, b) = (run(), run());
+        assert_eq!(a.evals, b.evals);
+        assert!(a.learner.policy().same(&*b.learner.policy()));
+        // Observation (2) then goal (2).
+        assert_eq!(a.learner.policy().obs_dim(), 4);
+    }
+    let err = train_vanilla(
+        &Toy1D,
+        &LearnerConfig::td3(),
+        &train,
+        &Seeds::new(0),
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("train.her") && err.contains("Env::goals"),
+        "{err}"
+    );
+    let err = train_vanilla(
+        &maze,
+        &toml::from_str("algo = \"td3\"\nbatch_size = 10\nreplay_size = 100").unwrap(),
+        &train,
+        &Seeds::new(0),
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("learner.replay_size"), "{err}");
+    let bad: Result<TrainConfig, _> = toml::from_str("[her]\nn_sampled_goal = 0");
+    let err = pbcs::config::Check::check(&bad.unwrap()).unwrap_err();
+    assert!(
+        err.to_string().contains("train.her.n_sampled_goal"),
+        "{err}"
+    );
+}
+
+fn small_sac() -> LearnerConfig {
+    toml::from_str("algo = \"sac\"\nhidden = [32, 32]\nbatch_size = 64").unwrap()
+}
