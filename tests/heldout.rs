@@ -240,3 +240,57 @@ fn a_paired_comparison_names_two_methods_of_its_file() {
         assert!(e.contains("registered.paired") && e.contains(why), "{e}");
     }
 }
+
+/// The registered comparison of SAC and DDPG skills (`experiments/sac_skills.toml`) runs, site
+/// by site, the committed grids' jobs (table.toml's `fast` cells on mazes 5 and 10,
+/// pointmaze.toml's Medium cell) and those jobs with only `[learner]` changed to SAC's, for
+/// the `fast` preset as it was when it was registered.
+#[test]
+fn the_sac_skill_comparison_runs_the_grids_jobs_with_only_the_learner_changed() {
+    use pbcs::experiment::Job;
+    let load = |f: &str| Experiment::load(&Path::new("experiments").join(f), None).unwrap();
+    let (cmp, table, grid) = (
+        load("sac_skills.toml"),
+        load("table.toml"),
+        load("pointmaze.toml"),
+    );
+    let (reg, hash) = registration(&cmp);
+    assert_eq!(
+        hash, reg.sha256,
+        "experiments/{} changed since the SAC-skill comparison was registered on {}: register \
+         a new one (and say so); do not update this hash.",
+        reg.preset, reg.date
+    );
+    let find = |exp: &Experiment, id: &str| exp.cells.iter().find(|c| c.id == id).unwrap().clone();
+    let pbcs_job = |j: &Job| match j {
+        Job::Pbcs(j) => j.clone(),
+        _ => panic!("not a PBCS cell"),
+    };
+    for (site, exp, theirs) in [
+        ("maze5", &table, "pbcs_fast-maze5"),
+        ("maze10", &table, "pbcs_fast-maze10"),
+        ("pointmaze_medium", &grid, "pbcs_pm-pointmaze_medium"),
+    ] {
+        let committed = find(exp, theirs);
+        let ddpg = find(&cmp, &format!("ddpg_skills-{site}"));
+        let sac = find(&cmp, &format!("sac_skills-{site}"));
+        assert_eq!(ddpg.job, committed.job, "{site}: not {theirs}'s job");
+        let (mut a, b) = (pbcs_job(&sac.job), pbcs_job(&committed.job));
+        assert_eq!(a.learner.algo(), "sac", "{site}");
+        assert_eq!(
+            a.learner.gamma(),
+            b.learner.gamma(),
+            "{site}: the preset's γ"
+        );
+        a.learner = b.learner.clone();
+        assert_eq!(a, b, "{site}: more than the learner differs");
+        for c in [&ddpg, &sac] {
+            assert_eq!(
+                cmp.seeds_of(c),
+                exp.seeds_of(&committed),
+                "{site}: paired seeds"
+            );
+        }
+    }
+    assert_eq!(cmp.cells.len(), 6);
+}

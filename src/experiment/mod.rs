@@ -10,7 +10,10 @@
 //! a deep merge of TOML tables in this order: base file ← method `set` ← the file's `by_maze`
 //! table for the cell's maze size ← the profile's table for the method's kind ← the profile's
 //! `by_maze`; then `maze.size` (or `env`) and `seed` are set (a profile overrides everything
-//! the file sets). A profile may also add methods (`[[profile.<p>.method]]`). The merged table is
+//! the file sets). A `learner.algo` of another learner family than the table's so far (`sac`
+//! over the presets' `ddpg`) starts the learner table afresh: `set = { learner.algo = "sac" }`
+//! is SAC with its own defaults, never SAC with TD3's noise settings. A profile may also add
+//! methods (`[[profile.<p>.method]]`). The merged table is
 //! parsed with unknown keys denied, so a typo in an
 //! experiment file is an error that names the method.
 //!
