@@ -407,3 +407,40 @@ fn sac_learns_the_1d_toy() {
         .count();
     assert!(solved >= 8, "SAC: {solved} of 10 seeds");
 }
+
+/// A chain of SAC skills saves and loads like any other: the manifest names the kind, its
+/// action fields have the policy's actions (half the network's output), and the loaded skill
+/// is the saved policy.
+#[test]
+fn a_chain_of_sac_skills_saves_and_loads() {
+    use pbcs::phase2::goal::Inputs;
+    use pbcs::phase2::{Ball, Skill, SkillChain};
+    let sac = Sac::new(
+        &SacConfig {
+            hidden: vec![8, 8],
+            ..SacConfig::default()
+        },
+        2,
+        &[1.0, 1.0],
+        &Seeds::new(5),
+        Kernel::detect(),
+    )
+    .unwrap();
+    let chain = SkillChain {
+        skills: vec![Skill {
+            policy: Box::new(sac.actor.clone()),
+            activation: Ball::new(vec![0.5, 0.5], 0.1),
+            start_index: 0,
+            target_index: 3,
+            inputs: Inputs::new(vec![0.5, 0.5], vec![0.1, 0.1]),
+        }],
+        kernel: Kernel::detect(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    chain.save(dir.path()).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("manifest.toml")).unwrap();
+    assert!(text.contains("policy = \"sac\""), "{text}");
+    let back = SkillChain::load(dir.path(), Kernel::detect()).unwrap();
+    assert!(back.skills[0].policy.same(chain.skills[0].policy.as_ref()));
+    assert_eq!(back.skills[0].policy.action_dim(), 2);
+}

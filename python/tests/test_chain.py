@@ -2,6 +2,7 @@
 succeeds exactly where `pbcs eval` does."""
 
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -92,3 +93,25 @@ def test_a_chain_whose_files_do_not_match_its_manifest_is_refused(chain_dir, tmp
     policy.write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
     with pytest.raises(ValueError, match=r"skills\[0\]\.sha256"):
         pbcs.load_chain(bad)
+
+
+def test_a_chain_of_sac_skills_runs_and_loads_like_any_other(tmp_path):
+    """A learner of another family through the same door: the `fast` job with one [learner]
+    table of SAC's (experiments/sac_skills.toml's setting); its chain names its skills' kind
+    (`sac`), loads, and steps through the Gymnasium environment exactly as in the core."""
+    fast = (Path(__file__).parents[2] / "experiments" / "pbcs_fast.toml").read_text()
+    head, _, rest = fast.partition("[learner]")
+    _, _, tail = rest.partition("\n[")
+    job = tmp_path / "sac.toml"
+    job.write_text(
+        head + "[learner]\nalgo = \"sac\"\nhidden = [64, 64]\nbatch_size = 64\ngamma = 0.9\n"
+        "learning_rate = 0.001\nent_coef = \"auto_0.01\"\n\n[" + tail)
+    record = pbcs.run(2, seed=0, config=str(job), out=str(tmp_path / "run"))
+    assert record["solved"]
+    manifest = (tmp_path / "run" / "chain" / "manifest.toml").read_text()
+    assert 'policy = "sac"' in manifest and 'policy = "mlp"' not in manifest
+    chain = pbcs.load_chain(tmp_path / "run" / "chain")
+    ours = chain.evaluate(episodes=20, seed=3)
+    core = chain.evaluate_in_core(episodes=20, seed=3)
+    assert ours["success"].tolist() == core["success"].tolist()
+    assert ours["steps"].tolist() == core["steps"].tolist()

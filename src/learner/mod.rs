@@ -129,6 +129,9 @@ pub trait Family:
     /// Its policy saved at `path`, of network `sizes` and action `bounds` as the manifest
     /// records them.
     fn load_policy(sizes: &[usize], bounds: &[f32], path: &Path) -> Result<Box<dyn Policy>>;
+    /// The actions its policy gives per observation, for a network of `sizes` (at least two
+    /// layers): TD3's actor its output, SAC's half of it (μ and ℓ per action).
+    fn policy_action_dim(sizes: &[usize]) -> usize;
 }
 
 /// Declares the learner families: each entry `Variant(module::Settings)` is a module of this
@@ -205,6 +208,14 @@ macro_rules! learners {
         ) -> Option<Result<Box<dyn Policy>>> {
             $(if kind == <$module::$settings as Family>::POLICY {
                 return Some(<$module::$settings as Family>::load_policy(sizes, bounds, path));
+            })+
+            None
+        }
+
+        /// The actions a policy of `kind` with a network of `sizes` gives, if the kind is known.
+        pub(crate) fn policy_action_dim(kind: &str, sizes: &[usize]) -> Option<usize> {
+            $(if kind == <$module::$settings as Family>::POLICY {
+                return Some(<$module::$settings as Family>::policy_action_dim(sizes));
             })+
             None
         }

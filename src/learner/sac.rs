@@ -186,6 +186,10 @@ impl Family for SacConfig {
             bounds: bounds.to_vec(),
         }))
     }
+    /// Half the network's output: μ and ℓ per action.
+    fn policy_action_dim(sizes: &[usize]) -> usize {
+        sizes[sizes.len() - 1] / 2
+    }
 }
 
 /// SAC's greedy policy b ⊙ tanh(μ(s)); its network's output row is [μ | ℓ].

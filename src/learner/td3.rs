@@ -489,6 +489,16 @@ impl Family for Td3Config {
         mlp.load(path)?;
         Ok(Box::new(mlp))
     }
+    fn policy_action_dim(sizes: &[usize]) -> usize {
+        Td3Config::actor_outputs(sizes)
+    }
+}
+
+impl Td3Config {
+    /// [`Family::policy_action_dim`]: the actor's output.
+    fn actor_outputs(sizes: &[usize]) -> usize {
+        sizes[sizes.len() - 1]
+    }
 }
 
 impl Learner for Td3 {

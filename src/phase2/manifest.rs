@@ -338,7 +338,11 @@ impl ManifestSkill {
                 format!("{:?} has more parameters than can be counted", self.sizes),
             ));
         }
-        let (input, output) = (self.sizes[0], self.sizes[self.sizes.len() - 1]);
+        // The policy's actions per observation: its kind says how its network gives them (an
+        // unknown kind is refused when the policy loads, naming the field).
+        let input = self.sizes[0];
+        let output = crate::learner::policy_action_dim(&self.policy, &self.sizes)
+            .unwrap_or(self.sizes[self.sizes.len() - 1]);
         let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);
         self.check_center(input)?;
         for (field, values, want, positive) in [
@@ -352,8 +356,9 @@ impl ManifestSkill {
                 return Err((
                     field,
                     format!(
-                        "has {} values, the network (sizes {:?}) needs {want}",
+                        "has {} values, the {} policy (sizes {:?}) needs {want}",
                         values.len(),
+                        self.policy,
                         self.sizes
                     ),
                 ));
