@@ -165,8 +165,8 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
     }
     // table 250, gamma 80, unseen 40, beyond 100, ablations 100, protocol 20, switches 90,
     // heldout 56, rooms 20, pointmaze 30, pointmaze_heldout 30, pointmaze_velocity 60,
-    // pointmaze_vanilla 60, three_rooms 20, pointmaze_own 20.
-    assert_eq!(checked, 976, "committed jobs");
+    // pointmaze_vanilla 60, three_rooms 20, pointmaze_own 20, sac_skills 60.
+    assert_eq!(checked, 1036, "committed jobs");
 }
 
 /// The report quotes the scaling figure's fit from `numbers.tex`: on made-up medians that
@@ -276,5 +276,37 @@ fn the_rooms_grid_goes_through_rows_tables_and_figures_like_a_maze() {
         "rooms_bars.svg",
     ] {
         assert!(results.join("figures").join(f).exists(), "{f}");
+    }
+}
+
+/// The SAC-skill comparison's DDPG arm runs the committed grids' jobs
+/// (`tests/heldout.rs`), so its rows are theirs: byte for byte past the experiment, cell and
+/// method names, and the same evaluation episodes, seed by seed.
+#[test]
+fn the_sac_comparisons_ddpg_arm_reproduces_the_committed_grids() {
+    let raw = Path::new("results/raw");
+    let past_names = |path: &Path| -> String {
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        text.lines()
+            .map(|l| l.splitn(4, ',').nth(3).unwrap_or("").to_string())
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    for (site, theirs) in [
+        ("maze5", "table/pbcs_fast-maze5"),
+        ("maze10", "table/pbcs_fast-maze10"),
+        ("pointmaze_medium", "pointmaze/pbcs_pm-pointmaze_medium"),
+    ] {
+        let ours = raw.join(format!("sac_skills/ddpg_skills-{site}"));
+        for seed in 0..10 {
+            let (a, b) = (
+                ours.join(format!("s{seed}.csv")),
+                raw.join(theirs).join(format!("s{seed}.csv")),
+            );
+            assert_eq!(past_names(&a), past_names(&b), "{}", a.display());
+            let eval = |d: &Path| std::fs::read(d.join(format!("s{seed}.evaluation.csv"))).unwrap();
+            assert_eq!(eval(&ours), eval(&raw.join(theirs)), "{site} seed {seed}");
+        }
     }
 }
