@@ -437,7 +437,8 @@ fn render_settings(experiments: &Path, tex_dir: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// The report's LaTeX of the outside checks from `<results>/tables/outside.*.csv` (each only
-/// where its table exists): `outside_maze.tex` and `outside_pendulum.tex` into `tex_dir` (added
+/// where its table exists): `outside_maze.tex`, `outside_pendulum.tex` and
+/// `outside_pendulum_sac.tex` into `tex_dir` (added
 /// to `files`), and their numbers for `numbers.tex` (returned).
 fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> Result<String> {
     use crate::record::read_records;
@@ -461,7 +462,14 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
     if pendulum.exists() {
         put(
             "outside_pendulum.tex",
-            report::outside::outside_pendulum_tex(&read_records(&pendulum)?),
+            report::outside::outside_pendulum_tex(&read_records(&pendulum)?, "pendulum"),
+        )?;
+    }
+    let pendulum_sac = outside_table(results, "pendulum_sac");
+    if pendulum_sac.exists() {
+        put(
+            "outside_pendulum_sac.tex",
+            report::outside::outside_pendulum_tex(&read_records(&pendulum_sac)?, "pendulumsac"),
         )?;
     }
     let cost = outside_table(results, "timing");

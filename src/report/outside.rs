@@ -72,11 +72,15 @@ pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (Str
 }
 
 /// `outside_pendulum.tex` (final mean returns on Pendulum-v1) and the numbers
-/// `\res{outside:pendulum:<source>:<field>}`: `n`, `steps`, `mean`, `sd`, `min`, `max`, `cilo`,
+/// `\res{outside:<key>:<source>:<field>}` (`key`: `pendulum` for TD3's check, `pendulumsac` for
+/// SAC's): `n`, `steps`, `mean`, `sd`, `min`, `max`, `cilo`,
 /// `cihi`, `episodes` (each run's evaluation episodes), `withinpublished` (runs within one
 /// standard deviation of the published mean), and for a source tested against ours `diff`
 /// (mean of ours − mean of this), `t`, `df`, `p`.
-pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (String, String) {
+pub fn outside_pendulum_tex(
+    rows: &[crate::tables::outside::PendulumRow],
+    key: &str,
+) -> (String, String) {
     let mut table = String::from(GENERATED);
     table.push_str("\\begin{tabular}{lrrrrrcl}\n\\toprule\n");
     table.push_str(
@@ -116,7 +120,7 @@ pub fn outside_pendulum_tex(rows: &[crate::tables::outside::PendulumRow]) -> (St
             tex(&ci),
             tex(&test)
         );
-        let key = format!("pendulum:{}", r.source);
+        let key = format!("{key}:{}", r.source);
         for (f, v) in [
             ("n", r.n.to_string()),
             ("steps", human_steps(r.steps as f64)),

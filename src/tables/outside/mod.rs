@@ -12,7 +12,9 @@
 //! - **Pendulum** ([`pendulum_rows`]): the final mean return of our TD3 on the Rust port of
 //!   Pendulum-v1 (`pendulum/ours/`) and of SB3's TD3 on gymnasium's (`pendulum/sb3/`): mean,
 //!   standard deviation, range, Student's t interval and Welch's test; beside them the
-//!   published figure of `pendulum/published.toml` (RL-Zoo's benchmark).
+//!   published figure of `pendulum/published.toml` (RL-Zoo's benchmark); the same for SAC
+//!   ([`pendulum_sac_rows`]: `pendulum/ours_sac/`, `pendulum/sb3_sac/`,
+//!   `pendulum/published_sac.toml`).
 //! - **Update cost** (`update_cost.csv`, wall clock, copied as `outside.timing.csv`): the time
 //!   per environment step of SB3's and our updates measured in the same run on one machine.
 //! - **PointMaze** ([`pointmaze_baselines`]): our DDPG and TD3 alone and SB3's SAC+HER on
@@ -405,7 +407,8 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
     Ok(())
 }
 
-/// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.timing.csv` and
+/// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.pendulum_sac.csv`,
+/// `outside.timing.csv` and
 /// `outside.pointmaze.csv` under `<results>/tables/` from the rows under `<results>/outside/`
 /// (PointMaze's: the raw rows of `pointmaze_vanilla` and `<results>/pointmaze/sb3/`,
 /// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
@@ -421,6 +424,12 @@ pub fn write_outside_tables(
     put_or_remove(&outside_table(results, "maze"), &maze, &mut files)?;
     let pendulum = pendulum_rows(results)?;
     put_or_remove(&outside_table(results, "pendulum"), &pendulum, &mut files)?;
+    let pendulum_sac = pendulum_sac_rows(results)?;
+    put_or_remove(
+        &outside_table(results, "pendulum_sac"),
+        &pendulum_sac,
+        &mut files,
+    )?;
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
     let pointmaze = pointmaze_baselines(pointmaze_vanilla, results)?;
@@ -429,7 +438,7 @@ pub fn write_outside_tables(
 }
 
 mod pendulum;
-pub use pendulum::{pendulum_rows, PendulumRow, PendulumRun, Published};
+pub use pendulum::{pendulum_rows, pendulum_sac_rows, PendulumRow, PendulumRun, Published};
 mod pointmaze;
 pub use pointmaze::{pointmaze_baselines, PointMazeBaseline, Sb3Eval, SB3_SOLVED};
 

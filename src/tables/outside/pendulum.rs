@@ -1,5 +1,7 @@
-//! The Pendulum-v1 outside check as a table ([`pendulum_rows`], `outside.pendulum.csv`): our
-//! TD3 on the Rust port against SB3's on gymnasium's, and a published figure beside them.
+//! The Pendulum-v1 outside checks as tables: our TD3 on the Rust port against SB3's on
+//! gymnasium's ([`pendulum_rows`], `outside.pendulum.csv`), our SAC against SB3's
+//! ([`pendulum_sac_rows`], `outside.pendulum_sac.csv`), each with RL-Zoo's published agent of
+//! that learner beside them.
 
 use super::{outside_dir, seed_rows};
 use crate::error::{Error, Result};
@@ -12,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub struct PendulumRun {
     /// `pbcs` or `sb3-<version>`.
     pub library: String,
-    /// The learner (`td3`).
+    /// The learner (`td3`, `sac`).
     pub algo: String,
     /// The run's seed.
     pub seed: u64,
@@ -82,29 +84,42 @@ pub struct PendulumRow {
     pub within_published: Option<u64>,
 }
 
-/// The Pendulum lines: `ours` (`pendulum/ours/`), `sb3` (`pendulum/sb3/`, with Welch's test of
+/// The TD3 lines: `ours` (`pendulum/ours/`), `sb3` (`pendulum/sb3/`, with Welch's test of
 /// ours against it) and `published` (`pendulum/published.toml`, if present); empty without
 /// the folder.
 pub fn pendulum_rows(results: &Path) -> Result<Vec<PendulumRow>> {
+    rows_of(results, ["ours", "sb3", "published.toml"])
+}
+
+/// The SAC lines, the same way: `pendulum/ours_sac/`, `pendulum/sb3_sac/`,
+/// `pendulum/published_sac.toml`; empty without `ours_sac/`.
+pub fn pendulum_sac_rows(results: &Path) -> Result<Vec<PendulumRow>> {
+    rows_of(results, ["ours_sac", "sb3_sac", "published_sac.toml"])
+}
+
+/// The lines of our runs, SB3's and a published figure, from the folders and file `names`
+/// under `<results>/outside/pendulum/`; empty without our folder.
+fn rows_of(results: &Path, names: [&str; 3]) -> Result<Vec<PendulumRow>> {
+    let [ours_dir, sb3_dir, published_file] = names;
     let root = outside_dir(results).join("pendulum");
-    if !root.is_dir() {
+    if !root.join(ours_dir).is_dir() {
         return Ok(Vec::new());
     }
-    let (ours, sb3) = (read_side(&root, "ours")?, read_side(&root, "sb3")?);
+    let (ours, sb3) = (read_side(&root, ours_dir)?, read_side(&root, sb3_dir)?);
     if (&ours[0].algo, ours[0].steps, ours[0].eval_episodes)
         != (&sb3[0].algo, sb3[0].steps, sb3[0].eval_episodes)
     {
         return Err(Error::parse(
-            root.join("sb3"),
+            root.join(sb3_dir),
             "SB3's runs differ from ours in algo, steps or eval_episodes",
         ));
     }
-    let published = read_published(&root, &ours[0])?;
+    let published = read_published(&root.join(published_file), &ours[0])?;
     let band = published.as_ref().map(|p| (p.mean - p.std, p.mean + p.std));
     let ours_returns = returns(&ours);
     let mut out = vec![
-        line(&root, "ours", &ours, None, band)?,
-        line(&root, "sb3", &sb3, Some(&ours_returns), band)?,
+        line(&root, "ours", ours_dir, &ours, None, band)?,
+        line(&root, "sb3", sb3_dir, &sb3, Some(&ours_returns), band)?,
     ];
     if let Some(p) = published {
         out.push(PendulumRow {
@@ -153,18 +168,17 @@ fn read_side(root: &Path, who: &str) -> Result<Vec<PendulumRun>> {
     Ok(runs.into_iter().map(|(_, r)| r).collect())
 }
 
-/// `<root>/published.toml` if present: of our runs' algorithm and steps, a finite mean and a
-/// standard deviation of at least 0.
-fn read_published(root: &Path, ours: &PendulumRun) -> Result<Option<Published>> {
-    let published = root.join("published.toml");
+/// The published figure at `published` if present: of our runs' algorithm and steps, a finite
+/// mean and a standard deviation of at least 0.
+fn read_published(published: &Path, ours: &PendulumRun) -> Result<Option<Published>> {
     if !published.exists() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(&published).map_err(|e| Error::io(&published, e))?;
-    let p: Published = toml::from_str(&text).map_err(|e| Error::parse(&published, e))?;
+    let text = std::fs::read_to_string(published).map_err(|e| Error::io(published, e))?;
+    let p: Published = toml::from_str(&text).map_err(|e| Error::parse(published, e))?;
     if p.algo != ours.algo || p.steps != ours.steps || !(p.mean.is_finite() && p.std >= 0.0) {
         return Err(Error::parse(
-            &published,
+            published,
             format!(
                 "the published figure must be of {} at {} steps, with a finite mean and std >= 0",
                 ours.algo, ours.steps
@@ -184,13 +198,14 @@ fn returns(runs: &[PendulumRun]) -> Vec<f64> {
 fn line(
     root: &Path,
     source: &str,
+    dir: &str,
     runs: &[PendulumRun],
     ours: Option<&[f64]>,
     band: Option<(f64, f64)>,
 ) -> Result<PendulumRow> {
     let r = returns(runs);
     let (mean, sd) = mean_sd(&r)
-        .ok_or_else(|| Error::parse(root.join(source), "fewer than two runs (s<seed>.csv)"))?;
+        .ok_or_else(|| Error::parse(root.join(dir), "fewer than two runs (s<seed>.csv)"))?;
     let (ci_lo, ci_hi) = t_interval(&r).map_or((None, None), |(a, b)| (Some(a), Some(b)));
     let w = ours.and_then(|o| welch(o, &r));
     let ours_mean = ours.and_then(mean_sd).map_or(f64::NAN, |m| m.0);

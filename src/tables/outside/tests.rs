@@ -178,3 +178,39 @@ fn pendulum_lines_give_the_mean_the_interval_and_welchs_test() {
     let e = pendulum_rows(r).unwrap_err().to_string();
     assert!(e.contains("published.toml"), "{e}");
 }
+
+/// SAC's lines come from their own folders and figure, and are absent without our folder; a
+/// side of another learner than ours is refused naming SB3's folder.
+#[test]
+fn pendulum_sac_lines_read_their_own_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = dir.path();
+    assert!(pendulum_sac_rows(r).unwrap().is_empty());
+    let runs = |who: &str, lib: &str, algo: &str| {
+        for (seed, x) in [-150.0, -140.0, -160.0].iter().enumerate() {
+            write(
+                &r.join(format!("outside/pendulum/{who}/s{seed}.csv")),
+                &format!(
+                    "library,algo,seed,steps,eval_episodes,mean_return\n\
+                     {lib},{algo},{seed},20000,10,{x}\n"
+                ),
+            );
+        }
+    };
+    runs("ours_sac", "pbcs", "sac");
+    runs("sb3_sac", "sb3-9.9", "sac");
+    write(
+        &r.join("outside/pendulum/published_sac.toml"),
+        "source = \"x\"\nalgo = \"sac\"\nsteps = 20000\neval_episodes = 750\nmean = -157.0\nstd = 88.7\n",
+    );
+    let rows = pendulum_sac_rows(r).unwrap();
+    assert_eq!(rows.len(), 3);
+    assert_eq!((rows[0].n, rows[0].mean), (3, -150.0));
+    assert_eq!(rows[1].diff_vs_ours, Some(0.0));
+    assert_eq!(rows[2].mean, -157.0);
+    // The TD3 lines are not there: SAC's folders do not make them.
+    assert!(pendulum_rows(r).unwrap().is_empty());
+    runs("sb3_sac", "sb3-9.9", "td3");
+    let e = pendulum_sac_rows(r).unwrap_err().to_string();
+    assert!(e.contains("sb3_sac"), "{e}");
+}
