@@ -118,6 +118,15 @@ pub struct TrainJob {
     pub train: TrainConfig,
 }
 
+impl TrainJob {
+    /// The learner's name in result rows: [`LearnerConfig::record_name`], with `_her` when
+    /// it trains with hindsight experience replay (`sac_her`, `td3_her`).
+    pub fn learner_name(&self) -> String {
+        let her = if self.train.her.is_some() { "_her" } else { "" };
+        format!("{}{her}", self.learner.record_name())
+    }
+}
+
 impl Check for TrainJob {
     fn check(&self) -> Result<()> {
         self.env_spec().check()?;

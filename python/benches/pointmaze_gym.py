@@ -90,8 +90,11 @@ def main():
     for cell in cells:
         rows = sorted(cell.glob("s[0-9]*.csv"), key=lambda p: int(p.stem[1:].split(".")[0]))
         rows = [r for r in rows if r.name.count(".") == 1]
-        # PBCS cells only: a vanilla learner's run (a grid's DDPG cell) leaves no chain.
-        rows = [r for r in rows if next(csv.DictReader(r.open()))["kind"] == "pbcs"]
+        # PBCS cells on PointMaze only: a vanilla learner's run (a grid's DDPG cell) leaves no
+        # chain, and a grid may hold maze cells too (experiments/sac_skills.toml).
+        rows = [r for r in rows
+                if (lambda row: row["kind"] == "pbcs" and row["maze"].startswith("pointmaze"))(
+                    next(csv.DictReader(r.open())))]
         wins, steps = 0, []
         for row_path in rows:
             gym_path = row_path.with_suffix(".gym.csv")

@@ -36,6 +36,7 @@
 
 mod declared;
 mod layout;
+mod merge;
 mod row;
 mod site;
 mod spec;

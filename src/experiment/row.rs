@@ -27,8 +27,9 @@ pub struct RawRow {
     pub maze_seed: u64,
     /// Run seed.
     pub seed: u64,
-    /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
-    /// argmax actor.
+    /// The learner: [`crate::learner::LearnerConfig::record_name`] (`ddpg`, `td3`, with `_am`
+    /// for the argmax actor; `sac`), with `_her` for a vanilla run with HER
+    /// ([`crate::config::TrainJob::learner_name`]).
     pub learner: String,
     /// γ.
     pub gamma: f32,
@@ -85,7 +86,7 @@ impl RawRow {
             site: Site::of(&job.env_spec()),
             maze_seed: layout_seed(job),
             seed: job.seed,
-            learner: job.learner.record_name(),
+            learner: job.learner_name(),
             gamma: job.learner.gamma(),
             chaining: false,
             starts: None,
@@ -160,7 +161,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         Job::Vanilla(j) => (
             Kind::Vanilla,
             layout_seed(j),
-            j.learner.record_name(),
+            j.learner_name(),
             j.learner.gamma(),
             false,
             None,

@@ -34,7 +34,7 @@ pub struct RunRecord {
     /// `pbcs` or `pbcs_no_chaining`.
     pub variant: Variant,
     /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
-    /// argmax actor.
+    /// argmax actor; `sac`.
     pub learner: String,
     /// `ball`, `exact` or `archive` starts.
     pub starts: StartMode,
