@@ -3,7 +3,7 @@
 //! them, a target disc. Each environment says where its walls are (`blocked`, `clear`); the
 //! step, the ball starts and the straight connections are written once, here.
 
-use crate::env::Step;
+use crate::env::{Goals, Step};
 use crate::rng::Rng;
 use rand::Rng as _;
 
@@ -99,5 +99,22 @@ impl Walled {
     pub fn inside(&self, p: &[f32; 2], clearance: f32) -> bool {
         (clearance..=self.width - clearance).contains(&p[0])
             && (clearance..=self.height - clearance).contains(&p[1])
+    }
+}
+
+/// Goals: positions; the episode's goal is the target; the reward 1 within the target's radius
+/// of the goal, by the step's own comparison ([`Walled::in_disc`]).
+impl Goals<[f32; 2]> for Walled {
+    fn goal_dim(&self) -> usize {
+        2
+    }
+    fn achieved_goal(&self, obs: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&obs[..2]);
+    }
+    fn desired_goal(&self, _: &[f32; 2], out: &mut [f32]) {
+        out.copy_from_slice(&self.target);
+    }
+    fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32 {
+        f32::from(u8::from(self.in_disc(achieved, desired)))
     }
 }
