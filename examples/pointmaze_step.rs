@@ -2,12 +2,15 @@
 //! (`python/tests/test_pointmaze.py`) sends the same states and actions to this and to
 //! gymnasium-robotics' `PointMaze_*-v3`, and compares what comes back.
 //!
-//! Each line read is one episode: `<map> x y vx vy w0 w1 a0 a1 [a0 a1 ...]` (map: `umaze`,
-//! `open`, `medium`, `large`; the whole state, warm start included; then the actions). For
-//! each action, one line is written: `x y vx vy w0 w1 reward success terminal`, numbers in
-//! Rust's shortest round-trip form (Python's `float()` reads them back exactly), then an empty
-//! line ends the episode. A line `task <map>` is answered with the task's cells instead:
-//! `start_row start_col goal_row goal_col`. A line `map <name> <row> <row> ...` (rows of `0`
+//! Each line read is one episode: `<map> [goal gx gy] x y vx vy w0 w1 a0 a1 [a0 a1 ...]` (map:
+//! `umaze`, `open`, `medium`, `large`; the episode's goal, the task's goal cell's centre when
+//! left out; the whole state, warm start included; then the actions). For each action, one
+//! line is written: `x y vx vy w0 w1 reward success terminal`, numbers in Rust's shortest
+//! round-trip form (Python's `float()` reads them back exactly), then an empty line ends the
+//! episode. A line `task <map>` is answered with the task's cells instead:
+//! `start_row start_col goal_row goal_col`. A line `resets <map> <n> <seed>` is answered with
+//! `n` lines `x y gx gy`: the starts and goals of `n` episodes of the map with
+//! gymnasium-robotics' resets (`Resets::Gym`), drawn from one stream of `seed`. A line `map <name> <row> <row> ...` (rows of `0`
 //! and `1`, as a job's `[pointmaze] map`) adds a map of one's own under that name, answered
 //! with an empty line. Bad input ends the program with a message naming the line.
 //!
@@ -56,7 +59,36 @@ fn main() -> anyhow::Result<()> {
             out.flush()?;
             continue;
         }
+        if map == "resets" {
+            let env = &envs[find(&envs, words.next().unwrap_or(""), n + 1)?].1;
+            let mut count = || -> anyhow::Result<u64> {
+                let w = words.next().unwrap_or("");
+                w.parse()
+                    .map_err(|e| anyhow::anyhow!("line {}: {w:?}: {e}", n + 1))
+            };
+            let (episodes, seed) = (count()?, count()?);
+            let gym = PointMaze::new(env.map().clone(), env.cells().0, env.cells().1)?
+                .with_gym_resets()?;
+            let mut rng = pbcs::rng::Seeds::new(seed).stream(pbcs::rng::Stream::Start);
+            for _ in 0..episodes {
+                let s = gym.sample_start(&mut rng);
+                let [x, y, gx, gy] = [s.qpos[0], s.qpos[1], s.goal[0], s.goal[1]];
+                writeln!(out, "{x:?} {y:?} {gx:?} {gy:?}")?;
+            }
+            out.flush()?;
+            continue;
+        }
         let env = &envs[find(&envs, map, n + 1)?].1;
+        let mut goal = env.goal();
+        let mut words = words.peekable();
+        if words.next_if_eq(&"goal").is_some() {
+            for g in &mut goal {
+                let w = words.next().unwrap_or("");
+                *g = w
+                    .parse()
+                    .map_err(|e| anyhow::anyhow!("line {}: goal {w:?}: {e}", n + 1))?;
+            }
+        }
         let numbers: Vec<f64> = words
             .map(|w| w.parse::<f64>())
             .collect::<Result<_, _>>()
@@ -68,6 +100,7 @@ fn main() -> anyhow::Result<()> {
             qpos: [numbers[0], numbers[1]],
             qvel: [numbers[2], numbers[3]],
             warmstart: [numbers[4], numbers[5]],
+            goal,
         };
         for a in numbers[6..].chunks(2) {
             let step = env.step(&s, &[a[0] as f32, a[1] as f32]);

@@ -54,6 +54,7 @@ pub struct ExploreJob {
 impl Check for ExploreJob {
     fn check(&self) -> Result<()> {
         self.env_spec().check()?;
+        self.env.check_fixed_task("phase 1's exploration")?;
         self.explore.check()
     }
 }
@@ -130,6 +131,9 @@ impl TrainJob {
 impl Check for TrainJob {
     fn check(&self) -> Result<()> {
         self.env_spec().check()?;
+        if self.train.her.is_none() {
+            self.env.check_fixed_task("a run without [train.her]")?;
+        }
         self.learner.check()?;
         self.train.check()
     }
@@ -188,6 +192,7 @@ impl Default for PbcsJob {
 impl Check for PbcsJob {
     fn check(&self) -> Result<()> {
         self.env_spec().check()?;
+        self.env.check_fixed_task("PBCS")?;
         self.explore.check()?;
         self.learner.check()?;
         self.phase2.check()

@@ -48,6 +48,11 @@ pub struct TrainConfig {
     /// offers goals ([`crate::env::Env::goals`]: the maze, the rooms, PointMaze).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub her: Option<HerConfig>,
+    /// Stop training after the first periodic evaluation with at least this many successful
+    /// episodes of its `eval_episodes` (Stable-Baselines3's PointMaze protocol: 95 of 100);
+    /// absent: train all `steps`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stop_at_successes: Option<usize>,
 }
 
 /// When a vanilla learner updates.
@@ -76,6 +81,7 @@ impl Default for TrainConfig {
             final_eval_max_steps: 5000,
             updates: Updates::Step,
             her: None,
+            stop_at_successes: None,
         }
     }
 }
@@ -116,6 +122,17 @@ impl Check for TrainConfig {
                 format!("must be positive, got {}", self.final_eval_epsilon),
             ));
         }
+        if let Some(n) = self.stop_at_successes {
+            if n == 0 || n > self.eval_episodes {
+                return Err(Error::invalid(
+                    "train.stop_at_successes",
+                    format!(
+                        "must be between 1 and train.eval_episodes = {}, got {n}",
+                        self.eval_episodes
+                    ),
+                ));
+            }
+        }
         match &self.her {
             Some(her) => her.check(),
             None => Ok(()),
@@ -141,6 +158,9 @@ pub struct EvalRow {
 /// What a training run produced.
 #[derive(Debug, Clone)]
 pub struct TrainOutcome {
+    /// Environment steps trained: `train.steps`, or fewer where `train.stop_at_successes`
+    /// stopped the run.
+    pub steps: u64,
     /// The evaluations, in order.
     pub evals: Vec<EvalRow>,
     /// Bins (of side `visit_bin`) of every observation met in training, sorted.
@@ -216,7 +236,8 @@ fn aim<S>(greedy: &mut Greedy<'_>, goals: Option<&dyn Goals<S>>, start: &S) {
     }
 }
 
-/// Trains a fresh learner on `env`'s own reward for `train.steps` environment steps.
+/// Trains a fresh learner on `env`'s own reward for `train.steps` environment steps, or until
+/// an evaluation has `train.stop_at_successes` successful episodes.
 /// `progress(steps, last_success)` is called after each evaluation.
 pub fn train_vanilla<E: Env>(
     env: &E,
@@ -230,9 +251,14 @@ pub fn train_vanilla<E: Env>(
     let mut run = Vanilla::new(env, learner_config, train, seeds, kernel)?;
     for step_i in 1..=train.steps {
         run.step(step_i);
+        run.steps = step_i;
         if step_i % train.eval_every == 0 {
             let success = run.evaluate(step_i);
             progress(step_i, success);
+            let wins = (success * train.eval_episodes as f32).round() as usize;
+            if train.stop_at_successes.is_some_and(|n| wins >= n) {
+                break;
+            }
         }
     }
     run.finish()
@@ -282,6 +308,8 @@ struct Vanilla<'a, E: Env> {
     terminal_transitions: u64,
     truncated_episodes: u64,
     evals: Vec<EvalRow>,
+    /// Environment steps taken.
+    steps: u64,
 }
 
 impl<'a, E: Env> Vanilla<'a, E> {
@@ -342,6 +370,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
             terminal_transitions: 0,
             truncated_episodes: 0,
             evals: Vec::new(),
+            steps: 0,
         };
         run.begin_episode();
         Ok(run)
@@ -540,6 +569,7 @@ impl<'a, E: Env> Vanilla<'a, E> {
             Vec::new()
         };
         Ok(TrainOutcome {
+            steps: self.steps,
             final_eval,
             evals: self.evals,
             visited,

@@ -80,11 +80,11 @@ fn the_environments_goal_rewards_are_their_steps() {
 #[cfg(feature = "mujoco")]
 #[test]
 fn pointmaze_goal_rewards_are_its_steps() {
-    use pbcs::envs::pointmaze::{MapName, PointMaze, PointState};
+    use pbcs::envs::pointmaze::{MapName, PointMaze};
     let env = PointMaze::named(MapName::UMaze).unwrap();
     let goal = env.goal();
     goal_reward_is_the_steps(&env, |rng| {
-        PointState::at_rest([
+        env.at_rest([
             goal[0] + rng.random_range(-0.6..0.6),
             goal[1] + rng.random_range(-0.6..0.6),
         ])

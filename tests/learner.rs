@@ -450,3 +450,44 @@ fn episode_updates_come_at_episode_ends_as_many_as_steps() {
     assert_eq!(episode.learner.updates(), 700);
     assert!(!step.learner.policy().same(&*episode.learner.policy()));
 }
+
+/// `train.stop_at_successes`: a run stops after the first evaluation with that many successful
+/// episodes, and is the same run as one without the stop up to there (the stop reads nothing
+/// and draws nothing); `steps` says how far it trained. Out-of-range values are refused.
+#[test]
+fn a_run_stops_at_its_first_solving_evaluation() {
+    let schedule = |stop| TrainConfig {
+        steps: 3_000,
+        max_episode_steps: 50,
+        learning_starts: 500,
+        eval_every: 250,
+        eval_episodes: 20,
+        stop_at_successes: stop,
+        ..Default::default()
+    };
+    let run = |stop| {
+        train_vanilla(
+            &Toy1D,
+            &LearnerConfig::from(Td3Config::ddpg()),
+            &schedule(stop),
+            &Seeds::new(2),
+            pbcs::nn::kernel::Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let (whole, stopped) = (run(None), run(Some(19)));
+    assert_eq!(whole.steps, 3_000);
+    let first = whole
+        .evals
+        .iter()
+        .position(|e| e.success >= 0.95)
+        .expect("seed 2 learns the toy within 3 000 steps");
+    assert!(first + 1 < whole.evals.len(), "solved only at the end");
+    assert_eq!(stopped.evals, whole.evals[..=first]);
+    assert_eq!(stopped.steps, whole.evals[first].steps);
+    for bad in [Some(0), Some(21)] {
+        let err = Check::check(&schedule(bad)).unwrap_err().to_string();
+        assert!(err.contains("train.stop_at_successes"), "{err}");
+    }
+}

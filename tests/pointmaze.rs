@@ -37,6 +37,7 @@ fn a_step_depends_on_the_whole_state_and_on_nothing_else() {
         qpos: [0.3, -0.2],
         qvel: [2.0, -4.0],
         warmstart: [10.0, -10.0],
+        goal: env.goal(),
     };
     let (mut s, mut o) = (env.start(), other);
     for (t, expected) in alone.iter().enumerate() {
@@ -124,7 +125,7 @@ fn reward_success_and_termination_agree() {
     let env = PointMaze::named(MapName::UMaze).unwrap();
     let goal = env.goal();
     for (dx, expect) in [(0.0, true), (0.44, true), (0.46, false), (1.0, false)] {
-        let s = PointState::at_rest([goal[0] + dx, goal[1]]);
+        let s = env.at_rest([goal[0] + dx, goal[1]]);
         // A step at rest with no thrust leaves the point where it is.
         let step = env.step(&s, &[0.0, 0.0]);
         assert!((step.state.qpos[0] - s.qpos[0]).abs() < 1e-9);
@@ -157,7 +158,7 @@ fn success_under_goal_noise_is_success_for_every_goal_of_the_square() {
     for k in 0..400 {
         let angle = k as f64 * 0.37;
         let r = 0.002 * (k % 100) as f64;
-        let s = PointState::at_rest([gx + r * angle.cos(), gy + r * angle.sin()]);
+        let s = sure.at_rest([gx + r * angle.cos(), gy + r * angle.sin()]);
         let every = goals
             .iter()
             .all(|g| (s.qpos[0] - g[0]).hypot(s.qpos[1] - g[1]) <= SUCCESS_DISTANCE);
@@ -303,9 +304,9 @@ fn velocity_balls_are_uniform_in_position_and_velocity() {
     let env = medium();
     let (r, l) = (0.25f32, 0.1f32);
     let center = PointState {
-        qpos: env.start().qpos,
         qvel: [1.0, -2.0],
         warmstart: [3.0, -4.0],
+        ..env.start()
     };
     assert_eq!(env.velocity_balls().map(|v| v.velocity_dims()), Some(2));
     let mut rng = pbcs::rng::Seeds::new(0).stream(pbcs::rng::Stream::Start);
@@ -395,4 +396,94 @@ fn a_chain_with_balls_in_position_and_velocity_saves_them_and_solves() {
         assert_eq!(s.activation.center, tau[s.start_index], "{s:?}");
         assert_eq!(s.inputs.origin[2..], [0.0, 0.0]);
     }
+}
+
+/// The `_goals` names: gymnasium-robotics' resets (start and goal each within ±0.25 of its
+/// cell's centre, at rest, a new goal per episode), success and the goal reward for the
+/// episode's own goal, no fixed success region; the fixed task is unchanged.
+#[test]
+fn goal_resets_draw_start_and_goal_per_episode() {
+    use pbcs::envs::pointmaze::Resets;
+    use pbcs::rng::{Seeds, Stream};
+    let built = EnvSpec::named(EnvName::PointmazeUmazeGoals)
+        .build()
+        .unwrap();
+    let pbcs::envs::Built::PointMaze(env) = built else {
+        panic!("a PointMaze")
+    };
+    assert_eq!(env.resets(), Resets::Gym);
+    assert!(env.success_region().is_none());
+    let fixed = PointMaze::named(MapName::UMaze).unwrap();
+    let (start, goal) = (fixed.start(), fixed.goal());
+    let mut rng = Seeds::new(5).stream(Stream::Start);
+    let draws: Vec<PointState> = (0..2000).map(|_| env.sample_start(&mut rng)).collect();
+    for s in &draws {
+        for k in 0..2 {
+            assert!((s.qpos[k] - start.qpos[k]).abs() <= GOAL_NOISE);
+            assert!((s.goal[k] - goal[k]).abs() <= GOAL_NOISE);
+        }
+        assert_eq!((s.qvel, s.warmstart), ([0.0; 2], [0.0; 2]));
+    }
+    // Uniform along each axis: each quarter of the range holds a quarter of the draws (the
+    // bounds are 6 standard deviations of Binomial(2000, 1/4)).
+    for k in 0..4 {
+        let mut quarters = [0usize; 4];
+        for s in &draws {
+            let (v, c) = match k {
+                0 | 1 => (s.qpos[k], start.qpos[k]),
+                _ => (s.goal[k - 2], goal[k - 2]),
+            };
+            quarters[(((v - c) / GOAL_NOISE + 1.0) * 2.0).floor().clamp(0.0, 3.0) as usize] += 1;
+        }
+        assert!(
+            quarters.iter().all(|&q| q.abs_diff(500) < 117),
+            "{k}: {quarters:?}"
+        );
+    }
+    // Success is for the episode's goal: a point at 0.4 from a goal moved 0.25 along x
+    // succeeds there, though 0.65 from the centre; the fixed task's state does not.
+    let moved = [goal[0] + 0.25, goal[1]];
+    let near = PointState::at_rest([moved[0] + 0.4, moved[1]], moved);
+    assert!(env.success(&near) && env.step(&near, &[0.0, 0.0]).terminal);
+    assert!(!env.success(&PointState { goal, ..near }));
+    let goals = env.goals().unwrap();
+    let mut g = [0.0f32; 2];
+    goals.desired_goal(&near, &mut g);
+    assert_eq!(g, moved.map(|v| v as f32));
+    // The fixed task still starts where it did, for every draw.
+    assert_eq!(fixed.sample_start(&mut rng), fixed.start());
+    assert!(PointMaze::named(MapName::UMaze)
+        .unwrap()
+        .with_gym_resets()
+        .unwrap()
+        .for_goal_noise(GOAL_NOISE)
+        .is_err());
+}
+
+/// PBCS and phase 1 need one goal, and a run without HER would not show the networks the goal:
+/// on a `_goals` name each is refused, naming the env; a run with `[train.her]` is not.
+#[test]
+fn goal_resets_refuse_what_needs_one_goal() {
+    use pbcs::config::{ExploreJob, PbcsJob, TrainJob};
+    use pbcs::envs::EnvName;
+    use pbcs::validate::Check;
+    let env = EnvName::PointmazeMediumGoals;
+    let pbcs = PbcsJob {
+        env,
+        ..PbcsJob::default()
+    };
+    let explore = ExploreJob {
+        env,
+        ..ExploreJob::default()
+    };
+    let mut train = TrainJob {
+        env,
+        ..TrainJob::default()
+    };
+    for err in [pbcs.check(), explore.check(), train.check()] {
+        let err = err.unwrap_err().to_string();
+        assert!(err.contains("pointmaze_medium_goals"), "{err}");
+    }
+    train.train.her = Some(pbcs::learner::her::HerConfig::default());
+    train.check().unwrap();
 }

@@ -58,9 +58,11 @@ def task(proc, name):
     return (a, b), (c, d)
 
 
-def run_ours(proc, name, state, actions):
-    """Our steps from `state` (x, y, vx, vy, w0, w1) under `actions` (float32 pairs)."""
-    numbers = [repr(float(v)) for v in state]
+def run_ours(proc, name, state, actions, goal=None):
+    """Our steps from `state` (x, y, vx, vy, w0, w1) under `actions` (float32 pairs), toward
+    `goal` (the task's, the goal cell's centre, when None)."""
+    numbers = [] if goal is None else ["goal", *(repr(float(g)) for g in goal)]
+    numbers += [repr(float(v)) for v in state]
     numbers += [repr(float(v)) for a in actions for v in a]
     ask(proc, f"{name.lower()} " + " ".join(numbers))
     rows = []
@@ -146,7 +148,60 @@ def test_our_pointmaze_steps_as_gymnasium_robotics_does(ours, name):
         actions = rng.uniform(-1, 1, (n, 2)).astype(np.float32)
         same(run_ours(ours, name, state, actions), run_theirs(env, state, actions), f"{name} reset {seed}")
         checked += len(actions)
+    # The same resets toward the goal they drew (the `_goals` environments' episodes): reward,
+    # success and termination for that goal, from a start within reach of it.
+    for seed in range(3, 9):
+        env.reset(seed=seed, options={"reset_cell": np.array(goal), "goal_cell": np.array(goal)})
+        point = env.point_env
+        state = [*point.data.qpos, *point.data.qvel, *point.data.qacc_warmstart]
+        drawn = env.goal.copy()
+        actions = rng.uniform(-1, 1, (60, 2)).astype(np.float32)
+        same(
+            run_ours(ours, name, state, actions, goal=drawn),
+            run_theirs(env, state, actions),
+            f"{name} drawn goal {seed}",
+        )
+        checked += len(actions)
     assert checked > 3000
+
+
+def ks_distance(a, b):
+    """The two-sample Kolmogorov-Smirnov statistic: the largest gap between the empirical
+    distribution functions of `a` and `b`."""
+    both = np.sort(np.concatenate([a, b]))
+    fa = np.searchsorted(np.sort(a), both, side="right") / len(a)
+    fb = np.searchsorted(np.sort(b), both, side="right") / len(b)
+    return np.abs(fa - fb).max()
+
+
+@pytest.mark.parametrize("name", ["UMaze", "Medium"])
+def test_our_goal_resets_draw_as_gymnasium_robotics_does(ours, name):
+    """The `_goals` environments' resets (Resets::Gym) against gymnasium-robotics' own with
+    the task's cells: both inside the squares of half-side 0.25 around the cells' centres, and
+    each coordinate of start and goal of 2 000 resets from the same law (two-sample
+    Kolmogorov-Smirnov at the 0.1 % level: D below 1.95·sqrt(2/n)). The draws are not the
+    same numbers (numpy's stream against ours), only the same law."""
+    gym = pytest.importorskip("gymnasium")
+    gymnasium_robotics = pytest.importorskip("gymnasium_robotics")
+    gym.register_envs(gymnasium_robotics)
+    env = gym.make(f"PointMaze_{name}-v3", continuing_task=False).unwrapped
+    start, goal = task(ours, name)
+    n = 2000
+    theirs = []
+    for seed in range(n):
+        obs, _ = env.reset(seed=seed, options={"reset_cell": np.array(start), "goal_cell": np.array(goal)})
+        assert (obs["observation"][2:] == 0).all() and (env.point_env.data.qacc_warmstart == 0).all()
+        theirs.append([*obs["observation"][:2], *obs["desired_goal"]])
+    ask(ours, f"resets {name.lower()} {n} 7")
+    mine = [[float(v) for v in ours.stdout.readline().split()] for _ in range(n)]
+    theirs, mine = np.array(theirs), np.array(mine)
+    centres = np.array([*env.maze.cell_rowcol_to_xy(np.array(start)), *env.maze.cell_rowcol_to_xy(np.array(goal))])
+    for drawn in (theirs, mine):
+        offsets = drawn - centres
+        assert (np.abs(offsets) <= 0.25).all(), offsets[np.abs(offsets) > 0.25]
+    for k, what in enumerate(["start x", "start y", "goal x", "goal y"]):
+        d = ks_distance(theirs[:, k], mine[:, k])
+        assert d < 1.95 * np.sqrt(2 / n), f"{name} {what}: D = {d}"
 
 
 @pytest.mark.parametrize(

@@ -83,6 +83,18 @@ pub enum EnvName {
     /// gymnasium-robotics' PointMaze on a map of one's own (the job's `[pointmaze]`,
     /// [`PointMazeConfig`]), the task and success as on the four named maps.
     Pointmaze,
+    /// gymnasium-robotics' `PointMaze_UMaze-v3` as that env runs it: the same two cells, but
+    /// start and goal drawn per episode by its own reset law (each ±0.25 around its cell's
+    /// centre), success within 0.45 of the episode's goal (`PointMaze::with_gym_resets`). A
+    /// goal-conditioned task: runs on it train with `[train.her]`, so that the networks see
+    /// the goal; PBCS, which needs one target, does not run on it.
+    PointmazeUmazeGoals,
+    /// gymnasium-robotics' `PointMaze_Open-v3`, the same way.
+    PointmazeOpenGoals,
+    /// gymnasium-robotics' `PointMaze_Medium-v3`, the same way.
+    PointmazeMediumGoals,
+    /// gymnasium-robotics' `PointMaze_Large-v3`, the same way.
+    PointmazeLargeGoals,
 }
 
 /// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
@@ -162,12 +174,50 @@ impl EnvName {
     /// [`crate::envs::pointmaze::model`].
     pub fn point_map(self) -> Option<MapName> {
         match self {
-            EnvName::PointmazeUmaze => Some(MapName::UMaze),
-            EnvName::PointmazeOpen => Some(MapName::Open),
-            EnvName::PointmazeMedium => Some(MapName::Medium),
-            EnvName::PointmazeLarge => Some(MapName::Large),
+            EnvName::PointmazeUmaze | EnvName::PointmazeUmazeGoals => Some(MapName::UMaze),
+            EnvName::PointmazeOpen | EnvName::PointmazeOpenGoals => Some(MapName::Open),
+            EnvName::PointmazeMedium | EnvName::PointmazeMediumGoals => Some(MapName::Medium),
+            EnvName::PointmazeLarge | EnvName::PointmazeLargeGoals => Some(MapName::Large),
             _ => None,
         }
+    }
+
+    /// Whether episodes draw their start and goal as gymnasium-robotics' reset does (the
+    /// `_goals` names): a goal-conditioned task.
+    ///
+    /// ```
+    /// use pbcs::envs::EnvName;
+    /// assert!(EnvName::PointmazeUmazeGoals.goal_resets());
+    /// assert!(!EnvName::PointmazeUmaze.goal_resets());
+    /// assert_eq!(EnvName::PointmazeLargeGoals.point_map(), EnvName::PointmazeLarge.point_map());
+    /// ```
+    pub fn goal_resets(self) -> bool {
+        matches!(
+            self,
+            EnvName::PointmazeUmazeGoals
+                | EnvName::PointmazeOpenGoals
+                | EnvName::PointmazeMediumGoals
+                | EnvName::PointmazeLargeGoals
+        )
+    }
+
+    /// Refuses a run that needs one fixed task on an environment whose episodes draw their
+    /// goal ([`EnvName::goal_resets`]): PBCS, and a vanilla run without HER (its networks
+    /// would not see the goal). `what` names the run.
+    pub fn check_fixed_task(self, what: &str) -> Result<()> {
+        if self.goal_resets() {
+            return Err(Error::invalid(
+                "env",
+                format!(
+                    "{} draws each episode's goal (gymnasium-robotics' resets): {what} needs \
+                     one fixed goal; train on it with [train.her] (the networks then see the \
+                     goal), or run {} for the fixed task",
+                    self.name(),
+                    self.name().trim_end_matches("_goals")
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// The cargo feature this environment needs and this build lacks (`mujoco` for PointMaze
@@ -257,6 +307,9 @@ impl EnvSpec {
     pub fn label(&self) -> String {
         match (self.name, self.name.point_map()) {
             (EnvName::Maze, _) => format!("maze {} (layout {})", self.maze.size, self.maze.seed),
+            (name, Some(map)) if name.goal_resets() => {
+                format!("PointMaze {} (goals drawn per episode)", <&str>::from(map))
+            }
             (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
             (EnvName::Pointmaze, None) => {
                 let (h, w) = (
@@ -325,9 +378,13 @@ impl EnvSpec {
             | EnvName::PointmazeOpen
             | EnvName::PointmazeMedium
             | EnvName::PointmazeLarge
-            | EnvName::Pointmaze => {
+            | EnvName::Pointmaze
+            | EnvName::PointmazeUmazeGoals
+            | EnvName::PointmazeOpenGoals
+            | EnvName::PointmazeMediumGoals
+            | EnvName::PointmazeLargeGoals => {
                 let map = self.point_map()?.expect("a PointMaze has a map");
-                Built::PointMaze(point_maze(map, self.name.name())?)
+                Built::PointMaze(point_maze(map, self.name)?)
             }
         })
     }
@@ -336,6 +393,11 @@ impl EnvSpec {
     /// PointMaze's from its map, without MuJoCo, so that committed rows draw in any build.
     pub fn scene(&self) -> Result<crate::env::Scene> {
         match self.point_map()? {
+            Some(map) if self.name.goal_resets() => {
+                let (start, goal) = map.farthest_cells();
+                let radius = pointmaze::SUCCESS_DISTANCE as f32;
+                Ok(map.scene(start, goal, radius))
+            }
             Some(map) => Ok(point_scene(&map)),
             None => Ok(crate::with_env!(self.build()?, |env| {
                 crate::env::Planar::scene(&env)
@@ -355,16 +417,26 @@ pub fn point_scene(map: &PointMap) -> crate::env::Scene {
 /// A PointMaze task ([`crate::envs::pointmaze::PointMaze::named`]) whose success holds for
 /// every goal gymnasium-robotics' reset may draw ([`pointmaze::GOAL_NOISE`]): one fixed chain
 /// is judged there from the env's own resets, which move the goal up to 0.25 along each axis.
+/// The `_goals` names: the same cells with those resets themselves
+/// ([`crate::envs::pointmaze::PointMaze::with_gym_resets`]).
 #[cfg(feature = "mujoco")]
-fn point_maze(map: PointMap, _name: &str) -> Result<PointMaze> {
-    PointMaze::on(map)?.for_goal_noise(pointmaze::GOAL_NOISE)
+fn point_maze(map: PointMap, name: EnvName) -> Result<PointMaze> {
+    let env = PointMaze::on(map)?;
+    if name.goal_resets() {
+        env.with_gym_resets()
+    } else {
+        env.for_goal_noise(pointmaze::GOAL_NOISE)
+    }
 }
 
 /// Without MuJoCo: refused, saying how to build with it.
 #[cfg(not(feature = "mujoco"))]
-fn point_maze(_map: PointMap, name: &str) -> Result<PointMaze> {
+fn point_maze(_map: PointMap, name: EnvName) -> Result<PointMaze> {
     Err(Error::invalid(
         "env",
-        format!("{name} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`"),
+        format!(
+            "{} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`",
+            name.name()
+        ),
     ))
 }

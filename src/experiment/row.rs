@@ -43,7 +43,8 @@ pub struct RawRow {
     pub solved: bool,
     /// Success rate of that evaluation.
     pub success_rate: f32,
-    /// Environment steps used (PBCS: phase 1 + training + tests; vanilla: the budget).
+    /// Environment steps used (PBCS: phase 1 + training + tests; vanilla: the budget, or
+    /// fewer where `train.stop_at_successes` stopped the run).
     pub env_steps: u64,
     /// The step budget of the run (PBCS: `phase2.max_env_steps`; vanilla: `train.steps`).
     pub budget: u64,

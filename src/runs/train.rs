@@ -89,7 +89,7 @@ impl TrainRun {
             seed: job.seed,
             algo: job.learner.algo(),
             actor_update: job.learner.as_td3().map(|l| l.actor_update),
-            env_steps: job.train.steps,
+            env_steps: result.steps,
             episodes: result.episodes,
             final_success: result.evals.last().map_or(0.0, |e| e.success),
             best_success: result.evals.iter().map(|e| e.success).fold(0.0, f32::max),

@@ -21,7 +21,7 @@ mod sim;
 pub use model::{sure_radius, MapName, PointMap, GOAL_NOISE, SUCCESS_DISTANCE};
 pub use own::{PointMazeConfig, MAX_MAP_SIDE, OWN_TIME_LIMIT};
 #[cfg(feature = "mujoco")]
-pub use sim::{PointMaze, PointState, MAX_SPEED, RADIUS};
+pub use sim::{PointMaze, PointState, Resets, MAX_SPEED, RADIUS};
 
 /// Without MuJoCo, PointMaze has no values: the registry refuses its names
 /// ([`crate::envs::EnvSpec::build`]), and code generic over the registry's environments

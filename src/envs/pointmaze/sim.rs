@@ -1,7 +1,7 @@
 //! The PointMaze environment on MuJoCo (feature `mujoco`): gymnasium-robotics'
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
-use super::model::{sure_radius, MapName, PointMap, SUCCESS_DISTANCE};
+use super::model::{sure_radius, MapName, PointMap, GOAL_NOISE, SUCCESS_DISTANCE};
 use crate::env::{BallIsClear, Env, Goals, Planar, SampleBall, Scene, Step, VelocityBalls};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
@@ -19,10 +19,11 @@ pub const RADIUS: f64 = 0.1;
 /// Draws of a start in B_ε(τ_K) before one clear of the walls is taken; then τ_K itself.
 const BALL_DRAWS: usize = 16;
 
-/// The whole state of the point: position and velocity, and the constraint solver's warm
-/// start, which MuJoCo carries from one step to the next (the ball always touches the floor,
-/// so the solver runs every step and starts from it): a state without it does not replay
-/// exactly.
+/// The whole state of an episode: the point's position and velocity, the constraint solver's
+/// warm start, which MuJoCo carries from one step to the next (the ball always touches the
+/// floor, so the solver runs every step and starts from it: a state without it does not replay
+/// exactly), and the episode's goal (gymnasium-robotics' `self.goal`: the task's goal, or the
+/// one a goal-drawing reset drew, [`Resets::Gym`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointState {
     /// Position (x, y), metres (`qpos`).
@@ -31,17 +32,35 @@ pub struct PointState {
     pub qvel: [f64; 2],
     /// The solver's warm start (`qacc_warmstart`).
     pub warmstart: [f64; 2],
+    /// The episode's goal (x, y).
+    pub goal: [f64; 2],
 }
 
 impl PointState {
-    /// At rest at `xy`, as a reset leaves the point (`mj_resetData` zeroes the warm start).
-    pub fn at_rest(xy: [f64; 2]) -> PointState {
+    /// At rest at `xy`, as a reset leaves the point (`mj_resetData` zeroes the warm start),
+    /// with the goal `goal`.
+    pub fn at_rest(xy: [f64; 2], goal: [f64; 2]) -> PointState {
         PointState {
             qpos: xy,
             qvel: [0.0; 2],
             warmstart: [0.0; 2],
+            goal,
         }
     }
+}
+
+/// Where an episode starts and what its goal is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Resets {
+    /// This package's task: every episode from rest at the start cell's centre, to the goal
+    /// cell's centre (success there for every goal gymnasium-robotics' reset may draw, with
+    /// [`PointMaze::for_goal_noise`]).
+    Fixed,
+    /// gymnasium-robotics' own resets of the same cells (`MazeEnv.reset` with `goal_cell` and
+    /// `reset_cell`): the goal, then the start, each its cell's centre plus noise uniform in
+    /// ±[`GOAL_NOISE`] along x, then y; the point at rest there. A goal-conditioned task: the
+    /// goal changes from episode to episode, and a policy must see it ([`Env::goals`]).
+    Gym,
 }
 
 /// gymnasium-robotics' PointMaze with `continuing_task=False`: a point mass pushed by two
@@ -52,6 +71,8 @@ impl PointState {
 /// [`PointMaze::for_goal_noise`] makes success mean success for every goal the env's reset
 /// may draw around that centre: the task a fixed policy has to solve for gymnasium-robotics
 /// to count its episodes a success wherever the reset put the goal.
+/// [`PointMaze::with_gym_resets`] instead draws start and goal per episode as
+/// gymnasium-robotics' reset does: its own goal-conditioned task ([`Resets::Gym`]).
 pub struct PointMaze {
     map: PointMap,
     start: [f64; 2],
@@ -60,6 +81,8 @@ pub struct PointMaze {
     cells: ((usize, usize), (usize, usize)),
     /// Half-side of the square of goals success must hold for (0: the goal itself).
     goal_noise: f64,
+    /// Where episodes start and end.
+    resets: Resets,
     /// The simulator the pure step borrows: every step sets the whole state first, so what a
     /// previous step left in it does not matter.
     data: Mutex<MjData<Box<MjModel>>>,
@@ -72,6 +95,7 @@ impl std::fmt::Debug for PointMaze {
             .field("start", &self.start)
             .field("goal", &self.goal)
             .field("goal_noise", &self.goal_noise)
+            .field("resets", &self.resets)
             .finish()
     }
 }
@@ -115,6 +139,7 @@ impl PointMaze {
             goal: goal_xy,
             cells: (start, goal),
             goal_noise: 0.0,
+            resets: Resets::Fixed,
             map,
             data: Mutex::new(data),
         })
@@ -128,6 +153,13 @@ impl PointMaze {
     /// the axes. `noise` = 0 is the environment itself, bit for bit.
     /// (`tests/pointmaze.rs` checks the region.)
     pub fn for_goal_noise(mut self, noise: f64) -> Result<PointMaze> {
+        if self.resets == Resets::Gym && noise != 0.0 {
+            return Err(Error::invalid(
+                "goal_noise",
+                "with gymnasium-robotics' resets the goal is the episode's own: no noise to \
+                 agree over",
+            ));
+        }
         if !(noise >= 0.0 && noise * std::f64::consts::SQRT_2 < SUCCESS_DISTANCE) {
             return Err(Error::invalid(
                 "goal_noise",
@@ -141,6 +173,32 @@ impl PointMaze {
         Ok(self)
     }
 
+    /// The same cells with gymnasium-robotics' own resets ([`Resets::Gym`]): start and goal
+    /// drawn per episode, success within [`SUCCESS_DISTANCE`] of the episode's goal. Refused
+    /// after [`PointMaze::for_goal_noise`] with noise (a success region for goals this env
+    /// would draw itself).
+    pub fn with_gym_resets(mut self) -> Result<PointMaze> {
+        if self.goal_noise != 0.0 {
+            return Err(Error::invalid(
+                "resets",
+                "gymnasium-robotics' resets draw the episode's goal: success is for that goal, \
+                 not for every goal of a noise square",
+            ));
+        }
+        self.resets = Resets::Gym;
+        Ok(self)
+    }
+
+    /// Where episodes start and what their goals are.
+    pub fn resets(&self) -> Resets {
+        self.resets
+    }
+
+    /// At rest at `xy`, with the task's goal (the goal cell's centre).
+    pub fn at_rest(&self, xy: [f64; 2]) -> PointState {
+        PointState::at_rest(xy, self.goal)
+    }
+
     /// The radius of the disc around the goal where success holds for every goal of the
     /// noise square (the whole region is a little larger along the axes).
     pub fn sure_radius(&self) -> f64 {
@@ -152,20 +210,27 @@ impl PointMaze {
         &self.map
     }
 
-    /// The goal's position.
+    /// The start and goal cells.
+    pub fn cells(&self) -> ((usize, usize), (usize, usize)) {
+        self.cells
+    }
+
+    /// The task's goal: the goal cell's centre (an episode's goal is its state's,
+    /// [`PointState::goal`]).
     pub fn goal(&self) -> [f64; 2] {
         self.goal
     }
 
-    /// Distance from the point to the goal.
+    /// Distance from the point to the episode's goal.
     pub fn distance_to_goal(&self, s: &PointState) -> f64 {
-        (s.qpos[0] - self.goal[0]).hypot(s.qpos[1] - self.goal[1])
+        (s.qpos[0] - s.goal[0]).hypot(s.qpos[1] - s.goal[1])
     }
 
-    /// Whether the point is within [`SUCCESS_DISTANCE`] of the goal (`info["success"]`), or
-    /// of every goal of the noise square ([`PointMaze::for_goal_noise`]).
+    /// Whether the point is within [`SUCCESS_DISTANCE`] of the episode's goal
+    /// (`info["success"]`), or of every goal of the noise square around it
+    /// ([`PointMaze::for_goal_noise`]).
     pub fn success(&self, s: &PointState) -> bool {
-        let (dx, dy) = (s.qpos[0] - self.goal[0], s.qpos[1] - self.goal[1]);
+        let (dx, dy) = (s.qpos[0] - s.goal[0], s.qpos[1] - s.goal[1]);
         let n = self.goal_noise;
         (dx.abs() + n).hypot(dy.abs() + n) <= SUCCESS_DISTANCE
     }
@@ -192,6 +257,7 @@ impl PointMaze {
             qpos: [q[0], q[1]],
             qvel: [v[0], v[1]],
             warmstart: [w[0], w[1]],
+            goal: s.goal,
         }
     }
 }
@@ -211,14 +277,27 @@ impl Env for PointMaze {
         1.0
     }
 
+    /// At rest at the start cell's centre, the goal at the goal cell's centre.
     fn start(&self) -> PointState {
-        PointState::at_rest(self.start)
+        self.at_rest(self.start)
     }
 
-    /// Every episode of our task starts at rest at the start cell's centre (gymnasium-robotics'
-    /// resets add noise; the judge plays those, `pbcs.pointmaze`).
-    fn sample_start(&self, _rng: &mut crate::rng::Rng) -> PointState {
-        self.start()
+    /// [`Resets::Fixed`]: every episode of our task starts at [`Env::start`]
+    /// (gymnasium-robotics' resets add noise; the judge plays those, `pbcs.pointmaze`).
+    /// [`Resets::Gym`]: the goal, then the start, as gymnasium-robotics' `add_xy_position_noise`
+    /// moves them: each coordinate plus a uniform draw in [−[`GOAL_NOISE`], [`GOAL_NOISE`]),
+    /// x then y (the same law; our stream, not numpy's).
+    fn sample_start(&self, rng: &mut crate::rng::Rng) -> PointState {
+        use rand::Rng as _;
+        match self.resets {
+            Resets::Fixed => self.start(),
+            Resets::Gym => {
+                let mut noisy =
+                    |c: [f64; 2]| c.map(|c| c + rng.random_range(-GOAL_NOISE..GOAL_NOISE));
+                let goal = noisy(self.goal);
+                PointState::at_rest(noisy(self.start), goal)
+            }
+        }
     }
 
     /// `observation` of gymnasium-robotics: [x, y, vx, vy] (in `f32`).
@@ -255,8 +334,12 @@ impl Env for PointMaze {
     }
 
     /// The goal and gymnasium-robotics' success distance, in position (with goal noise, the
-    /// disc inscribed in the region every goal agrees on, [`PointMaze::sure_radius`]).
+    /// disc inscribed in the region every goal agrees on, [`PointMaze::sure_radius`]); none
+    /// with gymnasium-robotics' resets, whose goal is each episode's own.
     fn success_region(&self) -> Option<(Vec<f32>, f32)> {
+        if self.resets == Resets::Gym {
+            return None;
+        }
         Some((
             self.goal.map(|g| g as f32).to_vec(),
             self.sure_radius() as f32,
@@ -383,7 +466,7 @@ impl Planar for PointMaze {
     }
 }
 
-/// Goals: positions (x, y); the episode's is the goal; the reward 1 where [`PointMaze::success`]
+/// Goals: positions (x, y); the episode's is its state's goal; the reward 1 where [`PointMaze::success`]
 /// would say so of a point at `achieved` (its `f64` test on the observation's `f32` position: at
 /// the very edge of the disc the two can differ by the rounding of a position to `f32`).
 impl Goals<PointState> for PointMaze {
@@ -393,8 +476,8 @@ impl Goals<PointState> for PointMaze {
     fn achieved_goal(&self, obs: &[f32], out: &mut [f32]) {
         out.copy_from_slice(&obs[..2]);
     }
-    fn desired_goal(&self, _: &PointState, out: &mut [f32]) {
-        out.copy_from_slice(&self.goal.map(|g| g as f32));
+    fn desired_goal(&self, s: &PointState, out: &mut [f32]) {
+        out.copy_from_slice(&s.goal.map(|g| g as f32));
     }
     fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32 {
         let (dx, dy) = (
