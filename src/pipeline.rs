@@ -494,8 +494,11 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
 pub fn aggregate_outside(exps: &[Experiment], results: &Path) -> Result<Vec<PathBuf>> {
     match exps.iter().find(|e| e.report.results_table) {
         Some(table) if crate::tables::outside::outside_dir(results).is_dir() => {
-            let pointmaze = exps.iter().find(|e| e.name == "pointmaze_vanilla");
-            crate::tables::outside::write_outside_tables(table, pointmaze, results)
+            let pointmaze: Vec<&Experiment> = ["pointmaze_vanilla", "pointmaze_her"]
+                .iter()
+                .filter_map(|n| exps.iter().find(|e| e.name == *n))
+                .collect();
+            crate::tables::outside::write_outside_tables(table, &pointmaze, results)
         }
         _ => Ok(Vec::new()),
     }

@@ -294,3 +294,55 @@ fn the_sac_skill_comparison_runs_the_grids_jobs_with_only_the_learner_changed() 
     }
     assert_eq!(cmp.cells.len(), 6);
 }
+
+/// The registered goal-conditioned grid (`experiments/pointmaze_her.toml`) runs its base job
+/// (`her_baseline.toml`, as it was when registered) on gymnasium-robotics' own PointMaze tasks
+/// by SB3's protocol, with SAC and with TD3, the two differing only in `[learner]`; each map
+/// with its time limit.
+#[test]
+fn the_her_grid_runs_its_base_job_by_sb3s_protocol_with_two_learners() {
+    use pbcs::envs::EnvName;
+    use pbcs::experiment::Job;
+    let exp = Experiment::load(Path::new("experiments/pointmaze_her.toml"), None).unwrap();
+    let (reg, hash) = registration(&exp);
+    assert_eq!(
+        hash, reg.sha256,
+        "experiments/{} changed since the HER grid was registered on {}: register a new one \
+         (and say so); do not update this hash.",
+        reg.preset, reg.date
+    );
+    let job = |id: &str| match &exp.cells.iter().find(|c| c.id == id).unwrap().job {
+        Job::Vanilla(j) => j.clone(),
+        _ => panic!("{id}: not a vanilla cell"),
+    };
+    for (env, limit) in [
+        (EnvName::PointmazeUmazeGoals, 300),
+        (EnvName::PointmazeMediumGoals, 600),
+        (EnvName::PointmazeLargeGoals, 800),
+    ] {
+        assert!(env.goal_resets());
+        let (sac, mut td3) = (
+            job(&format!("sac_her-{}", env.name())),
+            job(&format!("td3_her-{}", env.name())),
+        );
+        let t = &sac.train;
+        assert_eq!(sac.env, env);
+        assert_eq!(
+            (t.steps, t.eval_every, t.eval_episodes, t.stop_at_successes),
+            (1_000_000, 10_000, 100, Some(95))
+        );
+        assert_eq!((t.max_episode_steps, t.learning_starts), (limit, 1_000));
+        assert_eq!(t.her, Some(pbcs::learner::her::HerConfig::default()));
+        assert_eq!(sac.learner, pbcs::learner::LearnerConfig::preset("sac").unwrap());
+        let td3_learner = td3.learner.as_td3().unwrap().clone();
+        assert_eq!(td3.learner.algo(), "td3");
+        assert_eq!(
+            (td3_learner.hidden.as_slice(), td3_learner.batch_size, td3_learner.noise_sigma),
+            (&[256, 256][..], 256, 0.1)
+        );
+        td3.learner = sac.learner.clone();
+        assert_eq!(td3, sac, "{}: more than the learner differs", env.name());
+    }
+    assert_eq!(exp.cells.len(), 6);
+    assert_eq!(reg.paired, Some(["sac_her".into(), "td3_her".into()]));
+}

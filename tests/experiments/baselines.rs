@@ -30,7 +30,7 @@ fn column(dir: &Path, column: &str) -> Vec<String> {
 
 #[test]
 fn the_committed_vanilla_rows_give_the_counts_their_files_say() {
-    let lines = pointmaze_baselines(Some(&vanilla()), Path::new("results")).unwrap();
+    let lines = pointmaze_baselines(&[&vanilla()], Path::new("results")).unwrap();
     let ours: Vec<&PointMazeBaseline> = lines.iter().filter(|l| l.library == "ours").collect();
     assert_eq!(ours.len(), 6, "DDPG and TD3 on three maps");
     for l in ours {
@@ -112,7 +112,7 @@ fn sb3_evaluations_give_known_values() {
             ),
         ),
     ]);
-    let lines = pointmaze_baselines(None, tmp.path()).unwrap();
+    let lines = pointmaze_baselines(&[], tmp.path()).unwrap();
     // Seed 3 stopped before its first evaluation: left out; seed 2 was resumed once.
     let want = PointMazeBaseline {
         method: "sac_her".into(),
@@ -124,6 +124,9 @@ fn sb3_evaluations_give_known_values() {
         steps_max: 30_000,
         solved: 2,
         solved_at_min: Some(20_000),
+        // Seeds 2 and 0 solved at 20 000 and 30 000; seed 1's best was 0 of 100.
+        solved_at_median: Some(25_000),
+        best_unsolved: Some(0.0),
         reached: 2,
         best: 0.97,
         best_at: Some(20_000),
@@ -200,7 +203,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
         let files: Vec<(&str, String)> =
             files.iter().map(|(p, t)| (p.as_str(), t.clone())).collect();
         let tmp = scratch(&files);
-        let err = pointmaze_baselines(None, tmp.path())
+        let err = pointmaze_baselines(&[], tmp.path())
             .unwrap_err()
             .to_string();
         assert!(err.contains(file) && err.contains(why), "{why}: {err}");
@@ -226,7 +229,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
     let evals8 = std::fs::read_to_string(from.join("s8.evals.csv")).unwrap();
     let tmp = copy(&row, &evals8);
     assert_eq!(
-        pointmaze_baselines(Some(&exp), tmp.path()).unwrap().len(),
+        pointmaze_baselines(&[&exp], tmp.path()).unwrap().len(),
         1
     );
     for (bad, why) in [
@@ -238,7 +241,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
         ),
     ] {
         let tmp = copy(&bad, &evals8);
-        let err = pointmaze_baselines(Some(&exp), tmp.path())
+        let err = pointmaze_baselines(&[&exp], tmp.path())
             .unwrap_err()
             .to_string();
         assert!(err.contains("s8") && err.contains(why), "{why}: {err}");
@@ -251,7 +254,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
     cols[2] = "1.0";
     lines[last] = cols.join(",");
     let tmp = copy(&row, &(lines.join("\n") + "\n"));
-    let err = pointmaze_baselines(Some(&exp), tmp.path())
+    let err = pointmaze_baselines(&[&exp], tmp.path())
         .unwrap_err()
         .to_string();
     assert!(
@@ -262,7 +265,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
     let mut lines: Vec<&str> = evals8.lines().collect();
     lines.swap(1, 2);
     let tmp = copy(&row, &(lines.join("\n") + "\n"));
-    let err = pointmaze_baselines(Some(&exp), tmp.path())
+    let err = pointmaze_baselines(&[&exp], tmp.path())
         .unwrap_err()
         .to_string();
     assert!(

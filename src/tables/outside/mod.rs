@@ -410,13 +410,13 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
 /// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.pendulum_sac.csv`,
 /// `outside.timing.csv` and
 /// `outside.pointmaze.csv` under `<results>/tables/` from the rows under `<results>/outside/`
-/// (PointMaze's: the raw rows of `pointmaze_vanilla` and `<results>/pointmaze/sb3/`,
+/// (PointMaze's: the raw rows of `pointmaze_vanilla`, `pointmaze_her` and `<results>/pointmaze/sb3/`,
 /// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
 /// removed); `table` is the experiment of our maze side.
 /// Returns the files written.
 pub fn write_outside_tables(
     table: &Experiment,
-    pointmaze_vanilla: Option<&Experiment>,
+    pointmaze_vanilla: &[&Experiment],
     results: &Path,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();

@@ -1,6 +1,8 @@
-//! PointMaze's learner baselines (issue 35) as one table, `outside.pointmaze.csv`: our DDPG and
-//! TD3 alone on PBCS's PointMaze task (the experiment `experiments/pointmaze_vanilla.toml`, its
-//! raw rows checked as every sweep's, with each run's `s<seed>.evals.csv`)
+//! PointMaze's learner baselines (issues 35 and 48) as one table, `outside.pointmaze.csv`: our
+//! DDPG and TD3 alone on PBCS's PointMaze task (the experiment
+//! `experiments/pointmaze_vanilla.toml`), our SAC and TD3 with HER on gymnasium-robotics' own
+//! task by SB3's protocol (`experiments/pointmaze_her.toml`), their raw rows checked as every
+//! sweep's, with each run's `s<seed>.evals.csv`,
 //! and Stable-Baselines3's SAC+HER in gymnasium-robotics' own PointMaze
 //! (`python/benches/sb3_pointmaze.py`: `<results>/pointmaze/sb3/sac_her-pointmaze_<map>/`,
 //! `s<seed>.evals.csv` as the run goes, `s<seed>.csv` once it ended). An SB3 run stopped before
@@ -35,11 +37,12 @@ pub struct Sb3Eval {
 /// One line of `outside.pointmaze.csv`: one learner on one map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointMazeBaseline {
-    /// `ddpg`, `td3` (ours) or `sac_her` (SB3).
+    /// `ddpg`, `td3`, `sac_her`, `td3_her` (ours) or `sac_her` (SB3).
     pub method: String,
     /// `ours` or `sb3`.
     pub library: String,
-    /// The registry's name of the map (`pointmaze_umaze`).
+    /// The registry's name of the task (`pointmaze_umaze`; `pointmaze_umaze_goals` for ours
+    /// with the env's own resets; SB3's runs, named by their map, play those resets too).
     pub env: String,
     /// Runs with rows.
     pub runs: u64,
@@ -49,11 +52,19 @@ pub struct PointMazeBaseline {
     pub resumed: u64,
     /// The most environment steps a run trained.
     pub steps_max: u64,
-    /// Runs whose policy solves the map: ours, a final greedy episode from the start that
-    /// reaches the goal; SB3, an evaluation with at least [`SB3_SOLVED`] of 100.
+    /// Runs whose policy solves the map: ours alone on PBCS's task, a final greedy episode
+    /// from the start that reaches the goal; SB3 and ours by its protocol
+    /// (`train.stop_at_successes`), an evaluation with at least [`SB3_SOLVED`] of 100.
     pub solved: u64,
-    /// SB3: the fewest environment steps at which a run solved it (ours: never set).
+    /// By SB3's protocol: the fewest environment steps at which a run solved it (ours alone on
+    /// PBCS's task: never set).
     pub solved_at_min: Option<u64>,
+    /// By SB3's protocol: the median of those steps over the solved runs (the mean of the two
+    /// middle ones for an even count, rounded down).
+    pub solved_at_median: Option<u64>,
+    /// By SB3's protocol: the best evaluation of the runs that did not solve it (fraction of
+    /// its episodes), none where every run did.
+    pub best_unsolved: Option<f64>,
     /// Runs with at least one successful evaluation episode.
     pub reached: u64,
     /// The best evaluation of any run: success fraction (ours: 0 or 1; SB3: successes / 100).
@@ -65,16 +76,16 @@ pub struct PointMazeBaseline {
     pub seeds: String,
 }
 
-/// The lines of `outside.pointmaze.csv`: our learners from the raw rows of `vanilla` (the
-/// experiment `pointmaze_vanilla`, when given) under `results`, then SB3's from
-/// `<results>/pointmaze/sb3/` (none without that folder); each learner's lines by map, sorted
-/// by `<method>-<env>`.
+/// The lines of `outside.pointmaze.csv`: our learners from the raw rows of each of `vanilla`
+/// (the experiments `pointmaze_vanilla` and `pointmaze_her`, those given) under `results`,
+/// then SB3's from `<results>/pointmaze/sb3/` (none without that folder); each experiment's
+/// lines sorted by `<method>-<env>`.
 pub fn pointmaze_baselines(
-    vanilla: Option<&Experiment>,
+    vanilla: &[&Experiment],
     results: &Path,
 ) -> Result<Vec<PointMazeBaseline>> {
     let mut out = Vec::new();
-    if let Some(exp) = vanilla {
+    for &exp in vanilla {
         let rows = crate::experiment::read_raw(exp, results)?;
         let mut cells: Vec<&Cell> = exp.cells.iter().collect();
         cells.sort_by(|a, b| a.id.cmp(&b.id));
@@ -143,32 +154,49 @@ fn no_runs(dir: &Path) -> Error {
 
 /// Our learner's line from one cell's raw rows `runs` (read and checked as every sweep's),
 /// each checked against its own evaluations: in order, successes in [0, 1], the last at the
-/// run's budget with the row's success rate.
+/// run's last step with the row's success rate; by SB3's protocol (the cell's
+/// `train.stop_at_successes`), none solving before the last.
 fn vanilla_line(
     exp: &Experiment,
     cell: &Cell,
     runs: &[&RawRow],
     results: &Path,
 ) -> Result<PointMazeBaseline> {
+    let protocol = match &cell.job {
+        crate::experiment::Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
+        crate::experiment::Job::Pbcs(_) => false,
+    };
     let (mut best, mut reached) = ((0.0f32, u64::MAX), 0);
+    let mut solved_at = Vec::new();
+    let mut best_unsolved: Option<f32> = None;
     for r in runs {
         let path = crate::experiment::evals_file(exp, results, cell, r.seed);
         let evals: Vec<EvalRow> = crate::record::read_records(&path)?;
         let in_order = evals.windows(2).all(|w| w[0].steps < w[1].steps)
             && evals.iter().all(|e| (0.0..=1.0).contains(&e.success));
+        let stops_at_solving = !protocol
+            || evals[..evals.len().saturating_sub(1)]
+                .iter()
+                .all(|e| e.success < crate::runs::SOLVED_AT);
         let agrees = in_order
+            && stops_at_solving
             && evals
                 .last()
                 .is_some_and(|e| e.steps == r.env_steps && e.success == r.success_rate);
         if !agrees {
             let why = format!(
                 "does not agree with its row (in order, successes in [0, 1]; the last at {} \
-                 steps with success {})",
+                 steps with success {}; by SB3's protocol, none solving before it)",
                 r.env_steps, r.success_rate
             );
             return Err(Error::parse(&path, why));
         }
         let run_best = evals.iter().map(|e| e.success).fold(0.0, f32::max);
+        if protocol && r.solved {
+            solved_at.push(r.env_steps);
+        } else if protocol {
+            best_unsolved = Some(best_unsolved.map_or(run_best, |b| b.max(run_best)));
+        }
         reached += u64::from(run_best > 0.0);
         let at = evals
             .iter()
@@ -186,13 +214,31 @@ fn vanilla_line(
         ended: runs.len() as u64,
         resumed: 0,
         steps_max: runs.iter().map(|r| r.env_steps).max().unwrap_or(0),
-        solved: runs.iter().filter(|r| r.success_rate >= 1.0).count() as u64,
-        solved_at_min: None,
+        solved: if protocol {
+            solved_at.len() as u64
+        } else {
+            runs.iter().filter(|r| r.success_rate >= 1.0).count() as u64
+        },
+        solved_at_min: solved_at.iter().copied().min(),
+        solved_at_median: median_steps(&mut solved_at),
+        best_unsolved: best_unsolved.map(f64::from),
         reached,
         best: f64::from(best.0),
         best_at: (best.0 > 0.0).then_some(best.1),
         seeds: seeds_text(runs.iter().map(|r| r.seed)),
     })
+}
+
+/// The median of `steps` (the mean of the two middle ones for an even count, rounded down);
+/// none when empty.
+fn median_steps(steps: &mut [u64]) -> Option<u64> {
+    steps.sort_unstable();
+    let n = steps.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(steps[n / 2]),
+        _ => Some((steps[n / 2 - 1] + steps[n / 2]) / 2),
+    }
 }
 
 /// The seeds of the files `s<seed>.evals.csv` of `dir`, sorted.
@@ -277,6 +323,12 @@ fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
         steps_max: runs.iter().map(|r| r.steps).max().unwrap_or(0),
         solved: runs.iter().filter(|r| r.solved_at.is_some()).count() as u64,
         solved_at_min: runs.iter().filter_map(|r| r.solved_at).min(),
+        solved_at_median: median_steps(&mut runs.iter().filter_map(|r| r.solved_at).collect::<Vec<_>>()),
+        best_unsolved: runs
+            .iter()
+            .filter(|r| r.solved_at.is_none())
+            .map(|r| r.top as f64 / 100.0)
+            .reduce(f64::max),
         reached: runs.iter().filter(|r| r.top > 0).count() as u64,
         best: best.0 as f64 / 100.0,
         best_at: (best.0 > 0).then_some(best.1),
