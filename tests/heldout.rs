@@ -333,11 +333,18 @@ fn the_her_grid_runs_its_base_job_by_sb3s_protocol_with_two_learners() {
         );
         assert_eq!((t.max_episode_steps, t.learning_starts), (limit, 1_000));
         assert_eq!(t.her, Some(pbcs::learner::her::HerConfig::default()));
-        assert_eq!(sac.learner, pbcs::learner::LearnerConfig::preset("sac").unwrap());
+        assert_eq!(
+            sac.learner,
+            pbcs::learner::LearnerConfig::preset("sac").unwrap()
+        );
         let td3_learner = td3.learner.as_td3().unwrap().clone();
         assert_eq!(td3.learner.algo(), "td3");
         assert_eq!(
-            (td3_learner.hidden.as_slice(), td3_learner.batch_size, td3_learner.noise_sigma),
+            (
+                td3_learner.hidden.as_slice(),
+                td3_learner.batch_size,
+                td3_learner.noise_sigma
+            ),
             (&[256, 256][..], 256, 0.1)
         );
         td3.learner = sac.learner.clone();

@@ -123,8 +123,11 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pipeline::evaluation_starts, m)?)?;
     m.add_function(wrap_pyfunction!(env::pendulum_step, m)?)?;
     m.add("MAX_MAZE_SIZE", pbcs::envs::maze::MAX_MAZE_SIZE)?;
+    // The names this binding makes: not the goal-drawing ones, whose goal its observation
+    // would not show (`NamedEnv::new` refuses them, saying what to use).
     let names: Vec<&str> = pbcs::envs::EnvName::all()
         .iter()
+        .filter(|e| !e.goal_resets())
         .map(|e| e.name())
         .collect();
     m.add("ENV_NAMES", names)?;

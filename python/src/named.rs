@@ -234,6 +234,19 @@ impl NamedEnv {
         map_file: Option<std::path::PathBuf>,
     ) -> PyResult<Self> {
         let env = env_name(name)?;
+        if env.goal_resets() {
+            // Its observation would not hold the episode's goal.
+            return Err(invalid(
+                "env",
+                format!(
+                    "`{name}` draws a goal per episode, which this binding's observation does \
+                     not show: in Python, use gymnasium-robotics' own {} (its observation dict \
+                     holds the goal), or `{}` for PBCS's fixed task",
+                    env.point_map().map_or(String::new(), |m| m.gym_id()),
+                    name.trim_end_matches("_goals")
+                ),
+            ));
+        }
         let map = Map {
             rows: map,
             file: map_file,

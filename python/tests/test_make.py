@@ -24,6 +24,14 @@ def test_the_registry_lists_the_maze_the_rooms_and_pointmaze():
     assert {"pointmaze_umaze", "pointmaze_large", "pointmaze"} <= set(pbcs.ENV_NAMES)
 
 
+def test_a_goal_drawing_name_is_refused_naming_gymnasium_robotics_own():
+    # pointmaze_<map>_goals draws a goal per episode; this binding's observation would not show
+    # it, so it is not in ENV_NAMES and making it says what to use instead.
+    assert not [n for n in pbcs.ENV_NAMES if n.endswith("_goals")]
+    with pytest.raises(ValueError, match=r"PointMaze_UMaze-v3.*pointmaze_umaze"):
+        pbcs.make("pointmaze_umaze_goals")
+
+
 @pytest.mark.parametrize("name", RUNNABLE)
 def test_every_environment_passes_gymnasiums_checker(name):
     check_env(pbcs.make(name), skip_render_check=False)

@@ -197,8 +197,7 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
 pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseline]) -> String {
     let mut s = String::new();
     for r in rows {
-        let protocol =
-            r.library == "sb3" || r.solved_at_min.is_some() || r.best_unsolved.is_some();
+        let protocol = r.library == "sb3" || r.solved_at_min.is_some() || r.best_unsolved.is_some();
         let best = if protocol {
             format!("{:.0}", r.best * 100.0)
         } else {

@@ -228,10 +228,7 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
     let row = std::fs::read_to_string(from.join("s8.csv")).unwrap();
     let evals8 = std::fs::read_to_string(from.join("s8.evals.csv")).unwrap();
     let tmp = copy(&row, &evals8);
-    assert_eq!(
-        pointmaze_baselines(&[&exp], tmp.path()).unwrap().len(),
-        1
-    );
+    assert_eq!(pointmaze_baselines(&[&exp], tmp.path()).unwrap().len(), 1);
     for (bad, why) in [
         (row.replace(",8,ddpg,", ",9,ddpg,"), "seed"),
         (row.replace(",ddpg,vanilla,", ",td3,vanilla,"), "method"),

@@ -69,21 +69,13 @@ impl RunArgs {
         &self,
         default: impl FnOnce() -> pbcs::Result<T>,
     ) -> anyhow::Result<T> {
-        let mut job: T = match &self.config {
+        let (mut job, unset): (T, _) = match &self.config {
             Some(path) => {
                 let job: T = config::load(path)?;
                 let unset = pbcs::validate::unset_keys(path, &job);
-                if !unset.is_empty() {
-                    eprintln!(
-                        "note: {} does not set {}: the defaults are used (the run folder's \
-                         config.toml lists every value)",
-                        path.display(),
-                        unset.join(", ")
-                    );
-                }
-                job
+                (job, Some((path, unset)))
             }
-            None => default()?,
+            None => (default()?, None),
         };
         let place = Place {
             env: self.env,
@@ -100,6 +92,20 @@ impl RunArgs {
             },
         };
         place.apply(&mut job)?;
+        if let Some((path, mut unset)) = unset {
+            // The maze's parameters matter only on the maze.
+            if !job.env_spec().name.is_maze() {
+                unset.retain(|k| k != "maze");
+            }
+            if !unset.is_empty() {
+                eprintln!(
+                    "note: {} does not set {}: the defaults are used (the run folder's \
+                     config.toml lists every value)",
+                    path.display(),
+                    unset.join(", ")
+                );
+            }
+        }
         Ok(job)
     }
 
@@ -171,9 +177,9 @@ pub enum Command {
         #[command(flatten)]
         run: RunArgs,
     },
-    /// A vanilla baseline: DDPG or TD3 (optionally with the argmax actor) on an environment's
-    /// own reward (the maze unless --env); write evaluations, visited states, the actor and a
-    /// picture.
+    /// A vanilla baseline: DDPG, TD3 (optionally with the argmax actor) or SAC, with HER where
+    /// the config has [train.her], on an environment's own reward (the maze unless --env);
+    /// write evaluations, visited states, the policy and a picture.
     Train {
         #[command(flatten)]
         run: RunArgs,

@@ -408,8 +408,8 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
 }
 
 /// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.pendulum_sac.csv`,
-/// `outside.timing.csv` and
-/// `outside.pointmaze.csv` under `<results>/tables/` from the rows under `<results>/outside/`
+/// `outside.timing.csv`, `outside.pointmaze.csv` and `outside.pointmaze_sb3.csv`
+/// ([`sb3_comparisons`]) under `<results>/tables/` from the rows under `<results>/outside/`
 /// (PointMaze's: the raw rows of `pointmaze_vanilla`, `pointmaze_her` and `<results>/pointmaze/sb3/`,
 /// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
 /// removed); `table` is the experiment of our maze side.
@@ -433,14 +433,26 @@ pub fn write_outside_tables(
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
     let pointmaze = pointmaze_baselines(pointmaze_vanilla, results)?;
+    let against_sb3 = match pointmaze_vanilla.iter().find(|e| e.name == "pointmaze_her") {
+        Some(her) => sb3_comparisons(her, &pointmaze, results)?,
+        None => Vec::new(),
+    };
     put_or_remove(&outside_table(results, "pointmaze"), &pointmaze, &mut files)?;
+    put_or_remove(
+        &outside_table(results, "pointmaze_sb3"),
+        &against_sb3,
+        &mut files,
+    )?;
     Ok(files)
 }
 
 mod pendulum;
 pub use pendulum::{pendulum_rows, pendulum_sac_rows, PendulumRow, PendulumRun, Published};
 mod pointmaze;
-pub use pointmaze::{pointmaze_baselines, PointMazeBaseline, Sb3Eval, SB3_SOLVED};
+pub use pointmaze::{
+    pointmaze_baselines, sb3_comparisons, PointMazeBaseline, PointMazeSb3Comparison, Sb3Eval,
+    SB3_BUDGET, SB3_SOLVED,
+};
 
 #[cfg(test)]
 mod tests;

@@ -323,7 +323,9 @@ fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
         steps_max: runs.iter().map(|r| r.steps).max().unwrap_or(0),
         solved: runs.iter().filter(|r| r.solved_at.is_some()).count() as u64,
         solved_at_min: runs.iter().filter_map(|r| r.solved_at).min(),
-        solved_at_median: median_steps(&mut runs.iter().filter_map(|r| r.solved_at).collect::<Vec<_>>()),
+        solved_at_median: median_steps(
+            &mut runs.iter().filter_map(|r| r.solved_at).collect::<Vec<_>>(),
+        ),
         best_unsolved: runs
             .iter()
             .filter(|r| r.solved_at.is_none())
@@ -394,4 +396,92 @@ struct Sb3Row {
     solved: bool,
     best_successes: u64,
     best_at_steps: u64,
+}
+
+/// SB3's budget on PointMaze (`python/benches/sb3_pointmaze.py --steps`): our runs by its
+/// protocol are compared with its runs as they stood at this many steps.
+pub const SB3_BUDGET: u64 = 500_000;
+
+/// One line of `outside.pointmaze_sb3.csv`: our learner by SB3's protocol against SB3's
+/// SAC+HER on one map, runs solved within [`SB3_BUDGET`] steps (issue 48, point 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointMazeSb3Comparison {
+    /// Our method (`sac_her`).
+    pub method: String,
+    /// Our task (`pointmaze_umaze_goals`).
+    pub env: String,
+    /// SB3's map folder (`pointmaze_umaze`).
+    pub sb3_env: String,
+    /// The steps both are judged at.
+    pub budget: u64,
+    /// Our runs with rows.
+    pub ours_n: u64,
+    /// Of them, solved (an evaluation with 95 of 100) within the budget.
+    pub ours_solved: u64,
+    /// Their seeds, space-separated.
+    pub ours_seeds: String,
+    /// SB3's runs (every one ended at its budget or solving).
+    pub sb3_n: u64,
+    /// Of them, solved.
+    pub sb3_solved: u64,
+    /// Two-sided p-value of Fisher's exact test, ours against SB3.
+    pub fisher_p: f64,
+}
+
+/// The lines of `outside.pointmaze_sb3.csv`: for each method of ours that SB3 also ran
+/// (`sac_her`), on each of our `_goals` tasks whose map SB3 ran, from `lines` (the lines of
+/// [`pointmaze_baselines`]) and our raw rows under `results` (`her`: the experiment
+/// `pointmaze_her`). SB3's line must be of ended runs with [`SB3_BUDGET`] steps at most.
+pub fn sb3_comparisons(
+    her: &Experiment,
+    lines: &[PointMazeBaseline],
+    results: &Path,
+) -> Result<Vec<PointMazeSb3Comparison>> {
+    let rows = crate::experiment::read_raw(her, results)?;
+    let mut out = Vec::new();
+    for ours in lines.iter().filter(|l| l.library == "ours") {
+        let Some(map) = ours.env.strip_suffix("_goals") else {
+            continue;
+        };
+        let Some(sb3) = lines
+            .iter()
+            .find(|l| l.library == "sb3" && l.method == ours.method && l.env == map)
+        else {
+            continue;
+        };
+        if sb3.ended != sb3.runs || sb3.steps_max > SB3_BUDGET {
+            let why = format!(
+                "SB3's {} on {map}: {} of {} runs ended, at most {} steps: every run ended \
+                 within {SB3_BUDGET} expected",
+                sb3.method, sb3.ended, sb3.runs, sb3.steps_max
+            );
+            return Err(Error::parse(&results.join("pointmaze").join("sb3"), why));
+        }
+        let runs: Vec<&RawRow> = rows
+            .iter()
+            .filter(|r| r.method == ours.method && r.site.id() == ours.env)
+            .collect();
+        let solved: Vec<&&RawRow> = runs
+            .iter()
+            .filter(|r| r.solved && r.env_steps <= SB3_BUDGET)
+            .collect();
+        let (k1, n1, k2, n2) = (solved.len() as u64, runs.len() as u64, sb3.solved, sb3.runs);
+        out.push(PointMazeSb3Comparison {
+            method: ours.method.clone(),
+            env: ours.env.clone(),
+            sb3_env: map.to_string(),
+            budget: SB3_BUDGET,
+            ours_n: n1,
+            ours_solved: k1,
+            ours_seeds: seeds_text(solved.iter().map(|r| r.seed)),
+            sb3_n: n2,
+            sb3_solved: k2,
+            fisher_p: if n1 > 0 && n2 > 0 {
+                crate::stats::fisher_exact(k1, n1, k2, n2)
+            } else {
+                f64::NAN
+            },
+        });
+    }
+    Ok(out)
 }
