@@ -19,6 +19,10 @@ pub struct SeedCheck {
     pub seed: u64,
     /// Whether the fresh row has the committed row's bytes.
     pub identical: bool,
+    /// Where they differ: `column: committed → fresh`, one per column (empty when identical;
+    /// `header` when the headers differ, `bytes` when the values read the same but the bytes
+    /// do not).
+    pub differing: Vec<String>,
     /// The committed row.
     pub committed: RawRow,
     /// The fresh row.
@@ -118,9 +122,9 @@ impl CellCheck {
                 "seed {}: {} — committed: {}; now: {}\n",
                 c.seed,
                 if c.identical {
-                    "identical bytes"
+                    "identical bytes".to_string()
                 } else {
-                    "DIFFERENT"
+                    format!("DIFFERENT ({})", c.differing.join(", "))
                 },
                 c.committed,
                 c.fresh
@@ -157,9 +161,16 @@ impl CellCheck {
         match reproduced {
             Reproduced::Match => s.push_str("MATCH: the committed rows are reproduced exactly"),
             Reproduced::WithinInterval if exact => {
+                let which: Vec<String> = self
+                    .seeds
+                    .iter()
+                    .filter(|c| !c.identical)
+                    .map(|c| format!("seed {}: {}", c.seed, c.differing.join(", ")))
+                    .collect();
                 return fail(format!(
-                    "--exact: {differ} of {n} rows differ from the committed bytes"
-                ))
+                    "--exact: {differ} of {n} rows differ from the committed bytes ({})",
+                    which.join("; ")
+                ));
             }
             Reproduced::WithinInterval => s.push_str(&format!(
                 "DIFFERENT BYTES, but the new success rate {rate:.2} lies inside the committed \
@@ -214,8 +225,16 @@ pub fn check_cell(
     let mut seeds = Vec::new();
     let mut committed_kernels = Vec::new();
     for (p, (old, new)) in runs.iter().zip(committed.into_iter().zip(fresh)) {
-        let identical = read(&run_file(&committed_dir, p.seed, ".csv"))?
-            == read(&run_file(&fresh_dir, p.seed, ".csv"))?;
+        let (was, is) = (
+            read(&run_file(&committed_dir, p.seed, ".csv"))?,
+            read(&run_file(&fresh_dir, p.seed, ".csv"))?,
+        );
+        let identical = was == is;
+        let differing = if identical {
+            Vec::new()
+        } else {
+            differing_columns(&was, &is)
+        };
         let timing = Timing::read(&run_file(&committed_dir, p.seed, ".timing.toml"))
             .ok()
             .flatten();
@@ -224,6 +243,7 @@ pub fn check_cell(
         seeds.push(SeedCheck {
             seed: p.seed,
             identical,
+            differing,
             committed: old,
             fresh: new,
         });
@@ -238,9 +258,63 @@ pub fn check_cell(
     })
 }
 
+/// The columns where two raw row files differ, each `column: committed → fresh` in the
+/// header's order; `header` when the headers differ; `bytes` when every value reads the same
+/// (line endings, quoting).
+pub fn differing_columns(committed: &[u8], fresh: &[u8]) -> Vec<String> {
+    let records = |bytes: &[u8]| {
+        let mut r = csv::Reader::from_reader(bytes);
+        let header = r.headers().ok().cloned().unwrap_or_default();
+        let rows: Vec<csv::StringRecord> = r.records().filter_map(|x| x.ok()).collect();
+        (header, rows)
+    };
+    let ((h1, r1), (h2, r2)) = (records(committed), records(fresh));
+    if h1 != h2 {
+        return vec!["header".into()];
+    }
+    let empty = csv::StringRecord::new();
+    let (a, b) = (r1.first().unwrap_or(&empty), r2.first().unwrap_or(&empty));
+    let mut out: Vec<String> = h1
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| {
+            let (x, y) = (a.get(i).unwrap_or(""), b.get(i).unwrap_or(""));
+            (x != y).then(|| format!("{name}: {x} → {y}"))
+        })
+        .collect();
+    if r1.len() != r2.len() {
+        out.push(format!("records: {} → {}", r1.len(), r2.len()));
+    }
+    if out.is_empty() {
+        out.push("bytes".into());
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_difference_is_named_by_its_columns() {
+        let head = "cell,seed,skills,env_steps\n";
+        let was = format!("{head}pbcs-maze2,0,2,160484\n");
+        let is = format!("{head}pbcs-maze2,0,3,170000\n");
+        assert_eq!(
+            differing_columns(was.as_bytes(), is.as_bytes()),
+            ["skills: 2 → 3", "env_steps: 160484 → 170000"]
+        );
+        let crlf = was.replace('\n', "\r\n");
+        assert_eq!(
+            differing_columns(was.as_bytes(), crlf.as_bytes()),
+            ["bytes"]
+        );
+        let other = "cell,seed,skills\npbcs-maze2,0,2\n";
+        assert_eq!(
+            differing_columns(was.as_bytes(), other.as_bytes()),
+            ["header"]
+        );
+    }
 
     fn row(solved: bool) -> RawRow {
         let csv = format!(
@@ -266,6 +340,7 @@ mod tests {
                 .map(|(i, &(identical, old, new))| SeedCheck {
                     seed: i as u64,
                     identical,
+                    differing: Vec::new(),
                     committed: row(old),
                     fresh: row(new),
                 })

@@ -197,6 +197,21 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ("budget", row.budget.to_string(), budget.to_string()),
     ];
     // (γ is compared as written: the row holds the job's f32, which prints the same.)
+    // A vanilla run stops before its budget only with `train.stop_at_successes`.
+    let stops = match &cell.job {
+        Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
+        Job::Pbcs(_) => true,
+    };
+    if !stops && row.kind == Kind::Vanilla && row.env_steps != row.budget {
+        return Err(Error::parse(
+            path,
+            format!(
+                "line {line}, column `env_steps`: {} of a budget of {}, but the job of cell \
+                 `{}` trains its whole budget (it has no train.stop_at_successes)",
+                row.env_steps, row.budget, cell.id
+            ),
+        ));
+    }
     match fields.into_iter().find(|(_, found, want)| found != want) {
         None => check_values(&row, path, line).map(|()| row),
         Some((column, found, want)) => Err(Error::parse(
@@ -361,12 +376,18 @@ fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, Str
             format!("{} in a vanilla row (PBCS only: empty)", f.name()),
         );
     }
-    if r.env_steps != r.budget {
+    // A run trains its whole budget, or stops earlier at an evaluation that solved it
+    // (`train.stop_at_successes`; whether its job has that stop is checked against the cell,
+    // [`read_run_row`]).
+    if r.env_steps > r.budget || (r.env_steps < r.budget && !r.solved) {
         return fail(
             "env_steps",
             format!(
-                "{} in a vanilla row, whose run trains its whole budget of {}",
-                r.env_steps, r.budget
+                "{} in a vanilla row of budget {}{}: a run trains its whole budget, or stops \
+                 earlier at an evaluation that solved it",
+                r.env_steps,
+                r.budget,
+                if r.solved { "" } else { " not solved" }
             ),
         );
     }

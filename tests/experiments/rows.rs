@@ -219,3 +219,60 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
     assert_eq!(get("learningmax").as_deref(), Some("4k"));
     assert_eq!(get("testshare").as_deref(), Some("31"));
 }
+
+/// `pbcs exp check --exact` names what differs: a committed row whose `skills` was edited is
+/// re-run, and both the seed's comparison and the exact verdict name the column with its
+/// committed and fresh values (before: "1 of 1 rows differ", and two summaries that read the
+/// same).
+#[test]
+fn an_exact_check_names_the_columns_that_differ() {
+    let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+    let id = "pbcs_fast-maze2";
+    let cell = exp.cell(id).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let (from, to) = (
+        exp.cell_dir(Path::new("results"), cell),
+        exp.cell_dir(tmp.path(), cell),
+    );
+    std::fs::create_dir_all(&to).unwrap();
+    for ext in [
+        ".csv",
+        ".toml",
+        ".timing.toml",
+        ".evaluation.csv",
+        ".picture.csv",
+    ] {
+        let name = format!("s0{ext}");
+        if from.join(&name).exists() {
+            std::fs::copy(from.join(&name), to.join(&name)).unwrap();
+        }
+    }
+    let row = std::fs::read_to_string(to.join("s0.csv")).unwrap();
+    let edited = row.replace(",13585,2,", ",13585,7,");
+    assert_ne!(
+        edited, row,
+        "the committed row of seed 0 has 2 skills after 13585 test steps"
+    );
+    std::fs::write(to.join("s0.csv"), edited).unwrap();
+    let check = pbcs::reproduce::check_cell(
+        &exp,
+        tmp.path(),
+        id,
+        Some(0),
+        1,
+        pbcs::nn::kernel::Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    let differing = &check.seeds[0].differing;
+    assert!(
+        differing.iter().any(|d| d.starts_with("skills: 7 → ")),
+        "{differing:?}"
+    );
+    let err = check.verdict(id, true).unwrap_err().to_string();
+    assert!(
+        err.contains("seed 0: ") && err.contains("skills: 7 → "),
+        "{err}"
+    );
+    assert!(check.report(id).contains("DIFFERENT (skills: 7 → "));
+}
