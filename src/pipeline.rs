@@ -484,6 +484,12 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
             &pointmaze,
         )?));
     }
+    let against_sb3 = outside_table(results, "pointmaze_sb3");
+    if against_sb3.exists() {
+        numbers.push_str(&report::outside::outside_pointmaze_sb3_numbers(
+            &read_records(&against_sb3)?,
+        ));
+    }
     Ok(numbers)
 }
 

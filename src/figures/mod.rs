@@ -17,7 +17,7 @@ pub use grid::{Panels, ResultsGrid};
 pub use routes::Routes;
 pub use scaling::Scaling;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::experiment::{picture_file, Cell, Experiment, FigureSpec, Site};
 use crate::fmt::human_steps;
 use crate::plot::{render_figure, PictureData};
@@ -60,13 +60,28 @@ fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
     }
 }
 
-/// The picture data of a cell's first picture seed, if it was kept.
+/// The picture data of a cell's first picture seed: none while that seed has no row yet; an
+/// error naming the file where its row exists and its picture data does not (a figure never
+/// draws "no runs yet" over runs that exist).
 fn cell_picture(exp: &Experiment, results: &Path, cell: &Cell) -> Result<Option<PictureData>> {
     let Some(&seed) = exp.picture_seeds.first() else {
         return Ok(None);
     };
     let path = picture_file(exp, results, cell, seed);
     if !path.exists() {
+        let row = crate::experiment::run_file(&exp.cell_dir(results, cell), seed, ".csv");
+        if row.exists() {
+            return Err(Error::parse(
+                &path,
+                format!(
+                    "missing: seed {seed} of cell {} has its row ({}) but not the picture data \
+                     its figures draw (restore the file, or remove the row and run the seed \
+                     again)",
+                    cell.id,
+                    row.display()
+                ),
+            ));
+        }
         return Ok(None);
     }
     PictureData::read_csv(&path).map(Some)

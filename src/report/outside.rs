@@ -237,6 +237,39 @@ pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseli
     s
 }
 
+/// The numbers `\res{outside:pointmazesb3:<method>-<env>:<field>}` of our runs by SB3's
+/// protocol against SB3's on one map (`outside.pointmaze_sb3.csv`): `budget`, `oursn`,
+/// `ourssolved`, `oursseeds`, `sbn`, `sbsolved`, `p` (Fisher's exact test) and `verdict`.
+pub fn outside_pointmaze_sb3_numbers(
+    rows: &[crate::tables::outside::PointMazeSb3Comparison],
+) -> String {
+    let mut s = String::new();
+    for r in rows {
+        let rate = |k: u64, n: u64| k as f64 / n as f64;
+        let verdict = if r.fisher_p.is_nan() || r.fisher_p >= 0.05 {
+            "no significant difference"
+        } else if rate(r.ours_solved, r.ours_n) > rate(r.sb3_solved, r.sb3_n) {
+            "ours solves significantly more"
+        } else {
+            "ours solves significantly fewer"
+        };
+        for (f, v) in [
+            ("budget", human_steps(r.budget as f64)),
+            ("oursn", r.ours_n.to_string()),
+            ("ourssolved", r.ours_solved.to_string()),
+            ("oursseeds", seeds_list(&r.ours_seeds)),
+            ("sbn", r.sb3_n.to_string()),
+            ("sbsolved", r.sb3_solved.to_string()),
+            ("p", p_value(r.fisher_p)),
+            ("verdict", verdict.to_string()),
+        ] {
+            let key = format!("pointmazesb3:{}-{}:{f}", r.method, r.env);
+            def_res(&mut s, "outside", &key, &v);
+        }
+    }
+    s
+}
+
 /// The verdict of one maze comparison at the 5 % level of Fisher's exact test: "no significant
 /// difference", or which side solves more.
 pub fn maze_verdict(r: &crate::tables::outside::MazeComparison) -> &'static str {

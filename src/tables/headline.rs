@@ -15,8 +15,8 @@ use std::path::Path;
 /// `table` experiment, the paper's PBCS steps, our DDPG and TD3, and PBCS with the `paper`
 /// and `fast` presets (solved / runs, median environment steps of all runs); per PointMaze
 /// map, PBCS's chains as gymnasium-robotics judged them on the grid and the held-out grid,
-/// and the learners alone (`outside.pointmaze.csv`). A missing table or cell is an error
-/// naming it.
+/// and the learners alone (`outside.pointmaze.csv`; our SAC+HER and TD3+HER by SB3's protocol
+/// `–` until their grid has a row there). A missing table or cell is an error naming it.
 pub fn headline_markdown(results: &Path) -> Result<String> {
     let mut s = maze_table(&read_table(&table_path(results, "table"))?)?;
     s.push('\n');
@@ -85,7 +85,8 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         crate::record::read_records(&super::outside::outside_table(results, "pointmaze"))?;
     let mut s = String::from(
         "| map | PBCS, seeds 0–9 | PBCS, held out: 10–19 | DDPG, 1M steps | TD3, 1M steps | \
-         SAC+HER (SB3) |\n| --- | --- | --- | --- | --- | --- |\n",
+         SAC+HER (SB3) | SAC+HER (ours) | TD3+HER (ours) |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     for c in &grid {
         let Site::Env(env) = c.site else { continue };
@@ -121,14 +122,32 @@ fn pointmaze_table(results: &Path) -> Result<String> {
                 None => format!("{}/{}", b.solved, b.runs),
             })
         };
+        // Ours by SB3's protocol, on the env's own resets (`<name>_goals`): runs solved of
+        // those with rows (the grid may still be running: `–` where none has a row yet), and
+        // the median steps of the solved ones.
+        let goals = format!("{name}_goals");
+        let ours = |method: &str| {
+            let line = baselines
+                .iter()
+                .find(|b| b.library == "ours" && b.method == method && b.env == goals);
+            match line {
+                None => "–".to_string(),
+                Some(b) => match b.solved_at_median {
+                    Some(m) => format!("{}/{}, {}", b.solved, b.runs, human_steps(m as f64)),
+                    None => format!("{}/{}", b.solved, b.runs),
+                },
+            }
+        };
         let _ = writeln!(
             s,
-            "| {map} | **{}** | {} | {} | {} | {} |",
+            "| {map} | **{}** | {} | {} | {} | {} | {} | {} |",
             judged_cell(&grid_judged, &grid)?,
             judged_cell(&held_judged, &held)?,
             baseline("ddpg")?,
             baseline("td3")?,
             baseline("sac_her")?,
+            ours("sac_her"),
+            ours("td3_her"),
         );
     }
     Ok(s)

@@ -276,3 +276,40 @@ fn an_exact_check_names_the_columns_that_differ() {
     );
     assert!(check.report(id).contains("DIFFERENT (skills: 7 → "));
 }
+
+/// A figure refuses a picture seed whose row exists without its picture data, naming the file
+/// (before: the grid drew "no runs yet" over ten runs, exit 0).
+#[test]
+fn a_figure_refuses_missing_picture_data_naming_the_file() {
+    let exp = Experiment::load(Path::new("experiments/rooms.toml"), None).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = |from: &Path, to: &Path| {
+        std::fs::create_dir_all(to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+        }
+    };
+    for cell in &exp.cells {
+        copy(
+            &exp.cell_dir(Path::new("results"), cell),
+            &exp.cell_dir(tmp.path(), cell),
+        );
+    }
+    let rows = read_raw(&exp, tmp.path()).unwrap();
+    let stats = pbcs::tables::cell_stats(&exp, &rows);
+    let out = tmp.path().join("figures");
+    std::fs::create_dir_all(&out).unwrap();
+    pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out).unwrap();
+    let cell = &exp.cells[0];
+    let seed = exp.picture_seeds[0];
+    let picture = pbcs::experiment::picture_file(&exp, tmp.path(), cell, seed);
+    std::fs::remove_file(&picture).unwrap();
+    let err = pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(&picture.display().to_string()) && err.contains("missing"),
+        "{err}"
+    );
+}
