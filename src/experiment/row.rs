@@ -213,7 +213,11 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ));
     }
     match fields.into_iter().find(|(_, found, want)| found != want) {
-        None => check_values(&row, path, line).map(|()| row),
+        None => {
+            check_values(&row, path, line)?;
+            check_summary(&row, cell, seed, path, line)?;
+            Ok(row)
+        }
         Some((column, found, want)) => Err(Error::parse(
             path,
             format!(
@@ -225,6 +229,122 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
             ),
         )),
     }
+}
+
+/// Checks a row against the files it summarises, beside it (where they exist: rows written
+/// before a file existed lack it): a PBCS row's `s<seed>.evaluation.csv` holds the job's
+/// `phase2.eval_episodes` episodes and the rate is their wins over them, or is empty for a run
+/// that stopped (a failure) or made no skill, whose rate is 0; a vanilla row's rate is that of
+/// its `s<seed>.evaluation.csv` (PBCS's protocol after training) or else of the last
+/// evaluation of its `s<seed>.evals.csv`. An error names the row's file, line and column.
+fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> Result<()> {
+    use crate::env::EvalEpisode;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let evaluation_path = super::run_file(dir, seed, ".evaluation.csv");
+    let evaluation: Option<Vec<EvalEpisode>> = evaluation_path
+        .exists()
+        .then(|| crate::record::read_records(&evaluation_path))
+        .transpose()?;
+    let rate_of =
+        |e: &[EvalEpisode]| e.iter().filter(|e| e.success).count() as f32 / e.len() as f32;
+    let wrong = |column: &str, why: String| {
+        Err(Error::parse(
+            path,
+            format!("line {line}, column `{column}`: {why}"),
+        ))
+    };
+    match (&cell.job, evaluation) {
+        (Job::Pbcs(_), Some(e)) if e.is_empty() => {
+            if r.failure.is_none() && r.skills > 0 {
+                return wrong(
+                    "failure",
+                    format!(
+                        "empty, but {} holds no evaluation episode: a chain of {} skills with \
+                         no failure is evaluated",
+                        evaluation_path.display(),
+                        r.skills
+                    ),
+                );
+            }
+            if r.success_rate != 0.0 {
+                return wrong(
+                    "success_rate",
+                    format!(
+                        "{}, but {} holds no evaluation episode",
+                        r.success_rate,
+                        evaluation_path.display()
+                    ),
+                );
+            }
+        }
+        (Job::Pbcs(j), Some(e)) => {
+            if e.len() != j.phase2.eval_episodes {
+                return wrong(
+                    "success_rate",
+                    format!(
+                        "of {} episodes in {}, but the job evaluates {}",
+                        e.len(),
+                        evaluation_path.display(),
+                        j.phase2.eval_episodes
+                    ),
+                );
+            }
+            if let Some(f) = r.failure {
+                return wrong(
+                    "failure",
+                    format!(
+                        "{}, but the run's chain was evaluated ({})",
+                        f.name(),
+                        evaluation_path.display()
+                    ),
+                );
+            }
+            if r.success_rate != rate_of(&e) {
+                return wrong(
+                    "success_rate",
+                    format!(
+                        "{}, but {} holds {} wins of {} episodes",
+                        r.success_rate,
+                        evaluation_path.display(),
+                        e.iter().filter(|e| e.success).count(),
+                        e.len()
+                    ),
+                );
+            }
+        }
+        (Job::Vanilla(_), Some(e)) if !e.is_empty() && r.success_rate != rate_of(&e) => {
+            return wrong(
+                "success_rate",
+                format!(
+                    "{}, but {} holds {} wins of {} episodes",
+                    r.success_rate,
+                    evaluation_path.display(),
+                    e.iter().filter(|e| e.success).count(),
+                    e.len()
+                ),
+            );
+        }
+        (Job::Vanilla(_), None) => {
+            let evals_path = super::run_file(dir, seed, ".evals.csv");
+            if evals_path.exists() {
+                let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(&evals_path)?;
+                if let Some(last) = evals.last().filter(|e| e.success != r.success_rate) {
+                    return wrong(
+                        "success_rate",
+                        format!(
+                            "{}, but the last evaluation of {} (at {} steps) has success {}",
+                            r.success_rate,
+                            evals_path.display(),
+                            last.steps,
+                            last.success
+                        ),
+                    );
+                }
+            }
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 /// The row of `path` (one record under the header, its values not yet checked) and the line

@@ -243,7 +243,8 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
             .to_string();
         assert!(err.contains("s8") && err.contains(why), "{why}: {err}");
     }
-    // Its last evaluation says the goal was reached, its row that it was not: refused.
+    // Its last evaluation says the goal was reached, its row that it was not: refused (by
+    // the row's own check against its evaluations, naming both files and the column).
     let mut lines: Vec<String> = evals8.lines().map(String::from).collect();
     let last = lines.len() - 1;
     let mut cols: Vec<&str> = lines[last].split(',').collect();
@@ -255,7 +256,9 @@ fn rows_that_disagree_with_their_folder_or_evaluations_are_refused_naming_the_fi
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("s8.evals.csv") && err.contains("does not agree"),
+        err.contains("s8.csv")
+            && err.contains("s8.evals.csv")
+            && err.contains("column `success_rate`"),
         "{err}"
     );
     // Its evaluations out of order (the first two swapped): refused too.

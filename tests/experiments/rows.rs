@@ -313,3 +313,48 @@ fn a_figure_refuses_missing_picture_data_naming_the_file() {
         "{err}"
     );
 }
+
+/// A row is checked against what it summarises (issue 50's probes, which passed before): a
+/// run stopped by its budget, its evaluation file empty, edited to "solved, rate 1, no
+/// failure", is refused; so is a solved row whose rate is not its evaluation's wins over its
+/// episodes (0.33 of 100 episodes), naming the column.
+#[test]
+fn a_row_is_checked_against_its_evaluation_file() {
+    let exp = Experiment::load(Path::new("experiments/ablations.toml"), None).unwrap();
+    let cell = exp.cell("as_written-maze5").unwrap();
+    let from = exp.cell_dir(Path::new("results"), cell);
+    for (seed, from_text, to_text, column) in [
+        (
+            4,
+            ",false,0.0,10002242,10000000,,5954,8475035,1521253,0,budget",
+            ",true,1.0,10002242,10000000,,5954,8475035,1521253,0,",
+            "success_rate",
+        ),
+        (
+            0,
+            ",true,1.0,1237459,",
+            ",false,0.33,1237459,",
+            "success_rate",
+        ),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let to = exp.cell_dir(tmp.path(), cell);
+        std::fs::create_dir_all(&to).unwrap();
+        for ext in [".csv", ".toml", ".timing.toml", ".evaluation.csv"] {
+            let name = format!("s{seed}{ext}");
+            std::fs::copy(from.join(&name), to.join(&name)).unwrap();
+        }
+        let path = run_file(&to, seed, ".csv");
+        read_run_row(&exp, cell, seed, &path).unwrap();
+        let row = std::fs::read_to_string(&path).unwrap();
+        assert!(row.contains(from_text), "seed {seed}: {row}");
+        std::fs::write(&path, row.replace(from_text, to_text)).unwrap();
+        let err = read_run_row(&exp, cell, seed, &path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(&format!("column `{column}`")) && err.contains("evaluation"),
+            "seed {seed}: {err}"
+        );
+    }
+}
