@@ -123,13 +123,25 @@ impl Check for TrainConfig {
             ));
         }
         if let Some(n) = self.stop_at_successes {
-            if n == 0 || n > self.eval_episodes {
+            // A stopped run is a solved run: its row says so ([`crate::runs::SOLVED_AT`]).
+            let least = (crate::runs::SOLVED_AT * self.eval_episodes as f32).ceil() as usize;
+            if n < least.max(1) || n > self.eval_episodes {
                 return Err(Error::invalid(
                     "train.stop_at_successes",
                     format!(
-                        "must be between 1 and train.eval_episodes = {}, got {n}",
+                        "must be between {} (the {} % that counts a run solved) and \
+                         train.eval_episodes = {}, got {n}",
+                        least.max(1),
+                        (crate::runs::SOLVED_AT * 100.0).round(),
                         self.eval_episodes
                     ),
+                ));
+            }
+            if self.final_eval_episodes > 0 {
+                return Err(Error::invalid(
+                    "train.stop_at_successes",
+                    "cannot combine with train.final_eval_episodes: a run stopped at a solving \
+                     evaluation would be judged again on other episodes",
                 ));
             }
         }

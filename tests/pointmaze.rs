@@ -261,7 +261,8 @@ fn the_scene_drawn_without_mujoco_is_the_environments() {
         .filter(|e| e.point_map().is_some())
         .map(|&e| EnvSpec::named(e))
         .collect();
-    assert_eq!(specs.len(), 4);
+    // The four maps, each as PBCS's task and with gymnasium-robotics' resets (`_goals`).
+    assert_eq!(specs.len(), 8);
     let mut own = EnvSpec::named(EnvName::Pointmaze);
     own.pointmaze =
         PointMazeConfig::from_file(Path::new("experiments/maps/pointmaze_own.txt")).unwrap();

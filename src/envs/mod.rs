@@ -83,9 +83,11 @@ pub enum EnvName {
     /// gymnasium-robotics' PointMaze on a map of one's own (the job's `[pointmaze]`,
     /// [`PointMazeConfig`]), the task and success as on the four named maps.
     Pointmaze,
-    /// gymnasium-robotics' `PointMaze_UMaze-v3` as that env runs it: the same two cells, but
-    /// start and goal drawn per episode by its own reset law (each ±0.25 around its cell's
-    /// centre), success within 0.45 of the episode's goal (`PointMaze::with_gym_resets`). A
+    /// gymnasium-robotics' `PointMaze_UMaze-v3` with `continuing_task=False`, reset to the
+    /// cells of PBCS's task (`reset(options={"reset_cell", "goal_cell"})`, as SB3's baseline
+    /// and the judge play it): start and goal drawn per episode by its reset law (each ±0.25
+    /// around its cell's centre), success within 0.45 of the episode's goal
+    /// (`PointMaze::with_gym_resets`). A
     /// goal-conditioned task: runs on it train with `[train.her]`, so that the networks see
     /// the goal; PBCS, which needs one target, does not run on it.
     PointmazeUmazeGoals,

@@ -312,18 +312,24 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
                 );
             }
         }
-        (Job::Vanilla(_), Some(e)) if !e.is_empty() && r.success_rate != rate_of(&e) => {
-            return wrong(
-                "success_rate",
-                format!(
-                    "{}, but {} holds {} wins of {} episodes",
-                    r.success_rate,
-                    evaluation_path.display(),
-                    e.iter().filter(|e| e.success).count(),
-                    e.len()
-                ),
-            );
+        (Job::Vanilla(j), Some(e)) if !e.is_empty() => {
+            if e.len() != j.train.final_eval_episodes || r.success_rate != rate_of(&e) {
+                return wrong(
+                    "success_rate",
+                    format!(
+                        "{}, but {} holds {} wins of {} episodes (the job evaluates {})",
+                        r.success_rate,
+                        evaluation_path.display(),
+                        e.iter().filter(|e| e.success).count(),
+                        e.len(),
+                        j.train.final_eval_episodes
+                    ),
+                );
+            }
         }
+        // Judged on PBCS's protocol after training, whose file this row lacks (written before
+        // it existed): nothing here to check the rate against.
+        (Job::Vanilla(j), None) if j.train.final_eval_episodes > 0 => {}
         (Job::Vanilla(_), None) => {
             let evals_path = super::run_file(dir, seed, ".evals.csv");
             if evals_path.exists() {

@@ -156,7 +156,7 @@ impl TrainRun {
             summary.algo,
             job.env_spec().label(),
             job.seed,
-            job.train.steps,
+            self.result.steps,
             100.0 * summary.final_success
         );
         render_scene(
@@ -169,7 +169,7 @@ impl TrainRun {
         write_timing(
             &out.join("timing.toml"),
             self.seconds,
-            job.train.steps,
+            self.result.steps,
             Some(self.kernel),
         )
     }

@@ -38,28 +38,48 @@ pub fn curves_path(results: &Path, experiment: &str) -> PathBuf {
 }
 
 /// The curve points of every vanilla cell of `exp`, from each seed's `evals.csv` under
-/// `results`, in cell order then steps; seeds without the file are left out.
+/// `results`, in cell order then steps; seeds without the file are left out. A run its job
+/// stopped at a solving evaluation (`train.stop_at_successes`) counts as solved, with that
+/// evaluation's return, at every later step of its cell's curve.
 pub fn curve_points(exp: &Experiment, results: &Path) -> Result<Vec<CurvePoint>> {
     let mut out = Vec::new();
-    for c in exp
-        .cells
-        .iter()
-        .filter(|c| matches!(c.job, Job::Vanilla(_)))
-    {
-        // steps → (seeds reaching the target, seeds, sum of returns), summed in seed order.
-        let mut by_step: BTreeMap<u64, (u64, u64, f64)> = BTreeMap::new();
+    for c in &exp.cells {
+        let Job::Vanilla(job) = &c.job else { continue };
+        let stops = job.train.stop_at_successes.is_some();
+        let mut runs: Vec<Vec<EvalRow>> = Vec::new();
         for seed in exp.seeds() {
             let path = evals_file(exp, results, c, seed);
             if !path.exists() {
                 continue;
             }
             let mut reader = csv::Reader::from_path(&path).map_err(|e| Error::csv(&path, e))?;
-            for rec in reader.deserialize::<EvalRow>() {
-                let e = rec.map_err(|e| Error::csv(&path, e))?;
-                let slot = by_step.entry(e.steps).or_default();
-                slot.0 += u64::from(e.success >= crate::runs::SOLVED_AT);
-                slot.1 += 1;
-                slot.2 += f64::from(e.mean_return);
+            let evals = reader
+                .deserialize::<EvalRow>()
+                .collect::<std::result::Result<Vec<_>, _>>()
+                .map_err(|e| Error::csv(&path, e))?;
+            runs.push(evals);
+        }
+        // steps → (seeds reaching the target, seeds, sum of returns), summed in seed order.
+        let mut by_step: BTreeMap<u64, (u64, u64, f64)> = BTreeMap::new();
+        let mut add = |steps: u64, e: &EvalRow| {
+            let slot = by_step.entry(steps).or_default();
+            slot.0 += u64::from(e.success >= crate::runs::SOLVED_AT);
+            slot.1 += 1;
+            slot.2 += f64::from(e.mean_return);
+        };
+        let all_steps: std::collections::BTreeSet<u64> =
+            runs.iter().flatten().map(|e| e.steps).collect();
+        for evals in &runs {
+            for e in evals {
+                add(e.steps, e);
+            }
+            let stopped = evals
+                .last()
+                .filter(|last| stops && last.success >= crate::runs::SOLVED_AT);
+            if let Some(last) = stopped {
+                for &later in all_steps.range(last.steps + 1..) {
+                    add(later, last);
+                }
             }
         }
         out.extend(by_step.into_iter().map(|(steps, (k, n, r))| CurvePoint {

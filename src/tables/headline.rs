@@ -84,8 +84,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
     let baselines: Vec<PointMazeBaseline> =
         crate::record::read_records(&super::outside::outside_table(results, "pointmaze"))?;
     let mut s = String::from(
-        "| map | PBCS, seeds 0–9 | PBCS, held out: 10–19 | DDPG, 1M steps | TD3, 1M steps | \
-         SAC+HER (SB3) | SAC+HER (ours) | TD3+HER (ours) |\n\
+        "| map | PBCS, seeds 0–9 | PBCS, held out | DDPG | TD3 | SB3 SAC+HER | SAC+HER | TD3+HER |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     for c in &grid {

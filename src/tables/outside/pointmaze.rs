@@ -431,7 +431,9 @@ pub struct PointMazeSb3Comparison {
 /// The lines of `outside.pointmaze_sb3.csv`: for each method of ours that SB3 also ran
 /// (`sac_her`), on each of our `_goals` tasks whose map SB3 ran, from `lines` (the lines of
 /// [`pointmaze_baselines`]) and our raw rows under `results` (`her`: the experiment
-/// `pointmaze_her`). SB3's line must be of ended runs with [`SB3_BUDGET`] steps at most.
+/// `pointmaze_her`). A map where an SB3 run has not ended is left out; a run beyond
+/// [`SB3_BUDGET`] steps is an error. (The registered comparison is UMaze's; the other maps'
+/// lines are reported as not registered.)
 pub fn sb3_comparisons(
     her: &Experiment,
     lines: &[PointMazeBaseline],
@@ -449,13 +451,17 @@ pub fn sb3_comparisons(
         else {
             continue;
         };
-        if sb3.ended != sb3.runs || sb3.steps_max > SB3_BUDGET {
+        if sb3.steps_max > SB3_BUDGET {
             let why = format!(
-                "SB3's {} on {map}: {} of {} runs ended, at most {} steps: every run ended \
-                 within {SB3_BUDGET} expected",
-                sb3.method, sb3.ended, sb3.runs, sb3.steps_max
+                "SB3's {} on {map}: a run of {} steps, beyond the protocol's {SB3_BUDGET}",
+                sb3.method, sb3.steps_max
             );
             return Err(Error::parse(&results.join("pointmaze").join("sb3"), why));
+        }
+        // While an SB3 run of the map is still going, its outcome is not known: no comparison
+        // there yet (its evaluations so far show in `outside.pointmaze.csv`).
+        if sb3.ended != sb3.runs {
+            continue;
         }
         let runs: Vec<&RawRow> = rows
             .iter()
