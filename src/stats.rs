@@ -1,6 +1,10 @@
 //! Small statistics: quantiles, Wilson score intervals, Fisher's exact test, and for samples of
 //! real numbers (the outside checks' returns) the mean, Student's t interval and Welch's test.
 
+/// A run counts as solved when its evaluation (greedy episodes of a vanilla policy, or of a
+/// PBCS chain) reaches the target in at least this fraction of episodes.
+pub const SOLVED_AT: f32 = 0.95;
+
 /// The median of `v` (sorted in place; mean of the two middle values for an even count;
 /// NaN for an empty slice).
 ///

@@ -123,8 +123,8 @@ impl Check for TrainConfig {
             ));
         }
         if let Some(n) = self.stop_at_successes {
-            // A stopped run is a solved run: its row says so ([`crate::runs::SOLVED_AT`]).
-            let least = (crate::runs::SOLVED_AT * self.eval_episodes as f32).ceil() as usize;
+            // A stopped run is a solved run: its row says so ([`crate::stats::SOLVED_AT`]).
+            let least = (crate::stats::SOLVED_AT * self.eval_episodes as f32).ceil() as usize;
             if n < least.max(1) || n > self.eval_episodes {
                 return Err(Error::invalid(
                     "train.stop_at_successes",
@@ -132,7 +132,7 @@ impl Check for TrainConfig {
                         "must be between {} (the {} % that counts a run solved) and \
                          train.eval_episodes = {}, got {n}",
                         least.max(1),
-                        (crate::runs::SOLVED_AT * 100.0).round(),
+                        (crate::stats::SOLVED_AT * 100.0).round(),
                         self.eval_episodes
                     ),
                 ));

@@ -213,6 +213,11 @@ pub struct Experiment {
     pub picture_seeds: Vec<u64>,
     /// For a pre-registered grid, what was registered (`[registered]`).
     pub registered: Option<Registration>,
+    /// Whether its rows are committed as its runs finish (`in_progress = true`): its tables
+    /// hold the cells and seeds with rows so far, and the checks of whole committed grids
+    /// check those rows only. A grid in progress whose every run has its row is refused by
+    /// them (set it to false: the grid is whole).
+    pub in_progress: bool,
     /// The grid's rows: its maze sizes, then its other environments, in the file's order.
     pub sites: Vec<Site>,
     /// Methods (name, label), in order.

@@ -136,6 +136,10 @@ pub(crate) struct ExperimentSpec {
     /// A pre-registered grid: the preset it runs and that file's hash when registered.
     #[serde(default)]
     registered: Option<super::Registration>,
+    /// A grid whose rows are committed as its runs finish (runs of hours each): its tables
+    /// hold the cells and seeds with rows so far.
+    #[serde(default)]
+    in_progress: bool,
 }
 
 pub(crate) fn default_picture_seeds() -> Vec<u64> {
@@ -502,6 +506,7 @@ impl Experiment {
             seed_count,
             seeds_by_maze,
             picture_seeds,
+            in_progress: spec.in_progress,
             registered: spec.registered.map(|r| super::Registration {
                 preset_path: path.parent().unwrap_or(Path::new(".")).join(&r.preset),
                 ..r
@@ -568,6 +573,7 @@ impl Experiment {
             seeds_by_maze: BTreeMap::new(),
             picture_seeds: default_picture_seeds(),
             registered: None,
+            in_progress: false,
             sites,
             methods: vec![(name.to_string(), name.to_string())],
             cells,

@@ -32,9 +32,7 @@ use crate::phase2::StartMode;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// A run counts as solved when its evaluation (greedy episodes of a vanilla policy, or of a
-/// PBCS chain) reaches the target in at least this fraction of episodes.
-pub const SOLVED_AT: f32 = 0.95;
+pub use crate::stats::SOLVED_AT;
 
 /// Claims `out` for `job` before any work ([`crate::record::claim_out_dir`]): writes the
 /// resolved job as `config.toml` (so that `--config` re-runs exactly this job), refusing a

@@ -126,7 +126,8 @@ fn the_beyond_experiment_has_two_different_layouts_on_every_size() {
 
 /// Every committed raw row was computed from its experiment file as it is now: each
 /// `results/raw/<experiment>/<cell>/s<seed>.toml` is the job the file resolves for that cell
-/// and seed, every folder there is a cell of the file, and every cell has all its seeds. A
+/// and seed, every folder there is a cell of the file, and every cell has all its seeds (a
+/// grid `in_progress`: the seeds with rows so far). A
 /// changed experiment file (a budget, a preset) without re-run rows fails here, not silently
 /// in `make figures`.
 
@@ -148,9 +149,12 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
         }
         for cell in &exp.cells {
             for seed in exp.seeds_of(cell) {
-                let path = exp
-                    .cell_dir(Path::new("results"), cell)
-                    .join(format!("s{seed}.toml"));
+                let dir = exp.cell_dir(Path::new("results"), cell);
+                // A grid in progress: the runs with rows so far.
+                if exp.in_progress && !dir.join(format!("s{seed}.csv")).exists() {
+                    continue;
+                }
+                let path = dir.join(format!("s{seed}.toml"));
                 let text = std::fs::read_to_string(&path)
                     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
                 assert!(
@@ -159,11 +163,13 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
                     path.display(),
                     f.display()
                 );
-                checked += 1;
+                if !exp.in_progress {
+                    checked += 1;
+                }
             }
         }
     }
-    // table 250, gamma 80, unseen 40, beyond 100, ablations 100, protocol 20, switches 90,
+    // Whole grids (a grid in progress, pointmaze_her, adds its rows as they finish): table 250, gamma 80, unseen 40, beyond 100, ablations 100, protocol 20, switches 90,
     // heldout 56, rooms 20, pointmaze 30, pointmaze_heldout 30, pointmaze_velocity 60,
     // pointmaze_vanilla 60, three_rooms 20, pointmaze_own 20, sac_skills 60.
     assert_eq!(checked, 1036, "committed jobs");

@@ -221,12 +221,18 @@ fn vanilla_line(
         },
         solved_at_min: solved_at.iter().copied().min(),
         solved_at_median: median_steps(&mut solved_at),
-        best_unsolved: best_unsolved.map(f64::from),
+        best_unsolved: best_unsolved.map(decimal),
         reached,
-        best: f64::from(best.0),
+        best: decimal(best.0),
         best_at: (best.0 > 0.0).then_some(best.1),
         seeds: seeds_text(runs.iter().map(|r| r.seed)),
     })
+}
+
+/// A success fraction of the evaluations (an `f32`) as the decimal it prints as: 0.57, not
+/// 0.5699999928474426.
+fn decimal(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
 }
 
 /// The median of `steps` (the mean of the two middle ones for an even count, rounded down);
