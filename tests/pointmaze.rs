@@ -419,10 +419,8 @@ fn goal_resets_draw_start_and_goal_per_episode() {
     let mut rng = Seeds::new(5).stream(Stream::Start);
     let draws: Vec<PointState> = (0..2000).map(|_| env.sample_start(&mut rng)).collect();
     for s in &draws {
-        for k in 0..2 {
-            assert!((s.qpos[k] - start.qpos[k]).abs() <= GOAL_NOISE);
-            assert!((s.goal[k] - goal[k]).abs() <= GOAL_NOISE);
-        }
+        let mut offsets = (0..2).flat_map(|k| [s.qpos[k] - start.qpos[k], s.goal[k] - goal[k]]);
+        assert!(offsets.all(|d| d.abs() <= GOAL_NOISE), "{s:?}");
         assert_eq!((s.qvel, s.warmstart), ([0.0; 2], [0.0; 2]));
     }
     // Uniform along each axis: each quarter of the range holds a quarter of the draws (the

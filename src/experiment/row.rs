@@ -312,21 +312,23 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
                 );
             }
         }
-        (Job::Vanilla(j), Some(e)) if !e.is_empty() => {
-            if e.len() != j.train.final_eval_episodes || r.success_rate != rate_of(&e) {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "{}, but {} holds {} wins of {} episodes (the job evaluates {})",
-                        r.success_rate,
-                        evaluation_path.display(),
-                        e.iter().filter(|e| e.success).count(),
-                        e.len(),
-                        j.train.final_eval_episodes
-                    ),
-                );
-            }
+        (Job::Vanilla(j), Some(e))
+            if !e.is_empty()
+                && (e.len() != j.train.final_eval_episodes || r.success_rate != rate_of(&e)) =>
+        {
+            return wrong(
+                "success_rate",
+                format!(
+                    "{}, but {} holds {} wins of {} episodes (the job evaluates {})",
+                    r.success_rate,
+                    evaluation_path.display(),
+                    e.iter().filter(|e| e.success).count(),
+                    e.len(),
+                    j.train.final_eval_episodes
+                ),
+            );
         }
+        (Job::Vanilla(_), Some(_)) => {}
         // Judged on PBCS's protocol after training, whose file this row lacks (written before
         // it existed): nothing here to check the rate against.
         (Job::Vanilla(j), None) if j.train.final_eval_episodes > 0 => {}

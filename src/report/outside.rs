@@ -245,14 +245,7 @@ pub fn outside_pointmaze_sb3_numbers(
 ) -> String {
     let mut s = String::new();
     for r in rows {
-        let rate = |k: u64, n: u64| k as f64 / n as f64;
-        let verdict = if r.fisher_p.is_nan() || r.fisher_p >= 0.05 {
-            "no significant difference"
-        } else if rate(r.ours_solved, r.ours_n) > rate(r.sb3_solved, r.sb3_n) {
-            "ours solves significantly more"
-        } else {
-            "ours solves significantly fewer"
-        };
+        let verdict = fisher_verdict(r.ours_solved, r.ours_n, r.sb3_solved, r.sb3_n, r.fisher_p);
         for (f, v) in [
             ("budget", human_steps(r.budget as f64)),
             ("oursn", r.ours_n.to_string()),
@@ -273,10 +266,16 @@ pub fn outside_pointmaze_sb3_numbers(
 /// The verdict of one maze comparison at the 5 % level of Fisher's exact test: "no significant
 /// difference", or which side solves more.
 pub fn maze_verdict(r: &crate::tables::outside::MazeComparison) -> &'static str {
+    fisher_verdict(r.ours_solved, r.ours_n, r.sb3_solved, r.sb3_n, r.fisher_p)
+}
+
+/// The verdict of ours (`k1` solved of `n1`) against SB3's (`k2` of `n2`) at the 5 % level of
+/// Fisher's exact test `p`: "no significant difference", or which side solves more.
+fn fisher_verdict(k1: u64, n1: u64, k2: u64, n2: u64, p: f64) -> &'static str {
     let rate = |k: u64, n: u64| k as f64 / n as f64;
-    if r.fisher_p.is_nan() || r.fisher_p >= 0.05 {
+    if p.is_nan() || p >= 0.05 {
         "no significant difference"
-    } else if rate(r.ours_solved, r.ours_n) > rate(r.sb3_solved, r.sb3_n) {
+    } else if rate(k1, n1) > rate(k2, n2) {
         "ours solves significantly more"
     } else {
         "ours solves significantly fewer"

@@ -462,7 +462,7 @@ pub fn sb3_comparisons(
                 "SB3's {} on {map}: a run of {} steps, beyond the protocol's {SB3_BUDGET}",
                 sb3.method, sb3.steps_max
             );
-            return Err(Error::parse(&results.join("pointmaze").join("sb3"), why));
+            return Err(Error::parse(results.join("pointmaze").join("sb3"), why));
         }
         // While an SB3 run of the map is still going, its outcome is not known: no comparison
         // there yet (its evaluations so far show in `outside.pointmaze.csv`).
