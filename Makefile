@@ -40,7 +40,7 @@ help:
 	@echo "make lint      rustfmt and clippy"
 	@echo "make python    the Python package into \$$VENV (default .venv) and its tests"
 	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
-	@echo "make test-mujoco   our PointMaze's tests, and the equality test against"
+	@echo "make test-mujoco   our PointMaze's and AntMaze's tests, and the equality tests against"
 	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
 	@echo "make pointmaze     the PointMaze grids (experiments/pointmaze*.toml) with MuJoCo, then"
 	@echo "               gymnasium-robotics' verdict on every chain (python/benches/pointmaze_gym.py)"
@@ -70,12 +70,13 @@ mujoco:
 	bash scripts/fetch-mujoco.sh
 
 test-mujoco: mujoco
-	$(CARGO) test --release --locked --features mujoco --test pointmaze
-	$(CARGO) build --release --locked --features mujoco --example pointmaze_step
+	$(CARGO) test --release --locked --features mujoco --test pointmaze --test antmaze
+	$(CARGO) build --release --locked --features mujoco --example pointmaze_step --example antmaze_step
 	test -x $(VENV)/bin/python || python3 -m venv $(VENV)
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2" pytest
 	PBCS_POINTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/pointmaze_step \
-	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py
+	  PBCS_ANTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/antmaze_step \
+	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py python/tests/test_antmaze.py
 
 # The PointMaze grids (the named maps', the held-out seeds', the velocity comparison, the learners
 # alone, a map of one's own: their runs need MuJoCo), then every chain judged

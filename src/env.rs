@@ -125,6 +125,14 @@ pub trait Env {
         None
     }
 
+    /// Whether phase 1 may keep this state in its archive (and so start from it again): every
+    /// state by default. An environment says no to states no path should go through, which
+    /// exploration would otherwise return to (AntMaze made with
+    /// `AntMaze::refusing_flipped`: an ant on its back).
+    fn archivable(&self, _state: &Self::State) -> bool {
+        true
+    }
+
     /// Column names of the observation, for CSV headers.
     fn obs_names(&self) -> Vec<String> {
         (0..self.obs_dim()).map(|i| format!("o{i}")).collect()

@@ -10,7 +10,8 @@
 //! 2. reset the environment to that state (free here: [`Env::step`] is pure);
 //! 3. take one uniformly random action;
 //! 4. add s' to the archive, with the selected state as its parent, unless it is terminal (or
-//!    equal to the selected state, i.e. the step was blocked: it is already present);
+//!    equal to the selected state, i.e. the step was blocked: it is already present, or one
+//!    the environment does not let the archive keep, [`Env::archivable`]);
 //! 5. as soon as a positive reward is received, rebuild τ_0 … τ_N by following parents from
 //!    the rewarded state back to s_0.
 //!
@@ -352,7 +353,7 @@ pub fn explore<E: Env>(
                 archive,
             });
         }
-        if !step.terminal && step.state != *archive.state(chosen) {
+        if !step.terminal && step.state != *archive.state(chosen) && env.archivable(&step.state) {
             env.observe(&step.state, &mut obs);
             archive.insert(step.state, env.position(&obs), chosen, &action);
         }

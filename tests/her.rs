@@ -91,6 +91,21 @@ fn pointmaze_goal_rewards_are_its_steps() {
     });
 }
 
+/// AntMaze (the MuJoCo build): the same, from its resets (start and goal ±1 m around their
+/// cells' centres) and from rest near the episode's goal, legs kicking.
+#[cfg(feature = "mujoco")]
+#[test]
+fn antmaze_goal_rewards_are_its_steps() {
+    use pbcs::envs::antmaze::AntMaze;
+    use pbcs::envs::pointmaze::MapName;
+    let env = AntMaze::named(MapName::UMaze).unwrap();
+    goal_reward_is_the_steps(&env, |rng| {
+        let s = env.sample_start(rng);
+        let near = s.goal.map(|g| g + rng.random_range(-0.6..0.6));
+        env.at_rest(near, s.goal)
+    });
+}
+
 /// One push per step of an episode of `len` transitions along a line: observation t, next
 /// observation and achieved goal t + 1, goal `aim`, reward 1 − 1 (a wall) at odd steps.
 fn episode(her: &mut HerReplay, from: f32, len: usize, aim: f32) {

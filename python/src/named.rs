@@ -236,14 +236,20 @@ impl NamedEnv {
         let env = env_name(name)?;
         if env.goal_resets() {
             // Its observation would not hold the episode's goal.
+            let (gym_id, fixed) = match (env.point_map(), env.ant_map()) {
+                (Some(m), _) => (
+                    m.gym_id(),
+                    format!(", or `{}` for PBCS's fixed task", env.fixed_name()),
+                ),
+                (None, Some(m)) => (pbcs::envs::antmaze::model::gym_id(m), String::new()),
+                (None, None) => (String::new(), String::new()),
+            };
             return Err(invalid(
                 "env",
                 format!(
                     "`{name}` draws a goal per episode, which this binding's observation does \
-                     not show: in Python, use gymnasium-robotics' own {} (its observation dict \
-                     holds the goal), or `{}` for PBCS's fixed task",
-                    env.point_map().map_or(String::new(), |m| m.gym_id()),
-                    name.trim_end_matches("_goals")
+                     not show: in Python, use gymnasium-robotics' own {gym_id} (its observation \
+                     dict holds the goal){fixed}"
                 ),
             ));
         }

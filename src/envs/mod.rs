@@ -28,6 +28,7 @@
 //! assert_eq!("rooms".parse::<EnvName>().unwrap(), EnvName::Rooms);
 //! ```
 
+pub mod antmaze;
 pub mod maze;
 pub mod pendulum;
 pub mod pointmaze;
@@ -37,10 +38,62 @@ pub mod toy;
 mod walled;
 
 use crate::error::{Error, Result};
+use antmaze::AntMaze;
 use maze::{Maze, MazeConfig};
 use pointmaze::{MapName, PointMap, PointMaze, PointMazeConfig};
 use rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
+
+/// Declares `$name`, an environment without values, for a build without the feature that
+/// makes it: the registry refuses its names ([`EnvSpec::build`]), and code generic over the
+/// registry's environments ([`crate::with_env!`]) still compiles.
+#[cfg_attr(feature = "mujoco", allow(unused_macros))]
+macro_rules! uninhabited_env {
+    ($name:ident, $what:literal) => {
+        #[doc = concat!("Without MuJoCo, ", $what, " has no values.")]
+        #[derive(Debug, Clone)]
+        pub enum $name {}
+
+        impl crate::env::Env for $name {
+            type State = std::convert::Infallible;
+            fn obs_dim(&self) -> usize {
+                match *self {}
+            }
+            fn action_dim(&self) -> usize {
+                match *self {}
+            }
+            fn action_bound(&self, _: usize) -> f32 {
+                match *self {}
+            }
+            fn start(&self) -> Self::State {
+                match *self {}
+            }
+            fn sample_start(&self, _: &mut crate::rng::Rng) -> Self::State {
+                match *self {}
+            }
+            fn observe(&self, _: &Self::State, _: &mut [f32]) {
+                match *self {}
+            }
+            fn step(&self, _: &Self::State, _: &[f32]) -> crate::env::Step<Self::State> {
+                match *self {}
+            }
+        }
+
+        impl crate::env::Planar for $name {
+            fn point(&self, _: &Self::State) -> (f32, f32) {
+                match *self {}
+            }
+            fn scene(&self) -> crate::env::Scene {
+                match *self {}
+            }
+            fn ball_point(&self, _: &[f32]) -> (f32, f32) {
+                match *self {}
+            }
+        }
+    };
+}
+#[cfg_attr(feature = "mujoco", allow(unused_imports))]
+pub(crate) use uninhabited_env;
 
 /// The environments PBCS runs on, by name.
 #[derive(
@@ -97,6 +150,19 @@ pub enum EnvName {
     PointmazeMediumGoals,
     /// gymnasium-robotics' `PointMaze_Large-v3`, the same way.
     PointmazeLargeGoals,
+    /// gymnasium-robotics' `AntMaze_UMaze-v5` (`src/envs/antmaze/`, feature `mujoco`) with
+    /// `continuing_task=False` and the 27-number observation
+    /// (`include_cfrc_ext_in_observation=False`), reset to the cells of this package's task
+    /// (the two free cells farthest apart): start and goal drawn per episode, each ±1 m around
+    /// its cell's centre, success within 0.45 of the episode's goal. A goal-conditioned task,
+    /// as the `_goals` PointMazes: runs on it train with `[train.her]`.
+    AntmazeUmaze,
+    /// gymnasium-robotics' `AntMaze_Open-v5`, the same way.
+    AntmazeOpen,
+    /// gymnasium-robotics' `AntMaze_Medium-v5`, the same way.
+    AntmazeMedium,
+    /// gymnasium-robotics' `AntMaze_Large-v5`, the same way.
+    AntmazeLarge,
 }
 
 /// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
@@ -115,6 +181,8 @@ pub enum Built {
     /// The PointMaze names, the four maps and `pointmaze` (with MuJoCo; a build without it refuses them in
     /// [`EnvSpec::build`], and its `PointMaze` has no values).
     PointMaze(PointMaze),
+    /// The AntMaze names (with MuJoCo, as PointMaze).
+    AntMaze(AntMaze),
 }
 
 /// Runs `$body` with `$env` bound to the environment a [`Built`] holds, as a value of its own
@@ -136,6 +204,11 @@ macro_rules! with_env {
             $crate::envs::Built::ThreeRooms($env) => $body,
             // Without MuJoCo this arm has no values (and its body is unreachable code).
             $crate::envs::Built::PointMaze($env) => {
+                #[allow(unreachable_code)]
+                let out = $body;
+                out
+            }
+            $crate::envs::Built::AntMaze($env) => {
                 #[allow(unreachable_code)]
                 let out = $body;
                 out
@@ -184,8 +257,25 @@ impl EnvName {
         }
     }
 
+    /// The named map of an AntMaze name (AntMaze runs on PointMaze's maps, in cells of 4 m).
+    ///
+    /// ```
+    /// use pbcs::envs::{pointmaze::MapName, EnvName};
+    /// assert_eq!(EnvName::AntmazeMedium.ant_map(), Some(MapName::Medium));
+    /// assert_eq!(EnvName::PointmazeMedium.ant_map(), None);
+    /// ```
+    pub fn ant_map(self) -> Option<MapName> {
+        match self {
+            EnvName::AntmazeUmaze => Some(MapName::UMaze),
+            EnvName::AntmazeOpen => Some(MapName::Open),
+            EnvName::AntmazeMedium => Some(MapName::Medium),
+            EnvName::AntmazeLarge => Some(MapName::Large),
+            _ => None,
+        }
+    }
+
     /// Whether episodes draw their start and goal as gymnasium-robotics' reset does (the
-    /// `_goals` names): a goal-conditioned task.
+    /// `_goals` names and AntMaze): a goal-conditioned task.
     ///
     /// ```
     /// use pbcs::envs::EnvName;
@@ -200,7 +290,7 @@ impl EnvName {
                 | EnvName::PointmazeOpenGoals
                 | EnvName::PointmazeMediumGoals
                 | EnvName::PointmazeLargeGoals
-        )
+        ) || self.ant_map().is_some()
     }
 
     /// Refuses a run that needs one fixed task on an environment whose episodes draw their
@@ -208,18 +298,26 @@ impl EnvName {
     /// would not see the goal). `what` names the run.
     pub fn check_fixed_task(self, what: &str) -> Result<()> {
         if self.goal_resets() {
+            let fixed = match self.point_map() {
+                Some(_) => format!(", or run {} for the fixed task", self.fixed_name()),
+                None => String::new(),
+            };
             return Err(Error::invalid(
                 "env",
                 format!(
                     "{} draws each episode's goal (gymnasium-robotics' resets): {what} needs \
                      one fixed goal; train on it with [train.her] (the networks then see the \
-                     goal), or run {} for the fixed task",
+                     goal){fixed}",
                     self.name(),
-                    self.name().trim_end_matches("_goals")
                 ),
             ));
         }
         Ok(())
+    }
+
+    /// The name of the same map's fixed task, for a `_goals` PointMaze (itself for any other).
+    pub fn fixed_name(self) -> &'static str {
+        self.name().trim_end_matches("_goals")
     }
 
     /// The cargo feature this environment needs and this build lacks (`mujoco` for PointMaze
@@ -232,7 +330,8 @@ impl EnvName {
     /// assert_eq!(EnvName::PointmazeLarge.missing_feature(), lacks);
     /// ```
     pub fn missing_feature(self) -> Option<&'static str> {
-        (self.is_pointmaze() && !cfg!(feature = "mujoco")).then_some("mujoco")
+        ((self.is_pointmaze() || self.ant_map().is_some()) && !cfg!(feature = "mujoco"))
+            .then_some("mujoco")
     }
 
     /// Whether this is a PointMaze: one of the four named maps or a map of one's own.
@@ -309,6 +408,10 @@ impl EnvSpec {
     pub fn label(&self) -> String {
         match (self.name, self.name.point_map()) {
             (EnvName::Maze, _) => format!("maze {} (layout {})", self.maze.size, self.maze.seed),
+            (name, None) if name.ant_map().is_some() => {
+                let map = name.ant_map().map_or("", <&str>::from);
+                format!("AntMaze {map} (goals drawn per episode)")
+            }
             (name, Some(map)) if name.goal_resets() => {
                 format!("PointMaze {} (goals drawn per episode)", <&str>::from(map))
             }
@@ -388,6 +491,13 @@ impl EnvSpec {
                 let map = self.point_map()?.expect("a PointMaze has a map");
                 Built::PointMaze(point_maze(map, self.name)?)
             }
+            EnvName::AntmazeUmaze
+            | EnvName::AntmazeOpen
+            | EnvName::AntmazeMedium
+            | EnvName::AntmazeLarge => {
+                let map = self.name.ant_map().expect("an AntMaze name has a map");
+                Built::AntMaze(ant_maze(PointMap::named(map), self.name)?)
+            }
         })
     }
 
@@ -401,6 +511,12 @@ impl EnvSpec {
                 Ok(map.scene(start, goal, radius))
             }
             Some(map) => Ok(point_scene(&map)),
+            None if self.name.ant_map().is_some() => {
+                let map = PointMap::named(self.name.ant_map().expect("an AntMaze map"));
+                let (start, goal) = map.farthest_cells();
+                let radius = pointmaze::SUCCESS_DISTANCE as f32;
+                Ok(antmaze::model::scene(&map, start, goal, radius))
+            }
             None => Ok(crate::with_env!(self.build()?, |env| {
                 crate::env::Planar::scene(&env)
             })),
@@ -431,14 +547,33 @@ fn point_maze(map: PointMap, name: EnvName) -> Result<PointMaze> {
     }
 }
 
+/// An AntMaze task: the map's two free cells farthest apart, with gymnasium-robotics' resets
+/// ([`crate::envs::antmaze::AntMaze::on`]).
+#[cfg(feature = "mujoco")]
+fn ant_maze(map: PointMap, _name: EnvName) -> Result<AntMaze> {
+    AntMaze::on(map)
+}
+
 /// Without MuJoCo: refused, saying how to build with it.
 #[cfg(not(feature = "mujoco"))]
 fn point_maze(_map: PointMap, name: EnvName) -> Result<PointMaze> {
-    Err(Error::invalid(
+    Err(needs_mujoco(name))
+}
+
+/// Without MuJoCo: refused, saying how to build with it.
+#[cfg(not(feature = "mujoco"))]
+fn ant_maze(_map: PointMap, name: EnvName) -> Result<AntMaze> {
+    Err(needs_mujoco(name))
+}
+
+/// The error for a MuJoCo environment in a build without it.
+#[cfg(not(feature = "mujoco"))]
+fn needs_mujoco(name: EnvName) -> Error {
+    Error::invalid(
         "env",
         format!(
             "{} runs on MuJoCo: `make mujoco`, then build with `--features mujoco`",
             name.name()
         ),
-    ))
+    )
 }

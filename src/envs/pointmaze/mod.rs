@@ -23,48 +23,5 @@ pub use own::{PointMazeConfig, MAX_MAP_SIDE, OWN_TIME_LIMIT};
 #[cfg(feature = "mujoco")]
 pub use sim::{PointMaze, PointState, Resets, MAX_SPEED, RADIUS};
 
-/// Without MuJoCo, PointMaze has no values: the registry refuses its names
-/// ([`crate::envs::EnvSpec::build`]), and code generic over the registry's environments
-/// ([`crate::with_env!`]) still compiles.
 #[cfg(not(feature = "mujoco"))]
-#[derive(Debug, Clone)]
-pub enum PointMaze {}
-
-#[cfg(not(feature = "mujoco"))]
-impl crate::env::Env for PointMaze {
-    type State = std::convert::Infallible;
-    fn obs_dim(&self) -> usize {
-        match *self {}
-    }
-    fn action_dim(&self) -> usize {
-        match *self {}
-    }
-    fn action_bound(&self, _: usize) -> f32 {
-        match *self {}
-    }
-    fn start(&self) -> Self::State {
-        match *self {}
-    }
-    fn sample_start(&self, _: &mut crate::rng::Rng) -> Self::State {
-        match *self {}
-    }
-    fn observe(&self, _: &Self::State, _: &mut [f32]) {
-        match *self {}
-    }
-    fn step(&self, _: &Self::State, _: &[f32]) -> crate::env::Step<Self::State> {
-        match *self {}
-    }
-}
-
-#[cfg(not(feature = "mujoco"))]
-impl crate::env::Planar for PointMaze {
-    fn point(&self, _: &Self::State) -> (f32, f32) {
-        match *self {}
-    }
-    fn scene(&self) -> crate::env::Scene {
-        match *self {}
-    }
-    fn ball_point(&self, _: &[f32]) -> (f32, f32) {
-        match *self {}
-    }
-}
+crate::envs::uninhabited_env!(PointMaze, "PointMaze");

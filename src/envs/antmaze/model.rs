@@ -1,0 +1,175 @@
+//! AntMaze's model, as gymnasium-robotics 1.4.2 builds it (`ant_maze_v5.py`, `maze_v4.py`):
+//! PointMaze's maps ([`PointMap`]) with cells of [`SCALE`] = 4 m, walls [`SCALE`] ×
+//! [`WALL_HEIGHT`] = 2 m high, around gymnasium's `ant.xml`. Needs no MuJoCo: the XML is text.
+//!
+//! ```
+//! use pbcs::envs::antmaze::model::{cell_xy, xml, xy_cell};
+//! use pbcs::envs::pointmaze::{MapName, PointMap};
+//! let u = PointMap::named(MapName::UMaze);
+//! // Cell (i, j) is centred at x = 4(j + 0.5) − 4W/2, y = 4H/2 − 4(i + 0.5).
+//! assert_eq!(cell_xy(&u, (1, 1)), [-4.0, 4.0]);
+//! assert_eq!(xy_cell(&u, [-5.9, 2.1]), Some((1, 1)));
+//! assert!(xml(&u).contains("<geom name=\"block_0_0\" pos=\"-8.0 8.0 1.0\" size=\"2.0 2.0 1.0\""));
+//! ```
+
+use crate::envs::pointmaze::{MapName, PointMap};
+
+/// gymnasium's ant (`gymnasium/envs/mujoco/assets/ant.xml`, with an attribution comment).
+const ANT_XML: &str = include_str!("ant.xml");
+
+/// Side of a cell, metres (`maze_size_scaling` of `AntMazeEnv`).
+pub const SCALE: f64 = 4.0;
+
+/// `maze_height`: the walls are `maze_height` × [`SCALE`] = 2 m high.
+pub const WALL_HEIGHT: f64 = 0.5;
+
+/// `position_noise_range`: a reset moves the start and the goal from their cells' centres by
+/// a uniform draw in ±`POSITION_NOISE` × [`SCALE`] = ±1 m along each axis.
+pub const POSITION_NOISE: f64 = 0.25;
+
+/// Steps per episode on a map of one's own: Medium's and Large's.
+pub const OWN_TIME_LIMIT: usize = 1000;
+
+/// The environment id in gymnasium-robotics: `AntMaze_UMaze-v5`, ….
+pub fn gym_id(map: MapName) -> String {
+    format!("AntMaze_{}-v5", <&str>::from(map))
+}
+
+/// The time limit gymnasium-robotics registers for `AntMaze_<map>-v5` (`max_episode_steps`).
+pub fn time_limit(map: MapName) -> usize {
+    match map {
+        MapName::UMaze | MapName::Open => 700,
+        MapName::Medium | MapName::Large => 1000,
+    }
+}
+
+/// The centre of cell (i, j) (`cell_rowcol_to_xy`): x = (j + 0.5)·s − W/2·s,
+/// y = H/2·s − (i + 0.5)·s, with the same operations in the same order.
+pub fn cell_xy(map: &PointMap, (i, j): (usize, usize)) -> [f64; 2] {
+    let (xc, yc) = (
+        map.cols() as f64 / 2.0 * SCALE,
+        map.rows() as f64 / 2.0 * SCALE,
+    );
+    [(j as f64 + 0.5) * SCALE - xc, yc - (i as f64 + 0.5) * SCALE]
+}
+
+/// The cell a point lies in (`cell_xy_to_rowcol`), `None` outside the map.
+pub fn xy_cell(map: &PointMap, [x, y]: [f64; 2]) -> Option<(usize, usize)> {
+    let (xc, yc) = (
+        map.cols() as f64 / 2.0 * SCALE,
+        map.rows() as f64 / 2.0 * SCALE,
+    );
+    let (i, j) = (((yc - y) / SCALE).floor(), ((x + xc) / SCALE).floor());
+    (i >= 0.0 && j >= 0.0 && (i as usize) < map.rows() && (j as usize) < map.cols())
+        .then_some((i as usize, j as usize))
+}
+
+/// The model: `ant.xml` with, at the end of its world body, one box per wall cell, row by row
+/// (`block_<i>_<j>`, 4 × 4 × 2 m, centred 1 m up), then the target site — the elements,
+/// attributes and numbers `Maze.make_maze` writes (numbers as Python prints floats). The order
+/// of a model's geoms is part of its simulation.
+pub fn xml(map: &PointMap) -> String {
+    let py = |v: f64| format!("{v:?}");
+    let h = WALL_HEIGHT / 2.0 * SCALE;
+    let half = 0.5 * SCALE;
+    let mut extra = String::new();
+    for (i, j) in (0..map.rows()).flat_map(|i| (0..map.cols()).map(move |j| (i, j))) {
+        if map.is_wall((i, j)) {
+            let [x, y] = cell_xy(map, (i, j));
+            extra += &format!(
+                "<geom name=\"block_{i}_{j}\" pos=\"{} {} {}\" size=\"{} {} {}\" type=\"box\" \
+                 material=\"\" contype=\"1\" conaffinity=\"1\" rgba=\"0.7 0.5 0.3 1.0\" />",
+                py(x),
+                py(y),
+                py(h),
+                py(half),
+                py(half),
+                py(h),
+            );
+        }
+    }
+    extra += &format!(
+        "<site name=\"target\" pos=\"0 0 {}\" size=\"{}\" rgba=\"1 0 0 0.7\" type=\"sphere\" />",
+        py(h),
+        py(0.2 * SCALE),
+    );
+    ANT_XML.replacen("</worldbody>", &(extra + "</worldbody>"), 1)
+}
+
+/// What pictures draw of the task from cell `start` to cell `goal` with success within
+/// `target_radius` of the goal: PointMaze's scene of the map ([`PointMap::scene`]) in metres,
+/// the map spanning [0, 4W] × [0, 4H]. Needs no MuJoCo.
+pub fn scene(
+    map: &PointMap,
+    start: (usize, usize),
+    goal: (usize, usize),
+    target_radius: f32,
+) -> crate::env::Scene {
+    let s = SCALE as f32;
+    let cells = map.scene(start, goal, target_radius / s);
+    let scaled = |(x, y): (f32, f32)| (x * s, y * s);
+    crate::env::Scene {
+        width: cells.width * s,
+        height: cells.height * s,
+        walls: cells.walls.iter().map(|w| w.map(scaled)).collect(),
+        target: (scaled(cells.target.0), target_radius),
+        start: scaled(cells.start),
+    }
+}
+
+/// A position shifted so that the map spans [0, 4W] × [0, 4H] (how pictures draw it).
+pub fn drawn(map: &PointMap, [x, y]: [f64; 2]) -> (f32, f32) {
+    let (w, h) = (map.cols() as f64 * SCALE, map.rows() as f64 * SCALE);
+    ((x + w / 2.0) as f32, (y + h / 2.0) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use strum::IntoEnumIterator;
+
+    /// `ngeom` of gymnasium-robotics' compiled `AntMaze_<map>-v5` models (the floor, the ant's
+    /// 13 geoms, one box per wall cell), read from its env.
+    #[test]
+    fn models_have_the_geom_counts_of_gymnasium_robotics() {
+        let geoms: Vec<usize> = MapName::iter()
+            .map(|m| {
+                // Less the `<default>` element's `<geom>`, a class rather than a geom.
+                let xml = xml(&PointMap::named(m));
+                xml.matches("<geom ").count() - 1
+            })
+            .collect();
+        assert_eq!(geoms, [32, 34, 52, 76]);
+        let limits: Vec<usize> = MapName::iter().map(time_limit).collect();
+        assert_eq!(limits, [700, 700, 1000, 1000]);
+    }
+
+    #[test]
+    fn cells_and_points_convert_both_ways() {
+        for m in MapName::iter() {
+            let map = PointMap::named(m);
+            for i in 0..map.rows() {
+                for j in 0..map.cols() {
+                    let [x, y] = cell_xy(&map, (i, j));
+                    let [px, py] = map.cell_xy((i, j));
+                    assert_eq!([x, y], [px * SCALE, py * SCALE]);
+                    for (dx, dy) in [(0.0, 0.0), (1.99, 1.99), (-1.99, -1.99)] {
+                        assert_eq!(xy_cell(&map, [x + dx, y + dy]), Some((i, j)));
+                    }
+                }
+            }
+            assert_eq!(xy_cell(&map, [-100.0, 0.0]), None);
+        }
+    }
+
+    #[test]
+    fn the_scene_is_the_point_mazes_in_metres() {
+        let map = PointMap::named(MapName::UMaze);
+        let s = scene(&map, (1, 1), (3, 1), 0.45);
+        assert_eq!((s.width, s.height), (20.0, 20.0));
+        assert_eq!(s.start, drawn(&map, cell_xy(&map, (1, 1))));
+        assert_eq!(s.target, (drawn(&map, cell_xy(&map, (3, 1))), 0.45));
+        assert_eq!(s.walls.len(), 18);
+        assert!(s.walls.contains(&[(0.0, 16.0), (4.0, 20.0)]));
+    }
+}
