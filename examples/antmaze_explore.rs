@@ -4,9 +4,11 @@
 //! `bin_side` metres on the torso's (x, y). `refuse` never archives an ant on its back
 //! (`AntMaze::refusing_flipped`); `keep` archives every state.
 //!
-//! `antmaze_explore <umaze|open|medium|large> <seed> <keep|refuse> [bin_side 0.5] [budget 2000000]`
-//! prints one CSV row: `map,seed,flipped,bin_side,budget,solved,env_steps,archived,bins,
-//! archived_flipped,tau_steps,wall_s` (`--header` prints the header).
+//! `hold` env steps per random action (1, the paper's, by default; `ExploreConfig::hold`).
+//!
+//! `antmaze_explore <umaze|open|medium|large> <seed> <keep|refuse> [bin_side 0.5] [budget 2000000]
+//! [hold 1]` prints one CSV row: `map,seed,flipped,bin_side,budget,solved,env_steps,archived,bins,
+//! archived_flipped,tau_steps,wall_s,hold` (`--header` prints the header).
 
 use anyhow::{bail, Context};
 use pbcs::envs::antmaze::AntMaze;
@@ -16,7 +18,7 @@ use pbcs::rng::{Seeds, Stream};
 use strum::IntoEnumIterator;
 
 const HEADER: &str = "map,seed,flipped,bin_side,budget,solved,env_steps,archived,bins,\
-                      archived_flipped,tau_steps,wall_s";
+                      archived_flipped,tau_steps,wall_s,hold";
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -25,7 +27,7 @@ fn main() -> anyhow::Result<()> {
         return Ok(());
     }
     let [map, seed, flipped, rest @ ..] = &args[..] else {
-        bail!("usage: antmaze_explore <map> <seed> <keep|refuse> [bin_side] [budget]");
+        bail!("usage: antmaze_explore <map> <seed> <keep|refuse> [bin_side] [budget] [hold]");
     };
     let name = MapName::iter()
         .find(|m| <&str>::from(*m).eq_ignore_ascii_case(map))
@@ -39,6 +41,7 @@ fn main() -> anyhow::Result<()> {
         .get(1)
         .map_or(Ok(2_000_000), |b| b.parse())
         .context("budget")?;
+    let hold: u32 = rest.get(2).map_or(Ok(1), |b| b.parse()).context("hold")?;
     let points = PointMap::named(name);
     let (start, goal) = points.farthest_cells();
     let env = AntMaze::new(points, start, goal, Resets::Fixed)?;
@@ -47,7 +50,12 @@ fn main() -> anyhow::Result<()> {
         "refuse" => env.refusing_flipped(),
         other => bail!("flipped: keep or refuse, not {other:?}"),
     };
-    let config = ExploreConfig { bin_side, budget };
+    let config = ExploreConfig {
+        bin_side,
+        budget,
+        hold,
+    };
+    pbcs::validate::Check::check(&config)?;
     let mut rng = Seeds::new(seed).stream(Stream::Explore);
     let t = std::time::Instant::now();
     let found = explore(&env, &config, &mut rng, |_, _| {});
@@ -70,7 +78,7 @@ fn main() -> anyhow::Result<()> {
         Err(e) => return Err(e.into()),
     };
     println!(
-        "{},{seed},{flipped},{bin_side},{budget},{row},{wall:.1}",
+        "{},{seed},{flipped},{bin_side},{budget},{row},{wall:.1},{hold}",
         <&str>::from(name)
     );
     Ok(())

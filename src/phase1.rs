@@ -38,6 +38,15 @@ pub struct ExploreConfig {
     /// the length limit of one Backplay episode.
     #[serde(alias = "max_steps")]
     pub budget: u64,
+    /// Env steps one random action is held for (1, the paper's: one step per iteration). Each
+    /// state the held action reaches is archived, its parent the one before, until the hold
+    /// ends or a step is blocked, terminal or not archivable. Left out of written jobs at 1.
+    #[serde(skip_serializing_if = "is_one")]
+    pub hold: u32,
+}
+
+fn is_one(hold: &u32) -> bool {
+    *hold == 1
 }
 
 impl Default for ExploreConfig {
@@ -45,6 +54,7 @@ impl Default for ExploreConfig {
         ExploreConfig {
             bin_side: 0.05,
             budget: 100_000_000,
+            hold: 1,
         }
     }
 }
@@ -54,6 +64,12 @@ impl Check for ExploreConfig {
         positive_finite("explore.bin_side", self.bin_side, 1.0)?;
         if self.budget == 0 {
             return Err(Error::invalid("explore.budget", "must be at least 1"));
+        }
+        if self.hold == 0 {
+            return Err(Error::invalid(
+                "explore.hold",
+                "must be at least 1 (env steps)",
+            ));
         }
         Ok(())
     }
@@ -305,7 +321,7 @@ impl<S> Trajectory<S> {
 pub struct Exploration<S> {
     /// τ_0 … τ_N, from s_0 to the first rewarded state.
     pub trajectory: Trajectory<S>,
-    /// Environment steps used (one per iteration).
+    /// Environment steps used (one per iteration, or up to `hold`).
     pub env_steps: u64,
     /// The archive when the reward was found.
     pub archive: Archive<S>,
@@ -336,29 +352,40 @@ pub fn explore<E: Env>(
     let s0 = env.start();
     env.observe(&s0, &mut obs);
     let mut archive = Archive::new(s0, env.position(&obs), env.action_dim(), config.bin_side);
-    for steps in 1..=config.budget {
+    let mut steps = 0;
+    while steps < config.budget {
         let chosen = archive.select(rng);
         random_action(env, rng, &mut action);
-        let step = env.step(archive.state(chosen), &action);
-        if step.reward > 0.0 {
-            let mut ids = archive.path_to(chosen);
-            let mut states: Vec<E::State> = ids.iter().map(|&i| archive.state(i).clone()).collect();
-            let mut actions: Vec<Vec<f32>> =
-                ids.drain(1..).map(|i| archive.action(i).to_vec()).collect();
-            states.push(step.state);
-            actions.push(action);
-            return Ok(Exploration {
-                trajectory: Trajectory { states, actions },
-                env_steps: steps,
-                archive,
-            });
-        }
-        if !step.terminal && step.state != *archive.state(chosen) && env.archivable(&step.state) {
+        // The action held from the chosen state: each state it reaches archived after the last.
+        let mut from = chosen;
+        for _ in 0..config.hold {
+            steps += 1;
+            let step = env.step(archive.state(from), &action);
+            if step.reward > 0.0 {
+                let mut ids = archive.path_to(from);
+                let mut states: Vec<E::State> =
+                    ids.iter().map(|&i| archive.state(i).clone()).collect();
+                let mut actions: Vec<Vec<f32>> =
+                    ids.drain(1..).map(|i| archive.action(i).to_vec()).collect();
+                states.push(step.state);
+                actions.push(action);
+                return Ok(Exploration {
+                    trajectory: Trajectory { states, actions },
+                    env_steps: steps,
+                    archive,
+                });
+            }
+            if steps % 65_536 == 0 {
+                progress(steps, archive.len());
+            }
+            if step.terminal || step.state == *archive.state(from) || !env.archivable(&step.state) {
+                break;
+            }
             env.observe(&step.state, &mut obs);
-            archive.insert(step.state, env.position(&obs), chosen, &action);
-        }
-        if steps % 65_536 == 0 {
-            progress(steps, archive.len());
+            from = archive.insert(step.state, env.position(&obs), from, &action);
+            if steps == config.budget {
+                break;
+            }
         }
     }
     Err(Error::ExplorationBudget {

@@ -126,3 +126,44 @@ fn shortened_trajectories_are_real_steps_and_much_shorter() {
         );
     }
 }
+
+/// An action held for `hold` env steps: τ is still real steps of the environment (replayed,
+/// they reproduce it), its actions come in runs of equal actions no longer than the hold (the
+/// draws are continuous: two iterations drawing the same action has probability 0), some run
+/// is longer than one, and env steps count every held step. A hold of 0 is refused.
+#[test]
+fn a_held_action_is_archived_step_by_step() {
+    use pbcs::validate::Check;
+    let maze = Maze::new(&MazeConfig {
+        size: 5,
+        ..MazeConfig::default()
+    })
+    .unwrap();
+    let hold = 4;
+    let cfg = ExploreConfig {
+        hold,
+        ..ExploreConfig::default()
+    };
+    let mut rng = Seeds::new(2).stream(Stream::Explore);
+    let found = explore(&maze, &cfg, &mut rng, |_, _| {}).unwrap();
+    let tau = &found.trajectory;
+    for (i, a) in tau.actions.iter().enumerate() {
+        assert_eq!(maze.step(&tau.states[i], a).state, tau.states[i + 1]);
+    }
+    let mut runs = vec![1usize];
+    for w in tau.actions.windows(2) {
+        if w[0] == w[1] {
+            *runs.last_mut().unwrap() += 1;
+        } else {
+            runs.push(1);
+        }
+    }
+    assert!(runs.iter().all(|&r| r <= hold as usize), "{runs:?}");
+    assert!(runs.iter().any(|&r| r > 1), "{runs:?}");
+    assert!(found.env_steps >= found.archive.len() as u64 - 1);
+    let zero = ExploreConfig {
+        hold: 0,
+        ..ExploreConfig::default()
+    };
+    assert!(zero.check().unwrap_err().to_string().contains("explore.hold"));
+}
