@@ -30,6 +30,10 @@ def test_a_goal_drawing_name_is_refused_naming_gymnasium_robotics_own():
     assert not [n for n in pbcs.ENV_NAMES if n.endswith("_goals")]
     with pytest.raises(ValueError, match=r"PointMaze_UMaze-v3.*pointmaze_umaze"):
         pbcs.make("pointmaze_umaze_goals")
+    # AntMaze draws its goal too (gymnasium-robotics' own resets); it has no fixed task to offer.
+    assert not [n for n in pbcs.ENV_NAMES if n.startswith("antmaze")]
+    with pytest.raises(ValueError, match=r"AntMaze_Large-v5 \(its observation dict holds the goal\)$"):
+        pbcs.make("antmaze_large")
 
 
 @pytest.mark.parametrize("name", RUNNABLE)
