@@ -375,15 +375,16 @@ pub fn explore<E: Env>(
                     archive,
                 });
             }
+            let ended =
+                step.terminal || step.state == *archive.state(from) || !env.archivable(&step.state);
+            if !ended {
+                env.observe(&step.state, &mut obs);
+                from = archive.insert(step.state, env.position(&obs), from, &action);
+            }
             if steps % 65_536 == 0 {
                 progress(steps, archive.len());
             }
-            if step.terminal || step.state == *archive.state(from) || !env.archivable(&step.state) {
-                break;
-            }
-            env.observe(&step.state, &mut obs);
-            from = archive.insert(step.state, env.position(&obs), from, &action);
-            if steps == config.budget {
+            if ended || steps == config.budget {
                 break;
             }
         }

@@ -165,5 +165,9 @@ fn a_held_action_is_archived_step_by_step() {
         hold: 0,
         ..ExploreConfig::default()
     };
-    assert!(zero.check().unwrap_err().to_string().contains("explore.hold"));
+    assert!(zero
+        .check()
+        .unwrap_err()
+        .to_string()
+        .contains("explore.hold"));
 }

@@ -88,19 +88,30 @@ def run_ours(proc, name, goal, state, actions):
     return rows
 
 
+WALLS = set()
+
+
 def run_theirs(env, goal, state, actions):
     """gymnasium-robotics' steps from the same whole state toward `goal`; its observation dict
-    must be the state's positions and velocities."""
-    d = env.ant_env.data
+    must be the state's positions and velocities, and MuJoCo must not have warned (a warning
+    on bad values resets its data, and both sides would then agree on a reset state). Records
+    in WALLS whether a wall block was touched."""
+    d, m = env.ant_env.data, env.ant_env.model
+    warned = [w.number for w in d.warning]
     d.qpos[:], d.qvel[:], d.qacc_warmstart[:] = state[:15], state[15:29], state[29:]
     env.goal = np.array(goal, dtype=np.float64)
     rows = []
+    WALLS.discard("touched")
     for a in actions:
         obs, reward, terminated, _, info = env.step(a)
         assert (obs["achieved_goal"] == d.qpos[:2]).all()
         assert (obs["observation"] == np.concatenate([d.qpos[2:], d.qvel])).all()
         assert (obs["desired_goal"] == env.goal).all()
         rows.append((whole(env), float(reward), bool(info["success"]), bool(terminated)))
+        for c in d.contact[: d.ncon]:
+            if any(m.geom(g).name.startswith("block_") for g in (c.geom1, c.geom2)):
+                WALLS.add("touched")
+    assert [w.number for w in d.warning] == warned, "MuJoCo warned: the data was reset"
     return rows
 
 
@@ -156,9 +167,24 @@ def test_our_antmaze_steps_as_gymnasium_robotics_does(ours, name):
         same(run_ours(ours, name, goal_xy, state, actions), run_theirs(env, goal_xy, state, actions), f"{name} random {episode}")
         checked += len(actions)
     assert flipped >= 5
+    # Near the goal, 0.3 to 0.6 m from it (success within 0.45): reward 1, success and the end
+    # of the episode, on both sides of the edge.
+    ends = set()
+    for episode in range(12):
+        env.reset(seed=episode, options=cells)
+        state, drawn = whole(env), env.goal.copy()
+        angle, r = rng.uniform(0, 2 * np.pi), rng.uniform(0.3, 0.6)
+        state[0], state[1] = drawn[0] + r * np.cos(angle), drawn[1] + r * np.sin(angle)
+        actions = rng.uniform(-1, 1, (25, 8)).astype(np.float32)
+        rows = run_theirs(env, drawn, state, actions)
+        same(run_ours(ours, name, drawn, state, actions), rows, f"{name} near the goal {episode}")
+        ends |= {r[1:] for r in rows}
+        checked += len(actions)
+    assert (1.0, True, True) in ends and (0.0, False, False) in ends, ends
     # Into the walls: from the start cell, thrown at 4 m/s along each axis and diagonal, legs
-    # kicking at random.
+    # kicking at random; some throw reaches a wall.
     s0 = maze.cell_rowcol_to_xy(np.array(start))
+    walls = 0
     for direction in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1)]:
         env.reset(seed=0, options=cells)
         state = whole(env)
@@ -167,8 +193,11 @@ def test_our_antmaze_steps_as_gymnasium_robotics_does(ours, name):
         actions = rng.uniform(-1, 1, (120, 8)).astype(np.float32)
         g = maze.cell_rowcol_to_xy(np.array(goal))
         rows = run_theirs(env, g, state, actions)
+        walls += "touched" in WALLS
         same(run_ours(ours, name, g, state, actions), rows, f"{name} wall {direction}")
         checked += len(actions)
+    print(name, "throws that touched a wall:", walls)
+    assert walls >= 3
     # An ant upside down (rotated π about x), dropped from 1 m, legs kicking: it stays on its back.
     env.reset(seed=1, options=cells)
     state = whole(env)

@@ -198,8 +198,9 @@ impl AntMaze {
         d.qpos_mut().copy_from_slice(&s.qpos);
         d.qvel_mut().copy_from_slice(&s.qvel);
         d.qacc_warmstart_mut().copy_from_slice(&s.warmstart);
-        for (c, &a) in d.ctrl_mut().iter_mut().zip(action) {
-            *c = f64::from(a);
+        // Every control set, so that the step depends on this action alone (a missing one is 0).
+        for (k, c) in d.ctrl_mut().iter_mut().enumerate() {
+            *c = action.get(k).map_or(0.0, |&a| f64::from(a));
         }
         for _ in 0..FRAME_SKIP {
             d.step();
