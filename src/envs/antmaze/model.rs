@@ -65,35 +65,10 @@ pub fn xy_cell(map: &PointMap, [x, y]: [f64; 2]) -> Option<(usize, usize)> {
 }
 
 /// The model: `ant.xml` with, at the end of its world body, one box per wall cell, row by row
-/// (`block_<i>_<j>`, 4 × 4 × 2 m, centred 1 m up), then the target site — the elements,
-/// attributes and numbers `Maze.make_maze` writes (numbers as Python prints floats). The order
-/// of a model's geoms is part of its simulation.
+/// (`block_<i>_<j>`, 4 × 4 × 2 m, centred 1 m up), then the target site, as `Maze.make_maze`
+/// writes them ([`PointMap::maze_xml`] at scale 4).
 pub fn xml(map: &PointMap) -> String {
-    let py = |v: f64| format!("{v:?}");
-    let h = WALL_HEIGHT / 2.0 * SCALE;
-    let half = 0.5 * SCALE;
-    let mut extra = String::new();
-    for (i, j) in (0..map.rows()).flat_map(|i| (0..map.cols()).map(move |j| (i, j))) {
-        if map.is_wall((i, j)) {
-            let [x, y] = cell_xy(map, (i, j));
-            extra += &format!(
-                "<geom name=\"block_{i}_{j}\" pos=\"{} {} {}\" size=\"{} {} {}\" type=\"box\" \
-                 material=\"\" contype=\"1\" conaffinity=\"1\" rgba=\"0.7 0.5 0.3 1.0\" />",
-                py(x),
-                py(y),
-                py(h),
-                py(half),
-                py(half),
-                py(h),
-            );
-        }
-    }
-    extra += &format!(
-        "<site name=\"target\" pos=\"0 0 {}\" size=\"{}\" rgba=\"1 0 0 0.7\" type=\"sphere\" />",
-        py(h),
-        py(0.2 * SCALE),
-    );
-    ANT_XML.replacen("</worldbody>", &(extra + "</worldbody>"), 1)
+    map.maze_xml(ANT_XML, SCALE, WALL_HEIGHT)
 }
 
 /// What pictures draw of the task from cell `start` to cell `goal` with success within

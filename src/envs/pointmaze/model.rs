@@ -315,20 +315,34 @@ impl PointMap {
     /// the elements, attributes and numbers gymnasium-robotics' `Maze.make_maze` writes
     /// (numbers as Python prints floats: `-2.0`, `0.2`).
     pub fn xml(&self) -> String {
+        self.maze_xml(POINT_XML, 1.0, WALL_HEIGHT)
+    }
+
+    /// `Maze.make_maze` around an agent's model: before the end of `agent_xml`'s world body,
+    /// one box per wall cell, row by row (`block_<i>_<j>`, cells of `scale` metres, walls
+    /// `height` × `scale` high), then the target site, with its numbers computed as it computes
+    /// them and printed as Python prints floats. The order of a model's geoms is part of its
+    /// simulation. PointMaze's (scale 1) and AntMaze's (scale 4) models.
+    pub fn maze_xml(&self, agent_xml: &str, scale: f64, height: f64) -> String {
         let py = |v: f64| format!("{v:?}");
-        let h = WALL_HEIGHT / 2.0;
+        let h = height / 2.0 * scale;
+        let half = 0.5 * scale;
+        let (xc, yc) = (
+            self.cols() as f64 / 2.0 * scale,
+            self.rows() as f64 / 2.0 * scale,
+        );
         let mut extra = String::new();
         for (i, j) in (0..self.rows()).flat_map(|i| (0..self.cols()).map(move |j| (i, j))) {
             if self.is_wall((i, j)) {
-                let [x, y] = self.cell_xy((i, j));
+                let (x, y) = ((j as f64 + 0.5) * scale - xc, yc - (i as f64 + 0.5) * scale);
                 extra += &format!(
                     "<geom name=\"block_{i}_{j}\" pos=\"{} {} {}\" size=\"{} {} {}\" type=\"box\" \
                      material=\"\" contype=\"1\" conaffinity=\"1\" rgba=\"0.7 0.5 0.3 1.0\" />",
                     py(x),
                     py(y),
                     py(h),
-                    py(0.5),
-                    py(0.5),
+                    py(half),
+                    py(half),
                     py(h),
                 );
             }
@@ -336,9 +350,9 @@ impl PointMap {
         extra += &format!(
             "<site name=\"target\" pos=\"0 0 {}\" size=\"{}\" rgba=\"1 0 0 0.7\" type=\"sphere\" />",
             py(h),
-            py(0.2),
+            py(0.2 * scale),
         );
-        POINT_XML.replacen("</worldbody>", &(extra + "</worldbody>"), 1)
+        agent_xml.replacen("</worldbody>", &(extra + "</worldbody>"), 1)
     }
 }
 
