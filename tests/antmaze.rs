@@ -9,33 +9,51 @@ use pbcs::rng::{Seeds, Stream};
 use rand::Rng as _;
 use strum::IntoEnumIterator;
 
-/// The four names build the four maps' tasks with gymnasium-robotics' resets: 29 numbers
-/// observed (the torso's x, y, then the env's 27), 8 actions in [−1, 1], goals offered, no
-/// fixed success region; the scene drawn without MuJoCo is the env's; PBCS is refused.
+/// The eight names build the four maps' tasks: 29 numbers observed (the torso's x, y, then
+/// the env's 27), 8 actions in [−1, 1], goals offered; the scene drawn without MuJoCo is the
+/// env's. `antmaze_<map>` is the fixed task (from rest at the start cell's centre, success
+/// within 0.45 of the goal cell's centre, an ant on its back never archived), which PBCS runs;
+/// `antmaze_<map>_goals` has gymnasium-robotics' resets, no fixed success region, and PBCS
+/// is refused there, pointed to the fixed name.
 #[test]
-fn the_registry_builds_the_four_maps() {
+fn the_registry_builds_the_four_maps_both_ways() {
     let names: Vec<EnvName> = EnvName::all()
         .iter()
         .copied()
         .filter(|e| e.ant_map().is_some())
         .collect();
-    assert_eq!(names.len(), 4);
-    for (name, map) in names.into_iter().zip(MapName::iter()) {
+    assert_eq!(names.len(), 8);
+    let maps: Vec<MapName> = MapName::iter().chain(MapName::iter()).collect();
+    for (name, map) in names.into_iter().zip(maps) {
         assert_eq!(name.ant_map(), Some(map));
-        assert!(name.goal_resets());
         let spec = EnvSpec::named(name);
         let drawn = spec.scene().unwrap();
-        pbcs::with_env!(spec.build().unwrap(), |env| {
-            assert_eq!(
-                (env.obs_dim(), env.action_dim(), env.action_bound(3)),
-                (29, 8, 1.0)
-            );
-            assert_eq!(env.obs_names().len(), 29);
-            assert!(env.goals().is_some() && env.success_region().is_none());
-            assert_eq!(env.scene(), drawn, "{name:?}");
-        });
-        let err = name.check_fixed_task("PBCS").unwrap_err().to_string();
-        assert!(err.contains("draws each episode's goal") && err.contains("[train.her]"));
+        let goals = name.goal_resets();
+        assert_eq!(goals, name.name().ends_with("_goals"), "{name:?}");
+        let pbcs::envs::Built::AntMaze(env) = spec.build().unwrap() else {
+            panic!("{name:?} built another environment");
+        };
+        assert_eq!(
+            (env.obs_dim(), env.action_dim(), env.action_bound(3)),
+            (29, 8, 1.0)
+        );
+        assert_eq!(env.obs_names().len(), 29);
+        assert!(env.goals().is_some());
+        assert_eq!(env.success_region().is_none(), goals, "{name:?}");
+        assert_eq!(env.scene(), drawn, "{name:?}");
+        let mut flipped = env.start();
+        flipped.qpos[3..7].copy_from_slice(&[0.0, 1.0, 0.0, 0.0]);
+        assert_eq!(env.archivable(&flipped), goals, "{name:?}");
+        assert!(env.archivable(&env.start()));
+        if goals {
+            let err = name.check_fixed_task("PBCS").unwrap_err().to_string();
+            assert!(err.contains("draws each episode's goal") && err.contains("[train.her]"));
+            assert!(err.contains(name.fixed_name()) && !name.fixed_name().ends_with("_goals"));
+            assert!(spec.label().ends_with("(goals drawn per episode)"));
+        } else {
+            name.check_fixed_task("PBCS").unwrap();
+            assert_eq!(name.fixed_name(), name.name());
+        }
         assert!(spec.label().starts_with("AntMaze "));
     }
 }
@@ -155,4 +173,82 @@ fn the_walls_hold_the_ant() {
     }
     assert!(lowest > floor, "{lowest} past the wall at {floor}");
     assert!(lowest < floor + 1.0, "it never reached the wall: {lowest}");
+}
+
+/// Backplay's starts in B_ε(τ_K) for a body: the torso moved in the plane, within ε of the
+/// centre's position and farther than the ant's reach from every wall, everything else the
+/// centre's; where no draw is clear, the centre itself. A ball is clear when no wall lies
+/// within ε plus the reach.
+#[test]
+fn ball_starts_move_the_body_clear_of_the_walls() {
+    use pbcs::envs::antmaze::model::{cell_xy, clearance, REACH};
+    let env = AntMaze::named(MapName::UMaze).unwrap();
+    let mut rng = Seeds::new(3).stream(Stream::Start);
+    let mut centre = random_state(&env, &mut rng);
+    let xy = cell_xy(env.map(), env.cells().0);
+    centre.qpos[..2].copy_from_slice(&xy);
+    let (balls, clear) = (env.ball_starts().unwrap(), env.clear_balls().unwrap());
+    let mut moved = 0;
+    for _ in 0..200 {
+        let s = balls.sample_ball(&centre, 1.0, &mut rng);
+        let d = (s.qpos[0] - xy[0]).hypot(s.qpos[1] - xy[1]);
+        assert!(d <= 1.0 && clearance(env.map(), s.xy()) >= REACH, "{s:?}");
+        assert_eq!(
+            (&s.qpos[2..], s.qvel, s.warmstart, s.goal),
+            (
+                &centre.qpos[2..],
+                centre.qvel,
+                centre.warmstart,
+                centre.goal
+            )
+        );
+        moved += usize::from(s != centre);
+    }
+    assert!(moved > 150, "{moved}");
+    // The cell's centre is 2 m from its walls.
+    assert!(clear.ball_is_clear(&centre, 0.75) && !clear.ball_is_clear(&centre, 0.8));
+    // 0.3 m from a wall: every draw within 0.1 m is too close, so the centre comes back.
+    let mut near = centre;
+    near.qpos[0] = xy[0] - 1.7;
+    for _ in 0..20 {
+        assert_eq!(balls.sample_ball(&near, 0.1, &mut rng), near);
+    }
+}
+
+/// PBCS runs on the fixed task through the registry: phase 1 finds the goal cell (τ ends within
+/// 0.45 of its centre, no state of τ upside down), phase 2 runs Backplay from the archive's
+/// states until its budget, and the run writes its record.
+#[test]
+fn pbcs_runs_on_the_fixed_task() {
+    let text = std::fs::read_to_string("results/dev/issue49/phase2/ddpg64_e1.toml").unwrap();
+    let mut job: pbcs::config::PbcsJob = toml::from_str(&text).unwrap();
+    job.env = EnvName::AntmazeUmaze;
+    job.phase2.max_env_steps = 5_000;
+    job.phase2.eval_episodes = 2;
+    let dir = tempfile::tempdir().unwrap();
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let valid = pbcs::validate::Check::valid(job).unwrap();
+    let (record, _) = pbcs::runs::run_pbcs(&valid, kernel, dir.path(), |_, _| {}).unwrap();
+    assert!(!record.solved);
+    let goal = AntMaze::named(MapName::UMaze).unwrap().goal();
+    let tau: Vec<Vec<f64>> = csv::Reader::from_path(dir.path().join("trajectory.csv"))
+        .unwrap()
+        .records()
+        .map(|r| {
+            r.unwrap()
+                .iter()
+                .skip(1)
+                .take(7)
+                .map(|v| v.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    let last = tau.last().unwrap();
+    assert!(
+        (last[0] - goal[0]).hypot(last[1] - goal[1]) <= 0.45,
+        "{last:?}"
+    );
+    for p in &tau {
+        assert!(1.0 - 2.0 * (p[4] * p[4] + p[5] * p[5]) >= 0.0, "{p:?}");
+    }
 }

@@ -35,6 +35,7 @@ pub mod pointmaze;
 pub mod rooms;
 pub mod three_rooms;
 pub mod toy;
+mod uninhabited;
 mod walled;
 
 use crate::error::{Error, Result};
@@ -44,56 +45,8 @@ use pointmaze::{MapName, PointMap, PointMaze, PointMazeConfig};
 use rooms::TwoRooms;
 use serde::{Deserialize, Serialize};
 
-/// Declares `$name`, an environment without values, for a build without the feature that
-/// makes it: the registry refuses its names ([`EnvSpec::build`]), and code generic over the
-/// registry's environments ([`crate::with_env!`]) still compiles.
-#[cfg_attr(feature = "mujoco", allow(unused_macros))]
-macro_rules! uninhabited_env {
-    ($name:ident, $what:literal) => {
-        #[doc = concat!("Without MuJoCo, ", $what, " has no values.")]
-        #[derive(Debug, Clone)]
-        pub enum $name {}
-
-        impl crate::env::Env for $name {
-            type State = std::convert::Infallible;
-            fn obs_dim(&self) -> usize {
-                match *self {}
-            }
-            fn action_dim(&self) -> usize {
-                match *self {}
-            }
-            fn action_bound(&self, _: usize) -> f32 {
-                match *self {}
-            }
-            fn start(&self) -> Self::State {
-                match *self {}
-            }
-            fn sample_start(&self, _: &mut crate::rng::Rng) -> Self::State {
-                match *self {}
-            }
-            fn observe(&self, _: &Self::State, _: &mut [f32]) {
-                match *self {}
-            }
-            fn step(&self, _: &Self::State, _: &[f32]) -> crate::env::Step<Self::State> {
-                match *self {}
-            }
-        }
-
-        impl crate::env::Planar for $name {
-            fn point(&self, _: &Self::State) -> (f32, f32) {
-                match *self {}
-            }
-            fn scene(&self) -> crate::env::Scene {
-                match *self {}
-            }
-            fn ball_point(&self, _: &[f32]) -> (f32, f32) {
-                match *self {}
-            }
-        }
-    };
-}
 #[cfg_attr(feature = "mujoco", allow(unused_imports))]
-pub(crate) use uninhabited_env;
+pub(crate) use uninhabited::uninhabited_env;
 
 /// The environments PBCS runs on, by name.
 #[derive(
@@ -152,10 +105,9 @@ pub enum EnvName {
     PointmazeLargeGoals,
     /// gymnasium-robotics' `AntMaze_UMaze-v5` (`src/envs/antmaze/`, feature `mujoco`) with
     /// `continuing_task=False` and the 27-number observation
-    /// (`include_cfrc_ext_in_observation=False`), reset to the cells of this package's task
-    /// (the two free cells farthest apart): start and goal drawn per episode, each ±1 m around
-    /// its cell's centre, success within 0.45 of the episode's goal. A goal-conditioned task,
-    /// as the `_goals` PointMazes: runs on it train with `[train.her]`.
+    /// (`include_cfrc_ext_in_observation=False`), PBCS's fixed task: from rest at the centre of
+    /// one of the two free cells farthest apart to within 0.45 of the other's centre. Phase 1
+    /// never archives an ant on its back (`AntMaze::refusing_flipped`).
     AntmazeUmaze,
     /// gymnasium-robotics' `AntMaze_Open-v5`, the same way.
     AntmazeOpen,
@@ -163,6 +115,16 @@ pub enum EnvName {
     AntmazeMedium,
     /// gymnasium-robotics' `AntMaze_Large-v5`, the same way.
     AntmazeLarge,
+    /// `AntMaze_UMaze-v5` reset as the env resets the same cells: start and goal drawn per
+    /// episode, each ±1 m around its cell's centre, success within 0.45 of the episode's goal.
+    /// Goal-conditioned, as the `_goals` PointMazes: runs on it train with `[train.her]`.
+    AntmazeUmazeGoals,
+    /// `AntMaze_Open-v5`, the same way.
+    AntmazeOpenGoals,
+    /// `AntMaze_Medium-v5`, the same way.
+    AntmazeMediumGoals,
+    /// `AntMaze_Large-v5`, the same way.
+    AntmazeLargeGoals,
 }
 
 /// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
@@ -266,16 +228,16 @@ impl EnvName {
     /// ```
     pub fn ant_map(self) -> Option<MapName> {
         match self {
-            EnvName::AntmazeUmaze => Some(MapName::UMaze),
-            EnvName::AntmazeOpen => Some(MapName::Open),
-            EnvName::AntmazeMedium => Some(MapName::Medium),
-            EnvName::AntmazeLarge => Some(MapName::Large),
+            EnvName::AntmazeUmaze | EnvName::AntmazeUmazeGoals => Some(MapName::UMaze),
+            EnvName::AntmazeOpen | EnvName::AntmazeOpenGoals => Some(MapName::Open),
+            EnvName::AntmazeMedium | EnvName::AntmazeMediumGoals => Some(MapName::Medium),
+            EnvName::AntmazeLarge | EnvName::AntmazeLargeGoals => Some(MapName::Large),
             _ => None,
         }
     }
 
     /// Whether episodes draw their start and goal as gymnasium-robotics' reset does (the
-    /// `_goals` names and AntMaze): a goal-conditioned task.
+    /// `_goals` names): a goal-conditioned task.
     ///
     /// ```
     /// use pbcs::envs::EnvName;
@@ -290,7 +252,11 @@ impl EnvName {
                 | EnvName::PointmazeOpenGoals
                 | EnvName::PointmazeMediumGoals
                 | EnvName::PointmazeLargeGoals
-        ) || self.ant_map().is_some()
+                | EnvName::AntmazeUmazeGoals
+                | EnvName::AntmazeOpenGoals
+                | EnvName::AntmazeMediumGoals
+                | EnvName::AntmazeLargeGoals
+        )
     }
 
     /// Refuses a run that needs one fixed task on an environment whose episodes draw their
@@ -298,10 +264,7 @@ impl EnvName {
     /// would not see the goal). `what` names the run.
     pub fn check_fixed_task(self, what: &str) -> Result<()> {
         if self.goal_resets() {
-            let fixed = match self.point_map() {
-                Some(_) => format!(", or run {} for the fixed task", self.fixed_name()),
-                None => String::new(),
-            };
+            let fixed = format!(", or run {} for the fixed task", self.fixed_name());
             return Err(Error::invalid(
                 "env",
                 format!(
@@ -315,7 +278,7 @@ impl EnvName {
         Ok(())
     }
 
-    /// The name of the same map's fixed task, for a `_goals` PointMaze (itself for any other).
+    /// The name of the same map's fixed task, for a `_goals` name (itself for any other).
     pub fn fixed_name(self) -> &'static str {
         self.name().trim_end_matches("_goals")
     }
@@ -410,7 +373,12 @@ impl EnvSpec {
             (EnvName::Maze, _) => format!("maze {} (layout {})", self.maze.size, self.maze.seed),
             (name, None) if name.ant_map().is_some() => {
                 let map = name.ant_map().map_or("", <&str>::from);
-                format!("AntMaze {map} (goals drawn per episode)")
+                let drawn = if name.goal_resets() {
+                    " (goals drawn per episode)"
+                } else {
+                    ""
+                };
+                format!("AntMaze {map}{drawn}")
             }
             (name, Some(map)) if name.goal_resets() => {
                 format!("PointMaze {} (goals drawn per episode)", <&str>::from(map))
@@ -494,7 +462,11 @@ impl EnvSpec {
             EnvName::AntmazeUmaze
             | EnvName::AntmazeOpen
             | EnvName::AntmazeMedium
-            | EnvName::AntmazeLarge => {
+            | EnvName::AntmazeLarge
+            | EnvName::AntmazeUmazeGoals
+            | EnvName::AntmazeOpenGoals
+            | EnvName::AntmazeMediumGoals
+            | EnvName::AntmazeLargeGoals => {
                 let map = self.name.ant_map().expect("an AntMaze name has a map");
                 Built::AntMaze(ant_maze(PointMap::named(map), self.name)?)
             }
@@ -548,10 +520,15 @@ fn point_maze(map: PointMap, name: EnvName) -> Result<PointMaze> {
 }
 
 /// An AntMaze task: the map's two free cells farthest apart, with gymnasium-robotics' resets
-/// ([`crate::envs::antmaze::AntMaze::on`]).
+/// ([`crate::envs::antmaze::AntMaze::on`]) for the `_goals` names, else from rest at the
+/// start cell's centre to the goal cell's, phase 1 refusing an ant on its back.
 #[cfg(feature = "mujoco")]
-fn ant_maze(map: PointMap, _name: EnvName) -> Result<AntMaze> {
-    AntMaze::on(map)
+fn ant_maze(map: PointMap, name: EnvName) -> Result<AntMaze> {
+    if name.goal_resets() {
+        return AntMaze::on(map);
+    }
+    let (start, goal) = map.farthest_cells();
+    Ok(AntMaze::new(map, start, goal, pointmaze::Resets::Fixed)?.refusing_flipped())
 }
 
 /// Without MuJoCo: refused, saying how to build with it.

@@ -328,8 +328,11 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
-    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found.
+    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found,
+    // and the bar's message every `LOG_EVERY` seconds.
+    const LOG_EVERY: f64 = 30.0;
     let lines = !run.quiet && !std::io::stderr().is_terminal();
+    let mut logged = 0.0;
     let (record, seconds) = runs::run_pbcs(&job, kernel, &out, |skill, p| {
         let secs = clock.elapsed().as_secs_f64();
         if skill != current_skill {
@@ -344,7 +347,12 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
         }
         current = p.steps.train + p.steps.test;
         let total = finished + current;
-        bar.set_message(p.status(skill, total, total as f64 / secs.max(1e-9)));
+        let status = p.status(skill, total, total as f64 / secs.max(1e-9));
+        if lines && secs >= logged + LOG_EVERY {
+            logged = secs;
+            eprintln!("[{secs:.0} s] {status}");
+        }
+        bar.set_message(status);
         bar.tick();
     })
     .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;

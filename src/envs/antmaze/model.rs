@@ -27,6 +27,12 @@ pub const WALL_HEIGHT: f64 = 0.5;
 /// a uniform draw in ±`POSITION_NOISE` × [`SCALE`] = ±1 m along each axis.
 pub const POSITION_NOISE: f64 = 0.25;
 
+/// How far the ant reaches from its torso's centre, in the plane, in any pose: each leg is
+/// three capsules along one diagonal (0.2, 0.2 and 0.4 m along each axis in `ant.xml`, the
+/// hinges turning them at most to that length), of radius 0.08: 0.8·√2 + 0.08 ≈ 1.21 m. A
+/// torso farther than this from every wall cannot touch one.
+pub const REACH: f64 = 0.8 * std::f64::consts::SQRT_2 + 0.08;
+
 /// Steps per episode on a map of one's own: Medium's and Large's.
 pub const OWN_TIME_LIMIT: usize = 1000;
 
@@ -62,6 +68,12 @@ pub fn xy_cell(map: &PointMap, [x, y]: [f64; 2]) -> Option<(usize, usize)> {
     let (i, j) = (((yc - y) / SCALE).floor(), ((x + xc) / SCALE).floor());
     (i >= 0.0 && j >= 0.0 && (i as usize) < map.rows() && (j as usize) < map.cols())
         .then_some((i as usize, j as usize))
+}
+
+/// Distance in metres from the point `xy` to the nearest wall cell (0 inside one):
+/// [`PointMap::clearance`] in cells of [`SCALE`].
+pub fn clearance(map: &PointMap, [x, y]: [f64; 2]) -> f64 {
+    map.clearance([x / SCALE, y / SCALE]) * SCALE
 }
 
 /// The model: `ant.xml` with, at the end of its world body, one box per wall cell, row by row
@@ -135,6 +147,17 @@ mod tests {
             }
             assert_eq!(xy_cell(&map, [-100.0, 0.0]), None);
         }
+    }
+
+    #[test]
+    fn clearance_is_in_metres() {
+        let map = PointMap::named(MapName::UMaze);
+        // UMaze's cell (1, 1) has walls on three sides: 2 m from its centre.
+        let c = cell_xy(&map, (1, 1));
+        assert_eq!(clearance(&map, c), 2.0);
+        assert_eq!(clearance(&map, [c[0] - 1.5, c[1]]), 0.5);
+        assert_eq!(clearance(&map, [c[0] - 3.0, c[1]]), 0.0);
+        assert!((REACH - 1.2114).abs() < 1e-4);
     }
 
     #[test]

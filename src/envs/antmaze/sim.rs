@@ -2,7 +2,7 @@
 //! (v5) step, observation, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{self, POSITION_NOISE, SCALE};
-use crate::env::{Env, Goals, Planar, Scene, Step};
+use crate::env::{BallIsClear, Env, Goals, Planar, SampleBall, Scene, Step};
 use crate::envs::pointmaze::{MapName, PointMap, Resets, SUCCESS_DISTANCE};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
@@ -14,6 +14,9 @@ pub const NQ: usize = 15;
 
 /// Velocity coordinates: the torso's 6 (linear, then angular), then the 8 hinges'.
 pub const NV: usize = 14;
+
+/// Draws of a start in B_ε(τ_K) before one clear of the walls is taken; then τ_K itself.
+const BALL_DRAWS: usize = 16;
 
 /// Motors, one per hinge, in `ant.xml`'s order (hip_4, ankle_4, hip_1, …).
 pub const NU: usize = 8;
@@ -292,6 +295,14 @@ impl Env for AntMaze {
         Some(self)
     }
 
+    fn ball_starts(&self) -> Option<&dyn SampleBall<AntState>> {
+        Some(self)
+    }
+
+    fn clear_balls(&self) -> Option<&dyn BallIsClear<AntState>> {
+        Some(self)
+    }
+
     /// Every state, or (made [`AntMaze::refusing_flipped`]) every state with the torso's up
     /// axis not pointing down.
     fn archivable(&self, s: &AntState) -> bool {
@@ -307,6 +318,38 @@ impl Env for AntMaze {
             .chain(vel)
             .chain(joints.map(|j| format!("d{j}")))
             .collect()
+    }
+}
+
+impl SampleBall<AntState> for AntMaze {
+    /// The centre's body moved in the plane: the torso's (x, y) uniform in the disc of radius
+    /// `radius` around the centre's (r = radius·√u, angle uniform), redrawn while a wall lies
+    /// within the ant's reach ([`model::REACH`]; at most 16 draws, then the centre itself);
+    /// height, orientation, joints, velocities and warm start the centre's. (Phase 2's
+    /// `start = "archive"` draws phase 1's own states in the ball instead.)
+    fn sample_ball(&self, center: &AntState, radius: f32, rng: &mut crate::rng::Rng) -> AntState {
+        use rand::Rng as _;
+        for _ in 0..BALL_DRAWS {
+            let r = f64::from(radius) * rng.random::<f64>().sqrt();
+            let phi = std::f64::consts::TAU * rng.random::<f64>();
+            let xy = [
+                center.qpos[0] + r * phi.cos(),
+                center.qpos[1] + r * phi.sin(),
+            ];
+            if model::clearance(&self.map, xy) >= model::REACH {
+                let mut s = *center;
+                s.qpos[..2].copy_from_slice(&xy);
+                return s;
+            }
+        }
+        *center
+    }
+}
+
+impl BallIsClear<AntState> for AntMaze {
+    /// No wall within `radius` + the ant's reach of the torso's position.
+    fn ball_is_clear(&self, center: &AntState, radius: f32) -> bool {
+        model::clearance(&self.map, center.xy()) >= f64::from(radius) + model::REACH
     }
 }
 
