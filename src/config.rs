@@ -273,12 +273,12 @@ impl Place {
                 ),
             ));
         }
-        if spec.name != EnvName::Pointmaze && self.map.is_some() {
+        if !spec.name.takes_map() && self.map.is_some() {
             return Err(crate::error::Error::invalid(
                 "pointmaze.map",
                 format!(
-                    "a map (--map; Python's map=, map_file=) is for env `pointmaze`, but the \
-                     run's environment is `{env}`"
+                    "a map (--map; Python's map=, map_file=) is for env `pointmaze` or \
+                     `antmaze`, but the run's environment is `{env}`"
                 ),
             ));
         }

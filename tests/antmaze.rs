@@ -252,3 +252,47 @@ fn pbcs_runs_on_the_fixed_task() {
         assert!(1.0 - 2.0 * (p[4] * p[4] + p[5] * p[5]) >= 0.0, "{p:?}");
     }
 }
+
+/// `antmaze` runs the fixed task on a map of one's own, given as `pointmaze`'s (`[pointmaze]`
+/// rows, `--map`): the ant in the map's cells of 4 m between its two free cells farthest apart,
+/// named and foldered after its rows; without rows it is refused, and a named AntMaze refuses
+/// rows.
+#[test]
+fn antmaze_runs_a_map_of_ones_own() {
+    use pbcs::envs::pointmaze::{PointMap, PointMazeConfig};
+    let own = PointMazeConfig::from_file("experiments/maps/pointmaze_own.txt".as_ref()).unwrap();
+    let spec = EnvSpec {
+        name: EnvName::Antmaze,
+        pointmaze: own.clone(),
+        ..EnvSpec::default()
+    };
+    spec.check().unwrap();
+    assert_eq!(spec.label(), "AntMaze (own map, 10×10)");
+    assert!(spec.folder_name().starts_with("antmaze-10x10-"));
+    let pbcs::envs::Built::AntMaze(env) = spec.build().unwrap() else {
+        panic!("antmaze built another environment");
+    };
+    let map = PointMap::from_config(&own).unwrap();
+    assert_eq!(env.cells(), map.farthest_cells());
+    assert_eq!(env.cells(), ((1, 3), (8, 7)));
+    assert_eq!(env.resets(), Resets::Fixed);
+    let goal = pbcs::envs::antmaze::model::cell_xy(&map, (8, 7));
+    assert_eq!(
+        env.success_region(),
+        Some((goal.map(|g| g as f32).to_vec(), 0.45))
+    );
+    assert_eq!(env.scene(), spec.scene().unwrap());
+    assert!(!EnvName::Antmaze.goal_resets() && EnvName::Antmaze.takes_map());
+    let err = EnvSpec::named(EnvName::Antmaze)
+        .check()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("map of one's own"), "{err}");
+    let named = EnvSpec {
+        name: EnvName::AntmazeUmaze,
+        pointmaze: own,
+        ..EnvSpec::default()
+    };
+    let err = named.check().unwrap_err().to_string();
+    assert!(err.contains("\"antmaze\""), "{err}");
+}

@@ -236,14 +236,12 @@ impl NamedEnv {
         let env = env_name(name)?;
         if env.goal_resets() {
             // Its observation would not hold the episode's goal.
-            let (gym_id, fixed) = match (env.point_map(), env.ant_map()) {
-                (Some(m), _) => (
-                    m.gym_id(),
-                    format!(", or `{}` for PBCS's fixed task", env.fixed_name()),
-                ),
-                (None, Some(m)) => (pbcs::envs::antmaze::model::gym_id(m), String::new()),
-                (None, None) => (String::new(), String::new()),
+            let gym_id = match (env.point_map(), env.ant_map()) {
+                (Some(m), _) => m.gym_id(),
+                (None, Some(m)) => pbcs::envs::antmaze::model::gym_id(m),
+                (None, None) => String::new(),
             };
+            let fixed = format!(", or `{}` for PBCS's fixed task", env.fixed_name());
             return Err(invalid(
                 "env",
                 format!(

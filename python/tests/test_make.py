@@ -11,11 +11,12 @@ from gymnasium.utils.env_checker import check_env
 
 import pbcs
 
-# Every name this build makes without arguments (PointMaze's maps with MuJoCo; `pointmaze`
-# needs a map: its own test below).
+# Every name this build makes without arguments (PointMaze's and AntMaze's maps with MuJoCo;
+# `pointmaze` and `antmaze` need a map: PointMaze's own test below).
 RUNNABLE = [
     n for n in pbcs.ENV_NAMES
-    if n != "pointmaze" and (pbcs.MUJOCO or not n.startswith("pointmaze_"))
+    if n not in ("pointmaze", "antmaze")
+    and (pbcs.MUJOCO or not n.startswith(("pointmaze_", "antmaze_")))
 ]
 
 
@@ -30,10 +31,10 @@ def test_a_goal_drawing_name_is_refused_naming_gymnasium_robotics_own():
     assert not [n for n in pbcs.ENV_NAMES if n.endswith("_goals")]
     with pytest.raises(ValueError, match=r"PointMaze_UMaze-v3.*pointmaze_umaze"):
         pbcs.make("pointmaze_umaze_goals")
-    # AntMaze draws its goal too (gymnasium-robotics' own resets); it has no fixed task to offer.
-    assert not [n for n in pbcs.ENV_NAMES if n.startswith("antmaze")]
-    with pytest.raises(ValueError, match=r"AntMaze_Large-v5 \(its observation dict holds the goal\)$"):
-        pbcs.make("antmaze_large")
+    # So does AntMaze's: antmaze_<map>_goals is refused, antmaze_<map> is PBCS's fixed task.
+    assert {"antmaze_umaze", "antmaze_large", "antmaze"} <= set(pbcs.ENV_NAMES)
+    with pytest.raises(ValueError, match=r"AntMaze_Large-v5.*`antmaze_large` for PBCS's fixed"):
+        pbcs.make("antmaze_large_goals")
 
 
 @pytest.mark.parametrize("name", RUNNABLE)

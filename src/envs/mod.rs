@@ -125,6 +125,9 @@ pub enum EnvName {
     AntmazeMediumGoals,
     /// `AntMaze_Large-v5`, the same way.
     AntmazeLargeGoals,
+    /// gymnasium-robotics' AntMaze on a map of one's own (the job's `[pointmaze]`: the same
+    /// rows of 0 and 1, in cells of 4 m), the fixed task as on the four named maps.
+    Antmaze,
 }
 
 /// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
@@ -293,8 +296,19 @@ impl EnvName {
     /// assert_eq!(EnvName::PointmazeLarge.missing_feature(), lacks);
     /// ```
     pub fn missing_feature(self) -> Option<&'static str> {
-        ((self.is_pointmaze() || self.ant_map().is_some()) && !cfg!(feature = "mujoco"))
+        ((self.is_pointmaze() || self.is_antmaze()) && !cfg!(feature = "mujoco"))
             .then_some("mujoco")
+    }
+
+    /// Whether this is an AntMaze: a named map (either task) or a map of one's own.
+    pub fn is_antmaze(self) -> bool {
+        self.ant_map().is_some() || self == EnvName::Antmaze
+    }
+
+    /// Whether the job's `[pointmaze]` gives this environment its map: `pointmaze` and
+    /// `antmaze` (the others take none, and refuse one).
+    pub fn takes_map(self) -> bool {
+        matches!(self, EnvName::Pointmaze | EnvName::Antmaze)
     }
 
     /// Whether this is a PointMaze: one of the four named maps or a map of one's own.
@@ -324,7 +338,8 @@ pub struct EnvSpec {
     pub name: EnvName,
     /// The maze's size and layout (the maze only; the defaults for any other).
     pub maze: MazeConfig,
-    /// A PointMaze map of one's own (`pointmaze` only; the default, no map, for any other).
+    /// A map of one's own, in gymnasium-robotics' `maze_map` rows (`pointmaze` and `antmaze`
+    /// only; the default, no map, for any other).
     pub pointmaze: PointMazeConfig,
 }
 
@@ -338,7 +353,8 @@ impl EnvSpec {
     }
 
     /// Checks the parameters against the name: the maze's for the maze, a map for
-    /// `pointmaze`; parameters of another environment are refused (they would be ignored).
+    /// `pointmaze` and `antmaze`; parameters of another environment are refused (they would be
+    /// ignored).
     pub fn check(&self) -> Result<()> {
         let name = self.name.name();
         if !self.name.is_maze() && self.maze != MazeConfig::default() {
@@ -350,19 +366,19 @@ impl EnvSpec {
                 ),
             ));
         }
-        if self.name != EnvName::Pointmaze && !self.pointmaze.is_default() {
+        if !self.name.takes_map() && !self.pointmaze.is_default() {
             return Err(Error::invalid(
                 "pointmaze",
                 format!(
-                    "sets a PointMaze map of one's own, but env = \"{name}\" (leave \
-                     [pointmaze] out, or set env = \"pointmaze\")"
+                    "sets a map of one's own, but env = \"{name}\" (leave [pointmaze] out, \
+                     or set env = \"pointmaze\" or \"antmaze\")"
                 ),
             ));
         }
         crate::validate::Check::check(&self.maze)?;
-        match self.name {
-            EnvName::Pointmaze => self.pointmaze.check(),
-            _ => Ok(()),
+        match self.name.takes_map() {
+            true => self.pointmaze.check(),
+            false => Ok(()),
         }
     }
 
@@ -384,22 +400,27 @@ impl EnvSpec {
                 format!("PointMaze {} (goals drawn per episode)", <&str>::from(map))
             }
             (_, Some(map)) => format!("PointMaze {}", <&str>::from(map)),
-            (EnvName::Pointmaze, None) => {
+            (EnvName::Pointmaze | EnvName::Antmaze, None) => {
                 let (h, w) = (
                     self.pointmaze.map.len(),
                     self.pointmaze.map.first().map_or(0, String::len),
                 );
-                format!("PointMaze (own map, {h}×{w})")
+                let body = if self.name.is_antmaze() {
+                    "AntMaze"
+                } else {
+                    "PointMaze"
+                };
+                format!("{body} (own map, {h}×{w})")
             }
             (other, None) => other.name().to_string(),
         }
     }
 
     /// How run folders name where they ran ([`crate::runs::default_out`]): `maze<N>-m<layout>`
-    /// for the maze, `pointmaze-<H>x<W>-<hash>` for a map of one's own (the first 8 hex
-    /// digits of its rows' SHA-256, so that two maps do not share a folder; a clash of those
-    /// 32 bits would be refused by the folder's claim, which compares the whole job), the name
-    /// for another.
+    /// for the maze, `pointmaze-<H>x<W>-<hash>` (`antmaze-…`) for a map of one's own (the
+    /// first 8 hex digits of its rows' SHA-256, so that two maps do not share a folder; a clash
+    /// of those 32 bits would be refused by the folder's claim, which compares the whole job),
+    /// the name for another.
     ///
     /// ```
     /// use pbcs::envs::{EnvName, EnvSpec};
@@ -411,12 +432,12 @@ impl EnvSpec {
     pub fn folder_name(&self) -> String {
         match self.name {
             EnvName::Maze => format!("maze{}-m{}", self.maze.size, self.maze.seed),
-            EnvName::Pointmaze => {
+            EnvName::Pointmaze | EnvName::Antmaze => {
                 let rows = &self.pointmaze.map;
                 let hex = crate::record::sha256_hex(rows.join("\n").as_bytes());
                 let hex = &hex[..8];
                 let w = rows.first().map_or(0, String::len);
-                format!("pointmaze-{}x{w}-{hex}", rows.len())
+                format!("{}-{}x{w}-{hex}", self.name.name(), rows.len())
             }
             other => other.name().to_string(),
         }
@@ -439,6 +460,18 @@ impl EnvSpec {
             (EnvName::Pointmaze, None) => Some(PointMap::from_config(&self.pointmaze)?),
             _ => None,
         })
+    }
+
+    /// The map of an AntMaze (named, or the job's own); an error for any other environment.
+    fn ant_map(&self) -> Result<PointMap> {
+        match (self.name, self.name.ant_map()) {
+            (_, Some(named)) => Ok(PointMap::named(named)),
+            (EnvName::Antmaze, None) => PointMap::from_config(&self.pointmaze),
+            (other, None) => Err(Error::invalid(
+                "env",
+                format!("{} is not an AntMaze", other.name()),
+            )),
+        }
     }
 
     /// Makes the environment: once per run.
@@ -466,10 +499,8 @@ impl EnvSpec {
             | EnvName::AntmazeUmazeGoals
             | EnvName::AntmazeOpenGoals
             | EnvName::AntmazeMediumGoals
-            | EnvName::AntmazeLargeGoals => {
-                let map = self.name.ant_map().expect("an AntMaze name has a map");
-                Built::AntMaze(ant_maze(PointMap::named(map), self.name)?)
-            }
+            | EnvName::AntmazeLargeGoals
+            | EnvName::Antmaze => Built::AntMaze(ant_maze(self.ant_map()?, self.name)?),
         })
     }
 
@@ -483,8 +514,8 @@ impl EnvSpec {
                 Ok(map.scene(start, goal, radius))
             }
             Some(map) => Ok(point_scene(&map)),
-            None if self.name.ant_map().is_some() => {
-                let map = PointMap::named(self.name.ant_map().expect("an AntMaze map"));
+            None if self.name.is_antmaze() => {
+                let map = self.ant_map()?;
                 let (start, goal) = map.farthest_cells();
                 let radius = pointmaze::SUCCESS_DISTANCE as f32;
                 Ok(antmaze::model::scene(&map, start, goal, radius))

@@ -181,7 +181,8 @@ pub(crate) fn place(
             "pointmaze",
             format!(
                 "{what}: sets [pointmaze] — a grid's map of one's own (its rows and time limit) \
-                 is the experiment file's own [pointmaze], for its site `pointmaze`"
+                 is the experiment file's own [pointmaze], for its sites `pointmaze` and \
+                 `antmaze`"
             ),
         ));
     }
@@ -189,7 +190,7 @@ pub(crate) fn place(
         Site::Maze(n) => spec.maze.size = n,
         Site::Env(e) => spec.name = e,
     }
-    if site == Site::Env(EnvName::Pointmaze) {
+    if matches!(site, Site::Env(e) if e.takes_map()) {
         spec.pointmaze = own_map.cloned().unwrap_or_default();
     }
     job.set_env_spec(spec);

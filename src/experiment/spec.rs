@@ -116,7 +116,7 @@ pub(crate) struct ExperimentSpec {
     /// every PBCS method runs on each, its job's `env` set to it.
     #[serde(default)]
     envs: Vec<EnvName>,
-    /// The map of the site `pointmaze` (a PointMaze map of one's own), as a job's
+    /// The map of the sites `pointmaze` and `antmaze` (a map of one's own), as a job's
     /// `[pointmaze]` writes it; a `map_file` is read relative to this file's folder.
     #[serde(default)]
     pointmaze: Option<toml::Table>,
@@ -326,24 +326,26 @@ impl ExperimentSpec {
         Ok(())
     }
 
-    /// The map of the site `pointmaze` (`[pointmaze]`, its `map_file` relative to the file's
-    /// folder), checked; required exactly when `sites` has `pointmaze`.
+    /// The map of the sites `pointmaze` and `antmaze` (`[pointmaze]`, its `map_file` relative to
+    /// the file's folder), checked; required exactly when `sites` has one of them.
     fn own_map(&self, path: &Path, sites: &[Site]) -> Result<Option<PointMazeConfig>> {
-        let has_site = sites.contains(&Site::Env(EnvName::Pointmaze));
+        let takes_map = |s: &Site| matches!(s, Site::Env(e) if e.takes_map());
+        let has_site = sites.iter().any(takes_map);
         let Some(table) = &self.pointmaze else {
             return match has_site {
                 true => Err(Error::invalid(
                     "pointmaze",
-                    "the site `pointmaze` runs a map of one's own: give it in the file's \
-                     [pointmaze] (`map = [\"111\", ...]` or `map_file = \"maps/x.txt\"`)",
+                    "the sites `pointmaze` and `antmaze` run a map of one's own: give it in the \
+                     file's [pointmaze] (`map = [\"111\", ...]` or `map_file = \"maps/x.txt\"`)",
                 )),
                 false => Ok(None),
             };
         };
-        if !self.sites().contains(&Site::Env(EnvName::Pointmaze)) {
+        if !self.sites().iter().any(takes_map) {
             return Err(Error::invalid(
                 "pointmaze",
-                "gives a map, but `pointmaze` is not one of the file's `envs` (add it)",
+                "gives a map, but neither `pointmaze` nor `antmaze` is one of the file's `envs` \
+                 (add one)",
             ));
         }
         let mut table = table.clone();

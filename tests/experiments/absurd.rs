@@ -60,11 +60,11 @@ fn absurd_values_are_refused_naming_their_field() {
         ),
         (
             format!("title = \"t\"\nseeds = 2\nenvs = [\"pointmaze\"]\n{}", method("a", "")),
-            "invalid `pointmaze`: the site `pointmaze` runs a map of one's own",
+            "invalid `pointmaze`: the sites `pointmaze` and `antmaze` run a map of one's own",
         ),
         (
             format!("{head}[pointmaze]\nmap = [\"1111\", \"1001\", \"1111\"]\n{}", method("a", "")),
-            "is not one of the file's `envs`",
+            "nor `antmaze` is one of the file's `envs`",
         ),
     ];
     for (i, (text, needle)) in cases.iter().enumerate() {

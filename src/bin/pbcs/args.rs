@@ -45,15 +45,15 @@ pub struct RunArgs {
     /// Run seed; overrides `seed` [default: the config's, else 0].
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
-    /// A PointMaze map of one's own, for `--env pointmaze`: a file of rows of 0 (free) and 1
-    /// (wall), one row per line, `#` comments; overrides `[pointmaze] map` (the run folder's
-    /// config.toml keeps the rows).
+    /// A map of one's own, for `--env pointmaze` or `--env antmaze`: a file of rows of 0 (free)
+    /// and 1 (wall), one row per line, `#` comments; overrides `[pointmaze] map` (the run
+    /// folder's config.toml keeps the rows).
     #[arg(long)]
     pub map: Option<PathBuf>,
     /// Output folder [default: out/explore/<where>-s<seed>, out/train/<where>-s<seed>-<algo>[-am],
     /// out/run/<preset or config file stem>/<where>-s<seed>[-nochain][-exact|-archive][-velocity],
-    /// where is maze<N>-m<maze seed> for the maze, pointmaze-<H>x<W>-<8 hex of the rows' SHA-256>
-    /// for a map of one's own, the environment's name for another].
+    /// where is maze<N>-m<maze seed> for the maze, <env>-<H>x<W>-<8 hex of the rows' SHA-256>
+    /// for a map of one's own (pointmaze, antmaze), the environment's name for another].
     /// A folder that holds another run (another config.toml) is refused, before any work.
     #[arg(long)]
     pub out: Option<PathBuf>,

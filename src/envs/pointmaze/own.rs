@@ -158,8 +158,8 @@ impl PointMap {
         if c.map.is_empty() {
             return Err(Error::invalid(
                 field,
-                "env = \"pointmaze\" runs a map of one's own: give its rows (`[pointmaze] map = \
-                 [\"111\", \"101\", ...]`, --map FILE, Python's map=)",
+                "env = \"pointmaze\" (and \"antmaze\") runs a map of one's own: give its rows \
+                 (`[pointmaze] map = [\"111\", \"101\", ...]`, --map FILE, Python's map=)",
             ));
         }
         let mut rows = Vec::with_capacity(c.map.len());
