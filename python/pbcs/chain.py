@@ -51,9 +51,16 @@ class Chain:
         return self._core.pointmaze
 
     @property
+    def antmaze(self):
+        """For a chain of AntMaze's fixed task: ``(gym_id, start_cell, goal_cell, time_limit)``
+        of its task in gymnasium-robotics (cells as (row, column)); None otherwise. See
+        :mod:`pbcs.antmaze` to run it there."""
+        return self._core.antmaze
+
+    @property
     def pointmaze_map(self):
-        """For a chain of PointMaze on a map of one's own (``env == "pointmaze"``): the map as
-        gymnasium-robotics' ``maze_map`` takes it (rows of 0 and 1); None otherwise."""
+        """For a chain on a map of one's own (``env`` ``"pointmaze"`` or ``"antmaze"``): the
+        map as gymnasium-robotics' ``maze_map`` takes it (rows of 0 and 1); None otherwise."""
         return self._core.pointmaze_map
 
     @property

@@ -232,11 +232,36 @@ impl ChainCore {
         }))
     }
 
-    /// For a chain of PointMaze on a map of one's own: the map as gymnasium-robotics'
-    /// `maze_map` takes it (rows of 0 and 1); None otherwise.
+    /// For a chain of AntMaze's fixed task: gymnasium-robotics' id, the start and goal cells
+    /// (row, column) and the env's time limit; None for another environment. On a map of one's
+    /// own (`antmaze`): `AntMaze_UMaze-v5`, made with `maze_map=` [`Self::pointmaze_map`] and
+    /// `max_episode_steps=` the job's `pointmaze.time_limit`.
+    #[getter]
+    fn antmaze(&self) -> PyResult<Option<PointTask>> {
+        use pbcs::envs::{antmaze::model, pointmaze::MapName};
+        let env = self.job.env;
+        if !env.is_antmaze() || env.goal_resets() {
+            return Ok(None);
+        }
+        let map = match env.ant_map() {
+            Some(named) => pbcs::envs::pointmaze::PointMap::named(named),
+            None => {
+                pbcs::envs::pointmaze::PointMap::from_config(&self.job.pointmaze).map_err(py_err)?
+            }
+        };
+        let (start, goal) = map.farthest_cells();
+        let (gym_id, time_limit) = match env.ant_map() {
+            Some(named) => (model::gym_id(named), model::time_limit(named)),
+            None => (model::gym_id(MapName::UMaze), self.job.pointmaze.time_limit),
+        };
+        Ok(Some((gym_id, start, goal, time_limit)))
+    }
+
+    /// For a chain on a map of one's own (`pointmaze`, `antmaze`): the map as
+    /// gymnasium-robotics' `maze_map` takes it (rows of 0 and 1); None otherwise.
     #[getter]
     fn pointmaze_map(&self) -> PyResult<Option<Vec<Vec<u32>>>> {
-        if self.job.env != pbcs::envs::EnvName::Pointmaze {
+        if !self.job.env.takes_map() {
             return Ok(None);
         }
         let map = pbcs::envs::pointmaze::PointMap::from_config(&self.job.pointmaze);

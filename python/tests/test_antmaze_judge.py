@@ -1,0 +1,78 @@
+"""The judge for AntMaze chains (``pbcs.antmaze``, issue 49 point 3): a saved chain acts in
+gymnasium-robotics' own ``AntMaze_UMaze-v5`` (``continuing_task=False``, the 27-number
+observation) from the env's resets of the task's cells, seeing the torso's (x, y) and the env's
+27 numbers, as in our env. The chain is the development run of
+``results/dev/issue49/phase2/long/`` (AntMaze UMaze seed 2, stopped by its budget: some skills,
+the task not solved), committed with its job.
+
+Needs gymnasium-robotics and mujoco==3.17.0 beside this package, built with ``--features
+mujoco`` (``pbcs.MUJOCO``); otherwise skipped."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pbcs
+
+ROOT = Path(__file__).resolve().parents[2]
+CHAIN = ROOT / "results/dev/issue49/phase2/long/chain"
+
+
+@pytest.fixture(scope="module")
+def chain():
+    if not pbcs.MUJOCO:
+        pytest.skip("pbcs built without --features mujoco")
+    pytest.importorskip("gymnasium_robotics")
+    return pbcs.load_chain(CHAIN)
+
+
+def test_the_chain_names_its_task_in_gymnasium_robotics(chain):
+    assert chain.env == "antmaze_umaze"
+    assert chain.antmaze == ("AntMaze_UMaze-v5", (1, 1), (3, 1), 700)
+    assert chain.pointmaze is None and chain.pointmaze_map is None
+
+
+def test_the_judges_env_resets_the_cells_and_shows_what_our_env_shows(chain):
+    import pbcs.antmaze as am
+
+    env = am.make_env(chain)
+    assert env.spec.max_episode_steps == 700
+    centres = {(1, 1): (-4.0, 4.0), (3, 1): (-4.0, -4.0)}
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        o = obs["observation"]
+        assert o.shape == (29,) and env.observation_space["observation"].contains(o)
+        assert np.array_equal(o[:2], obs["achieved_goal"])
+        assert np.abs(o[:2] - centres[(1, 1)]).max() <= 1.0
+        assert np.abs(obs["desired_goal"] - centres[(3, 1)]).max() <= 1.0
+    env.close()
+
+
+def test_the_chain_sees_the_state_as_our_env_observes_it(chain):
+    """While the chain acts, the judge's observation is the ant's qpos then qvel (the torso's
+    x, y first), in our env's order (``pbcs.make("antmaze_umaze")`` observes 29 numbers; that
+    their values are gymnasium-robotics' own, bit for bit, is test_antmaze.py's)."""
+    import pbcs.antmaze as am
+
+    assert pbcs.make("antmaze_umaze").observation_space.shape == (29,)
+    env = am.make_env(chain)
+    obs, _ = env.reset(seed=3)
+    data = env.unwrapped.ant_env.data
+    chain.reset()
+    for _ in range(50):
+        assert np.array_equal(obs["observation"], np.concatenate([data.qpos, data.qvel]))
+        obs, _, terminated, truncated, _ = env.step(chain.act(obs["observation"]))
+        if terminated or truncated:
+            break
+    env.close()
+
+
+def test_the_judge_plays_episodes_to_the_time_limit_or_success(chain):
+    import pbcs.antmaze as am
+
+    r = am.evaluate(chain, episodes=3, seed=1_000_002)
+    assert r["episodes"] == 3 and len(r["success"]) == 3
+    assert all((s and n <= 700) or (not s and n == 700) for s, n in zip(r["success"], r["steps"]))
+    again = am.evaluate(chain, episodes=3, seed=1_000_002)
+    assert np.array_equal(r["steps"], again["steps"])
