@@ -44,7 +44,7 @@ pub struct ExploreJob {
     pub env: EnvName,
     /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
-    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    /// A map of one's own (when `env` is `pointmaze` or `antmaze`; left out otherwise).
     #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
     pub pointmaze: PointMazeConfig,
     /// Phase 1 settings.
@@ -110,7 +110,7 @@ pub struct TrainJob {
     pub env: EnvName,
     /// The maze (when `env` is the maze; left at its defaults otherwise).
     pub maze: MazeConfig,
-    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    /// A map of one's own (when `env` is `pointmaze` or `antmaze`; left out otherwise).
     #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
     pub pointmaze: PointMazeConfig,
     /// The learner's hyper-parameters.
@@ -160,7 +160,7 @@ pub struct PbcsJob {
     /// The maze (the environment's size and layout when `env` is the maze; left at its
     /// defaults otherwise).
     pub maze: MazeConfig,
-    /// A PointMaze map of one's own (when `env` is `pointmaze`; left out otherwise).
+    /// A map of one's own (when `env` is `pointmaze` or `antmaze`; left out otherwise).
     #[serde(skip_serializing_if = "PointMazeConfig::is_default")]
     pub pointmaze: PointMazeConfig,
     /// Phase 1.
@@ -230,7 +230,7 @@ impl PbcsJob {
 /// What a command line or a Python call changes in a job before it runs: where it runs and
 /// its seed, each left as the job has it when `None` (the same call in both, so a job means
 /// the same from either). [`Place::apply`] refuses a maze size or layout for a job on another
-/// environment, and a map for any but `pointmaze`.
+/// environment, and a map for any but `pointmaze` and `antmaze`.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Place {
     /// The environment (`--env`, `env=`).
@@ -241,8 +241,8 @@ pub struct Place {
     pub maze_seed: Option<u64>,
     /// The run seed (`--seed`, `seed=`).
     pub seed: Option<u64>,
-    /// The rows of a PointMaze map of one's own (`--map FILE`, `map=`, `map_file=`), for
-    /// `pointmaze` (its time limit stays the job's).
+    /// The rows of a map of one's own (`--map FILE`, `map=`, `map_file=`), for `pointmaze`
+    /// and `antmaze` (its time limit stays the job's).
     pub map: Option<Vec<String>>,
 }
 

@@ -223,13 +223,26 @@ fn pbcs_runs_on_the_fixed_task() {
     let text = std::fs::read_to_string("results/dev/issue49/phase2/ddpg64_e1.toml").unwrap();
     let mut job: pbcs::config::PbcsJob = toml::from_str(&text).unwrap();
     job.env = EnvName::AntmazeUmaze;
-    job.phase2.max_env_steps = 5_000;
+    // The budget counts phase 1 too (38 696 env steps here): phase 2 gets the rest.
+    job.phase2.max_env_steps = 60_000;
     job.phase2.eval_episodes = 2;
     let dir = tempfile::tempdir().unwrap();
     let kernel = pbcs::nn::kernel::Kernel::detect();
     let valid = pbcs::validate::Check::valid(job).unwrap();
     let (record, _) = pbcs::runs::run_pbcs(&valid, kernel, dir.path(), |_, _| {}).unwrap();
     assert!(!record.solved);
+    // Phase 2 ran Backplay from the archive's states until the budget stopped it.
+    assert_eq!(
+        record.failure,
+        Some(pbcs::phase2::Failure::Budget),
+        "{record:?}"
+    );
+    assert!(
+        record.train_steps > 0 && record.test_steps > 0,
+        "{record:?}"
+    );
+    let trace = std::fs::read_to_string(dir.path().join("trace.csv")).unwrap();
+    assert!(trace.lines().count() > 1, "{trace}");
     let goal = AntMaze::named(MapName::UMaze).unwrap().goal();
     let tau: Vec<Vec<f64>> = csv::Reader::from_path(dir.path().join("trajectory.csv"))
         .unwrap()

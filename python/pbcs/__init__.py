@@ -5,8 +5,8 @@ Everything is computed by the Rust package pbcs-rs (the compiled module ``pbcs._
 * :class:`ContinuousMaze` — the paper's continuous maze as a ``gymnasium.Env``, registered as
   ``pbcs/ContinuousMaze-v0``; :class:`ContinuousMazeVec` steps N mazes in one call.
 * :func:`make` — any environment of the registry by name (``ENV_NAMES``: ``maze``, ``rooms``,
-  ``three_rooms``, PointMaze's maps and ``pointmaze`` on a map of one's own in a build with
-  MuJoCo, ``MUJOCO``), registered as ``pbcs/<name>-v0``.
+  ``three_rooms``; in a build with MuJoCo, ``MUJOCO``, PointMaze's and AntMaze's maps and
+  ``pointmaze`` and ``antmaze`` on a map of one's own), registered as ``pbcs/<name>-v0``.
 * :func:`explore` — phase 1: the trajectory τ from s_0 to the target.
 * :func:`run` — a whole PBCS run with a preset (``fast`` or ``paper``).
 * :func:`load_chain` — a chain of skills saved by ``pbcs run`` as a policy (:class:`Chain`).
@@ -45,7 +45,7 @@ __all__ = [
 
 MAX_MAZE_SIZE = _pbcs.MAX_MAZE_SIZE
 ENV_NAMES = tuple(_pbcs.ENV_NAMES)
-#: Whether this build runs PointMaze (built with the ``mujoco`` feature:
+#: Whether this build runs PointMaze and AntMaze (built with the ``mujoco`` feature:
 #: ``MATURIN_PEP517_ARGS="--features mujoco" pip install ./python`` after ``make mujoco``).
 MUJOCO = bool(_pbcs.MUJOCO)
 
@@ -65,7 +65,7 @@ def run(size=None, layout=None, seed=0, preset="fast", config=None, out=None,
     ``seed``, with the preset ``fast`` or ``paper``, or the job in the TOML file ``config``, on
     the environment ``env`` names (a registry name, ``ENV_NAMES``; default: the config's, else
     the maze), the maze of ``size`` and layout ``layout`` (default: the config's, else 5 and 0),
-    the PointMaze map of one's own of ``env="pointmaze"`` (``map``: rows as strings of 0 and 1
+    the map of one's own of ``env="pointmaze"`` or ``"antmaze"`` (``map``: rows as strings of 0 and 1
     or as lists of 0 and 1; or ``map_file``: a file of rows; default: the config's). With
     ``out`` (a folder), the run's files are written there as ``pbcs run --out`` writes them,
     the chain in ``out/chain`` (load it with :func:`load_chain`). Returns the run's record as a

@@ -18,7 +18,9 @@ import numpy as np
 
 import gymnasium as gym
 
-from .pointmaze import FixedCells
+from ._judge import play, task_env
+
+__all__ = ["AntObservation", "make_env", "evaluate"]
 
 
 class AntObservation(gym.ObservationWrapper):
@@ -43,24 +45,8 @@ def make_env(chain, **kwargs):
     """gymnasium-robotics' AntMaze of ``chain``'s task, ``continuing_task=False`` and the
     27-number observation, resetting to its cells, observed as :class:`AntObservation`
     (``kwargs`` go to ``gym.make``)."""
-    task = chain.antmaze
-    if task is None:
-        raise ValueError(f"a chain of env = {chain.env!r}, not of AntMaze's fixed task")
-    try:
-        import gymnasium_robotics
-    except ImportError as e:
-        raise ImportError(
-            "pbcs.antmaze needs gymnasium-robotics: pip install gymnasium-robotics==1.4.2"
-        ) from e
-    gym.register_envs(gymnasium_robotics)
-    gym_id, start, goal, time_limit = task
-    kwargs.setdefault("continuing_task", False)
     kwargs.setdefault("include_cfrc_ext_in_observation", False)
-    own = chain.pointmaze_map
-    if own is not None:
-        kwargs.setdefault("maze_map", own)
-        kwargs.setdefault("max_episode_steps", time_limit)
-    return AntObservation(FixedCells(gym.make(gym_id, **kwargs), start, goal))
+    return AntObservation(task_env(chain, chain.antmaze, "pbcs.antmaze", **kwargs))
 
 
 def evaluate(chain, episodes=100, seed=0, env=None):
@@ -73,17 +59,8 @@ def evaluate(chain, episodes=100, seed=0, env=None):
     own = env is None
     if own:
         env = make_env(chain)
-    spec = getattr(env, "spec", None)
-    limit = (spec.max_episode_steps if spec and spec.max_episode_steps else None) or chain.antmaze[3]
-    runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
-            for e in range(episodes)]
-    success = [r["success"] for r in runs]
-    steps = [r["steps"] for r in runs]
-    if own:
-        env.close()
-    return {
-        "successes": int(sum(success)),
-        "episodes": episodes,
-        "success": np.array(success),
-        "steps": np.array(steps),
-    }
+    try:
+        return play(chain, env, episodes, seed, lambda: chain.antmaze[3])
+    finally:
+        if own:
+            env.close()

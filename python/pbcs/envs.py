@@ -155,14 +155,15 @@ class ContinuousMazeVec(VectorEnv):
 
 class RegisteredEnv(gym.Env):
     """An environment of pbcs-rs' registry by name (``pbcs.ENV_NAMES``: ``maze``, ``rooms``,
-    ``three_rooms``, ``pointmaze_<map>`` in a build with MuJoCo), as a ``gymnasium.Env``: the observation is the environment's
-    (float32, unbounded box), the action box its bounds (out-of-range components are clipped,
-    NaN counts as 0), ``reset`` starts from its start distribution (s_0 for the maze, the rooms
-    and PointMaze's task), ``step`` is the Rust core's own, truncated after
-    ``max_episode_steps``. ``size`` and ``layout`` are the maze's and refused for another
-    environment; ``map`` (rows as strings of 0 and 1, or lists of 0 and 1) or ``map_file`` (a
-    file of rows) is ``pointmaze``'s map of one's own, and refused for another. ``render()`` (with ``render_mode="rgb_array"``) draws the environment with
-    the episode's path.
+    ``three_rooms``, ``pointmaze_<map>`` and ``antmaze_<map>`` in a build with MuJoCo), as a
+    ``gymnasium.Env``: the observation is the environment's (float32, unbounded box), the
+    action box its bounds (out-of-range components are clipped, NaN counts as 0), ``reset``
+    starts from its start distribution (s_0 for the maze, the rooms and PointMaze's task),
+    ``step`` is the Rust core's own, truncated after ``max_episode_steps``. ``size`` and
+    ``layout`` are the maze's and refused for another environment; ``map`` (rows as strings
+    of 0 and 1, or lists of 0 and 1) or ``map_file`` (a file of rows) is the map of one's
+    own of ``pointmaze`` and ``antmaze``, and refused for another. ``render()`` (with
+    ``render_mode="rgb_array"``) draws the environment with the episode's path.
 
     >>> env = RegisteredEnv("rooms")
     >>> obs, _ = env.reset(seed=0)
@@ -215,8 +216,8 @@ def make(name, **kwargs):
     if name == "maze":
         if "map" in kwargs or "map_file" in kwargs:
             raise ValueError(
-                "invalid `pointmaze.map`: a map (map=, map_file=) is for env `pointmaze`, "
-                "but the environment is `maze`"
+                "invalid `pointmaze.map`: a map (map=, map_file=) is for env `pointmaze` or "
+                "`antmaze`, but the environment is `maze`"
             )
         return ContinuousMaze(**kwargs)
     return RegisteredEnv(name, **kwargs)

@@ -15,44 +15,15 @@ goal.
 Needs ``gymnasium-robotics`` (and ``mujoco``) beside this package; nothing else here does.
 """
 
-import numpy as np
+from ._judge import FixedCells, play, task_env
 
-import gymnasium as gym
-
-
-class FixedCells(gym.Wrapper):
-    """Every reset asks PointMaze for the same start and goal cells (with its own ±0.25
-    noise)."""
-
-    def __init__(self, env, start, goal):
-        super().__init__(env)
-        self.cells = {"reset_cell": np.array(start), "goal_cell": np.array(goal)}
-
-    def reset(self, *, seed=None, options=None):
-        return self.env.reset(seed=seed, options=dict(self.cells))
+__all__ = ["FixedCells", "make_env", "evaluate"]
 
 
 def make_env(chain, **kwargs):
     """gymnasium-robotics' PointMaze of ``chain``'s task, ``continuing_task=False``, resetting
     to its cells (``kwargs`` go to ``gym.make``)."""
-    task = chain.pointmaze
-    if task is None:
-        raise ValueError(f"a chain of env = {chain.env!r}, not of PointMaze")
-    try:
-        import gymnasium_robotics
-    except ImportError as e:
-        raise ImportError(
-            "pbcs.pointmaze needs gymnasium-robotics: pip install gymnasium-robotics==1.4.2"
-        ) from e
-    gym.register_envs(gymnasium_robotics)
-    gym_id, start, goal, time_limit = task
-    kwargs.setdefault("continuing_task", False)
-    own = chain.pointmaze_map
-    if own is not None:
-        # A map of one's own: the same env class on those rows, with the job's time limit.
-        kwargs.setdefault("maze_map", own)
-        kwargs.setdefault("max_episode_steps", time_limit)
-    return FixedCells(gym.make(gym_id, **kwargs), start, goal)
+    return task_env(chain, chain.pointmaze, "pbcs.pointmaze", **kwargs)
 
 
 def evaluate(chain, episodes=100, seed=0, env=None):
@@ -65,18 +36,8 @@ def evaluate(chain, episodes=100, seed=0, env=None):
     own = env is None
     if own:
         env = make_env(chain)
-    # The env's own time limit ends each episode (the rollout's cap never comes first).
-    spec = getattr(env, "spec", None)
-    limit = (spec.max_episode_steps if spec and spec.max_episode_steps else None) or chain.pointmaze[3]
-    runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
-            for e in range(episodes)]
-    success = [r["success"] for r in runs]
-    steps = [r["steps"] for r in runs]
-    if own:
-        env.close()
-    return {
-        "successes": int(sum(success)),
-        "episodes": episodes,
-        "success": np.array(success),
-        "steps": np.array(steps),
-    }
+    try:
+        return play(chain, env, episodes, seed, lambda: chain.pointmaze[3])
+    finally:
+        if own:
+            env.close()

@@ -243,12 +243,7 @@ impl ChainCore {
         if !env.is_antmaze() || env.goal_resets() {
             return Ok(None);
         }
-        let map = match env.ant_map() {
-            Some(named) => pbcs::envs::pointmaze::PointMap::named(named),
-            None => {
-                pbcs::envs::pointmaze::PointMap::from_config(&self.job.pointmaze).map_err(py_err)?
-            }
-        };
+        let map = self.job.env_spec().ant_map().map_err(py_err)?;
         let (start, goal) = map.farthest_cells();
         let (gym_id, time_limit) = match env.ant_map() {
             Some(named) => (model::gym_id(named), model::time_limit(named)),

@@ -29,9 +29,9 @@ pub(crate) fn env_name(name: &str) -> PyResult<EnvName> {
     })
 }
 
-/// The environment `env` with the maze of `size` and `layout` or the PointMaze `map` (the
+/// The environment `env` with the maze of `size` and `layout` or the `map` of one's own (the
 /// defaults where not given), checked: a maze for another environment, or a map for any but
-/// `pointmaze`, is refused, as `pbcs run --maze` and `--map` are ([`Place`]).
+/// `pointmaze` and `antmaze`, is refused, as `pbcs run --maze` and `--map` are ([`Place`]).
 fn spec_for(env: EnvName, size: Option<i64>, layout: Option<i64>, map: Map) -> PyResult<EnvSpec> {
     let mut job = pbcs::config::ExploreJob::default();
     place_of(Some(env), size, layout, None, map)?

@@ -107,8 +107,8 @@ pub(crate) fn evaluation_starts<'py>(
 
 /// A whole PBCS run (phase 1, phase 2, the chain's evaluation) of a preset (`fast` or `paper`)
 /// or of a config file, on the environment it names (`env`, else the config's, else the
-/// maze: of size `size` and layout `layout`, else the config's; `pointmaze`: on the map
-/// `map` or `map_file`, else the config's); with `out`, its files
+/// maze: of size `size` and layout `layout`, else the config's; `pointmaze` and `antmaze`: on
+/// the map `map` or `map_file`, else the config's); with `out`, its files
 /// (record, trace, chain/, picture) are written there, as `pbcs run --out` does. Returns the
 /// run's record as a dict, τ as an array of points, and the chain folder when one was
 /// written.

@@ -50,13 +50,21 @@ def test_the_judges_env_resets_the_cells_and_shows_what_our_env_shows(chain):
 
 
 def test_the_chain_sees_the_state_as_our_env_observes_it(chain):
-    """While the chain acts, the judge's observation is the ant's qpos then qvel (the torso's
-    x, y first), in our env's order (``pbcs.make("antmaze_umaze")`` observes 29 numbers; that
-    their values are gymnasium-robotics' own, bit for bit, is test_antmaze.py's)."""
+    """Our env observes a state as gymnasium-robotics' ant holds it, qpos then qvel (the
+    torso's x, y first), and while the chain acts in the judge's env, that env shows it the
+    same (that the two envs step alike, bit for bit, is test_antmaze.py's)."""
     import pbcs.antmaze as am
 
-    assert pbcs.make("antmaze_umaze").observation_space.shape == (29,)
+    # Our env's first observation (at rest at the start cell's centre) is the same state's
+    # qpos ++ qvel in gymnasium-robotics' ant, in float32.
+    mine, _ = pbcs.make("antmaze_umaze").reset(seed=0)
     env = am.make_env(chain)
+    env.reset(seed=0)
+    ant = env.unwrapped.ant_env
+    qpos = ant.init_qpos.copy()
+    qpos[:2] = (-4.0, 4.0)
+    ant.set_state(qpos, np.zeros(ant.model.nv))
+    assert np.array_equal(mine, np.concatenate([ant.data.qpos, ant.data.qvel]).astype(np.float32))
     obs, _ = env.reset(seed=3)
     data = env.unwrapped.ant_env.data
     chain.reset()

@@ -463,7 +463,7 @@ impl EnvSpec {
     }
 
     /// The map of an AntMaze (named, or the job's own); an error for any other environment.
-    fn ant_map(&self) -> Result<PointMap> {
+    pub fn ant_map(&self) -> Result<PointMap> {
         match (self.name, self.name.ant_map()) {
             (_, Some(named)) => Ok(PointMap::named(named)),
             (EnvName::Antmaze, None) => PointMap::from_config(&self.pointmaze),

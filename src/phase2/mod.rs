@@ -147,11 +147,12 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A one-line status for a progress bar: `skill` skills found, this report on the next,
-    /// `total_steps` phase-2 environment steps so far at `steps_per_s`.
+    /// A one-line status for a progress bar: `skill` skill attempts done (each a fresh learning
+    /// problem: a skill saved, or one dropped by its verification or restarted), this report on
+    /// the next, `total_steps` phase-2 environment steps so far at `steps_per_s`.
     pub fn status(&self, skill: usize, total_steps: u64, steps_per_s: f64) -> String {
         format!(
-            "{skill} skills found; building skill {}: K {} → T {}, {} {:.0} %, {total_steps} \
+            "{skill} skill attempts done; attempt {}: K {} → T {}, {} {:.0} %, {total_steps} \
              phase-2 env steps ({steps_per_s:.0} steps/s)",
             skill + 1,
             self.k,

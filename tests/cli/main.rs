@@ -284,11 +284,11 @@ fn without_a_terminal_a_run_prints_a_line_per_skill() {
     let o = pbcs(&["run", "--maze", "2", "--seed", "0", "--out", path(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let e = stderr(&o);
-    let lines: Vec<&str> = e.lines().filter(|l| l.contains("skills found")).collect();
+    let lines: Vec<&str> = e.lines().filter(|l| l.contains("attempts done")).collect();
     assert!(
         lines
             .iter()
-            .any(|l| l.contains("1 skills found, building skill 2")),
+            .any(|l| l.contains("1 skill attempts done, attempt 2 starts")),
         "{e}"
     );
 

@@ -328,8 +328,8 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
     let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
-    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill found,
-    // and the bar's message every `LOG_EVERY` seconds.
+    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill attempt
+    // (a skill saved, dropped or restarted), and the bar's message every `LOG_EVERY` seconds.
     const LOG_EVERY: f64 = 30.0;
     let lines = !run.quiet && !std::io::stderr().is_terminal();
     let mut logged = 0.0;
@@ -339,8 +339,8 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
             (finished, current_skill) = (finished + current, skill);
             if lines {
                 eprintln!(
-                    "[{secs:.0} s] {skill} skills found, building skill {}; {finished} phase-2 \
-                     env steps so far",
+                    "[{secs:.0} s] {skill} skill attempts done, attempt {} starts; {finished} \
+                     phase-2 env steps so far",
                     skill + 1
                 );
             }

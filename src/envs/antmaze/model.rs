@@ -33,9 +33,6 @@ pub const POSITION_NOISE: f64 = 0.25;
 /// torso farther than this from every wall cannot touch one.
 pub const REACH: f64 = 0.8 * std::f64::consts::SQRT_2 + 0.08;
 
-/// Steps per episode on a map of one's own: Medium's and Large's.
-pub const OWN_TIME_LIMIT: usize = 1000;
-
 /// The environment id in gymnasium-robotics: `AntMaze_UMaze-v5`, ….
 pub fn gym_id(map: MapName) -> String {
     format!("AntMaze_{}-v5", <&str>::from(map))

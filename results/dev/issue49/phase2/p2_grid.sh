@@ -13,6 +13,5 @@ done
 wait
 for d in /tmp/r/*; do
   [ -f $d/record.csv ] && cp $d/record.csv $OUT/logs/$(basename $d).record.csv
-  [ -f $d/trajectory.csv ] || true
 done
 cd $OUT && tar czf logs.tgz logs && rm -rf logs
