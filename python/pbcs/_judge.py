@@ -40,17 +40,26 @@ def task_env(chain, task, module, **kwargs):
     return FixedCells(gym.make(gym_id, **kwargs), start, goal)
 
 
-def play(chain, env, episodes, seed, time_limit):
-    """``episodes`` episodes of ``chain`` in ``env``, the first reset seeded with ``seed``, each
-    the chain's one rollout (:meth:`pbcs.Chain.rollout`: ``info["success"]`` on the last step),
-    within the env's time limit (``time_limit()`` where the env has none). Returns
-    ``successes``, ``episodes`` and each episode's ``success`` and ``steps`` (``episodes`` ≥ 1:
-    the callers check it before making an env)."""
-    # The env's own time limit ends each episode (the rollout's cap never comes first).
-    spec = getattr(env, "spec", None)
-    limit = (spec.max_episode_steps if spec and spec.max_episode_steps else None) or time_limit()
-    runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
-            for e in range(episodes)]
+def evaluate(chain, make_env, time_limit, episodes, seed, env):
+    """``episodes`` episodes of ``chain`` in ``env`` (None: ``make_env(chain)``, closed after),
+    the first reset seeded with ``seed``, each the chain's one rollout
+    (:meth:`pbcs.Chain.rollout`: ``info["success"]`` on the last step), within the env's time
+    limit (``time_limit()`` where the env has none). Returns ``successes``, ``episodes`` and
+    each episode's ``success`` and ``steps``."""
+    if episodes < 1:
+        raise ValueError(f"invalid `episodes`: must be at least 1, got {episodes}")
+    own = env is None
+    if own:
+        env = make_env(chain)
+    try:
+        # The env's own time limit ends each episode (the rollout's cap never comes first).
+        spec = getattr(env, "spec", None)
+        limit = (spec.max_episode_steps if spec and spec.max_episode_steps else None) or time_limit()
+        runs = [chain.rollout(env=env, max_steps=limit, seed=seed if e == 0 else None)
+                for e in range(episodes)]
+    finally:
+        if own:
+            env.close()
     success = [r["success"] for r in runs]
     return {
         "successes": int(sum(success)),

@@ -18,7 +18,8 @@ import numpy as np
 
 import gymnasium as gym
 
-from ._judge import play, task_env
+from . import _judge
+from ._judge import task_env
 
 __all__ = ["AntObservation", "make_env", "evaluate"]
 
@@ -54,13 +55,4 @@ def evaluate(chain, episodes=100, seed=0, env=None):
     reset seeded with ``seed``, each the chain's one rollout (:meth:`pbcs.Chain.rollout`:
     ``info["success"]`` on the last step, within the env's time limit). Returns
     ``successes``, ``episodes`` and each episode's ``success`` and ``steps``."""
-    if episodes < 1:
-        raise ValueError(f"invalid `episodes`: must be at least 1, got {episodes}")
-    own = env is None
-    if own:
-        env = make_env(chain)
-    try:
-        return play(chain, env, episodes, seed, lambda: chain.antmaze[3])
-    finally:
-        if own:
-            env.close()
+    return _judge.evaluate(chain, make_env, lambda: chain.antmaze[3], episodes, seed, env)
