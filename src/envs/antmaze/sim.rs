@@ -328,14 +328,9 @@ impl SampleBall<AntState> for AntMaze {
     /// height, orientation, joints, velocities and warm start the centre's. (Phase 2's
     /// `start = "archive"` draws phase 1's own states in the ball instead.)
     fn sample_ball(&self, center: &AntState, radius: f32, rng: &mut crate::rng::Rng) -> AntState {
-        use rand::Rng as _;
+        use crate::envs::pointmaze::model::disc_point;
         for _ in 0..BALL_DRAWS {
-            let r = f64::from(radius) * rng.random::<f64>().sqrt();
-            let phi = std::f64::consts::TAU * rng.random::<f64>();
-            let xy = [
-                center.qpos[0] + r * phi.cos(),
-                center.qpos[1] + r * phi.sin(),
-            ];
+            let xy = disc_point([center.qpos[0], center.qpos[1]], f64::from(radius), rng);
             if model::clearance(&self.map, xy) >= model::REACH {
                 let mut s = *center;
                 s.qpos[..2].copy_from_slice(&xy);

@@ -55,6 +55,15 @@ pub enum MapName {
     Large,
 }
 
+/// A point uniform in the disc of radius `radius` around `centre`: r = radius·√u, then the
+/// angle uniform (two draws, in that order). Ball starts in the plane (PointMaze, AntMaze).
+pub fn disc_point(centre: [f64; 2], radius: f64, rng: &mut crate::rng::Rng) -> [f64; 2] {
+    use rand::Rng as _;
+    let r = radius * rng.random::<f64>().sqrt();
+    let phi = std::f64::consts::TAU * rng.random::<f64>();
+    [centre[0] + r * phi.cos(), centre[1] + r * phi.sin()]
+}
+
 impl MapName {
     /// The environment id in gymnasium-robotics: `PointMaze_UMaze-v3`, ….
     pub fn gym_id(self) -> String {

@@ -381,14 +381,9 @@ impl SampleBall<PointState> for PointMaze {
         radius: f32,
         rng: &mut crate::rng::Rng,
     ) -> PointState {
-        use rand::Rng as _;
+        use crate::envs::pointmaze::model::disc_point;
         for _ in 0..BALL_DRAWS {
-            let r = f64::from(radius) * rng.random::<f64>().sqrt();
-            let phi = std::f64::consts::TAU * rng.random::<f64>();
-            let xy = [
-                center.qpos[0] + r * phi.cos(),
-                center.qpos[1] + r * phi.sin(),
-            ];
+            let xy = disc_point([center.qpos[0], center.qpos[1]], f64::from(radius), rng);
             if self.map.clearance(xy) >= RADIUS {
                 return PointState {
                     qpos: xy,
