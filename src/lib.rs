@@ -41,7 +41,9 @@
 //! let mut job = ExploreJob::default();
 //! job.maze.size = 2;
 //! let out = tempfile::tempdir().unwrap();
-//! let (summary, _seconds) = run_explore(&job.valid().unwrap(), out.path(), |_, _| {}).unwrap();
+//! // Runs write data; the drawing step they are handed draws (`picture::no_pictures`: none).
+//! let draw = &pbcs::plot::draw_run;
+//! let (summary, _seconds) = run_explore(&job.valid().unwrap(), out.path(), draw, |_, _| {}).unwrap();
 //! assert!(summary.trajectory_len >= 2);
 //! assert!(out.path().join("explore.png").exists());
 //! ```
@@ -65,6 +67,7 @@ pub mod mathtext;
 pub mod nn;
 pub mod phase1;
 pub mod phase2;
+pub mod picture;
 pub mod pipeline;
 pub mod plot;
 pub mod policy;

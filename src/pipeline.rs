@@ -264,11 +264,16 @@ pub fn render(
     } else {
         (crate::claims::claims(&specs, &named)?, Vec::new())
     };
-    let mut files = render_all(&tables, &claims, results, figures, tex)?;
-    files.extend(render_settings(
-        claims_file.parent().unwrap_or(Path::new(".")),
-        tex,
-    )?);
+    // Every figure and LaTeX file is drawn first and then moved into place: a failure (a
+    // missing picture file, say) leaves both folders as they were.
+    let files = crate::record::write_all_or_none([figures, tex], |[figures, tex]| {
+        let mut files = render_all(&tables, &claims, results, figures, tex)?;
+        files.extend(render_settings(
+            claims_file.parent().unwrap_or(Path::new(".")),
+            tex,
+        )?);
+        Ok(files)
+    })?;
     Ok(Rendered {
         tables,
         skipped,

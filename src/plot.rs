@@ -7,6 +7,7 @@
 
 use crate::env::Scene;
 use crate::error::{Error, Result};
+use crate::picture::PictureData;
 use plotters::coord::types::RangedCoordf32;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -45,25 +46,6 @@ pub struct Picture<'a> {
 
 /// Height of the legend line under the scene.
 const LEGEND_PX: u32 = 18;
-
-/// The layers of `picture.csv`, by their names in the file (one table: strum derives both
-/// directions; `red` and `green` are the names the committed files use).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString)]
-#[strum(serialize_all = "snake_case")]
-enum Layer {
-    /// Faint points (archive or visited states).
-    Point,
-    /// A phase-1 trajectory τ.
-    #[strum(serialize = "red")]
-    Tau,
-    /// A square of the explored area.
-    Area,
-    /// A rollout of a policy or chain.
-    #[strum(serialize = "green")]
-    Rollout,
-    /// An activation ball.
-    Circle,
-}
 
 /// Most archive points drawn in an SVG picture (the PNG draws them all).
 pub const SVG_MAX_POINTS: usize = 20_000;
@@ -329,42 +311,6 @@ pub fn render_rgb(scene: &Scene, picture: &Picture, side: u32) -> Result<Vec<u8>
     Ok(buf)
 }
 
-/// The owned content of a [`Picture`], as stored in a run's `picture.csv`, so that figures
-/// can be drawn again from committed results without re-running anything.
-///
-/// The CSV has one row per point: `layer, index, x, y, r`, where `layer` is `point`, `red`
-/// (polyline `index`), `area` (square of side `r` at lower-left corner `(x, y)`), `green`
-/// (polyline `index`) or `circle` (centre `(x, y)`, radius `r`).
-///
-/// ```
-/// use pbcs::plot::PictureData;
-///
-/// let data = PictureData {
-///     tau_paths: vec![vec![(0.5, 0.5), (0.6, 0.5)]],
-///     circles: vec![((1.0, 1.5), 0.1)],
-///     ..PictureData::default()
-/// };
-/// let dir = tempfile::tempdir().unwrap();
-/// let path = dir.path().join("picture.csv");
-/// data.write_csv(&path).unwrap();
-/// assert_eq!(PictureData::read_csv(&path).unwrap(), data);
-/// ```
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct PictureData {
-    /// Faint points.
-    pub points: Vec<(f32, f32)>,
-    /// Red polylines.
-    pub tau_paths: Vec<Vec<(f32, f32)>>,
-    /// Red squares by lower-left corner.
-    pub red_area: Vec<(f32, f32)>,
-    /// Side of the red squares.
-    pub red_area_side: f32,
-    /// Green polylines.
-    pub rollout_paths: Vec<Vec<(f32, f32)>>,
-    /// Purple circles.
-    pub circles: Vec<((f32, f32), f32)>,
-}
-
 impl PictureData {
     /// A picture of this data with `title`.
     pub fn picture(&self, title: String) -> Picture<'_> {
@@ -378,76 +324,17 @@ impl PictureData {
             circles: self.circles.clone(),
         }
     }
+}
 
-    /// Writes the data as CSV (atomically): one row per point, `layer, index, x, y, r`.
-    pub fn write_csv(&self, path: &Path) -> Result<()> {
-        let header: Vec<String> = ["layer", "index", "x", "y", "r"].map(String::from).to_vec();
-        let mut rows: Vec<[String; 5]> = Vec::new();
-        let row = |layer: Layer, i: usize, (x, y): (f32, f32), r: f32| {
-            [
-                <&str>::from(layer).to_string(),
-                i.to_string(),
-                x.to_string(),
-                y.to_string(),
-                r.to_string(),
-            ]
-        };
-        rows.extend(self.points.iter().map(|&p| row(Layer::Point, 0, p, 0.0)));
-        for (i, path) in self.tau_paths.iter().enumerate() {
-            rows.extend(path.iter().map(|&p| row(Layer::Tau, i, p, 0.0)));
-        }
-        rows.extend(
-            self.red_area
-                .iter()
-                .map(|&p| row(Layer::Area, 0, p, self.red_area_side)),
-        );
-        for (i, path) in self.rollout_paths.iter().enumerate() {
-            rows.extend(path.iter().map(|&p| row(Layer::Rollout, i, p, 0.0)));
-        }
-        rows.extend(
-            self.circles
-                .iter()
-                .map(|&(c, r)| row(Layer::Circle, 0, c, r)),
-        );
-        crate::record::write_csv(path, &header, rows)
-    }
-
-    /// Reads data written by [`PictureData::write_csv`].
-    pub fn read_csv(path: &Path) -> Result<PictureData> {
-        let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
-        let mut data = PictureData::default();
-        let bad = |line: u64, what: &str| Error::parse(path, format!("line {line}: {what}"));
-        let push = |paths: &mut Vec<Vec<(f32, f32)>>, i: usize, p| {
-            if paths.len() <= i {
-                paths.resize(i + 1, Vec::new());
-            }
-            paths[i].push(p);
-        };
-        for (line, rec) in reader.records().enumerate() {
-            let rec = rec.map_err(|e| Error::csv(path, e))?;
-            let line = line as u64 + 2;
-            let num = |k: usize| -> Result<f32> {
-                rec.get(k)
-                    .and_then(|v| v.parse().ok())
-                    .ok_or_else(|| bad(line, "expected a number"))
-            };
-            let i: usize = rec
-                .get(1)
-                .and_then(|v| v.parse().ok())
-                .ok_or_else(|| bad(line, "expected an index"))?;
-            let (p, r) = ((num(2)?, num(3)?), num(4)?);
-            let layer = rec.get(0).and_then(|l| l.parse::<Layer>().ok());
-            match layer.ok_or_else(|| bad(line, "unknown layer"))? {
-                Layer::Point => data.points.push(p),
-                Layer::Tau => push(&mut data.tau_paths, i, p),
-                Layer::Area => {
-                    data.red_area.push(p);
-                    data.red_area_side = r;
-                }
-                Layer::Rollout => push(&mut data.rollout_paths, i, p),
-                Layer::Circle => data.circles.push((p, r)),
-            }
-        }
-        Ok(data)
-    }
+/// Draws a run's picture into `dir` as `<stem>.png` and `<stem>.svg` ([`render_scene`]; the
+/// SVG thinned to [`SVG_MAX_POINTS`]): the drawing step ([`crate::picture::Draw`]) the
+/// commands hand to a run's `write`.
+pub fn draw_run(picture: &crate::picture::RunPicture, dir: &Path) -> Result<()> {
+    render_scene(
+        &picture.scene,
+        &picture.data.picture(picture.title.clone()),
+        &dir.join(format!("{}.png", picture.stem)),
+        &dir.join(format!("{}.svg", picture.stem)),
+        SVG_MAX_POINTS,
+    )
 }

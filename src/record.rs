@@ -6,7 +6,7 @@
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Temporary files become result files: give them ordinary read permissions (tempfile's
 /// default, 0600, would make results unreadable to other users).
@@ -168,6 +168,85 @@ pub fn write_run_folder(out: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> R
         std::fs::rename(&from, &to).map_err(|e| Error::io(&to, e))?;
     }
     std::fs::remove_file(&marker).map_err(|e| Error::io(&marker, e))
+}
+
+/// Writes a set of generated files into the folders `dirs`, all of them or none: `fill` is
+/// handed, for each folder, a temporary folder inside it (`.writing-*`) and writes there,
+/// returning the files it wrote; only when it succeeds is every file it left there moved to
+/// the same name in the real folder. A failure on the way (missing data, a full disk) leaves
+/// every folder as it was, never half old and half new files (`pbcs figures`: the figures and
+/// the report's LaTeX). Returns `fill`'s files at their final paths.
+///
+/// ```
+/// use pbcs::record::write_all_or_none;
+/// let dir = tempfile::tempdir().unwrap();
+/// std::fs::write(dir.path().join("a.txt"), "old").unwrap();
+/// let failed = write_all_or_none([dir.path()], |[stage]| {
+///     std::fs::write(stage.join("a.txt"), "new").unwrap();
+///     Err(pbcs::Error::invalid("data", "missing"))
+/// });
+/// assert!(failed.is_err());
+/// assert_eq!(std::fs::read_to_string(dir.path().join("a.txt")).unwrap(), "old");
+/// let files = write_all_or_none([dir.path()], |[stage]| {
+///     std::fs::write(stage.join("a.txt"), "new").unwrap();
+///     Ok(vec![stage.join("a.txt")])
+/// })
+/// .unwrap();
+/// assert_eq!(files, vec![dir.path().join("a.txt")]);
+/// assert_eq!(std::fs::read_to_string(&files[0]).unwrap(), "new");
+/// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1); // no staging folder left
+/// ```
+pub fn write_all_or_none<const N: usize>(
+    dirs: [&Path; N],
+    fill: impl FnOnce([&Path; N]) -> Result<Vec<PathBuf>>,
+) -> Result<Vec<PathBuf>> {
+    let mut stages = Vec::with_capacity(N);
+    for dir in dirs {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let stage = tempfile::Builder::new()
+            .prefix(".writing-")
+            .tempdir_in(dir)
+            .map_err(|e| Error::io(dir, e))?;
+        stages.push(stage);
+    }
+    let staged: [&Path; N] = std::array::from_fn(|i| stages[i].path());
+    let written = fill(staged)?;
+    // Every file left in a stage moves, whether or not `fill` listed it.
+    for (stage, dir) in stages.iter().zip(dirs) {
+        let mut files = Vec::new();
+        list_files(stage.path(), &mut files)?;
+        files.sort();
+        for from in files {
+            let rel = from.strip_prefix(stage.path()).unwrap_or(&from);
+            let to = dir.join(rel);
+            if let Some(parent) = to.parent() {
+                std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+            }
+            std::fs::rename(&from, &to).map_err(|e| Error::io(&to, e))?;
+        }
+    }
+    Ok(written
+        .into_iter()
+        .map(|f| {
+            let at = stages.iter().zip(dirs).find_map(|(stage, dir)| {
+                f.strip_prefix(stage.path()).ok().map(|rel| dir.join(rel))
+            });
+            at.unwrap_or(f)
+        })
+        .collect())
+}
+
+/// Every file under `dir`, recursively, into `out`.
+fn list_files(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        if path.is_dir() {
+            list_files(&path, out)?;
+        } else {
+            out.push(path);
+        }
+    }
+    Ok(())
 }
 
 /// Refuses the run folder `dir` if it is marked [`INCOMPLETE`] (its run failed while writing

@@ -229,7 +229,14 @@ fn pbcs_runs_on_the_fixed_task() {
     let dir = tempfile::tempdir().unwrap();
     let kernel = pbcs::nn::kernel::Kernel::detect();
     let valid = pbcs::validate::Check::valid(job).unwrap();
-    let (record, _) = pbcs::runs::run_pbcs(&valid, kernel, dir.path(), |_, _| {}).unwrap();
+    let (record, _) = pbcs::runs::run_pbcs(
+        &valid,
+        kernel,
+        dir.path(),
+        &pbcs::picture::no_pictures,
+        |_, _| {},
+    )
+    .unwrap();
     assert!(!record.solved);
     // Phase 2 ran Backplay from the archive's states until the budget stopped it.
     assert_eq!(

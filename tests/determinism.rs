@@ -17,6 +17,7 @@ fn run(job: &ExploreJob, dir: &Path) {
     run_explore(
         &pbcs::validate::Check::valid(job.clone()).unwrap(),
         dir,
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -91,6 +92,7 @@ fn vanilla_training_is_byte_identical_per_seed() {
         &pbcs::validate::Check::valid(job.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         a.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -98,6 +100,7 @@ fn vanilla_training_is_byte_identical_per_seed() {
         &pbcs::validate::Check::valid(job.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         b.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();

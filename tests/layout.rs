@@ -42,8 +42,9 @@ fn module_of(src: &Path, file: &Path) -> Option<String> {
     (name != "lib" && name != "bin").then_some(name)
 }
 
-#[test]
-fn the_library_modules_import_one_way() {
+/// Which top-level modules each top-level module of `src/` names through `crate::` in its
+/// code (comments and unit tests left out).
+fn module_imports() -> BTreeMap<String, BTreeSet<String>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);
@@ -83,6 +84,43 @@ fn the_library_modules_import_one_way() {
             }
         }
     }
+    edges
+}
+
+/// The files of `src/<module>/` (or `src/<module>.rs`) whose code (comments left out) names
+/// `needle`.
+fn files_naming(module: &str, needle: &str) -> Vec<PathBuf> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files
+        .into_iter()
+        .filter(|f| module_of(&src, f).as_deref() == Some(module))
+        .filter(|f| {
+            let text = std::fs::read_to_string(f).unwrap();
+            text.lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .any(|l| l.contains(needle))
+        })
+        .collect()
+}
+
+/// Runs compute and write data; the drawing layer draws (a run is handed its drawing step,
+/// `picture::Draw`): nothing under src/runs/ names plot.rs, figures/ or plotters.
+#[test]
+fn runs_draw_nothing() {
+    let runs = &module_imports()["runs"];
+    for drawing in ["plot", "figures"] {
+        assert!(!runs.contains(drawing), "runs/ imports crate::{drawing}");
+    }
+    assert_eq!(files_naming("runs", "plotters"), Vec::<PathBuf>::new());
+    // The check sees an import where there is one: figures/ draws.
+    assert!(module_imports()["figures"].contains("plot"));
+}
+
+#[test]
+fn the_library_modules_import_one_way() {
+    let edges = module_imports();
     // Depth-first search for a cycle.
     fn visit(
         m: &str,

@@ -364,6 +364,7 @@ fn a_chain_with_balls_in_position_and_velocity_saves_them_and_solves() {
         &pbcs::validate::Check::valid(job.clone()).unwrap(),
         kernel,
         &out,
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();

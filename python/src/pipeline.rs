@@ -151,7 +151,7 @@ pub(crate) fn run<'py>(
             pbcs::with_env!(built, |env| {
                 let run = PbcsRun::compute(env, &job, kernel, |_, _| {})?;
                 if let Some(dir) = out.as_deref() {
-                    run.write(&job, dir)?;
+                    run.write(&job, dir, &pbcs::plot::draw_run)?;
                 }
                 pbcs::Result::Ok(RunDone {
                     tau: run.tau.iter().map(|s| run.env.point(s)).collect(),

@@ -6,7 +6,8 @@ use super::{cell_picture, centred_text, stats_of, summary, DrawResult, GREEN_BG,
 use crate::env::Scene;
 use crate::error::Result;
 use crate::experiment::Experiment;
-use crate::plot::{draw_scene, Figure, PictureData};
+use crate::picture::PictureData;
+use crate::plot::{draw_scene, Figure};
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;

@@ -10,7 +10,7 @@ use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::phase2::SkillChain;
-use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
+use crate::picture::{Draw, PictureData, RunPicture};
 use crate::rng::Seeds;
 use std::path::Path;
 
@@ -175,9 +175,10 @@ pub fn eval_chain(
 
 impl ChainEval {
     /// Writes `eval-s<seed>.csv` (one row per episode: success, steps) and
-    /// `eval-s<seed>.png`/`.svg` (the first rollouts over the environment) into `out` (`pbcs eval`:
-    /// the chain folder unless `--out` says otherwise).
-    pub fn write(&self, out: &Path) -> Result<()> {
+    /// what `draw` draws of the first rollouts over the environment (`eval-s<seed>.png` and
+    /// `.svg` with [`crate::plot::draw_run`]) into `out` (`pbcs eval`: the chain folder unless
+    /// `--out` says otherwise).
+    pub fn write(&self, out: &Path, draw: Draw) -> Result<()> {
         let seed = self.seed;
         std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
         crate::record::write_records(&out.join(format!("eval-s{seed}.csv")), &self.rows)?;
@@ -187,12 +188,14 @@ impl ChainEval {
             self.successes,
             self.episodes
         );
-        render_scene(
-            &self.scene,
-            &self.picture.picture(title),
-            &out.join(format!("eval-s{seed}.png")),
-            &out.join(format!("eval-s{seed}.svg")),
-            SVG_MAX_POINTS,
+        draw(
+            &RunPicture {
+                stem: format!("eval-s{seed}"),
+                title,
+                scene: self.scene.clone(),
+                data: &self.picture,
+            },
+            out,
         )
     }
 }

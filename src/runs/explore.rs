@@ -7,7 +7,7 @@ use crate::env::Planar;
 use crate::envs::EnvName;
 use crate::error::Result;
 use crate::phase1::{explore, Exploration, NO_PARENT};
-use crate::plot::{render_scene, Picture, SVG_MAX_POINTS};
+use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Valid;
@@ -82,20 +82,20 @@ impl<E: Planar> ExploreRun<E> {
         })
     }
 
-    /// Writes into `out`: `summary.csv`, `trajectory.csv`, `archive.csv`, `explore.png`,
-    /// `explore.svg` and `timing.toml`, all of them or none
-    /// ([`crate::record::write_run_folder`]: a failure leaves `out` as it was, or marked
-    /// incomplete).
-    pub fn write(&self, job: &ExploreJob, out: &Path) -> Result<()> {
-        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    /// Writes into `out`: `summary.csv`, `trajectory.csv`, `archive.csv`, `timing.toml` and
+    /// what `draw` draws of the archive and τ (`explore.png`, `explore.svg` with
+    /// [`crate::plot::draw_run`]), all of them or none ([`crate::record::write_run_folder`]: a
+    /// failure leaves `out` as it was, or marked incomplete).
+    pub fn write(&self, job: &ExploreJob, out: &Path, draw: Draw) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir, draw))
     }
 
-    fn write_files(&self, job: &ExploreJob, out: &Path) -> Result<()> {
+    fn write_files(&self, job: &ExploreJob, out: &Path, draw: Draw) -> Result<()> {
         let (env, found) = (&self.env, &self.found);
         write_record(&out.join("summary.csv"), &self.summary)?;
         write_trajectory_csv(env, found, &out.join("trajectory.csv"))?;
         write_archive_csv(env, found, &out.join("archive.csv"))?;
-        render_exploration(env, found, job, out)?;
+        draw_exploration(env, found, job, out, draw)?;
         write_timing(
             &out.join("timing.toml"),
             self.seconds,
@@ -107,17 +107,19 @@ impl<E: Planar> ExploreRun<E> {
 
 /// Runs phase 1 for `job` into `out` on the environment it names: claims the folder (writing
 /// `config.toml`, the resolved job) before any work, then [`ExploreRun::compute`] and
-/// [`ExploreRun::write`]. `progress(steps, archive_len)` is called during the run.
+/// [`ExploreRun::write`] with the drawing step `draw` ([`crate::plot::draw_run`], or
+/// [`crate::picture::no_pictures`]). `progress(steps, archive_len)` is called during the run.
 pub fn run_explore(
     job: &Valid<ExploreJob>,
     out: &Path,
+    draw: Draw,
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
     let built = job.env_spec().build()?;
     claim(job, out)?;
     crate::with_env!(built, |env| {
         let run = ExploreRun::compute(env, job, progress)?;
-        run.write(job, out)?;
+        run.write(job, out, draw)?;
         Ok((run.summary, run.seconds))
     })
 }
@@ -180,39 +182,41 @@ pub(crate) fn write_archive_csv<E: Env>(
     write_csv(path, &header, rows)
 }
 
-pub(crate) fn render_exploration<E: Planar>(
+/// Hands `draw` phase 1's picture: the archive's states and τ over `env`'s scene.
+fn draw_exploration<E: Planar>(
     env: &E,
     found: &Exploration<E::State>,
     job: &ExploreJob,
     out: &Path,
+    draw: Draw,
 ) -> Result<()> {
-    let points: Vec<(f32, f32)> = (0..found.archive.len() as u32)
-        .map(|i| env.point(found.archive.state(i)))
-        .collect();
-    let path: Vec<(f32, f32)> = found
-        .trajectory
-        .states
-        .iter()
-        .map(|s| env.point(s))
-        .collect();
-    let picture = Picture {
-        title: format!(
-            "phase 1, {}, seed {}: {} steps, |τ| = {}",
-            job.env_spec().label(),
-            job.seed,
-            found.env_steps,
-            found.trajectory.len()
-        ),
-        points: &points,
-        tau_paths: vec![&path],
-        ..Picture::default()
+    let data = PictureData {
+        points: (0..found.archive.len() as u32)
+            .map(|i| env.point(found.archive.state(i)))
+            .collect(),
+        tau_paths: vec![found
+            .trajectory
+            .states
+            .iter()
+            .map(|s| env.point(s))
+            .collect()],
+        ..PictureData::default()
     };
-    render_scene(
-        &env.scene(),
-        &picture,
-        &out.join("explore.png"),
-        &out.join("explore.svg"),
-        SVG_MAX_POINTS,
+    let title = format!(
+        "phase 1, {}, seed {}: {} steps, |τ| = {}",
+        job.env_spec().label(),
+        job.seed,
+        found.env_steps,
+        found.trajectory.len()
+    );
+    draw(
+        &RunPicture {
+            stem: "explore".into(),
+            title,
+            scene: env.scene(),
+            data: &data,
+        },
+        out,
     )
 }
 

@@ -1,7 +1,9 @@
 //! Runs: a validated job in, an outcome out. Each kind of run is a type whose `compute` is a
 //! function from the job to the outcome that writes nothing ([`ExploreRun`], [`TrainRun`],
-//! [`PbcsRun`]), and whose `write` puts the outcome into a folder (CSVs, pictures, the saved
-//! chain). [`run_explore`], [`run_train`] and [`run_pbcs`] claim a folder, compute and write:
+//! [`PbcsRun`]), and whose `write` puts the outcome into a folder (CSVs, the picture's data,
+//! the saved chain) and hands its picture to the drawing step it is given
+//! ([`crate::picture::Draw`]: [`crate::plot::draw_run`] draws PNG and SVG): runs compute and
+//! write data, and nothing here draws (tests/layout.rs holds runs/ to it). [`run_explore`], [`run_train`] and [`run_pbcs`] claim a folder, compute and write:
 //! the CLI's subcommands are thin wrappers around them, so tests exercise exactly what users
 //! run; the sweep ([`crate::experiment::run_cell_seed`]) computes and keeps only its raw files.
 //!

@@ -13,7 +13,7 @@ use crate::phase2::{
     chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, Ready, SkillChain,
     StartMode, Variant,
 };
-use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
+use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Valid;
@@ -182,15 +182,16 @@ impl<E: Planar> PbcsRun<E> {
     /// Writes into `out`: `record.csv`, `skills.csv` (one row per skill: K, T, ball),
     /// `trace.csv` (every test, training round and verification: skill, K, T, event, success,
     /// env steps) with its wall clock in `trace.timing.csv`, `trajectory.csv`, `chain/` (the
-    /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `run.png`, `run.svg`,
-    /// `timing.toml`, all of them or none ([`crate::record::write_run_folder`]: a failure, a
+    /// saved chain, with the job as `chain/run.toml`), `picture.csv`, `timing.toml` and
+    /// what `draw` draws of the picture (`run.png`, `run.svg` with [`crate::plot::draw_run`]),
+    /// all of them or none ([`crate::record::write_run_folder`]: a failure, a
     /// full disk say, leaves `out` as it was, an earlier finished run included, or marked
     /// incomplete, which `pbcs eval` refuses).
-    pub fn write(&self, job: &PbcsJob, out: &Path) -> Result<()> {
-        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    pub fn write(&self, job: &PbcsJob, out: &Path, draw: Draw) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir, draw))
     }
 
-    fn write_files(&self, job: &PbcsJob, out: &Path) -> Result<()> {
+    fn write_files(&self, job: &PbcsJob, out: &Path, draw: Draw) -> Result<()> {
         let (record, phase2) = (&self.record, &self.phase2);
         write_record(&out.join("record.csv"), record)?;
         write_trajectory_csv(&self.env, &self.found, &out.join("trajectory.csv"))?;
@@ -220,12 +221,14 @@ impl<E: Planar> PbcsRun<E> {
             record.skills,
             100.0 * record.success_rate
         );
-        render_scene(
-            &self.env.scene(),
-            &self.picture.picture(title),
-            &out.join("run.png"),
-            &out.join("run.svg"),
-            SVG_MAX_POINTS,
+        draw(
+            &RunPicture {
+                stem: "run".into(),
+                title,
+                scene: self.env.scene(),
+                data: &self.picture,
+            },
+            out,
         )?;
         write_timing(
             &out.join("timing.toml"),
@@ -283,18 +286,20 @@ pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32,
 /// Runs PBCS for `job` into `out` on the environment it names ([`crate::envs`]): refuses a
 /// setting the environment lacks a hook for ([`PbcsRun::require_hooks`]), claims the folder
 /// (writing `config.toml`) before any work, then [`PbcsRun::compute`] and
-/// [`PbcsRun::write`]. `progress(skill, report)` is called during phase 2.
+/// [`PbcsRun::write`] with the drawing step `draw` ([`crate::plot::draw_run`], or
+/// [`crate::picture::no_pictures`]). `progress(skill, report)` is called during phase 2.
 pub fn run_pbcs(
     job: &Valid<PbcsJob>,
     kernel: Kernel,
     out: &Path,
+    draw: Draw,
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
     crate::with_env!(job.env_spec().build()?, |env| {
         let ready = PbcsRun::require_hooks(&env, job)?;
         claim(job, out)?;
         let run = PbcsRun::compute_ready(env, job, ready, kernel, progress)?;
-        run.write(job, out)?;
+        run.write(job, out, draw)?;
         Ok((run.record, run.seconds))
     })
 }

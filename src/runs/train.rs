@@ -7,7 +7,7 @@ use crate::envs::EnvName;
 use crate::error::Result;
 use crate::learner::td3::ActorUpdate;
 use crate::nn::kernel::Kernel;
-use crate::plot::{render_scene, PictureData, SVG_MAX_POINTS};
+use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
 use crate::validate::Valid;
@@ -124,14 +124,15 @@ impl TrainRun {
     /// Writes into `out`: `summary.csv`, `evals.csv` (one row per evaluation),
     /// `evaluation.csv` (PBCS's protocol after training, when `train.final_eval_episodes` asks
     /// for it: success and steps of each episode), `visited.csv`
-    /// (lower-left corners of visited bins), `actor.safetensors`, `picture.csv`, `train.png`,
-    /// `train.svg`, `timing.toml`, all of them or none ([`crate::record::write_run_folder`]: a
+    /// (lower-left corners of visited bins), `actor.safetensors`, `picture.csv`,
+    /// `timing.toml` and what `draw` draws of the picture (`train.png`, `train.svg` with
+    /// [`crate::plot::draw_run`]), all of them or none ([`crate::record::write_run_folder`]: a
     /// failure leaves `out` as it was, or marked incomplete).
-    pub fn write(&self, job: &TrainJob, out: &Path) -> Result<()> {
-        crate::record::write_run_folder(out, |dir| self.write_files(job, dir))
+    pub fn write(&self, job: &TrainJob, out: &Path, draw: Draw) -> Result<()> {
+        crate::record::write_run_folder(out, |dir| self.write_files(job, dir, draw))
     }
 
-    fn write_files(&self, job: &TrainJob, out: &Path) -> Result<()> {
+    fn write_files(&self, job: &TrainJob, out: &Path, draw: Draw) -> Result<()> {
         let summary = &self.summary;
         write_record(&out.join("summary.csv"), summary)?;
         crate::record::write_records(&out.join("evals.csv"), &self.result.evals)?;
@@ -159,12 +160,14 @@ impl TrainRun {
             self.result.steps,
             100.0 * summary.final_success
         );
-        render_scene(
-            &self.scene,
-            &self.picture.picture(title),
-            &out.join("train.png"),
-            &out.join("train.svg"),
-            SVG_MAX_POINTS,
+        draw(
+            &RunPicture {
+                stem: "train".into(),
+                title,
+                scene: self.scene.clone(),
+                data: &self.picture,
+            },
+            out,
         )?;
         write_timing(
             &out.join("timing.toml"),
@@ -176,17 +179,19 @@ impl TrainRun {
 }
 
 /// Trains the vanilla baseline of `job` into `out`: claims the folder (writing
-/// `config.toml`) before any work, then [`TrainRun::compute`] and [`TrainRun::write`].
+/// `config.toml`) before any work, then [`TrainRun::compute`] and [`TrainRun::write`] with
+/// the drawing step `draw` ([`crate::plot::draw_run`], or [`crate::picture::no_pictures`]).
 pub fn run_train(
     job: &Valid<TrainJob>,
     kernel: Kernel,
     out: &Path,
+    draw: Draw,
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
     let built = job.env_spec().build()?;
     claim(job, out)?;
     let run = crate::with_env!(built, |env| TrainRun::compute(env, job, kernel, progress)?);
-    run.write(job, out)?;
+    run.write(job, out, draw)?;
     Ok((run.summary, run.seconds))
 }
 

@@ -391,7 +391,7 @@ fn a_bad_csv_file_is_named_in_the_error() {
     assert!(e.contains("s0.csv"), "{e}");
     let picture = dir.path().join("s0.picture.csv");
     std::fs::write(&picture, "layer,index,x,y,r\nred,0,not-a-number,1,0\n").unwrap();
-    let e = pbcs::plot::PictureData::read_csv(&picture)
+    let e = pbcs::picture::PictureData::read_csv(&picture)
         .unwrap_err()
         .to_string();
     assert!(e.contains("s0.picture.csv"), "{e}");

@@ -314,6 +314,101 @@ fn a_figure_refuses_missing_picture_data_naming_the_file() {
     );
 }
 
+/// `pbcs figures` writes its figures and LaTeX all or none: a picture file of the second
+/// experiment missing stops it before any figure is replaced (before: the first experiment's
+/// figures were new and the rest stale), and the staging folders are gone; with the file
+/// back, it writes them all.
+#[test]
+fn figures_are_written_all_or_none() {
+    let load = |name: &str| {
+        Experiment::load(&Path::new("experiments").join(format!("{name}.toml")), None).unwrap()
+    };
+    // Two experiments: the first's figures are drawn before the second's missing file.
+    let exps = [load("rooms"), load("three_rooms")];
+    let tmp = tempfile::tempdir().unwrap();
+    let results = tmp.path().join("results");
+    for (exp, cell) in exps
+        .iter()
+        .flat_map(|e| e.cells.iter().map(move |c| (e, c)))
+    {
+        let (from, to) = (
+            exp.cell_dir(Path::new("results"), cell),
+            exp.cell_dir(&results, cell),
+        );
+        std::fs::create_dir_all(&to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    std::fs::create_dir_all(results.join("tables")).unwrap();
+    for table in [
+        "rooms.csv",
+        "rooms.chains.csv",
+        "three_rooms.csv",
+        "three_rooms.chains.csv",
+    ] {
+        let from = Path::new("results/tables").join(table);
+        std::fs::copy(from, results.join("tables").join(table)).unwrap();
+    }
+    // The claims file, and the settings beside it: one claim on the rooms' table.
+    let claims_dir = tmp.path().join("experiments");
+    std::fs::create_dir_all(&claims_dir).unwrap();
+    for file in ["settings.toml", "departures.toml"] {
+        std::fs::copy(Path::new("experiments").join(file), claims_dir.join(file)).unwrap();
+    }
+    std::fs::write(
+        claims_dir.join("claims.toml"),
+        "[[claim]]\nid = \"rooms_solved\"\npaper = \"PBCS solves the rooms.\"\n\
+         experiment = \"rooms\"\ntest = { kind = \"solves_everywhere\", method = \"pbcs\" }\n",
+    )
+    .unwrap();
+    let (figures, tex) = (tmp.path().join("figures"), tmp.path().join("tex"));
+    let render = || {
+        pbcs::pipeline::render(
+            exps.to_vec(),
+            &claims_dir.join("claims.toml"),
+            &results,
+            &figures,
+            &tex,
+        )
+    };
+    // Stand-ins for an earlier `figures`: every file it writes, holding "old".
+    let written = render().unwrap().files;
+    assert!(written.len() > 4, "{written:?}");
+    for f in &written {
+        assert!(
+            f.starts_with(&figures) || f.starts_with(&tex),
+            "{}",
+            f.display()
+        );
+        std::fs::write(f, "old").unwrap();
+    }
+    // The second experiment's grid draws every cell's picture; its last cell's is gone.
+    let exp = &exps[1];
+    let cell = exp.cells.last().unwrap();
+    let picture = pbcs::experiment::picture_file(exp, &results, cell, exp.picture_seeds[0]);
+    let kept = std::fs::read(&picture).unwrap();
+    std::fs::remove_file(&picture).unwrap();
+    let err = render().map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains(&picture.display().to_string()), "{err}");
+    for f in &written {
+        let kept_old = std::fs::read(f).unwrap() == b"old";
+        assert!(kept_old, "{} was replaced", f.display());
+    }
+    for dir in [&figures, &tex] {
+        let names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
+    }
+    std::fs::write(&picture, kept).unwrap();
+    let again = render().unwrap().files;
+    assert_eq!(again, written);
+    assert!(written.iter().all(|f| std::fs::read(f).unwrap() != b"old"));
+}
+
 /// A row is checked against what it summarises (issue 50's probes, which passed before): a
 /// run stopped by its budget, its evaluation file empty, edited to "solved, rate 1, no
 /// failure", is refused; so is a solved row whose rate is not its evaluation's wins over its

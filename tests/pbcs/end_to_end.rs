@@ -22,6 +22,7 @@ fn pbcs_solves_maze_2_for_most_seeds() {
             &pbcs::validate::Check::valid(j.clone()).unwrap(),
             pbcs::nn::kernel::Kernel::detect(),
             dir.path(),
+            &pbcs::plot::draw_run,
             |_, _| {},
         )
         .unwrap();
@@ -65,6 +66,7 @@ fn a_grid_gives_pbcs_runs_rows_resumes_and_refuses_another_config() {
             &pbcs::validate::Check::valid(single.clone()).unwrap(),
             pbcs::nn::kernel::Kernel::detect(),
             run_dir.path(),
+            &pbcs::plot::draw_run,
             |_, _| {},
         )
         .unwrap();
@@ -115,6 +117,7 @@ fn pbcs_run_is_byte_identical_per_seed() {
         &pbcs::validate::Check::valid(j.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         a.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -122,6 +125,7 @@ fn pbcs_run_is_byte_identical_per_seed() {
         &pbcs::validate::Check::valid(j.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         b.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -169,6 +173,7 @@ fn the_evaluation_episodes_are_written_and_a_saved_chain_gives_them_back() {
         &pbcs::validate::Check::valid(j.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         dir.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -204,7 +209,7 @@ fn the_evaluation_episodes_are_written_and_a_saved_chain_gives_them_back() {
     assert_eq!(again.rows, episodes);
     // Computing wrote nothing; writing puts the episodes where it is told.
     assert!(!chain.join(format!("eval-s{}.csv", j.seed)).exists());
-    again.write(&chain).unwrap();
+    again.write(&chain, &pbcs::plot::draw_run).unwrap();
     assert_eq!(read(&chain.join(format!("eval-s{}.csv", j.seed))), episodes);
 }
 
@@ -217,6 +222,7 @@ fn a_computed_run_is_what_the_written_run_holds() {
         &pbcs::validate::Check::valid(j.clone()).unwrap(),
         pbcs::nn::kernel::Kernel::detect(),
         a.path(),
+        &pbcs::plot::draw_run,
         |_, _| {},
     )
     .unwrap();
@@ -235,7 +241,7 @@ fn a_computed_run_is_what_the_written_run_holds() {
     assert_eq!(row[3], written.variant.name());
     assert_eq!(run.tau.len(), written.phase2_trajectory_len);
     assert_eq!(run.phase2.chain.skills.len(), written.skills);
-    run.write(&j, b.path()).unwrap();
+    run.write(&j, b.path(), &pbcs::plot::draw_run).unwrap();
     same_files(
         a.path(),
         b.path(),

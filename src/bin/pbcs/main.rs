@@ -140,7 +140,7 @@ fn eval(
 ) -> anyhow::Result<()> {
     let e = runs::eval_chain(chain, episodes, seed, kernel)?;
     let out = out.unwrap_or_else(|| chain.to_path_buf());
-    e.write(&out)?;
+    e.write(&out, &pbcs::plot::draw_run)?;
     println!("{}", e.summary(chain, e.seed));
     println!("wrote {}/eval-s{}.{{csv,png,svg}}", out.display(), e.seed);
     Ok(())
@@ -333,29 +333,30 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
     const LOG_EVERY: f64 = 30.0;
     let lines = !run.quiet && !std::io::stderr().is_terminal();
     let mut logged = 0.0;
-    let (record, seconds) = runs::run_pbcs(&job, kernel, &out, |skill, p| {
-        let secs = clock.elapsed().as_secs_f64();
-        if skill != current_skill {
-            (finished, current_skill) = (finished + current, skill);
-            if lines {
-                eprintln!(
-                    "[{secs:.0} s] {skill} skill attempts done, attempt {} starts; {finished} \
+    let (record, seconds) =
+        runs::run_pbcs(&job, kernel, &out, &pbcs::plot::draw_run, |skill, p| {
+            let secs = clock.elapsed().as_secs_f64();
+            if skill != current_skill {
+                (finished, current_skill) = (finished + current, skill);
+                if lines {
+                    eprintln!(
+                        "[{secs:.0} s] {skill} skill attempts done, attempt {} starts; {finished} \
                      phase-2 env steps so far",
-                    skill + 1
-                );
+                        skill + 1
+                    );
+                }
             }
-        }
-        current = p.steps.train + p.steps.test;
-        let total = finished + current;
-        let status = p.status(skill, total, total as f64 / secs.max(1e-9));
-        if lines && secs >= logged + LOG_EVERY {
-            logged = secs;
-            eprintln!("[{secs:.0} s] {status}");
-        }
-        bar.set_message(status);
-        bar.tick();
-    })
-    .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
+            current = p.steps.train + p.steps.test;
+            let total = finished + current;
+            let status = p.status(skill, total, total as f64 / secs.max(1e-9));
+            if lines && secs >= logged + LOG_EVERY {
+                logged = secs;
+                eprintln!("[{secs:.0} s] {status}");
+            }
+            bar.set_message(status);
+            bar.tick();
+        })
+        .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", record.summary(job.phase2.eval_episodes, seconds));
     let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";
@@ -368,11 +369,12 @@ fn explore(run: &RunArgs) -> anyhow::Result<()> {
     let out = run.out_dir("explore", &*job, "");
     let template = "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]";
     let bar = run.bar(template, None);
-    let (summary, seconds) = runs::run_explore(&job, &out, |steps, states| {
-        bar.set_position(steps);
-        bar.set_message(format!("{states} archived states"));
-    })
-    .with_context(|| format!("explore {} seed {}", job.env_spec().label(), job.seed))?;
+    let (summary, seconds) =
+        runs::run_explore(&job, &out, &pbcs::plot::draw_run, |steps, states| {
+            bar.set_position(steps);
+            bar.set_message(format!("{states} archived states"));
+        })
+        .with_context(|| format!("explore {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.explore.bin_side));
     let wrote = "{summary,trajectory,archive}.csv, explore.png, explore.svg";
@@ -393,10 +395,16 @@ fn train(
     let out = run.out_dir("train", &*job, &runs::train_suffix(&job));
     let template = "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}";
     let bar = run.bar(template, Some(job.train.steps));
-    let (summary, seconds) = runs::run_train(&job, kernel, &out, |steps, success| {
-        bar.set_position(steps);
-        bar.set_message(format!("greedy success {success}"));
-    })
+    let (summary, seconds) = runs::run_train(
+        &job,
+        kernel,
+        &out,
+        &pbcs::plot::draw_run,
+        |steps, success| {
+            bar.set_position(steps);
+            bar.set_message(format!("greedy success {success}"));
+        },
+    )
     .with_context(|| format!("train on {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
     println!("{}", summary.summary(seconds, job.train.visit_bin));
