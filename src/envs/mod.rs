@@ -33,6 +33,7 @@ pub mod maze;
 pub mod pendulum;
 pub mod pointmaze;
 pub mod rooms;
+mod tasks;
 pub mod three_rooms;
 pub mod toy;
 mod uninhabited;
@@ -237,53 +238,6 @@ impl EnvName {
             EnvName::AntmazeLarge | EnvName::AntmazeLargeGoals => Some(MapName::Large),
             _ => None,
         }
-    }
-
-    /// Whether episodes draw their start and goal as gymnasium-robotics' reset does (the
-    /// `_goals` names): a goal-conditioned task.
-    ///
-    /// ```
-    /// use pbcs::envs::EnvName;
-    /// assert!(EnvName::PointmazeUmazeGoals.goal_resets());
-    /// assert!(!EnvName::PointmazeUmaze.goal_resets());
-    /// assert_eq!(EnvName::PointmazeLargeGoals.point_map(), EnvName::PointmazeLarge.point_map());
-    /// ```
-    pub fn goal_resets(self) -> bool {
-        matches!(
-            self,
-            EnvName::PointmazeUmazeGoals
-                | EnvName::PointmazeOpenGoals
-                | EnvName::PointmazeMediumGoals
-                | EnvName::PointmazeLargeGoals
-                | EnvName::AntmazeUmazeGoals
-                | EnvName::AntmazeOpenGoals
-                | EnvName::AntmazeMediumGoals
-                | EnvName::AntmazeLargeGoals
-        )
-    }
-
-    /// Refuses a run that needs one fixed task on an environment whose episodes draw their
-    /// goal ([`EnvName::goal_resets`]): PBCS, and a vanilla run without HER (its networks
-    /// would not see the goal). `what` names the run.
-    pub fn check_fixed_task(self, what: &str) -> Result<()> {
-        if self.goal_resets() {
-            let fixed = format!(", or run {} for the fixed task", self.fixed_name());
-            return Err(Error::invalid(
-                "env",
-                format!(
-                    "{} draws each episode's goal (gymnasium-robotics' resets): {what} needs \
-                     one fixed goal; train on it with [train.her] (the networks then see the \
-                     goal){fixed}",
-                    self.name(),
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// The name of the same map's fixed task, for a `_goals` name (itself for any other).
-    pub fn fixed_name(self) -> &'static str {
-        self.name().trim_end_matches("_goals")
     }
 
     /// The cargo feature this environment needs and this build lacks (`mujoco` for PointMaze

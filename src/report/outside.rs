@@ -3,6 +3,8 @@
 
 use super::{def_res, tex, GENERATED};
 use crate::fmt::human_steps;
+use crate::tables::outside::Source;
+use crate::tables::scope::Scope;
 use std::fmt::Write as _;
 
 /// `outside_maze.tex` (the table of ours against Stable-Baselines3 on the maze) and the numbers
@@ -18,9 +20,9 @@ pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (Str
     );
     let mut numbers = String::new();
     for r in rows {
-        let name = match r.algo.as_str() {
-            "pooled" => "both, pooled".to_string(),
-            a => a.to_uppercase(),
+        let name = match r.algo {
+            Scope::Pooled => "both, pooled".to_string(),
+            Scope::One(a) => a.name().to_uppercase(),
         };
         let _ = writeln!(
             table,
@@ -60,7 +62,7 @@ pub fn outside_maze_tex(rows: &[crate::tables::outside::MazeComparison]) -> (Str
             ),
         ];
         // The pooled line has no seeds of its own.
-        if r.algo == "pooled" {
+        if r.algo == Scope::Pooled {
             fields.retain(|(f, _)| !f.ends_with("seeds"));
         }
         for (f, v) in fields {
@@ -90,10 +92,10 @@ pub fn outside_pendulum_tex(
     let one = |x: f64| format!("{x:.1}").replace('-', "−");
     let mut numbers = String::new();
     for r in rows {
-        let name = match r.source.as_str() {
-            "ours" => "ours (Rust port)".to_string(),
-            "sb3" => format!("SB3 {} (gymnasium)", r.library.trim_start_matches("sb3-")),
-            _ => "RL-Zoo (one agent)".to_string(),
+        let name = match r.source {
+            Source::Ours => "ours (Rust port)".to_string(),
+            Source::Sb3 => format!("SB3 {} (gymnasium)", r.library.trim_start_matches("sb3-")),
+            Source::Published => "RL-Zoo (one agent)".to_string(),
         };
         let opt = |x: Option<f64>| x.map_or("--".to_string(), one);
         let ci = match (r.ci_lo, r.ci_hi) {
@@ -156,7 +158,7 @@ pub fn outside_pendulum_tex(
 /// `\res{outside:cost:<algo>:ratio}` (SB3's over ours, where both are finite and positive).
 pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> String {
     let mut s = String::new();
-    let who = |l: &str| if l.starts_with("sb3") { "sb3" } else { "ours" };
+    let who = |l: &str| crate::tables::outside::Library::of_version(l);
     for r in rows {
         let v = if r.us_per_step >= 1000.0 {
             format!("{:.1} ms", r.us_per_step / 1000.0)
@@ -172,8 +174,9 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
     }
     let algos: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.algo.as_str()).collect();
     for a in algos {
-        let find = |w: &str| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
-        if let (Some(sb3), Some(ours)) = (find("sb3"), find("ours")) {
+        let find = |w| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
+        use crate::tables::outside::Library;
+        if let (Some(sb3), Some(ours)) = (find(Library::Sb3), find(Library::Ours)) {
             let ratio = sb3.us_per_step / ours.us_per_step;
             if ratio.is_finite() && ratio > 0.0 {
                 let ratio = if ratio >= 10.0 {
@@ -197,7 +200,9 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
 pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseline]) -> String {
     let mut s = String::new();
     for r in rows {
-        let protocol = r.library == "sb3" || r.solved_at_min.is_some() || r.best_unsolved.is_some();
+        let protocol = r.library == crate::tables::outside::Library::Sb3
+            || r.solved_at_min.is_some()
+            || r.best_unsolved.is_some();
         let best = if protocol {
             format!("{:.0}", r.best * 100.0)
         } else {
@@ -230,7 +235,7 @@ pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseli
             ),
             ("seeds", r.seeds.clone()),
         ] {
-            let key = format!("pointmaze:{}-{}:{f}", r.method, r.env);
+            let key = format!("pointmaze:{}-{}:{f}", r.method, r.env.name());
             def_res(&mut s, "outside", &key, &v);
         }
     }
@@ -256,7 +261,7 @@ pub fn outside_pointmaze_sb3_numbers(
             ("p", p_value(r.fisher_p)),
             ("verdict", verdict.to_string()),
         ] {
-            let key = format!("pointmazesb3:{}-{}:{f}", r.method, r.env);
+            let key = format!("pointmazesb3:{}-{}:{f}", r.method, r.env.name());
             def_res(&mut s, "outside", &key, &v);
         }
     }
@@ -316,7 +321,7 @@ mod tests {
         let line = |ok: u64, sk: u64| {
             let p = crate::stats::fisher_exact(ok, 10, sk, 10);
             crate::tables::outside::MazeComparison {
-                algo: "ddpg".into(),
+                algo: Scope::One(crate::learner::td3::Algo::Ddpg),
                 maze: 2,
                 steps: 300_000,
                 ours_n: 10,

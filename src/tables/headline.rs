@@ -3,7 +3,7 @@
 //! holds the README's block equal to [`headline_markdown`].
 
 use super::judged::{judged_path, JudgedCell};
-use super::outside::PointMazeBaseline;
+use super::outside::{Library, PointMazeBaseline};
 use super::{read_table, table_path, CellStats};
 use crate::error::{Error, Result};
 use crate::experiment::Site;
@@ -109,7 +109,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         let baseline = |method: &str| -> Result<String> {
             let b = baselines
                 .iter()
-                .find(|b| b.method == method && b.env == name)
+                .find(|b| b.method == method && b.env == env)
                 .ok_or_else(|| {
                     Error::parse(
                         Path::new("results/tables/outside.pointmaze.csv"),
@@ -124,11 +124,11 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         // Ours by SB3's protocol, on the env's own resets (`<name>_goals`): runs solved of
         // those with rows (the grid may still be running: `–` where none has a row yet), and
         // the median steps of the solved ones.
-        let goals = format!("{name}_goals");
+        let goals = env.goals_task();
         let ours = |method: &str| {
             let line = baselines
                 .iter()
-                .find(|b| b.library == "ours" && b.method == method && b.env == goals);
+                .find(|b| b.library == Library::Ours && b.method == method && Some(b.env) == goals);
             match line {
                 None => "–".to_string(),
                 Some(b) => match b.solved_at_median {

@@ -15,6 +15,7 @@ pub mod paired;
 pub mod phases;
 pub mod routes;
 pub mod scaling;
+pub mod scope;
 
 use crate::error::{Error, Result};
 use crate::experiment::{Cell, Experiment, RawRow, Site};

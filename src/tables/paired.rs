@@ -6,18 +6,16 @@
 //! `results/tables/<experiment>.paired.csv`; `pbcs figures` writes its numbers
 //! (`\res{<experiment>:paired:<site>:<field>}`, the pooled row's site being `all`).
 
-use crate::experiment::{Experiment, RawRow};
+use super::scope::Scope;
+use crate::experiment::{Experiment, RawRow, Site};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// The site name of the pooled row.
-pub const ALL_SITES: &str = "all";
-
-/// The comparison on one site, or on all of them pooled ([`ALL_SITES`]).
+/// The comparison on one site, or on all of them pooled.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PairedSite {
-    /// The site (`pointmaze_medium`), or `all`.
-    pub site: String,
+    /// The site (`pointmaze_medium`), or all of them pooled (written `all`).
+    pub site: Scope<Site>,
     /// The baseline method.
     pub baseline: String,
     /// The variant method.
@@ -63,7 +61,7 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
             .find(|r| r.cell == cell.id && r.seed == seed)
             .map(|r| r.env_steps)
     };
-    let row = |site: String, diffs: &[std::cmp::Ordering]| {
+    let row = |site: Scope<Site>, diffs: &[std::cmp::Ordering]| {
         let count = |o| diffs.iter().filter(|&&d| d == o).count() as u64;
         let (fewer, more) = (
             count(std::cmp::Ordering::Less),
@@ -90,11 +88,11 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
             .collect();
         if !diffs.is_empty() {
             all.extend_from_slice(&diffs);
-            out.push(row(site.to_string(), &diffs));
+            out.push(row(Scope::One(site), &diffs));
         }
     }
     if !all.is_empty() {
-        out.push(row(ALL_SITES.to_string(), &all));
+        out.push(row(Scope::Pooled, &all));
     }
     out
 }
@@ -185,7 +183,7 @@ mod known {
         ours.retain(|r| !(r.cell == "pbcs_pm_velocity-pointmaze_medium" && r.seed == 23));
         let got: Vec<_> = paired_sites(&exp, &ours)
             .into_iter()
-            .map(|s| (s.site, s.pairs, s.fewer, s.more, s.ties))
+            .map(|s| (s.site.to_string(), s.pairs, s.fewer, s.more, s.ties))
             .collect();
         assert_eq!(
             got,
@@ -193,7 +191,7 @@ mod known {
                 ("pointmaze_umaze".to_string(), 4, 2, 1, 1),
                 ("pointmaze_medium".to_string(), 3, 3, 0, 0),
                 ("pointmaze_large".to_string(), 4, 4, 0, 0),
-                (ALL_SITES.to_string(), 11, 9, 1, 1),
+                ("all".to_string(), 11, 9, 1, 1),
             ]
         );
         let all = paired_sites(&exp, &ours).pop().unwrap();

@@ -3,8 +3,9 @@
 //! rows give the counts their CSVs say, SB3's evaluations give known values, and a row that
 //! disagrees with its folder or its evaluations is refused naming the file.
 
+use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
-use pbcs::tables::outside::{pointmaze_baselines, PointMazeBaseline};
+use pbcs::tables::outside::{pointmaze_baselines, Library, PointMazeBaseline};
 use std::path::Path;
 
 /// The experiment of our learners on PointMaze.
@@ -31,11 +32,17 @@ fn column(dir: &Path, column: &str) -> Vec<String> {
 #[test]
 fn the_committed_vanilla_rows_give_the_counts_their_files_say() {
     let lines = pointmaze_baselines(&[&vanilla()], Path::new("results")).unwrap();
-    let ours: Vec<&PointMazeBaseline> = lines.iter().filter(|l| l.library == "ours").collect();
+    let ours: Vec<&PointMazeBaseline> = lines
+        .iter()
+        .filter(|l| l.library == Library::Ours)
+        .collect();
     assert_eq!(ours.len(), 6, "DDPG and TD3 on three maps");
     for l in ours {
-        let dir =
-            Path::new("results/raw/pointmaze_vanilla").join(format!("{}-{}", l.method, l.env));
+        let dir = Path::new("results/raw/pointmaze_vanilla").join(format!(
+            "{}-{}",
+            l.method,
+            l.env.name()
+        ));
         let finals = column(&dir, "success_rate");
         assert_eq!(l.runs as usize, finals.len(), "{dir:?}");
         let solved = finals
@@ -116,8 +123,8 @@ fn sb3_evaluations_give_known_values() {
     // Seed 3 stopped before its first evaluation: left out; seed 2 was resumed once.
     let want = PointMazeBaseline {
         method: "sac_her".into(),
-        library: "sb3".into(),
-        env: "pointmaze_umaze".into(),
+        library: Library::Sb3,
+        env: EnvName::PointmazeUmaze,
         runs: 3,
         ended: 2,
         resumed: 1,

@@ -21,8 +21,10 @@
 //!   PBCS's PointMaze tasks (the experiment `pointmaze_vanilla`'s raw rows,
 //!   `<results>/pointmaze/sb3/`).
 
+use super::scope::Scope;
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};
+use crate::learner::td3::Algo;
 use crate::stats::{fisher_exact, wilson, Z95};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
@@ -44,7 +46,7 @@ pub struct MazeRun {
     /// `sb3-<version>`.
     pub library: String,
     /// `ddpg` or `td3`.
-    pub algo: String,
+    pub algo: Algo,
     /// The run's seed.
     pub seed: u64,
     /// Environment steps of training.
@@ -58,12 +60,12 @@ pub struct MazeRun {
     pub protocol_episodes: u64,
 }
 
-/// One line of `outside.maze.csv`: ours against SB3 for one learner (or `pooled`), at one step
-/// count, judged by one greedy episode from s_0.
+/// One line of `outside.maze.csv`: ours against SB3 for one learner (or both pooled), at one
+/// step count, judged by one greedy episode from s_0.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MazeComparison {
-    /// `ddpg`, `td3` or `pooled` (both learners' runs together).
-    pub algo: String,
+    /// `ddpg`, `td3`, or both learners' runs together (written `pooled`).
+    pub algo: Scope<Algo>,
     /// Maze size N.
     pub maze: usize,
     /// Environment steps of training at the judged evaluation.
@@ -173,7 +175,7 @@ fn seeds_text(seeds: impl IntoIterator<Item = u64>) -> String {
 fn ours_at(
     table: &Experiment,
     results: &Path,
-    algo: &str,
+    algo: Algo,
     maze: usize,
     steps: u64,
 ) -> Result<Vec<(u64, bool)>> {
@@ -222,8 +224,8 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
             continue;
         };
         let (steps, library) = (first.steps, first.library.clone());
-        check_sb3_runs(&runs, algo, steps, &library)?;
-        let ours = ours_at(table, results, algo, *maze, steps)?;
+        check_sb3_runs(&runs, *algo, steps, &library)?;
+        let ours = ours_at(table, results, *algo, *maze, steps)?;
         let solved = |v: &[(u64, bool)]| {
             v.iter()
                 .filter(|(_, s)| *s)
@@ -237,7 +239,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
             .count() as u64;
         let (ours_seeds, sb3_seeds) = (solved(&ours), solved(&sb3));
         let mut line = comparison(
-            algo,
+            Scope::One(*algo),
             *maze,
             steps,
             &library,
@@ -254,9 +256,10 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
     Ok(out)
 }
 
-/// The SB3 folders `<algo>-maze<N>` under `root`, sorted by maze, then algorithm.
-fn sb3_folders(root: &Path) -> Result<Vec<(usize, String, PathBuf)>> {
-    let mut folders: Vec<(usize, String, PathBuf)> = Vec::new();
+/// The SB3 folders `<algo>-maze<N>` under `root`, sorted by maze, then algorithm; a folder so
+/// named whose `<algo>` is not a learner of ours is an error naming it.
+fn sb3_folders(root: &Path) -> Result<Vec<(usize, Algo, PathBuf)>> {
+    let mut folders: Vec<(usize, Algo, PathBuf)> = Vec::new();
     for entry in std::fs::read_dir(root).map_err(|e| Error::io(root, e))? {
         let path = entry.map_err(|e| Error::io(root, e))?.path();
         let name = path
@@ -266,10 +269,15 @@ fn sb3_folders(root: &Path) -> Result<Vec<(usize, String, PathBuf)>> {
             .to_string();
         let parsed = name
             .split_once("-maze")
-            .and_then(|(a, m)| m.parse::<usize>().ok().map(|m| (m, a.to_string())));
-        match parsed {
-            Some((maze, algo)) if path.is_dir() => folders.push((maze, algo, path)),
-            _ => {}
+            .and_then(|(a, m)| m.parse::<usize>().ok().map(|m| (m, a)));
+        if let Some((maze, algo)) = parsed.filter(|_| path.is_dir()) {
+            let algo = algo.parse::<Algo>().map_err(|_| {
+                Error::parse(
+                    &path,
+                    format!("`{algo}` is not a learner of ours (`ddpg` or `td3`)"),
+                )
+            })?;
+            folders.push((maze, algo, path));
         }
     }
     folders.sort();
@@ -280,7 +288,7 @@ fn sb3_folders(root: &Path) -> Result<Vec<(usize, String, PathBuf)>> {
 /// algorithm and library.
 fn check_sb3_runs(
     runs: &[(PathBuf, MazeRun)],
-    algo: &str,
+    algo: Algo,
     steps: u64,
     library: &str,
 ) -> Result<()> {
@@ -328,7 +336,7 @@ fn pooled_comparisons(lines_in: &[MazeComparison]) -> Result<Vec<MazeComparison>
         }
         let sum = |f: fn(&MazeComparison) -> u64| lines.iter().map(|c| f(c)).sum::<u64>();
         let pooled = comparison(
-            "pooled",
+            Scope::Pooled,
             maze,
             lines[0].steps,
             &lines[0].sb3_library.clone(),
@@ -343,7 +351,7 @@ fn pooled_comparisons(lines_in: &[MazeComparison]) -> Result<Vec<MazeComparison>
 
 /// One comparison line from the counts `[n, solved]` of each side (solved seeds left empty).
 fn comparison(
-    algo: &str,
+    algo: Scope<Algo>,
     maze: usize,
     steps: u64,
     library: &str,
@@ -360,7 +368,7 @@ fn comparison(
     };
     let ((olo, ohi), (slo, shi)) = (interval(ok, on), interval(sk, sn));
     MazeComparison {
-        algo: algo.to_string(),
+        algo,
         maze,
         steps,
         ours_n: on,
@@ -447,11 +455,11 @@ pub fn write_outside_tables(
 }
 
 mod pendulum;
-pub use pendulum::{pendulum_rows, pendulum_sac_rows, PendulumRow, PendulumRun, Published};
+pub use pendulum::{pendulum_rows, pendulum_sac_rows, PendulumRow, PendulumRun, Published, Source};
 mod pointmaze;
 pub use pointmaze::{
-    pointmaze_baselines, sb3_comparisons, PointMazeBaseline, PointMazeSb3Comparison, Sb3Eval,
-    SB3_BUDGET, SB3_SOLVED,
+    pointmaze_baselines, sb3_comparisons, Library, PointMazeBaseline, PointMazeSb3Comparison,
+    Sb3Eval, SB3_BUDGET, SB3_SOLVED,
 };
 
 #[cfg(test)]

@@ -44,11 +44,26 @@ pub struct Published {
     pub std: f64,
 }
 
+/// Whose final mean returns a line of `outside.pendulum.csv` holds.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr, strum::Display,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum Source {
+    /// Our runs.
+    Ours,
+    /// Stable-Baselines3's runs.
+    Sb3,
+    /// A published figure ([`Published`]).
+    Published,
+}
+
 /// One line of `outside.pendulum.csv`: one source of final mean returns.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PendulumRow {
     /// `ours`, `sb3` or `published`.
-    pub source: String,
+    pub source: Source,
     /// The library (or the publication for `published`).
     pub library: String,
     /// Runs (seeds); 1 for a published agent.
@@ -118,12 +133,12 @@ fn rows_of(results: &Path, names: [&str; 3]) -> Result<Vec<PendulumRow>> {
     let band = published.as_ref().map(|p| (p.mean - p.std, p.mean + p.std));
     let ours_returns = returns(&ours);
     let mut out = vec![
-        line(&root, "ours", ours_dir, &ours, None, band)?,
-        line(&root, "sb3", sb3_dir, &sb3, Some(&ours_returns), band)?,
+        line(&root, Source::Ours, ours_dir, &ours, None, band)?,
+        line(&root, Source::Sb3, sb3_dir, &sb3, Some(&ours_returns), band)?,
     ];
     if let Some(p) = published {
         out.push(PendulumRow {
-            source: "published".into(),
+            source: Source::Published,
             library: p.source,
             n: 1,
             steps: p.steps,
@@ -197,7 +212,7 @@ fn returns(runs: &[PendulumRun]) -> Vec<f64> {
 /// them; with `band` (the published mean ± std), how many runs lie in it.
 fn line(
     root: &Path,
-    source: &str,
+    source: Source,
     dir: &str,
     runs: &[PendulumRun],
     ours: Option<&[f64]>,
@@ -210,7 +225,7 @@ fn line(
     let w = ours.and_then(|o| welch(o, &r));
     let ours_mean = ours.and_then(mean_sd).map_or(f64::NAN, |m| m.0);
     Ok(PendulumRow {
-        source: source.to_string(),
+        source,
         library: runs[0].library.clone(),
         n: runs.len() as u64,
         steps: runs[0].steps,

@@ -10,6 +10,7 @@
 //! the table says how many runs ended and how many were resumed from a checkpoint.
 
 use super::{seed_files, seed_rows, seeds_text};
+use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::experiment::run_file;
 use crate::experiment::{Cell, Experiment, RawRow};
@@ -34,16 +35,52 @@ pub struct Sb3Eval {
     pub wall_seconds: f64,
 }
 
+/// Whose runs a line counts (`outside.pointmaze.csv`; the cost table's `pbcs` and
+/// `sb3-<version>`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    strum::IntoStaticStr,
+    strum::Display,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum Library {
+    /// Ours (this package's learners).
+    Ours,
+    /// Stable-Baselines3's.
+    Sb3,
+}
+
+impl Library {
+    /// The library a version string names: `sb3-<version>` (or `sb3`) is SB3's, any other
+    /// (`pbcs`) ours.
+    pub fn of_version(version: &str) -> Library {
+        if version.starts_with("sb3") {
+            Library::Sb3
+        } else {
+            Library::Ours
+        }
+    }
+}
+
 /// One line of `outside.pointmaze.csv`: one learner on one map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointMazeBaseline {
     /// `ddpg`, `td3`, `sac_her`, `td3_her` (ours) or `sac_her` (SB3).
     pub method: String,
     /// `ours` or `sb3`.
-    pub library: String,
+    pub library: Library,
     /// The registry's name of the task (`pointmaze_umaze`; `pointmaze_umaze_goals` for ours
     /// with the env's own resets; SB3's runs, named by their map, play those resets too).
-    pub env: String,
+    pub env: EnvName,
     /// Runs with rows.
     pub runs: u64,
     /// Of them, ended (their budget spent, or SB3's stopped at a solving evaluation).
@@ -105,7 +142,7 @@ pub fn pointmaze_baselines(
 /// One learner's folder `<method>-<env>`.
 struct Folder {
     method: String,
-    env: String,
+    env: EnvName,
     dir: PathBuf,
 }
 
@@ -122,10 +159,9 @@ fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
             continue;
         }
         let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let parsed = name.split_once('-').filter(|(m, env)| {
-            methods.contains(m)
-                && env.starts_with("pointmaze_")
-                && env.parse::<crate::envs::EnvName>().is_ok()
+        let parsed = name.split_once('-').and_then(|(m, env)| {
+            let env = env.parse::<EnvName>().ok()?;
+            (methods.contains(&m) && env.point_map().is_some()).then_some((m, env))
         });
         let Some((method, env)) = parsed else {
             let why = format!(
@@ -136,7 +172,7 @@ fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
         };
         found.push(Folder {
             method: method.to_string(),
-            env: env.to_string(),
+            env,
             dir: dir.clone(),
         });
     }
@@ -208,8 +244,8 @@ fn vanilla_line(
     }
     Ok(PointMazeBaseline {
         method: cell.method.clone(),
-        library: "ours".to_string(),
-        env: cell.site.id(),
+        library: Library::Ours,
+        env: cell.site.env(),
         runs: runs.len() as u64,
         ended: runs.len() as u64,
         resumed: 0,
@@ -284,12 +320,12 @@ fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
 /// SB3's line from one folder: every run's evaluations; a run ended where its `s<seed>.csv`
 /// exists, and then it must agree with them (its best, and its stop at a solving evaluation).
 fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
-    let (method, env, dir) = (f.method.as_str(), f.env.clone(), f.dir.as_path());
+    let (method, env, dir) = (f.method.as_str(), f.env, f.dir.as_path());
     let ended: Vec<(PathBuf, Sb3Row)> = seed_rows(dir, |r: &Sb3Row| r.seed)?;
     if let Some((path, _)) = ended.iter().find(|(_, r)| r.algo != method || r.map != env) {
         return Err(Error::parse(
             path,
-            format!("not a run of {method} on {env}"),
+            format!("not a run of {method} on {}", env.name()),
         ));
     }
     let mut runs = Vec::new();
@@ -318,7 +354,7 @@ fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
         .unwrap_or((0, 0));
     Ok(PointMazeBaseline {
         method: method.to_string(),
-        library: "sb3".to_string(),
+        library: Library::Sb3,
         env,
         runs: runs.len() as u64,
         ended: ended.len() as u64,
@@ -396,7 +432,7 @@ fn sb3_run(seed: u64, evals: &[Sb3Eval], row: Option<&(PathBuf, Sb3Row)>) -> Res
 struct Sb3Row {
     library: String,
     algo: String,
-    map: String,
+    map: EnvName,
     seed: u64,
     env_steps: u64,
     solved: bool,
@@ -415,9 +451,9 @@ pub struct PointMazeSb3Comparison {
     /// Our method (`sac_her`).
     pub method: String,
     /// Our task (`pointmaze_umaze_goals`).
-    pub env: String,
+    pub env: EnvName,
     /// SB3's map folder (`pointmaze_umaze`).
-    pub sb3_env: String,
+    pub sb3_env: EnvName,
     /// The steps both are judged at.
     pub budget: u64,
     /// Our runs with rows.
@@ -447,20 +483,23 @@ pub fn sb3_comparisons(
 ) -> Result<Vec<PointMazeSb3Comparison>> {
     let rows = crate::experiment::read_raw(her, results)?;
     let mut out = Vec::new();
-    for ours in lines.iter().filter(|l| l.library == "ours") {
-        let Some(map) = ours.env.strip_suffix("_goals") else {
+    for ours in lines.iter().filter(|l| l.library == Library::Ours) {
+        if !ours.env.goal_resets() {
             continue;
-        };
+        }
+        let map = ours.env.fixed_task();
         let Some(sb3) = lines
             .iter()
-            .find(|l| l.library == "sb3" && l.method == ours.method && l.env == map)
+            .find(|l| l.library == Library::Sb3 && l.method == ours.method && l.env == map)
         else {
             continue;
         };
         if sb3.steps_max > SB3_BUDGET {
             let why = format!(
-                "SB3's {} on {map}: a run of {} steps, beyond the protocol's {SB3_BUDGET}",
-                sb3.method, sb3.steps_max
+                "SB3's {} on {}: a run of {} steps, beyond the protocol's {SB3_BUDGET}",
+                sb3.method,
+                map.name(),
+                sb3.steps_max
             );
             return Err(Error::parse(results.join("pointmaze").join("sb3"), why));
         }
@@ -471,7 +510,7 @@ pub fn sb3_comparisons(
         }
         let runs: Vec<&RawRow> = rows
             .iter()
-            .filter(|r| r.method == ours.method && r.site.id() == ours.env)
+            .filter(|r| r.method == ours.method && r.site.env() == ours.env)
             .collect();
         let solved: Vec<&&RawRow> = runs
             .iter()
@@ -480,8 +519,8 @@ pub fn sb3_comparisons(
         let (k1, n1, k2, n2) = (solved.len() as u64, runs.len() as u64, sb3.solved, sb3.runs);
         out.push(PointMazeSb3Comparison {
             method: ours.method.clone(),
-            env: ours.env.clone(),
-            sb3_env: map.to_string(),
+            env: ours.env,
+            sb3_env: map,
             budget: SB3_BUDGET,
             ours_n: n1,
             ours_solved: k1,

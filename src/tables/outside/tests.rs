@@ -50,7 +50,10 @@ fn the_maze_comparison_counts_both_sides_at_the_same_step() {
     let lines = maze_comparisons(&table(), r).unwrap();
     assert_eq!(lines.len(), 3, "{lines:?}");
     let d = &lines[0];
-    assert_eq!((d.algo.as_str(), d.maze, d.steps), ("ddpg", 2, 300_000));
+    assert_eq!(
+        (d.algo, d.maze, d.steps),
+        (Scope::One(Algo::Ddpg), 2, 300_000)
+    );
     assert_eq!(
         (d.ours_n, d.ours_solved, d.sb3_n, d.sb3_solved),
         (5, 4, 4, 1)
@@ -63,7 +66,7 @@ fn the_maze_comparison_counts_both_sides_at_the_same_step() {
     assert_eq!(d.fisher_p, fisher_exact(4, 5, 1, 4));
     assert_eq!((d.ours_lo, d.ours_hi), wilson(4, 5, Z95));
     let p = &lines[2];
-    assert_eq!(p.algo, "pooled");
+    assert_eq!(p.algo, Scope::Pooled);
     assert_eq!(
         (p.ours_n, p.ours_solved, p.sb3_n, p.sb3_solved),
         (8, 5, 7, 3)
@@ -147,8 +150,8 @@ fn pendulum_lines_give_the_mean_the_interval_and_welchs_test() {
     assert!((s.welch_p.unwrap() - 0.107_531_194_9).abs() < 1e-8);
     assert_eq!(s.diff_vs_ours, Some(-3.0));
     assert_eq!(
-        (p.source.as_str(), p.mean, p.sd, p.ci_lo),
-        ("published", 3.0, 1.5, None)
+        (p.source, p.mean, p.sd, p.ci_lo),
+        (Source::Published, 3.0, 1.5, None)
     );
     // Within [1.5, 4.5]: ours 2, 3, 4; SB3's 2, 4.
     assert_eq!((o.within_published, s.within_published), (Some(3), Some(2)));
