@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The chain-success thresholds of [`Criteria`]: 0.5, 0.9, 0.95 (ours) and 1.0.
-pub const THRESHOLDS: [f32; 4] = [0.5, 0.9, 0.95, 1.0];
+pub const THRESHOLDS: [f32; 4] = [0.5, 0.9, crate::stats::SOLVED_AT, 1.0];
 
 /// One PBCS run's chain: whether phase 2 built it completely and the fraction of evaluation
 /// episodes from B_ε(s_0) that reached the target (0 for an incomplete chain).

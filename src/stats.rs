@@ -5,6 +5,35 @@
 /// PBCS chain) reaches the target in at least this fraction of episodes.
 pub const SOLVED_AT: f32 = 0.95;
 
+/// The one rule every record, row and table judges a run by: solved when nothing stopped it
+/// (`stopped`: PBCS's phase 2 failed or ran out of budget) and its evaluation's success rate
+/// is at least [`SOLVED_AT`].
+///
+/// ```
+/// use pbcs::stats::solved;
+/// assert!(solved(false, 0.95) && solved(false, 1.0));
+/// assert!(!solved(false, 0.94) && !solved(true, 1.0));
+/// ```
+pub fn solved(stopped: bool, rate: f32) -> bool {
+    !stopped && rate >= SOLVED_AT
+}
+
+/// The fewest successes of `episodes` that solve a run by [`solved`]: ⌈[`SOLVED_AT`] ·
+/// episodes⌉ (95 of 100, as SB3's protocol on PointMaze counts).
+///
+/// ```
+/// use pbcs::stats::least_successes;
+/// assert_eq!((least_successes(100), least_successes(20), least_successes(10)), (95, 19, 10));
+/// for n in 1..=1000u64 {
+///     let k = least_successes(n);
+///     assert!(pbcs::stats::solved(false, k as f32 / n as f32));
+///     assert!(k == 0 || !pbcs::stats::solved(false, (k - 1) as f32 / n as f32));
+/// }
+/// ```
+pub fn least_successes(episodes: u64) -> u64 {
+    (f64::from(SOLVED_AT) * episodes as f64).ceil() as u64
+}
+
 /// The median of `v` (sorted in place; mean of the two middle values for an even count;
 /// NaN for an empty slice).
 ///

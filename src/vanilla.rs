@@ -124,7 +124,7 @@ impl Check for TrainConfig {
         }
         if let Some(n) = self.stop_at_successes {
             // A stopped run is a solved run: its row says so ([`crate::stats::SOLVED_AT`]).
-            let least = (crate::stats::SOLVED_AT * self.eval_episodes as f32).ceil() as usize;
+            let least = crate::stats::least_successes(self.eval_episodes as u64) as usize;
             if n < least.max(1) || n > self.eval_episodes {
                 return Err(Error::invalid(
                     "train.stop_at_successes",

@@ -91,7 +91,7 @@ impl RawRow {
             gamma: job.learner.gamma(),
             chaining: false,
             starts: None,
-            solved: success_rate >= crate::runs::SOLVED_AT,
+            solved: crate::stats::solved(false, success_rate),
             success_rate,
             env_steps: s.env_steps,
             budget: job.train.steps,
@@ -456,7 +456,7 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
         Kind::Vanilla => vanilla_value_error(r)?,
         Kind::Pbcs => pbcs_value_error(r)?,
     }
-    let solved = r.failure.is_none() && r.success_rate >= crate::runs::SOLVED_AT;
+    let solved = crate::stats::solved(r.failure.is_some(), r.success_rate);
     if r.solved != solved {
         return fail(
             "solved",

@@ -27,11 +27,7 @@ impl Routes {
             routes
                 .iter()
                 .filter(|r| r.method == m && r.site == n)
-                .map(|r| {
-                    let fewest = r.fewest_steps.max(1) as f64;
-                    let tau = r.phase2_tau_steps as f64 / fewest;
-                    (r.seed, r.chain_steps.map(|c| c / fewest), tau)
-                })
+                .map(|r| (r.seed, r.chain_over_fewest(), r.tau_over_fewest()))
                 .collect()
         });
         Routes {

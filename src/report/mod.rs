@@ -79,12 +79,11 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
     let paths: Vec<(&str, f64, f64, f64)> = routes
         .iter()
         .filter_map(|r| {
-            let c = r.chain_steps?;
             Some((
                 r.cell.as_str(),
-                c / r.fewest_steps.max(1) as f64,
-                r.phase2_tau_steps as f64 / c,
-                r.tau_steps as f64 / c,
+                r.chain_over_fewest()?,
+                r.phase2_tau_over_chain()?,
+                r.phase1_tau_over_chain()?,
             ))
         })
         .collect();
@@ -95,8 +94,7 @@ pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Rou
         .iter()
         .filter(|r| r.chain_steps.is_some_and(|c| c < r.phase2_tau_steps as f64))
         .count();
-    let mut cells: Vec<&str> = paths.iter().map(|p| p.0).collect();
-    cells.dedup();
+    let cells = crate::tables::distinct(paths.iter().map(|p| p.0));
     let (mut fewest, mut tau, mut phase1) = (Vec::new(), Vec::new(), Vec::new());
     for cell in cells {
         let mut f: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.1).collect();
@@ -215,8 +213,7 @@ fn chain_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> c
                 &percent,
             );
         }
-        let mut cells: Vec<&str> = runs.iter().map(|r| r.cell.as_str()).collect();
-        cells.dedup();
+        let cells = crate::tables::distinct(runs.iter().map(|r| r.cell.as_str()));
         for cell in cells {
             let of = || runs.iter().filter(move |r| r.cell == cell);
             for (field, count) in [
@@ -240,14 +237,11 @@ fn route_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> c
     let routes = crate::tables::routes::routes_path(results, name);
     if routes.exists() {
         let routes = crate::tables::routes::read_routes(&routes)?;
-        let mut cells: Vec<&str> = routes.iter().map(|r| r.cell.as_str()).collect();
-        cells.dedup();
+        let cells = crate::tables::distinct(routes.iter().map(|r| r.cell.as_str()));
         for cell in cells {
             let of = || routes.iter().filter(|r| r.cell == cell);
             let mut fewest: Vec<f64> = of().map(|r| r.fewest_steps as f64).collect();
-            let mut left: Vec<f64> = of()
-                .map(|r| r.phase2_tau_steps as f64 / r.tau_steps.max(1) as f64)
-                .collect();
+            let mut left: Vec<f64> = of().map(|r| r.tau_left()).collect();
             let fewest = crate::stats::median(&mut fewest);
             let left = crate::stats::median(&mut left);
             def_res(

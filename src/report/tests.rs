@@ -111,6 +111,59 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
     }
 }
 
+/// The report groups rows by cell whatever their order (it grouped with `Vec::dedup`, right
+/// only while rows came sorted: rows of two cells interleaved gave each cell's numbers twice).
+#[test]
+fn the_report_groups_rows_whatever_their_order() {
+    use crate::criteria::ChainSuccess;
+    use crate::tables::routes::Route;
+    let exp = Experiment::of_job("m", &Default::default(), &[2, 5], 10).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let chain = |n: usize, seed: u64| ChainSuccess {
+        experiment: "m".into(),
+        cell: format!("m-maze{n}"),
+        method: "m".into(),
+        label: "m".into(),
+        site: crate::experiment::Site::Maze(n),
+        seed,
+        complete: true,
+        success_rate: 1.0,
+        solved: true,
+        env_steps: 1000,
+        paper_steps: None,
+    };
+    let route = |n: usize, seed: u64| Route {
+        cell: format!("m-maze{n}"),
+        method: "m".into(),
+        site: crate::experiment::Site::Maze(n),
+        seed,
+        solved: true,
+        tau_steps: 400,
+        phase2_tau_steps: 100,
+        chain_steps: Some(70.0),
+        successes: 100,
+        fewest_steps: 62,
+    };
+    let interleaved = [(5, 0), (2, 0), (5, 1), (2, 1)];
+    crate::record::write_records(
+        &crate::criteria::chains_path(dir.path(), "m"),
+        &interleaved.map(|(n, s)| chain(n, s)),
+    )
+    .unwrap();
+    crate::record::write_records(
+        &crate::tables::routes::routes_path(dir.path(), "m"),
+        &interleaved.map(|(n, s)| route(n, s)),
+    )
+    .unwrap();
+    let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
+    for cell in ["m-maze2", "m-maze5"] {
+        for field in ["unsolved", "incomplete", "zerochains", "routes:fewest"] {
+            let key = format!("res:m:{cell}:{field}\\endcsname");
+            assert_eq!(tex.matches(&key).count(), 1, "{key}: {tex}");
+        }
+    }
+}
+
 /// The code's constants as the report quotes them.
 #[test]
 fn the_code_constants_are_quoted_in_their_units() {

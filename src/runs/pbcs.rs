@@ -1,8 +1,6 @@
 //! `pbcs run`: PBCS — phase 1, phase 2, the chain's evaluation — and its record.
 
-use super::{
-    claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB, SOLVED_AT,
-};
+use super::{claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB};
 use crate::config::{Located, PbcsJob};
 use crate::env::{Planar, SampleBall};
 use crate::envs::EnvName;
@@ -42,7 +40,8 @@ pub struct RunRecord {
     pub gamma: f32,
     /// ε.
     pub epsilon: f32,
-    /// Whether the chain reaches the target in at least [`SOLVED_AT`] of the evaluation episodes.
+    /// Whether the chain reaches the target in at least [`super::SOLVED_AT`] of the evaluation
+    /// episodes and phase 2 did not stop early ([`crate::stats::solved`]).
     pub solved: bool,
     /// Fraction of evaluation episodes that reached the target.
     pub success_rate: f32,
@@ -260,7 +259,7 @@ impl RunRecord {
             starts: job.phase2.start,
             gamma: lc.gamma(),
             epsilon: job.phase2.epsilon,
-            solved: phase2.failure.is_none() && success_rate >= SOLVED_AT,
+            solved: crate::stats::solved(phase2.failure.is_some(), success_rate),
             success_rate,
             failure: phase2.failure,
             phase1_steps: found.env_steps,

@@ -1,6 +1,6 @@
 //! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on an environment's own reward.
 
-use super::{claim, write_timing, SOLVED_AT};
+use super::{claim, write_timing};
 use crate::config::{Located, TrainJob};
 use crate::env::{Planar, Scene};
 use crate::envs::EnvName;
@@ -39,7 +39,8 @@ pub struct TrainSummary {
     pub best_success: f32,
     /// Bins of side `train.visit_bin` visited during training.
     pub visited_bins: usize,
-    /// Environment steps at the first evaluation whose greedy success was ≥ [`SOLVED_AT`], if any.
+    /// Environment steps at the first evaluation whose greedy success solved the task
+    /// ([`crate::stats::solved`]), if any.
     pub first_success_steps: Option<u64>,
     /// The environment ([`EnvName`]; the last column, so the others keep their places).
     pub env: EnvName,
@@ -97,7 +98,7 @@ impl TrainRun {
             first_success_steps: result
                 .evals
                 .iter()
-                .find(|e| e.success >= SOLVED_AT)
+                .find(|e| crate::stats::solved(false, e.success))
                 .map(|e| e.steps),
             env: job.env,
         };

@@ -63,7 +63,7 @@ pub fn curve_points(exp: &Experiment, results: &Path) -> Result<Vec<CurvePoint>>
         let mut by_step: BTreeMap<u64, (u64, u64, f64)> = BTreeMap::new();
         let mut add = |steps: u64, e: &EvalRow| {
             let slot = by_step.entry(steps).or_default();
-            slot.0 += u64::from(e.success >= crate::runs::SOLVED_AT);
+            slot.0 += u64::from(crate::stats::solved(false, e.success));
             slot.1 += 1;
             slot.2 += f64::from(e.mean_return);
         };
@@ -75,7 +75,7 @@ pub fn curve_points(exp: &Experiment, results: &Path) -> Result<Vec<CurvePoint>>
             }
             let stopped = evals
                 .last()
-                .filter(|last| stops && last.success >= crate::runs::SOLVED_AT);
+                .filter(|last| stops && crate::stats::solved(false, last.success));
             if let Some(last) = stopped {
                 for &later in all_steps.range(last.steps + 1..) {
                     add(later, last);

@@ -48,8 +48,7 @@ fn solved_steps(c: &CellStats) -> String {
 }
 
 fn maze_table(stats: &[CellStats]) -> Result<String> {
-    let mut sizes: Vec<Site> = stats.iter().map(|c| c.site).collect();
-    sizes.dedup();
+    let sizes = super::distinct(stats.iter().map(|c| c.site));
     let mut s = String::from(
         "| maze | the paper's PBCS (1 run) | DDPG, 1M steps | TD3, 1M steps | PBCS `paper` | \
          PBCS `fast` |\n| --- | --- | --- | --- | --- | --- |\n",

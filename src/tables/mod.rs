@@ -141,6 +141,23 @@ pub(crate) fn table_numbers<T: serde::de::DeserializeOwned, const N: usize>(
         .collect())
 }
 
+/// The distinct items of `items` in the order they first appear: a grouping that does not
+/// depend on rows coming sorted (`Vec::dedup` merges only neighbours).
+///
+/// ```
+/// use pbcs::tables::distinct;
+/// assert_eq!(distinct(["b", "a", "b", "c", "a"]), ["b", "a", "c"]);
+/// ```
+pub fn distinct<T: PartialEq>(items: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut out = Vec::new();
+    for item in items {
+        if !out.contains(&item) {
+            out.push(item);
+        }
+    }
+    out
+}
+
 /// Where an experiment's table lives under `results`.
 pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
     results.join("tables").join(format!("{experiment}.csv"))

@@ -45,6 +45,34 @@ pub struct Route {
     pub fewest_steps: usize,
 }
 
+/// The ratios the report's numbers and the routes figure read, each written once here.
+impl Route {
+    /// The chain's path over the fewest steps (none without a successful episode).
+    pub fn chain_over_fewest(&self) -> Option<f64> {
+        Some(self.chain_steps? / self.fewest_steps.max(1) as f64)
+    }
+
+    /// The τ phase 2 worked on over the fewest steps.
+    pub fn tau_over_fewest(&self) -> f64 {
+        self.phase2_tau_steps as f64 / self.fewest_steps.max(1) as f64
+    }
+
+    /// The τ phase 2 worked on over the chain's path.
+    pub fn phase2_tau_over_chain(&self) -> Option<f64> {
+        Some(self.phase2_tau_steps as f64 / self.chain_steps?)
+    }
+
+    /// Phase 1's τ over the chain's path.
+    pub fn phase1_tau_over_chain(&self) -> Option<f64> {
+        Some(self.tau_steps as f64 / self.chain_steps?)
+    }
+
+    /// The share of phase 1's τ that phase 2 worked on.
+    pub fn tau_left(&self) -> f64 {
+        self.phase2_tau_steps as f64 / self.tau_steps.max(1) as f64
+    }
+}
+
 /// `<results>/tables/<experiment>.routes.csv`.
 pub fn routes_path(results: &Path, experiment: &str) -> PathBuf {
     results

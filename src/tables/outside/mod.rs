@@ -25,7 +25,7 @@ use super::scope::Scope;
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, Experiment};
 use crate::learner::td3::Algo;
-use crate::stats::{fisher_exact, wilson, Z95};
+use crate::stats::{fisher_exact, least_successes, wilson, Z95};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -197,7 +197,7 @@ fn ours_at(
             .iter()
             .find(|e| e.steps == steps)
             .ok_or_else(|| Error::parse(&path, format!("no greedy evaluation at step {steps}")))?;
-        out.push((seed, at.success >= crate::runs::SOLVED_AT));
+        out.push((seed, crate::stats::solved(false, at.success)));
     }
     if out.is_empty() {
         return Err(Error::parse(
@@ -235,7 +235,7 @@ pub fn maze_comparisons(table: &Experiment, results: &Path) -> Result<Vec<MazeCo
         let sb3: Vec<(u64, bool)> = runs.iter().map(|(_, r)| (r.seed, r.solved_s0)).collect();
         let protocol = runs
             .iter()
-            .filter(|(_, r)| r.protocol_successes * 100 >= 95 * r.protocol_episodes)
+            .filter(|(_, r)| r.protocol_successes >= least_successes(r.protocol_episodes))
             .count() as u64;
         let (ours_seeds, sb3_seeds) = (solved(&ours), solved(&sb3));
         let mut line = comparison(
@@ -459,7 +459,7 @@ pub use pendulum::{pendulum_rows, pendulum_sac_rows, PendulumRow, PendulumRun, P
 mod pointmaze;
 pub use pointmaze::{
     pointmaze_baselines, sb3_comparisons, Library, PointMazeBaseline, PointMazeSb3Comparison,
-    Sb3Eval, SB3_BUDGET, SB3_SOLVED,
+    Sb3Eval, SB3_BUDGET,
 };
 
 #[cfg(test)]

@@ -18,11 +18,8 @@ use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Successes of 100 evaluation episodes that count SB3's policy as solving the map (the
-/// protocol's 95, as for PBCS's chains).
-pub const SB3_SOLVED: u64 = 95;
-
 /// One evaluation of an SB3 run (`s<seed>.evals.csv`): 100 episodes from the env's own resets.
+/// It solves the map by the package's one rule ([`crate::stats::solved`]: 95 of 100).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Sb3Eval {
     /// Environment steps of training before it.
@@ -71,6 +68,14 @@ impl Library {
     }
 }
 
+impl Sb3Eval {
+    /// Whether this evaluation solved the map: at least [`crate::stats::least_successes`] of
+    /// its episodes.
+    pub fn solves(&self) -> bool {
+        self.successes >= crate::stats::least_successes(self.episodes)
+    }
+}
+
 /// One line of `outside.pointmaze.csv`: one learner on one map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointMazeBaseline {
@@ -91,7 +96,8 @@ pub struct PointMazeBaseline {
     pub steps_max: u64,
     /// Runs whose policy solves the map: ours alone on PBCS's task, a final greedy episode
     /// from the start that reaches the goal; SB3 and ours by its protocol
-    /// (`train.stop_at_successes`), an evaluation with at least [`SB3_SOLVED`] of 100.
+    /// (`train.stop_at_successes`), an evaluation that solves it
+    /// ([`crate::stats::least_successes`]: 95 of 100).
     pub solved: u64,
     /// By SB3's protocol: the fewest environment steps at which a run solved it (ours alone on
     /// PBCS's task: never set).
@@ -297,7 +303,7 @@ fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
     let path = run_file(dir, seed, ".evals.csv");
     let evals: Vec<Sb3Eval> = crate::record::read_records(&path)?;
     for (i, e) in evals.iter().enumerate() {
-        let after_solved = i > 0 && evals[i - 1].successes >= SB3_SOLVED;
+        let after_solved = i > 0 && evals[i - 1].solves();
         if e.episodes != 100
             || e.successes > e.episodes
             || e.env_steps != 10_000 * (i as u64 + 1)
@@ -305,11 +311,12 @@ fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
         {
             let why = format!(
                 "evaluation {} ({} successes of {} episodes at {} steps): 100 episodes every \
-                 10 000 steps expected, and none after one with {SB3_SOLVED} successes",
+                 10 000 steps expected, and none after one with {} successes (it solved the map)",
                 i + 1,
                 e.successes,
                 e.episodes,
-                e.env_steps
+                e.env_steps,
+                crate::stats::least_successes(100)
             );
             return Err(Error::parse(&path, why));
         }
@@ -389,7 +396,7 @@ struct Sb3Run {
     /// the script's own convention).
     top: u64,
     top_at: u64,
-    /// The steps of its first evaluation with at least [`SB3_SOLVED`] successes.
+    /// The steps of its first evaluation that solved the map ([`Sb3Eval::solves`]).
     solved_at: Option<u64>,
 }
 
@@ -405,10 +412,7 @@ fn sb3_run(seed: u64, evals: &[Sb3Eval], row: Option<&(PathBuf, Sb3Row)>) -> Res
         steps: evals.last().map_or(0, |e| e.env_steps),
         top,
         top_at,
-        solved_at: evals
-            .iter()
-            .find(|e| e.successes >= SB3_SOLVED)
-            .map(|e| e.env_steps),
+        solved_at: evals.iter().find(|e| e.solves()).map(|e| e.env_steps),
     };
     if let Some((path, r)) = row {
         let agrees = r.library.starts_with("sb3-")
