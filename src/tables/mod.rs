@@ -16,6 +16,7 @@ pub mod phases;
 pub mod routes;
 pub mod scaling;
 pub mod scope;
+pub mod statistics;
 
 use crate::error::{Error, Result};
 use crate::experiment::{Cell, Experiment, RawRow, Site};
