@@ -203,7 +203,10 @@ mod tests {
         ];
         for change in changed {
             let mut other = plain.clone();
-            let cell = other.iter_mut().find(|s| s.solved_steps_median.is_some()).unwrap();
+            let cell = other
+                .iter_mut()
+                .find(|s| s.solved_steps_median.is_some())
+                .unwrap();
             change(cell);
             assert!(!same(&ours, &other));
         }

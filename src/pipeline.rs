@@ -288,7 +288,8 @@ pub fn render(
 /// chain success and the table under other success criteria), `<name>.curves.csv` (with a
 /// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
 /// each cell's shortest path), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
-/// chain's path beside |τ| and the fewest steps), `<name>.judged.csv` (chains judged by an
+/// chain's path beside |τ| and the fewest steps) and `<name>.route_cells.csv` (their medians
+/// per cell, what the report quotes), `<name>.judged.csv` (chains judged by an
 /// outside environment), `<name>.paired.csv` (a registered paired comparison),
 /// `<name>.phases.csv` (PBCS cells: env steps by phase) and the wall-clock companion
 /// `<name>.timing.csv`.
@@ -323,6 +324,10 @@ pub fn write_tables(
     let name = exp.name.as_str();
     let routes = crate::tables::routes::routes(exp, results, rows)?;
     write_nonempty(&routes_path(results, name), &routes)?;
+    write_nonempty(
+        &crate::tables::routes::route_cells_path(results, name),
+        &crate::tables::routes::route_cells(&routes),
+    )?;
     let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
     write_nonempty(&crate::tables::judged::judged_path(results, name), &judged)?;
     let paired = crate::tables::paired::paired_sites(exp, rows);
@@ -403,10 +408,10 @@ pub fn render_all(
                 &read_paths(&paths)?,
             ));
         }
-        let routes = routes_path(results, &exp.name);
-        if routes.exists() {
-            let routes = crate::tables::routes::read_routes(&routes)?;
-            numbers.push_str(&report::routes_numbers_tex(&exp.name, &routes));
+        let route_cells = crate::tables::routes::route_cells_path(results, &exp.name);
+        if route_cells.exists() {
+            let cells = crate::record::read_records(&route_cells)?;
+            numbers.push_str(&report::routes_numbers_tex(&exp.name, &cells));
         }
         numbers.push_str(&report::extra_numbers_tex(exp, results)?);
     }

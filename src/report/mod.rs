@@ -44,55 +44,41 @@ fn def_res(s: &mut String, experiment: &str, key: &str, value: &str) {
     );
 }
 
-/// For an experiment with a routes table (PBCS runs with evaluation episodes): how the chains'
-/// paths compare with τ and with the fewest steps, as `\res{<experiment>:routes:<key>}`:
+/// For an experiment with a routes table (PBCS runs with evaluation episodes), from its cells'
+/// summaries (`<experiment>.route_cells.csv`, [`crate::tables::routes::route_cells`]): how the
+/// chains' paths compare with τ and with the fewest steps, as
+/// `\res{<experiment>:routes:<key>}`:
 /// `runs` (runs with a successful evaluation episode), `shorter` (of those, runs whose chain's
 /// median successful path is shorter than the τ phase 2 worked on), `fewestlo`/`fewesthi` (the
 /// least and largest, over cells, of the median chain path / fewest steps), `taulo`/`tauhi`
 /// (the same for the τ phase 2 worked on / chain path) and `phase1lo`/`phase1hi` (for phase 1's
 /// τ / chain path: what the abstract's "improve on the trajectory obtained by the motion
 /// planning phase" compares; the two τ differ where `shorten` is on); empty without routes.
-pub fn routes_numbers_tex(experiment: &str, routes: &[crate::tables::routes::Route]) -> String {
+pub fn routes_numbers_tex(experiment: &str, cells: &[crate::tables::routes::RouteCell]) -> String {
     let mut s = String::new();
-    let paths: Vec<(&str, f64, f64, f64)> = routes
-        .iter()
-        .filter_map(|r| {
-            Some((
-                r.cell.as_str(),
-                r.chain_over_fewest()?,
-                r.phase2_tau_over_chain()?,
-                r.phase1_tau_over_chain()?,
-            ))
-        })
-        .collect();
-    if paths.is_empty() {
+    let runs: u64 = cells.iter().map(|c| c.chain_runs).sum();
+    if runs == 0 {
         return s;
     }
-    let shorter = routes
-        .iter()
-        .filter(|r| r.chain_steps.is_some_and(|c| c < r.phase2_tau_steps as f64))
-        .count();
-    let cells = crate::tables::distinct(paths.iter().map(|p| p.0));
-    let (mut fewest, mut tau, mut phase1) = (Vec::new(), Vec::new(), Vec::new());
-    for cell in cells {
-        let mut f: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.1).collect();
-        let mut t: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.2).collect();
-        let mut t1: Vec<f64> = paths.iter().filter(|p| p.0 == cell).map(|p| p.3).collect();
-        fewest.push(crate::stats::median(&mut f));
-        tau.push(crate::stats::median(&mut t));
-        phase1.push(crate::stats::median(&mut t1));
-    }
-    let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let shorter: u64 = cells.iter().map(|c| c.shorter).sum();
+    let spread = |f: fn(&crate::tables::routes::RouteCell) -> Option<f64>| {
+        let v: Vec<f64> = cells.iter().filter_map(f).collect();
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
+    };
+    let fewest = spread(|c| c.chain_over_fewest);
+    let tau = spread(|c| c.phase2_tau_over_chain);
+    let phase1 = spread(|c| c.phase1_tau_over_chain);
     for (key, value) in [
-        ("runs", paths.len().to_string()),
+        ("runs", runs.to_string()),
         ("shorter", shorter.to_string()),
-        ("fewestlo", format!("{:.2}", lo(&fewest))),
-        ("fewesthi", format!("{:.2}", hi(&fewest))),
-        ("taulo", format!("{:.1}", lo(&tau))),
-        ("tauhi", format!("{:.1}", hi(&tau))),
-        ("phase1lo", format!("{:.1}", lo(&phase1))),
-        ("phase1hi", format!("{:.1}", hi(&phase1))),
+        ("fewestlo", format!("{:.2}", fewest.0)),
+        ("fewesthi", format!("{:.2}", fewest.1)),
+        ("taulo", format!("{:.1}", tau.0)),
+        ("tauhi", format!("{:.1}", tau.1)),
+        ("phase1lo", format!("{:.1}", phase1.0)),
+        ("phase1hi", format!("{:.1}", phase1.1)),
     ] {
         def_res(&mut s, experiment, &format!("routes:{key}"), &value);
     }
@@ -209,31 +195,18 @@ fn chain_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> c
     Ok(())
 }
 
-/// Per cell the median fewest steps and the median share of τ phase 2 kept, from the routes
-/// table.
+/// Per cell the median fewest steps and the median share of τ phase 2 kept, from the cells'
+/// routes table (`<experiment>.route_cells.csv`).
 fn route_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> crate::Result<()> {
-    let routes = crate::tables::routes::routes_path(results, name);
-    if routes.exists() {
-        let routes = crate::tables::routes::read_routes(&routes)?;
-        let cells = crate::tables::distinct(routes.iter().map(|r| r.cell.as_str()));
-        for cell in cells {
-            let of = || routes.iter().filter(|r| r.cell == cell);
-            let mut fewest: Vec<f64> = of().map(|r| r.fewest_steps as f64).collect();
-            let mut left: Vec<f64> = of().map(|r| r.tau_left()).collect();
-            let fewest = crate::stats::median(&mut fewest);
-            let left = crate::stats::median(&mut left);
-            def_res(
-                s,
-                name,
-                &format!("{cell}:routes:fewest"),
-                &format!("{fewest:.0}"),
-            );
-            def_res(
-                s,
-                name,
-                &format!("{cell}:routes:tauleft"),
-                &format!("{:.0}", left * 100.0),
-            );
+    let path = crate::tables::routes::route_cells_path(results, name);
+    if path.exists() {
+        let cells: Vec<crate::tables::routes::RouteCell> = crate::record::read_records(&path)?;
+        for c in &cells {
+            let cell = &c.cell;
+            let fewest = format!("{:.0}", c.fewest_steps);
+            def_res(s, name, &format!("{cell}:routes:fewest"), &fewest);
+            let left = format!("{:.0}", c.tau_left * 100.0);
+            def_res(s, name, &format!("{cell}:routes:tauleft"), &left);
         }
     }
     Ok(())

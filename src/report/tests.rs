@@ -93,8 +93,12 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
         fewest_steps: 62,
     };
     crate::record::write_records(
-        &crate::tables::routes::routes_path(dir.path(), "m"),
-        &[route(0, 400, 100), route(1, 400, 120), route(2, 300, 90)],
+        &crate::tables::routes::route_cells_path(dir.path(), "m"),
+        &crate::tables::routes::route_cells(&[
+            route(0, 400, 100),
+            route(1, 400, 120),
+            route(2, 300, 90),
+        ]),
     )
     .unwrap();
     let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
@@ -151,8 +155,8 @@ fn the_report_groups_rows_whatever_their_order() {
     )
     .unwrap();
     crate::record::write_records(
-        &crate::tables::routes::routes_path(dir.path(), "m"),
-        &interleaved.map(|(n, s)| route(n, s)),
+        &crate::tables::routes::route_cells_path(dir.path(), "m"),
+        &crate::tables::routes::route_cells(&interleaved.map(|(n, s)| route(n, s))),
     )
     .unwrap();
     let tex = extra_numbers_tex(&exp, dir.path()).unwrap();
@@ -198,13 +202,14 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         successes: u64::from(chain.is_some()),
         fewest_steps: fewest,
     };
+    let cells = |routes: &[Route]| crate::tables::routes::route_cells(routes);
     let tex = routes_numbers_tex(
         "x",
-        &[
+        &cells(&[
             route("a", Some(110.0), 440, 100),
             route("b", Some(120.0), 600, 100),
             route("b", None, 600, 100),
-        ],
+        ]),
     );
     for (key, value) in [
         ("runs", "2"),
@@ -219,13 +224,16 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         let line = format!("\\csname res:x:routes:{key}\\endcsname{{{value}}}");
         assert!(tex.contains(&line), "{key}: {tex}");
     }
-    assert_eq!(routes_numbers_tex("x", &[route("a", None, 1, 1)]), "");
+    assert_eq!(
+        routes_numbers_tex("x", &cells(&[route("a", None, 1, 1)])),
+        ""
+    );
     // A shortened τ: phase 2 worked on 440 steps, phase 1's τ had 880.
     let shortened = crate::tables::routes::Route {
         tau_steps: 880,
         ..route("a", Some(110.0), 440, 100)
     };
-    let tex = routes_numbers_tex("x", &[shortened]);
+    let tex = routes_numbers_tex("x", &cells(&[shortened]));
     assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");
     assert!(
         tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"),

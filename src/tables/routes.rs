@@ -128,3 +128,67 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
 pub fn read_routes(path: &Path) -> Result<Vec<Route>> {
     crate::record::read_records(path)
 }
+
+/// One line of `<results>/tables/<experiment>.route_cells.csv`: a cell's routes summarised over
+/// its runs, what the report quotes (it reads this table and aggregates nothing).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RouteCell {
+    /// Cell id.
+    pub cell: String,
+    /// Runs with a route.
+    pub runs: u64,
+    /// Of them, runs with a successful evaluation episode (a chain's path).
+    pub chain_runs: u64,
+    /// Of those, runs whose chain's path is shorter than the τ phase 2 worked on.
+    pub shorter: u64,
+    /// Median of the fewest steps from s_0 over the runs.
+    pub fewest_steps: f64,
+    /// Median share of phase 1's τ that phase 2 worked on ([`Route::tau_left`]).
+    pub tau_left: f64,
+    /// Median chain's path over the fewest steps ([`Route::chain_over_fewest`]; empty without
+    /// a chain's path).
+    pub chain_over_fewest: Option<f64>,
+    /// Median τ phase 2 worked on over the chain's path ([`Route::phase2_tau_over_chain`]).
+    pub phase2_tau_over_chain: Option<f64>,
+    /// Median phase 1's τ over the chain's path ([`Route::phase1_tau_over_chain`]).
+    pub phase1_tau_over_chain: Option<f64>,
+}
+
+/// `<results>/tables/<experiment>.route_cells.csv`.
+pub fn route_cells_path(results: &Path, experiment: &str) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.route_cells.csv"))
+}
+
+/// Each cell's [`RouteCell`] from the routes table, cells in the order they first appear
+/// (whatever the rows' order).
+pub fn route_cells(routes: &[Route]) -> Vec<RouteCell> {
+    super::distinct(routes.iter().map(|r| r.cell.as_str()))
+        .into_iter()
+        .map(|cell| {
+            let runs: Vec<&Route> = routes.iter().filter(|r| r.cell == cell).collect();
+            let median = |v: Vec<f64>| -> Option<f64> {
+                let mut v = v;
+                (!v.is_empty()).then(|| crate::stats::median(&mut v))
+            };
+            let of =
+                |f: fn(&Route) -> Option<f64>| median(runs.iter().filter_map(|r| f(r)).collect());
+            RouteCell {
+                cell: cell.to_string(),
+                runs: runs.len() as u64,
+                chain_runs: runs.iter().filter(|r| r.chain_steps.is_some()).count() as u64,
+                shorter: runs
+                    .iter()
+                    .filter(|r| r.chain_steps.is_some_and(|c| c < r.phase2_tau_steps as f64))
+                    .count() as u64,
+                fewest_steps: median(runs.iter().map(|r| r.fewest_steps as f64).collect())
+                    .unwrap_or(f64::NAN),
+                tau_left: median(runs.iter().map(|r| r.tau_left()).collect()).unwrap_or(f64::NAN),
+                chain_over_fewest: of(Route::chain_over_fewest),
+                phase2_tau_over_chain: of(Route::phase2_tau_over_chain),
+                phase1_tau_over_chain: of(Route::phase1_tau_over_chain),
+            }
+        })
+        .collect()
+}
