@@ -9,6 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::experiment::{Experiment, RawRow};
+use crate::tables::statistics::STATISTICS;
 use crate::tables::{cell_stats, CellStats};
 use polars::prelude::*;
 
@@ -134,26 +135,19 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             num(name, i)?.ok_or_else(|| err(exp, format!("{}: no `{name}`", c.id)))
         };
         let (n, k) = (get("n")? as u64, get("successes")? as u64);
-        out.push(CellStats {
-            steps_median: get("steps_median")?,
-            steps_q1: get("steps_q1")?,
-            steps_q3: get("steps_q3")?,
-            steps_min: get("steps_min")?,
-            steps_max: get("steps_max")?,
-            solved_steps_median: num("solved_steps_median", i)?,
-            // Null paper steps count nothing; the paper's figure decides whether there is one.
-            solved_within_paper: match c.paper_steps {
-                Some(_) => Some(get("solved_within_paper")? as u64),
-                None => None,
-            },
-            skills_median: get("skills_median")?,
-            success_rate_median: get("success_rate_median")?,
-            budget: get("budget")? as u64,
-            // polars' own interval: `same` checks it against the plain one.
-            wilson_lo: get("wilson_lo")?,
-            wilson_hi: get("wilson_hi")?,
-            ..CellStats::counted(exp, c, k, n)
-        });
+        // Every declared statistic polars computes, by its column's name (polars' own Wilson
+        // interval among them: `same` checks it against the plain one).
+        let mut stats = CellStats::counted(exp, c, k, n);
+        for stat in STATISTICS {
+            if grouped.column(stat.column).is_ok() {
+                (stat.set)(&mut stats, num(stat.column, i)?);
+            }
+        }
+        // Null paper steps count nothing; the paper's figure decides whether there is one.
+        if c.paper_steps.is_none() {
+            stats.solved_within_paper = None;
+        }
+        out.push(stats);
     }
     let plain = cell_stats(exp, rows);
     if !same(&out, &plain) {
@@ -172,13 +166,13 @@ fn same(a: &[CellStats], b: &[CellStats]) -> bool {
     a.len() == b.len()
         && a.iter().zip(b).all(|(x, y)| {
             x.cell == y.cell
-                && crate::tables::statistics::STATISTICS.iter().all(|stat| {
-                    match ((stat.value)(x), (stat.value)(y)) {
+                && STATISTICS
+                    .iter()
+                    .all(|stat| match ((stat.value)(x), (stat.value)(y)) {
                         (Some(p), Some(q)) => close(p, q),
                         (None, None) => true,
                         _ => false,
-                    }
-                })
+                    })
         })
 }
 
