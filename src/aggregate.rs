@@ -58,6 +58,9 @@ pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
             steps()
                 .quantile(lit(0.75), QuantileMethod::Linear)
                 .alias("steps_q3"),
+            (steps().quantile(lit(0.75), QuantileMethod::Linear)
+                - steps().quantile(lit(0.25), QuantileMethod::Linear))
+            .alias("steps_iqr"),
             steps().min().alias("steps_min"),
             steps().max().alias("steps_max"),
             steps()

@@ -18,6 +18,7 @@ fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
         steps_median: 1.0,
         steps_q1: 1.0,
         steps_q3: 1.0,
+        steps_iqr: 0.0,
         steps_min: 1.0,
         steps_max: 1.0,
         solved_steps_median: None,

@@ -320,6 +320,7 @@ mod tests {
             steps_median,
             steps_q1: steps_median,
             steps_q3: steps_median,
+            steps_iqr: 0.0,
             steps_min: steps_median,
             steps_max: steps_median,
             solved_steps_median: solved,

@@ -54,6 +54,8 @@ pub struct CellStats {
     pub steps_q1: f64,
     /// Third quartile.
     pub steps_q3: f64,
+    /// Interquartile range: `steps_q3 − steps_q1`.
+    pub steps_iqr: f64,
     /// Fewest.
     pub steps_min: f64,
     /// Most.
@@ -94,6 +96,7 @@ impl CellStats {
             steps_median: 0.0,
             steps_q1: 0.0,
             steps_q3: 0.0,
+            steps_iqr: 0.0,
             steps_min: 0.0,
             steps_max: 0.0,
             solved_steps_median: None,
@@ -351,10 +354,12 @@ pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
                 .collect();
             let mut skills: Vec<f64> = runs.iter().map(|r| r.skills as f64).collect();
             let mut rate: Vec<f64> = runs.iter().map(|r| r.success_rate as f64).collect();
+            let (q1, q3) = (quantile(&mut steps, 0.25), quantile(&mut steps, 0.75));
             Some(CellStats {
                 steps_median: median(&mut steps),
-                steps_q1: quantile(&mut steps, 0.25),
-                steps_q3: quantile(&mut steps, 0.75),
+                steps_q1: q1,
+                steps_q3: q3,
+                steps_iqr: q3 - q1,
                 steps_min: steps[0],
                 steps_max: steps[steps.len() - 1],
                 solved_within_paper: c

@@ -89,6 +89,13 @@ pub const STATISTICS: &[Statistic] = &[
         set: |s, v| s.steps_q3 = v.unwrap_or(f64::NAN),
     },
     Statistic {
+        column: "steps_iqr",
+        res: Some("iqr"),
+        print: |s| human_steps(s.steps_iqr),
+        value: |s| Some(s.steps_iqr),
+        set: |s, v| s.steps_iqr = v.unwrap_or(f64::NAN),
+    },
+    Statistic {
         column: "solved_steps_median",
         res: Some("solvedmedian"),
         print: |s| s.solved_steps_median.map_or("--".into(), human_steps),
