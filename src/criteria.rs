@@ -84,12 +84,26 @@ pub struct Criteria {
     pub at_0_95: u64,
     /// Complete chains at 100 %.
     pub at_1_00: u64,
+    /// Complete chains at 0 % (a chain built whole that never reaches the target).
+    pub at_zero: u64,
 }
 
 impl Criteria {
     /// The counts at [`THRESHOLDS`], in order.
     pub fn at(&self) -> [u64; 4] {
         [self.at_0_50, self.at_0_90, self.at_0_95, self.at_1_00]
+    }
+
+    /// Runs not solved: a run is solved exactly when its chain is complete and reaches the
+    /// target from at least 95 % of its episodes ([`crate::stats::solved`]; a complete chain is
+    /// one phase 2 did not stop), the count at 95 %.
+    pub fn unsolved(&self) -> u64 {
+        self.n - self.at_0_95
+    }
+
+    /// Runs whose chain is not complete (phase 2 stopped early).
+    pub fn incomplete(&self) -> u64 {
+        self.n - self.complete
     }
 }
 
@@ -135,6 +149,7 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
                     at_0_90: 0,
                     at_0_95: 0,
                     at_1_00: 0,
+                    at_zero: 0,
                 });
                 out.len() - 1
             }
@@ -147,6 +162,7 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
         c.at_0_90 += solved_at(THRESHOLDS[1]);
         c.at_0_95 += solved_at(THRESHOLDS[2]);
         c.at_1_00 += solved_at(THRESHOLDS[3]);
+        c.at_zero += u64::from(r.complete && r.success_rate <= 0.0);
     }
     out
 }
@@ -163,6 +179,11 @@ pub fn criteria_path(results: &Path, experiment: &str) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.criteria.csv"))
+}
+
+/// Reads `<experiment>.criteria.csv`.
+pub fn read_criteria(path: &Path) -> crate::Result<Vec<Criteria>> {
+    crate::record::read_records(path)
 }
 
 /// Reads `<experiment>.chains.csv`.

@@ -370,9 +370,9 @@ pub fn render_all(
         let text = report::cells_table_tex(stats);
         write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         files.push(path);
-        let chains = crate::criteria::chains_path(results, &exp.name);
-        if chains.exists() {
-            let criteria = crate::criteria::criteria(&crate::criteria::read_chains(&chains)?);
+        let criteria = crate::criteria::criteria_path(results, &exp.name);
+        if criteria.exists() {
+            let criteria = crate::criteria::read_criteria(&criteria)?;
             let path = tex_dir.join(format!("{}_criteria.tex", exp.name));
             let text = report::criteria_tex(&criteria);
             write_atomic(&path, |w| w.write_all(text.as_bytes()))?;

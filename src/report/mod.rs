@@ -162,8 +162,9 @@ fn method_settings_tex(s: &mut String, exp: &crate::experiment::Experiment) -> c
     Ok(())
 }
 
-/// Each run's chain success `\res{<experiment>:<cell>:s<seed>:chain}` and per cell the counts
-/// of unsolved runs, incomplete chains and complete chains at 0 %, from the chains table.
+/// Each run's chain success `\res{<experiment>:<cell>:s<seed>:chain}`, from the chains table,
+/// and per cell the counts of unsolved runs, incomplete chains and complete chains at 0 %,
+/// from the criteria table.
 fn chain_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> crate::Result<()> {
     let chains = crate::criteria::chains_path(results, name);
     if chains.exists() {
@@ -177,18 +178,16 @@ fn chain_numbers_tex(s: &mut String, name: &str, results: &std::path::Path) -> c
                 &percent,
             );
         }
-        let cells = crate::tables::distinct(runs.iter().map(|r| r.cell.as_str()));
-        for cell in cells {
-            let of = || runs.iter().filter(move |r| r.cell == cell);
+    }
+    let criteria = crate::criteria::criteria_path(results, name);
+    if criteria.exists() {
+        for c in crate::criteria::read_criteria(&criteria)? {
             for (field, count) in [
-                ("unsolved", of().filter(|r| !r.solved).count()),
-                ("incomplete", of().filter(|r| !r.complete).count()),
-                (
-                    "zerochains",
-                    of().filter(|r| r.complete && r.success_rate <= 0.0).count(),
-                ),
+                ("unsolved", c.unsolved()),
+                ("incomplete", c.incomplete()),
+                ("zerochains", c.at_zero),
             ] {
-                def_res(s, name, &format!("{cell}:{field}"), &count.to_string());
+                def_res(s, name, &format!("{}:{field}", c.cell), &count.to_string());
             }
         }
     }

@@ -68,16 +68,18 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
         env_steps: 1000,
         paper_steps: None,
     };
+    let chains = [
+        run(1, 0.29),
+        run(4, 0.0),
+        ChainSuccess {
+            complete: true,
+            ..run(7, 0.0)
+        },
+    ];
+    crate::record::write_records(&crate::criteria::chains_path(dir.path(), "m"), &chains).unwrap();
     crate::record::write_records(
-        &crate::criteria::chains_path(dir.path(), "m"),
-        &[
-            run(1, 0.29),
-            run(4, 0.0),
-            ChainSuccess {
-                complete: true,
-                ..run(7, 0.0)
-            },
-        ],
+        &crate::criteria::criteria_path(dir.path(), "m"),
+        &crate::criteria::criteria(&chains),
     )
     .unwrap();
     let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
@@ -149,9 +151,11 @@ fn the_report_groups_rows_whatever_their_order() {
         fewest_steps: 62,
     };
     let interleaved = [(5, 0), (2, 0), (5, 1), (2, 1)];
+    let chains = interleaved.map(|(n, s)| chain(n, s));
+    crate::record::write_records(&crate::criteria::chains_path(dir.path(), "m"), &chains).unwrap();
     crate::record::write_records(
-        &crate::criteria::chains_path(dir.path(), "m"),
-        &interleaved.map(|(n, s)| chain(n, s)),
+        &crate::criteria::criteria_path(dir.path(), "m"),
+        &crate::criteria::criteria(&chains),
     )
     .unwrap();
     crate::record::write_records(
