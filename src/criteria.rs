@@ -181,9 +181,30 @@ pub fn criteria_path(results: &Path, experiment: &str) -> PathBuf {
         .join(format!("{experiment}.criteria.csv"))
 }
 
-/// Reads `<experiment>.criteria.csv`.
+/// Reads `<experiment>.criteria.csv`, each line's counts checked to nest (at 100 % ≤ at 95 %
+/// ≤ at 90 % ≤ at 50 % ≤ complete ≤ n, and at 0 % ≤ complete): a line that does not is an
+/// error naming the file and the cell, never a count the report subtracts from.
 pub fn read_criteria(path: &Path) -> crate::Result<Vec<Criteria>> {
-    crate::record::read_records(path)
+    let lines: Vec<Criteria> = crate::record::read_records(path)?;
+    for c in &lines {
+        let chain = [c.at_1_00, c.at_0_95, c.at_0_90, c.at_0_50, c.complete, c.n];
+        if chain.windows(2).any(|w| w[0] > w[1]) || c.at_zero > c.complete {
+            return Err(crate::Error::parse(
+                path,
+                format!(
+                    "cell {}: counts that do not nest (n {}, complete {}, at 0.5/0.9/0.95/1.0 \
+                     {:?}, at 0 {}): each criterion counts a subset of the one before; run \
+                     `pbcs aggregate` again",
+                    c.cell,
+                    c.n,
+                    c.complete,
+                    c.at(),
+                    c.at_zero
+                ),
+            ));
+        }
+    }
+    Ok(lines)
 }
 
 /// Reads `<experiment>.chains.csv`.

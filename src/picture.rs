@@ -150,8 +150,9 @@ pub struct RunPicture<'a> {
 }
 
 /// The drawing step a run's `write` calls with the run's picture and the folder it is
-/// writing (inside the folder's staging, so that the pictures land with the data, all or
-/// none): [`crate::plot::draw_run`], what the commands pass, or [`no_pictures`]. Runs compute
+/// writing (for `explore`, `train` and `run`, inside the run folder's staging, so that the
+/// pictures land with the data, all or none; `eval` writes its files beside a chain, one by
+/// one): [`crate::plot::draw_run`], what the commands pass, or [`no_pictures`]. Runs compute
 /// and write data; this is where drawing comes in, from the layer that draws.
 pub type Draw<'f> = &'f dyn Fn(&RunPicture, &Path) -> Result<()>;
 

@@ -264,8 +264,8 @@ pub fn render(
     } else {
         (crate::claims::claims(&specs, &named)?, Vec::new())
     };
-    // Every figure and LaTeX file is drawn first and then moved into place: a failure (a
-    // missing picture file, say) leaves both folders as they were.
+    // Every figure and LaTeX file is drawn first and then moved into place: a failure while
+    // drawing (a missing picture file, say) leaves both folders' files as they were.
     let files = crate::record::write_all_or_none([figures, tex], |[figures, tex]| {
         let mut files = render_all(&tables, &claims, results, figures, tex)?;
         files.extend(render_settings(

@@ -173,9 +173,10 @@ pub fn write_run_folder(out: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> R
 /// Writes a set of generated files into the folders `dirs`, all of them or none: `fill` is
 /// handed, for each folder, a temporary folder inside it (`.writing-*`) and writes there,
 /// returning the files it wrote; only when it succeeds is every file it left there moved to
-/// the same name in the real folder. A failure on the way (missing data, a full disk) leaves
-/// every folder as it was, never half old and half new files (`pbcs figures`: the figures and
-/// the report's LaTeX). Returns `fill`'s files at their final paths.
+/// the same name in the real folder. A failure while `fill` draws and writes (missing data, a
+/// full disk) leaves every folder's files as they were, never half old and half new (`pbcs
+/// figures`: the figures and the report's LaTeX); the moves after it are renames within one
+/// file system, each atomic, not atomic as a set. Returns `fill`'s files at their final paths.
 ///
 /// ```
 /// use pbcs::record::write_all_or_none;

@@ -172,6 +172,39 @@ fn the_report_groups_rows_whatever_their_order() {
     }
 }
 
+/// A summary table the report reads is checked before it is trusted: missing beside the runs
+/// it summarises (a folder aggregated before it existed) is an error saying to aggregate
+/// again, and criteria counts that do not nest are an error naming the cell (the report
+/// subtracts them).
+#[test]
+fn the_report_refuses_a_missing_or_inconsistent_summary() {
+    use crate::criteria::{criteria_path, read_criteria};
+    let exp = Experiment::of_job("m", &Default::default(), &[2, 5], 10).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // A chains table (its header is enough) without the criteria table beside it.
+    std::fs::create_dir_all(dir.path().join("tables")).unwrap();
+    std::fs::write(
+        crate::criteria::chains_path(dir.path(), "m"),
+        "experiment,cell,method,label,maze,seed,complete,success_rate,solved,env_steps,paper_steps\n",
+    )
+    .unwrap();
+    let err = extra_numbers_tex(&exp, dir.path()).unwrap_err().to_string();
+    assert!(
+        err.contains("m.criteria.csv") && err.contains("pbcs aggregate"),
+        "{err}"
+    );
+    let path = criteria_path(dir.path(), "m");
+    std::fs::write(
+        &path,
+        "experiment,cell,method,label,maze,n,complete,at_0_50,at_0_90,at_0_95,at_1_00,at_zero\n\
+         m,m-maze5,m,m,5,10,10,9,9,12,8,0\n",
+    )
+    .unwrap();
+    let err = read_criteria(&path).unwrap_err().to_string();
+    assert!(err.contains("m-maze5") && err.contains("nest"), "{err}");
+    assert!(extra_numbers_tex(&exp, dir.path()).is_err());
+}
+
 /// The code's constants as the report quotes them.
 #[test]
 fn the_code_constants_are_quoted_in_their_units() {

@@ -3,9 +3,9 @@
 //! [`PbcsRun`]), and whose `write` puts the outcome into a folder (CSVs, the picture's data,
 //! the saved chain) and hands its picture to the drawing step it is given
 //! ([`crate::picture::Draw`]: [`crate::plot::draw_run`] draws PNG and SVG): runs compute and
-//! write data, and nothing here draws (tests/layout.rs holds runs/ to it). [`run_explore`], [`run_train`] and [`run_pbcs`] claim a folder, compute and write:
-//! the CLI's subcommands are thin wrappers around them, so tests exercise exactly what users
-//! run; the sweep ([`crate::experiment::run_cell_seed`]) computes and keeps only its raw files.
+//! write data, and nothing here draws (tests/layout.rs holds runs/ to it). [`run_explore`],
+//! [`run_train`] and [`run_pbcs`] claim a folder, compute and write: the CLI's subcommands are
+//! thin wrappers around them, so tests exercise exactly what users run; the sweep ([`crate::experiment::run_cell_seed`]) computes and keeps only its raw files.
 //!
 //! Result files are CSV (deterministic: same config, same bytes) written atomically; the
 //! wall-clock time of a job lives beside them in `timing.toml`, never inside a CSV.

@@ -4,9 +4,10 @@
 //! ([`crate::report::numbers_tex`]), polars' aggregation (which fills each column it computes by
 //! name) and its check against the plain one read this list; a test holds it to the table's
 //! columns, so no column is added to the table without its declaration. Adding a statistic:
-//! its field in [`CellStats`], its declaration here, its computation in
-//! [`crate::tables::cell_stats`], and polars' expression for it (the oracle's own computation,
-//! in `aggregate::group_cells`).
+//! its field in [`CellStats`] (and its zero in [`CellStats::counted`] and in the tests that
+//! build a `CellStats` whole), its declaration here, its computation in
+//! [`crate::tables::cell_stats`], and polars' expression for it (the second computation, in
+//! `aggregate::group_cells`).
 
 use super::CellStats;
 use crate::fmt::human_steps;

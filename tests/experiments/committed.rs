@@ -316,3 +316,31 @@ fn the_sac_comparisons_ddpg_arm_reproduces_the_committed_grids() {
         }
     }
 }
+
+/// The committed criteria tables count what the chains tables hold, and their count at 95 %
+/// is the solved rule's (`Criteria::unsolved`, which the report quotes, subtracts it from n).
+#[test]
+fn the_criteria_tables_agree_with_the_chains_and_the_solved_rule() {
+    use pbcs::criteria::{chains_path, criteria, criteria_path, read_chains, read_criteria};
+    let mut checked = 0;
+    for entry in std::fs::read_dir("results/tables").unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(exp) = name.strip_suffix(".chains.csv") else {
+            continue;
+        };
+        let results = Path::new("results");
+        let chains = read_chains(&chains_path(results, exp)).unwrap();
+        let committed = read_criteria(&criteria_path(results, exp)).unwrap();
+        assert_eq!(committed, criteria(&chains), "{exp}");
+        for c in &committed {
+            let unsolved = chains
+                .iter()
+                .filter(|r| r.cell == c.cell && !r.solved)
+                .count();
+            assert_eq!(c.unsolved(), unsolved as u64, "{exp} {}", c.cell);
+        }
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked} chains tables");
+}

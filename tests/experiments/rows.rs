@@ -345,8 +345,10 @@ fn figures_are_written_all_or_none() {
     for table in [
         "rooms.csv",
         "rooms.chains.csv",
+        "rooms.criteria.csv",
         "three_rooms.csv",
         "three_rooms.chains.csv",
+        "three_rooms.criteria.csv",
     ] {
         let from = Path::new("results/tables").join(table);
         std::fs::copy(from, results.join("tables").join(table)).unwrap();

@@ -219,7 +219,7 @@ fn vanilla_line(
         let stops_at_solving = !protocol
             || evals[..evals.len().saturating_sub(1)]
                 .iter()
-                .all(|e| e.success < crate::runs::SOLVED_AT);
+                .all(|e| !crate::stats::solved(false, e.success));
         let agrees = in_order
             && stops_at_solving
             && evals
