@@ -20,18 +20,18 @@ fn err(exp: &Experiment, e: impl std::fmt::Display) -> Error {
     }
 }
 
-/// The raw rows as a polars DataFrame (one row per run), with the paper's steps for the run's
+/// The raw rows as a polars DataFrame (one row per run): the run's cell as its index in the
+/// experiment's cells (null for a row of no cell of `exp`), and the paper's steps for that
 /// cell (null where the paper gives none).
 pub fn raw_frame(exp: &Experiment, rows: &[RawRow]) -> PolarsResult<DataFrame> {
+    let index = |r: &RawRow| exp.cells.iter().position(|c| c.id == r.cell);
     let paper = |r: &RawRow| {
-        exp.cells
-            .iter()
-            .find(|c| c.id == r.cell)
-            .and_then(|c| c.paper_steps)
+        index(r)
+            .and_then(|i| exp.cells[i].paper_steps)
             .map(|p| p as f64)
     };
     df!(
-        "cell" => rows.iter().map(|r| r.cell.clone()).collect::<Vec<_>>(),
+        "cell" => rows.iter().map(|r| index(r).map(|i| i as u32)).collect::<Vec<_>>(),
         "paper_steps" => rows.iter().map(paper).collect::<Vec<_>>(),
         "seed" => rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
         "solved" => rows.iter().map(|r| f64::from(u8::from(r.solved))).collect::<Vec<_>>(),
@@ -42,7 +42,7 @@ pub fn raw_frame(exp: &Experiment, rows: &[RawRow]) -> PolarsResult<DataFrame> {
     )
 }
 
-/// Per-cell aggregates of the raw frame, one row per cell (sorted by cell id).
+/// Per-cell aggregates of the raw frame, one row per cell (sorted by cell index).
 pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
     let steps = || col("env_steps");
     frame
@@ -121,7 +121,7 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
         .map_err(|e| err(exp, e))?;
     let cells = grouped
         .column("cell")
-        .and_then(|c| c.str().cloned())
+        .and_then(|c| c.u32().cloned())
         .map_err(|e| err(exp, e))?;
     let num = |name: &str, i: usize| -> Result<Option<f64>> {
         grouped
@@ -130,8 +130,8 @@ pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
             .map_err(|e| err(exp, e))
     };
     let mut out = Vec::new();
-    for c in &exp.cells {
-        let Some(i) = (0..grouped.height()).find(|&i| cells.get(i) == Some(c.id.as_str())) else {
+    for (index, c) in exp.cells.iter().enumerate() {
+        let Some(i) = (0..grouped.height()).find(|&i| cells.get(i) == Some(index as u32)) else {
             continue;
         };
         let get = |name: &str| -> Result<f64> {

@@ -13,7 +13,7 @@
 //! use pbcs::criteria::{criteria, ChainSuccess};
 //!
 //! let run = |seed, complete, success_rate| ChainSuccess {
-//!     experiment: "t".into(), cell: "pbcs-maze2".into(), method: "pbcs".into(),
+//!     experiment: "t".into(), cell: "pbcs-maze2".parse().unwrap(), method: "pbcs".parse().unwrap(),
 //!     label: "PBCS".into(), site: pbcs::experiment::Site::Maze(2), seed, complete, success_rate,
 //!     solved: complete && success_rate >= 0.95, env_steps: 1000, paper_steps: Some(321_000),
 //! };
@@ -21,7 +21,7 @@
 //! assert_eq!((c.n, c.complete, c.at_0_50, c.at_0_90, c.at_0_95, c.at_1_00), (3, 2, 2, 2, 1, 1));
 //! ```
 
-use crate::experiment::{Experiment, Kind, RawRow};
+use crate::experiment::{CellKey, Experiment, Kind, Method, RawRow};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -35,9 +35,9 @@ pub struct ChainSuccess {
     /// Experiment name.
     pub experiment: String,
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Method label.
     pub label: String,
     /// Maze size N or another environment's name (column `maze`).
@@ -64,9 +64,9 @@ pub struct Criteria {
     /// Experiment name.
     pub experiment: String,
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Method label.
     pub label: String,
     /// Maze size N or another environment's name (column `maze`).
@@ -114,11 +114,11 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
         .filter(|r| r.kind == Kind::Pbcs)
         .map(|r| ChainSuccess {
             experiment: r.experiment.clone(),
-            cell: r.cell.clone(),
-            method: r.method.clone(),
+            cell: r.cell,
+            method: r.method,
             label: exp
-                .cell(&r.cell)
-                .map_or_else(|_| r.method.clone(), |c| c.label.clone()),
+                .cell_at(r.cell)
+                .map_or_else(|_| r.method.to_string(), |c| c.label.clone()),
             site: r.site,
             seed: r.seed,
             complete: r.failure.is_none(),
@@ -139,8 +139,8 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
             None => {
                 out.push(Criteria {
                     experiment: r.experiment.clone(),
-                    cell: r.cell.clone(),
-                    method: r.method.clone(),
+                    cell: r.cell,
+                    method: r.method,
                     label: r.label.clone(),
                     site: r.site,
                     n: 0,
@@ -220,7 +220,8 @@ pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
 /// use pbcs::criteria::{profile, ChainSuccess};
 ///
 /// let run = |steps, solved| ChainSuccess {
-///     experiment: "t".into(), cell: "c".into(), method: "m".into(), label: "m".into(),
+///     experiment: "t".into(), cell: "m-maze2".parse().unwrap(), method: "m".parse().unwrap(),
+///     label: "m".into(),
 ///     site: pbcs::experiment::Site::Maze(2), seed: 0, complete: true, success_rate: 1.0,
 ///     solved, env_steps: steps,
 ///     paper_steps: Some(100),

@@ -333,7 +333,7 @@ mod tests {
     /// `solved` committed / fresh per seed, and whether the bytes matched.
     fn check(seeds: &[(bool, bool, bool)], committed: &[&str], now: &str) -> CellCheck {
         CellCheck {
-            cell: "pbcs-maze2".into(),
+            cell: "pbcs-maze2".parse().unwrap(),
             seeds: seeds
                 .iter()
                 .enumerate()

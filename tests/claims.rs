@@ -9,7 +9,7 @@
 //! picture fails the test and is looked at.
 
 use pbcs::claims::{beats, fails, solves, Claim, Verdict};
-use pbcs::experiment::{read_raw, Experiment};
+use pbcs::experiment::{read_raw, Experiment, Method};
 use pbcs::tables::{cell_stats, read_table, table_path, CellStats};
 use std::path::Path;
 
@@ -53,7 +53,7 @@ fn table(name: &str) -> Vec<CellStats> {
 
 fn cell<'a>(t: &'a [CellStats], method: &str, maze: usize) -> &'a CellStats {
     t.iter()
-        .find(|s| s.method == method && s.site == pbcs::experiment::Site::Maze(maze))
+        .find(|s| s.method.as_str() == method && s.site == pbcs::experiment::Site::Maze(maze))
         .unwrap_or_else(|| panic!("no cell {method}-maze{maze}"))
 }
 
@@ -93,7 +93,7 @@ fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
             );
         }
         for s in &committed {
-            let cell = exp.cell(&s.cell).unwrap();
+            let cell = exp.cell_at(s.cell).unwrap();
             let seeds = exp.seeds_of(cell).len() as u64;
             assert!(
                 s.n == seeds || (exp.in_progress && s.n < seeds),
@@ -197,7 +197,7 @@ fn every_unsolved_pbcs_run_built_a_complete_chain_that_failed_its_evaluation() {
     let rows = read_raw(&exp, Path::new("results")).unwrap();
     let unsolved: Vec<_> = rows
         .iter()
-        .filter(|r| r.method == "pbcs" && !r.solved)
+        .filter(|r| r.method.as_str() == "pbcs" && !r.solved)
         .collect();
     assert!(
         !unsolved.is_empty(),
@@ -333,7 +333,7 @@ fn gamma_study_lower_gamma_and_the_argmax_actor_help_on_maze_2_only() {
     let g = table("gamma");
     for s in g
         .iter()
-        .filter(|s| s.site.size() == Some(3) || s.method.starts_with("g099"))
+        .filter(|s| s.site.size() == Some(3) || s.method.as_str().starts_with("g099"))
     {
         assert!(
             fails(s),
@@ -380,7 +380,7 @@ fn unseen_states_ball_starts_beat_exact_starts() {
         exact.successes,
         exact.n
     );
-    for b in u.iter().filter(|s| s.method == "ball") {
+    for b in u.iter().filter(|s| s.method.as_str() == "ball") {
         let e = cell(&u, "exact", b.site.size().unwrap());
         assert!(b.successes > e.successes && !beats(e, b), "maze {}", b.site);
     }
@@ -390,7 +390,7 @@ fn unseen_states_ball_starts_beat_exact_starts() {
     for r in read_raw(&exp, Path::new("results"))
         .unwrap()
         .iter()
-        .filter(|r| r.method == "exact")
+        .filter(|r| r.method.as_str() == "exact")
     {
         let id = format!("{} seed {}", r.cell, r.seed);
         assert_eq!(r.failure, None, "{id}");
@@ -432,7 +432,13 @@ fn the_fast_preset_solves_the_development_grid_at_a_cost_near_linear_in_the_path
         exponent > 1.0 && exponent <= 1.2,
         "steps ∝ L^{exponent} — update the report"
     );
-    let l = |cell: &str| paths.iter().find(|p| p.cell == cell).unwrap().path_cells;
+    let l = |cell: &str| {
+        paths
+            .iter()
+            .find(|p| p.cell.to_string() == cell)
+            .unwrap()
+            .path_cells
+    };
     assert_eq!(l("fast-maze9"), l("fast_l2-maze6"));
     let (a, c) = (
         cell(&b, "fast", 9).steps_median,
@@ -519,10 +525,10 @@ fn the_claims_file_names_real_experiments_and_methods() {
             None,
         )
         .unwrap_or_else(|e| panic!("claim {}: {e}", c.id));
-        let methods: Vec<&str> = match &c.test {
+        let methods: Vec<Method> = match &c.test {
             ClaimTest::FailsEverywhere { method, .. }
             | ClaimTest::SolvesEverywhere { method }
-            | ClaimTest::StepsBelowPaper { method } => vec![method],
+            | ClaimTest::StepsBelowPaper { method } => vec![*method],
             ClaimTest::Beats {
                 method,
                 than,
@@ -537,14 +543,14 @@ fn the_claims_file_names_real_experiments_and_methods() {
                     c.id,
                     other.name
                 );
-                vec![method]
+                vec![*method]
             }
-            ClaimTest::Beats { method, than, .. } => vec![method, than],
-            ClaimTest::Pooled { methods } => methods.iter().map(|(m, _)| m.as_str()).collect(),
+            ClaimTest::Beats { method, than, .. } => vec![*method, *than],
+            ClaimTest::Pooled { methods } => methods.iter().map(|(m, _)| *m).collect(),
         };
         for m in methods {
             assert!(
-                exp.methods.iter().any(|(n, _)| n == m),
+                exp.methods.iter().any(|(n, _)| *n == m),
                 "claim {}: experiment {} has no method {m}",
                 c.id,
                 c.experiment

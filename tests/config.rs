@@ -243,7 +243,7 @@ fn epsilon_is_a_radius_in_cells() {
 fn enum_names_are_their_serde_names() {
     use pbcs::config::Preset;
     use pbcs::learner::td3::{ActorUpdate, Algo};
-    use pbcs::phase2::{EventKind, Failure, Variant};
+    use pbcs::phase2::{EventKind, Failure, StartMode, Variant};
     fn serde_name<T: serde::Serialize>(v: &T) -> String {
         #[derive(serde::Serialize)]
         struct Wrap<'a, T> {
@@ -271,6 +271,9 @@ fn enum_names_are_their_serde_names() {
         Failure::Budget,
     ] {
         pairs.push((f.name(), serde_name(&f)));
+    }
+    for s in [StartMode::Ball, StartMode::Exact, StartMode::Archive] {
+        pairs.push((s.into(), serde_name(&s)));
     }
     for k in [
         EventKind::Test,

@@ -39,7 +39,10 @@ fn at_our_threshold_the_criteria_are_the_tables_solved_counts() {
 #[test]
 fn the_table_under_other_criteria() {
     let (criteria, _) = committed("table");
-    let get = |cell: &str| criteria.iter().find(|c| c.cell == cell).unwrap();
+    let get = |cell: &str| {
+        let key: pbcs::experiment::CellKey = cell.parse().unwrap();
+        criteria.iter().find(|c| c.cell == key).unwrap()
+    };
     for n in [2, 5, 7, 10, 15] {
         let paper = get(&format!("pbcs-maze{n}"));
         assert_eq!(paper.complete, paper.n, "maze {n}");
@@ -57,7 +60,8 @@ fn the_profile_at_one_and_two_is_the_tables_solved_within_and_solved() {
     let tables = Path::new("results/tables");
     let runs = read_chains(&tables.join("table.chains.csv")).unwrap();
     let stats = read_table(&tables.join("table.csv")).unwrap();
-    for method in ["pbcs", "pbcs_fast", "pbcs_no_chaining"] {
+    for name in ["pbcs", "pbcs_fast", "pbcs_no_chaining"] {
+        let method: pbcs::experiment::Method = name.parse().unwrap();
         let own: Vec<_> = runs
             .iter()
             .filter(|r| r.method == method)
@@ -68,7 +72,7 @@ fn the_profile_at_one_and_two_is_the_tables_solved_within_and_solved() {
         let solved: u64 = cells.iter().map(|s| s.successes).sum();
         let p = pbcs::criteria::profile(&own, &[2.0]);
         assert_eq!(p[0], solved as f64 / n as f64, "{method}");
-        if method == "pbcs" {
+        if name == "pbcs" {
             let within: u64 = cells.iter().map(|s| s.solved_within_paper.unwrap()).sum();
             let p = pbcs::criteria::profile(&own, &[1.0]);
             assert_eq!(p[0], within as f64 / n as f64);

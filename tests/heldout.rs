@@ -49,8 +49,8 @@ fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
         .collect();
     let run = |cell: &str, label: &str, seed: u64, rate: f32| pbcs::criteria::ChainSuccess {
         experiment: "heldout".into(),
-        cell: cell.into(),
-        method: cell[..1].into(),
+        cell: cell.parse().unwrap(),
+        method: cell[..1].parse().unwrap(),
         label: label.into(),
         site: pbcs::experiment::Site::Maze(8),
         seed,
@@ -142,7 +142,7 @@ fn the_own_map_grid_runs_the_named_maps_jobs_on_its_map() {
         pointmaze: map,
         ..EnvSpec::named(EnvName::Pointmaze)
     };
-    let find = |exp: &Experiment, id: &str| exp.cells.iter().find(|c| c.id == id).unwrap().clone();
+    let find = |exp: &Experiment, id: &str| exp.cell(id).unwrap().clone();
     for (mine, theirs) in [
         (
             find(&own, "pbcs_pm-pointmaze"),
@@ -198,9 +198,9 @@ fn the_velocity_comparison_runs_the_grids_jobs_and_one_change_on_unused_seeds() 
         .flat_map(|e| e.cells.iter().flat_map(|c| e.seeds_of(c)))
         .collect();
     for g in &grid.cells {
-        let velocity_id = g.id.replace("pbcs_pm-", "pbcs_pm_velocity-");
-        let cell = |id: &str| cmp.cells.iter().find(|c| c.id == id).unwrap();
-        let (same, velocity) = (cell(&g.id), cell(&velocity_id));
+        let velocity_id = g.id.to_string().replace("pbcs_pm-", "pbcs_pm_velocity-");
+        let cell = |id: &str| cmp.cell(id).unwrap();
+        let (same, velocity) = (cell(&g.id.to_string()), cell(&velocity_id));
         assert_eq!(same.job, g.job, "{}: not the grid's job", g.id);
         let mut expected = pbcs_job(&g.job);
         expected.phase2.ball = BallMetric::PositionVelocity { scale: 0.1 };
@@ -261,7 +261,7 @@ fn the_sac_skill_comparison_runs_the_grids_jobs_with_only_the_learner_changed() 
          a new one (and say so); do not update this hash.",
         reg.preset, reg.date
     );
-    let find = |exp: &Experiment, id: &str| exp.cells.iter().find(|c| c.id == id).unwrap().clone();
+    let find = |exp: &Experiment, id: &str| exp.cell(id).unwrap().clone();
     let pbcs_job = |j: &Job| match j {
         Job::Pbcs(j) => j.clone(),
         _ => panic!("not a PBCS cell"),
@@ -311,7 +311,7 @@ fn the_her_grid_runs_its_base_job_by_sb3s_protocol_with_two_learners() {
          (and say so); do not update this hash.",
         reg.preset, reg.date
     );
-    let job = |id: &str| match &exp.cells.iter().find(|c| c.id == id).unwrap().job {
+    let job = |id: &str| match &exp.cell(id).unwrap().job {
         Job::Vanilla(j) => j.clone(),
         _ => panic!("{id}: not a vanilla cell"),
     };
@@ -351,5 +351,8 @@ fn the_her_grid_runs_its_base_job_by_sb3s_protocol_with_two_learners() {
         assert_eq!(td3, sac, "{}: more than the learner differs", env.name());
     }
     assert_eq!(exp.cells.len(), 6);
-    assert_eq!(reg.paired, Some(["sac_her".into(), "td3_her".into()]));
+    assert_eq!(
+        reg.paired,
+        Some(["sac_her".parse().unwrap(), "td3_her".parse().unwrap()])
+    );
 }

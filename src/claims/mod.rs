@@ -9,9 +9,10 @@
 //! is *inconclusive*.
 
 use crate::error::{Error, Result};
-use crate::experiment::Site;
+use crate::experiment::{Method, Site};
 use crate::fmt::human_steps;
 use crate::tables::CellStats;
+pub use rules::{beats, exact_better, exact_p, fails, solves, Counts, Pooled, EXACT_TEST_LEVEL};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -61,36 +62,8 @@ pub struct Claim {
     pub verdict: Verdict,
 }
 
-/// Fails reliably: Wilson upper end below 1/2.
-pub fn fails(s: &CellStats) -> bool {
-    s.wilson_hi < 0.5
-}
-
-/// Solves reliably: Wilson lower end above 1/2.
-pub fn solves(s: &CellStats) -> bool {
-    s.wilson_lo > 0.5
-}
-
-/// `a` beats `b`: the intervals are disjoint with `a` above.
-pub fn beats(a: &CellStats, b: &CellStats) -> bool {
-    a.wilson_lo > b.wilson_hi
-}
-
-/// The significance level of Fisher's exact test beside the interval rule.
-pub const EXACT_TEST_LEVEL: f64 = 0.05;
-
-/// `a` does better than `b` by Fisher's exact two-sided test at [`EXACT_TEST_LEVEL`].
-pub fn exact_better(a: &CellStats, b: &CellStats) -> bool {
-    a.success_rate > b.success_rate && exact_p(a, b) < EXACT_TEST_LEVEL
-}
-
-/// Fisher's exact two-sided p-value of two cells' solved counts.
-pub fn exact_p(a: &CellStats, b: &CellStats) -> f64 {
-    crate::stats::fisher_exact(a.successes, a.n, b.successes, b.n)
-}
-
 /// "k/n [lo, hi] vs k/n [lo, hi], Fisher p = …".
-fn versus(a: &CellStats, b: &CellStats, (a_name, b_name): (&str, &str)) -> String {
+fn versus(a: &impl Counts, b: &impl Counts, (a_name, b_name): (&str, &str)) -> String {
     let p = exact_p(a, b);
     let p = if p < 0.001 {
         "< 0.001".to_string()
@@ -113,8 +86,8 @@ fn versus(a: &CellStats, b: &CellStats, (a_name, b_name): (&str, &str)) -> Strin
 /// methods have, and the verdict.
 fn per_maze(
     stats: &[CellStats],
-    (a, a_name): (&str, &str),
-    (b, b_name): (&str, &str),
+    (a, a_name): (Method, &str),
+    (b, b_name): (Method, &str),
 ) -> (Vec<String>, Verdict) {
     let mut parts = Vec::new();
     let (mut a_wins, mut b_wins, mut a_exact, mut b_exact) = (false, false, false, false);
@@ -143,31 +116,25 @@ fn per_maze(
     (parts, verdict)
 }
 
-fn k_of_n(s: &CellStats) -> String {
-    format!(
-        "{}/{} [{:.2}, {:.2}]",
-        s.successes, s.n, s.wilson_lo, s.wilson_hi
-    )
+fn k_of_n(s: &impl Counts) -> String {
+    let (lo, hi) = s.wilson();
+    format!("{}/{} [{lo:.2}, {hi:.2}]", s.successes(), s.n())
 }
 
-fn cells<'a>(stats: &'a [CellStats], method: &str) -> Vec<&'a CellStats> {
+fn cells(stats: &[CellStats], method: Method) -> Vec<&CellStats> {
     stats.iter().filter(|s| s.method == method).collect()
 }
 
-pub(crate) fn find<'a>(stats: &'a [CellStats], method: &str, site: Site) -> Option<&'a CellStats> {
+pub(crate) fn find(stats: &[CellStats], method: Method, site: Site) -> Option<&CellStats> {
     stats.iter().find(|s| s.method == method && s.site == site)
 }
 
-/// Pools a method's cells over mazes (counts added; interval recomputed).
-fn pooled(stats: &[CellStats], method: &str) -> Option<CellStats> {
+/// Pools a method's cells over mazes (counts added; interval recomputed); None without cells.
+fn pooled(stats: &[CellStats], method: Method) -> Option<Pooled> {
     let c = cells(stats, method);
-    let first = (*c.first()?).clone();
-    let (k, n) = c
-        .iter()
-        .fold((0, 0), |(k, n), s| (k + s.successes, n + s.n));
-    Some(CellStats {
-        cell: format!("{method}-pooled"),
-        ..first.with_counts(k, n)
+    (!c.is_empty()).then(|| Pooled {
+        successes: c.iter().map(|s| s.successes).sum(),
+        n: c.iter().map(|s| s.n).sum(),
     })
 }
 
@@ -182,7 +149,7 @@ fn fails_everywhere(
     paper: &str,
     stats: &[CellStats],
     longer: &[CellStats],
-    method: &str,
+    method: Method,
 ) -> Option<Claim> {
     let c = cells(stats, method);
     if c.is_empty() {
@@ -251,7 +218,7 @@ pub enum ClaimTest {
     /// larger budget, those runs weigh in (see `fails_everywhere`).
     FailsEverywhere {
         /// The method.
-        method: String,
+        method: Method,
         /// An experiment with the same method at a larger budget.
         #[serde(default)]
         longer: Option<String>,
@@ -260,17 +227,17 @@ pub enum ClaimTest {
     /// one fails reliably.
     SolvesEverywhere {
         /// The method.
-        method: String,
+        method: Method,
     },
     /// `method` does better than `than`, maze by maze (`per_maze`); with `pooled`, the
     /// counts pooled over mazes decide where no maze does.
     Beats {
         /// The method said to do better.
-        method: String,
+        method: Method,
         /// Its name in the text.
         label: String,
         /// The method it is compared with.
-        than: String,
+        than: Method,
         /// That method's name in the text.
         than_label: String,
         /// Whether pooled counts decide an inconclusive per-maze verdict.
@@ -285,13 +252,13 @@ pub enum ClaimTest {
     /// solved run and a paper figure (inconclusive otherwise).
     StepsBelowPaper {
         /// The method.
-        method: String,
+        method: Method,
     },
     /// No claim in the paper: the pooled counts of `methods` (method, label), the first two
     /// set against each other.
     Pooled {
         /// (method, label), at least two.
-        methods: Vec<(String, String)>,
+        methods: Vec<(Method, String)>,
     },
 }
 
@@ -376,7 +343,7 @@ fn missing(spec: &ClaimSpec, message: String) -> Error {
 }
 
 /// The error of a claim whose table has no cell of `method`.
-fn no_cells(spec: &ClaimSpec, experiment: &str, method: &str) -> Error {
+fn no_cells(spec: &ClaimSpec, experiment: &str, method: Method) -> Error {
     missing(
         spec,
         format!("the table of experiment `{experiment}` has no cell of method `{method}`"),
@@ -400,11 +367,11 @@ fn evaluate<'a>(
                 Some(name) => table(name)?,
                 None => &[],
             };
-            fails_everywhere(&spec.id, &spec.paper, stats, longer, method)
-                .ok_or_else(|| no_cells(spec, &spec.experiment, method))
+            fails_everywhere(&spec.id, &spec.paper, stats, longer, *method)
+                .ok_or_else(|| no_cells(spec, &spec.experiment, *method))
         }
         ClaimTest::SolvesEverywhere { method } => {
-            let (ours, verdict) = solves_everywhere(spec, stats, method)?;
+            let (ours, verdict) = solves_everywhere(spec, stats, *method)?;
             Ok(claim(ours, verdict))
         }
         ClaimTest::Beats {
@@ -419,13 +386,14 @@ fn evaluate<'a>(
             // own cells.
             let mut both = stats.to_vec();
             if let Some(other) = than_experiment {
-                both.extend(table(other)?.iter().filter(|s| &s.method == than).cloned());
+                both.extend(table(other)?.iter().filter(|s| s.method == *than).cloned());
             }
-            let (ours, verdict) = beats_claim(&both, (method, label), (than, than_label), *pooled)
-                .ok_or_else(|| {
-                    missing(
-                        spec,
-                        format!(
+            let (ours, verdict) =
+                beats_claim(&both, (*method, label), (*than, than_label), *pooled).ok_or_else(
+                    || {
+                        missing(
+                            spec,
+                            format!(
                             "no maze where both `{method}` and `{than}` have a cell (experiment \
                              `{}`{})",
                             spec.experiment,
@@ -433,12 +401,13 @@ fn evaluate<'a>(
                                 .as_ref()
                                 .map_or(String::new(), |o| format!(" and `{o}`"))
                         ),
-                    )
-                })?;
+                        )
+                    },
+                )?;
             Ok(claim(ours, verdict))
         }
         ClaimTest::StepsBelowPaper { method } => {
-            let (ours, verdict) = steps_below_paper(spec, stats, method)?;
+            let (ours, verdict) = steps_below_paper(spec, stats, *method)?;
             Ok(claim(ours, verdict))
         }
         ClaimTest::Pooled { methods } => {
@@ -451,7 +420,7 @@ fn evaluate<'a>(
 fn method_cells<'a>(
     spec: &ClaimSpec,
     stats: &'a [CellStats],
-    method: &str,
+    method: Method,
 ) -> Result<Vec<&'a CellStats>> {
     let c = cells(stats, method);
     if c.is_empty() {
@@ -464,12 +433,12 @@ fn method_cells<'a>(
 fn solves_everywhere(
     spec: &ClaimSpec,
     stats: &[CellStats],
-    method: &str,
+    method: Method,
 ) -> Result<(String, Verdict)> {
     let c = method_cells(spec, stats, method)?;
-    let verdict = if c.iter().all(|s| solves(s)) {
+    let verdict = if c.iter().all(solves) {
         Verdict::Agrees
-    } else if c.iter().any(|s| fails(s)) {
+    } else if c.iter().any(fails) {
         Verdict::Disagrees
     } else {
         Verdict::Inconclusive
@@ -493,7 +462,7 @@ fn solves_everywhere(
 fn steps_below_paper(
     spec: &ClaimSpec,
     stats: &[CellStats],
-    method: &str,
+    method: Method,
 ) -> Result<(String, Verdict)> {
     let c = method_cells(spec, stats, method)?;
     let mut parts = Vec::new();
@@ -533,19 +502,19 @@ fn steps_below_paper(
 fn pooled_claim(
     spec: &ClaimSpec,
     stats: &[CellStats],
-    methods: &[(String, String)],
+    methods: &[(Method, String)],
 ) -> Result<String> {
-    let pool = |m: &str| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
+    let pool = |m: Method| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
     let (m0, l0) = &methods[0];
     let (m1, l1) = &methods[1];
-    let (a, b) = (pool(m0)?, pool(m1)?);
+    let (a, b) = (pool(*m0)?, pool(*m1)?);
     let mut ours = format!(
         "pooled over mazes: {l0} {} vs {l1} {}",
         k_of_n(&a),
         k_of_n(&b)
     );
     for (m, l) in &methods[2..] {
-        ours.push_str(&format!("; {l} {}", k_of_n(&pool(m)?)));
+        ours.push_str(&format!("; {l} {}", k_of_n(&pool(*m)?)));
     }
     Ok(ours)
 }
@@ -555,8 +524,8 @@ fn pooled_claim(
 /// has both.
 fn beats_claim(
     stats: &[CellStats],
-    (method, label): (&str, &str),
-    (than, than_label): (&str, &str),
+    (method, label): (Method, &str),
+    (than, than_label): (Method, &str),
     pool: bool,
 ) -> Option<(String, Verdict)> {
     let (parts, verdict) = per_maze(stats, (method, label), (than, than_label));
@@ -592,5 +561,6 @@ fn beats_claim(
     Some((ours, verdict))
 }
 
+mod rules;
 #[cfg(test)]
 mod tests;

@@ -1,13 +1,19 @@
 //! Unit tests of the claim criteria and verdicts, on made-up tables.
 
 use super::*;
+use crate::experiment::CellKey;
+
+/// The method called `name`.
+fn m(name: &str) -> Method {
+    Method::new(name).unwrap()
+}
 
 /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
 fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
     CellStats {
         experiment: "t".into(),
-        cell: format!("{method}-maze{maze}"),
-        method: method.into(),
+        cell: CellKey::new(m(method), Site::Maze(maze)),
+        method: m(method),
         label: method.into(),
         site: crate::experiment::Site::Maze(maze),
         n: 0,
@@ -39,9 +45,9 @@ fn pooled_counts_only_the_mazes_both_methods_ran() {
         paper: "p".into(),
         experiment: "t".into(),
         test: ClaimTest::Beats {
-            method: "a".into(),
+            method: m("a"),
             label: "A".into(),
-            than: "b".into(),
+            than: m("b"),
             than_label: "B".into(),
             pooled: true,
             than_experiment: None,
@@ -69,12 +75,12 @@ fn an_exact_test_speaks_where_intervals_overlap() {
         cell("b", 3, 4, 10),
     ];
     assert!(!beats(&stats[0], &stats[1]) && exact_better(&stats[0], &stats[1]));
-    let (parts, verdict) = per_maze(&stats, ("a", "A"), ("b", "B"));
+    let (parts, verdict) = per_maze(&stats, (m("a"), "A"), (m("b"), "B"));
     assert_eq!(verdict, Verdict::ExactTestOnly);
     assert!(parts[0].ends_with("Fisher p = 0.020"), "{}", parts[0]);
     assert!(parts[1].ends_with("Fisher p = 1.000"), "{}", parts[1]);
     // The other way round the test finds nothing for "b beats a".
-    let (_, verdict) = per_maze(&stats, ("b", "B"), ("a", "A"));
+    let (_, verdict) = per_maze(&stats, (m("b"), "B"), (m("a"), "A"));
     assert_eq!(verdict, Verdict::Inconclusive);
 }
 
@@ -87,13 +93,16 @@ fn per_maze_agrees_when_one_maze_separates_and_none_reverses() {
         cell("a", 3, 0, 10),
         cell("b", 3, 0, 10),
     ];
-    let (parts, verdict) = per_maze(&stats, ("a", "A"), ("b", "B"));
+    let (parts, verdict) = per_maze(&stats, (m("a"), "A"), (m("b"), "B"));
     assert_eq!(verdict, Verdict::Agrees);
     assert_eq!(parts.len(), 2);
     assert!(parts[0].starts_with("maze 2: A 10/10 [0.72, 1.00] vs B 2/10 [0.06, 0.51]"));
     // Pooled, the same counts overlap (10/20 [0.30, 0.70] against 2/20 [0.03, 0.30] is a
     // near miss), which is why the verdict is per maze.
-    let (a, b) = (pooled(&stats, "a").unwrap(), pooled(&stats, "b").unwrap());
+    let (a, b) = (
+        pooled(&stats, m("a")).unwrap(),
+        pooled(&stats, m("b")).unwrap(),
+    );
     assert!(!beats(&a, &b), "{} vs {}", k_of_n(&a), k_of_n(&b));
 }
 
@@ -108,7 +117,7 @@ fn fails_everywhere_weighs_runs_at_the_papers_budget() {
         with_budget(cell("ddpg", 5, 0, 10), 100_000),
     ];
     let verdict = |longer: &[CellStats]| {
-        fails_everywhere("x", "", &table, longer, "ddpg")
+        fails_everywhere("x", "", &table, longer, m("ddpg"))
             .unwrap()
             .verdict
     };
@@ -137,7 +146,7 @@ fn fails_everywhere_weighs_runs_at_the_papers_budget() {
         "",
         &table,
         &[with_budget(cell("ddpg", 2, 2, 3), 1_000_000)],
-        "ddpg",
+        m("ddpg"),
     )
     .unwrap();
     assert!(
@@ -158,18 +167,18 @@ fn per_maze_disagrees_when_any_maze_reverses_and_is_inconclusive_on_overlaps() {
         cell("b", 5, 10, 10),
     ];
     assert_eq!(
-        per_maze(&reversed, ("a", "A"), ("b", "B")).1,
+        per_maze(&reversed, (m("a"), "A"), (m("b"), "B")).1,
         Verdict::Disagrees
     );
     // 6/10 [0.31, 0.83] against 3/10 [0.11, 0.60]: overlapping.
     let close = [cell("a", 2, 6, 10), cell("b", 2, 3, 10)];
     assert_eq!(
-        per_maze(&close, ("a", "A"), ("b", "B")).1,
+        per_maze(&close, (m("a"), "A"), (m("b"), "B")).1,
         Verdict::Inconclusive
     );
     // A maze only one method has is not compared.
     let alone = [cell("a", 2, 10, 10)];
-    let (parts, verdict) = per_maze(&alone, ("a", "A"), ("b", "B"));
+    let (parts, verdict) = per_maze(&alone, (m("a"), "A"), (m("b"), "B"));
     assert!(parts.is_empty());
     assert_eq!(verdict, Verdict::Inconclusive);
 }
@@ -184,9 +193,9 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
     };
     let beats = |pooled: bool| {
         spec(ClaimTest::Beats {
-            method: "a".into(),
+            method: m("a"),
             label: "A".into(),
-            than: "b".into(),
+            than: m("b"),
             than_label: "B".into(),
             pooled,
             than_experiment: None,
@@ -205,7 +214,11 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
     assert_eq!(verdict(beats(false)), Verdict::Inconclusive);
     assert_eq!(verdict(beats(true)), Verdict::Agrees);
     // `than` from another experiment's table: the same comparison.
-    let (own, other): (Vec<_>, Vec<_>) = tables[0].1.iter().cloned().partition(|c| c.method == "a");
+    let (own, other): (Vec<_>, Vec<_>) = tables[0]
+        .1
+        .iter()
+        .cloned()
+        .partition(|c| c.method == m("a"));
     let split = [("t".to_string(), own), ("u".to_string(), other)];
     let mut across = beats(true);
     if let ClaimTest::Beats {
@@ -219,7 +232,7 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
     assert_eq!(c.ours, claims(&[beats(true)], &tables).unwrap()[0].ours);
     let shown = claims(
         &[spec(ClaimTest::Pooled {
-            methods: vec![("a".into(), "A".into()), ("b".into(), "B".into())],
+            methods: vec![(m("a"), "A".into()), (m("b"), "B".into())],
         })],
         &tables,
     )
@@ -243,9 +256,9 @@ fn a_claim_without_its_table_or_cells_is_an_error() {
     };
     let beats = |than_experiment: Option<&str>| {
         spec(ClaimTest::Beats {
-            method: "a".into(),
+            method: m("a"),
             label: "A".into(),
-            than: "b".into(),
+            than: m("b"),
             than_label: "B".into(),
             pooled: false,
             than_experiment: than_experiment.map(String::from),
@@ -272,14 +285,14 @@ fn a_claim_without_its_table_or_cells_is_an_error() {
     let e = claims(&[beats(None)], &apart).unwrap_err().to_string();
     assert!(e.contains("no maze where both `a` and `b`"), "{e}");
     for test in [
-        ClaimTest::SolvesEverywhere { method: "c".into() },
+        ClaimTest::SolvesEverywhere { method: m("c") },
         ClaimTest::FailsEverywhere {
-            method: "c".into(),
+            method: m("c"),
             longer: None,
         },
-        ClaimTest::StepsBelowPaper { method: "c".into() },
+        ClaimTest::StepsBelowPaper { method: m("c") },
         ClaimTest::Pooled {
-            methods: vec![("a".into(), "A".into()), ("c".into(), "C".into())],
+            methods: vec![(m("a"), "A".into()), (m("c"), "C".into())],
         },
     ] {
         let e = claims(&[spec(test)], &tables).unwrap_err().to_string();

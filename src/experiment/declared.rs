@@ -2,7 +2,7 @@
 //! (`[[figure]]`) and what the report's generated LaTeX takes from it (`[report]`), with the
 //! checks that tie both to the experiment's methods.
 
-use super::{Cell, Job};
+use super::{Cell, Job, Method};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use std::collections::BTreeSet;
@@ -27,9 +27,9 @@ pub struct ReportSpec {
 #[serde(deny_unknown_fields)]
 pub struct SettingsSpec {
     /// A PBCS method (phase 2 and learner settings).
-    pub pbcs: String,
+    pub pbcs: Method,
     /// A vanilla method (budget, γ, episode length, learning starts).
-    pub vanilla: String,
+    pub vanilla: Method,
 }
 
 /// A baseline bar: `method` of the experiment `experiment`, drawn as `label`.
@@ -39,7 +39,7 @@ pub struct Baseline {
     /// The experiment whose table holds it (e.g. `table`).
     pub experiment: String,
     /// Its method there (e.g. `pbcs`).
-    pub method: String,
+    pub method: Method,
     /// Its label in the figure.
     pub label: String,
 }
@@ -60,7 +60,7 @@ pub enum FigureSpec {
         /// File stem, followed by the maze size.
         name: String,
         /// The method drawn.
-        method: String,
+        method: Method,
     },
     /// Learning curves of the experiment's vanilla methods (drawn only if it has some).
     Curves {
@@ -109,7 +109,7 @@ pub enum FigureSpec {
         /// File stem.
         name: String,
         /// The methods shown, in order (at least two).
-        methods: Vec<String>,
+        methods: Vec<Method>,
     },
 }
 
@@ -130,10 +130,10 @@ impl FigureSpec {
     }
 
     /// The methods the figure names.
-    fn methods(&self) -> Vec<&str> {
+    fn methods(&self) -> Vec<Method> {
         match self {
-            FigureSpec::Mazes { method, .. } => vec![method.as_str()],
-            FigureSpec::Panels { methods, .. } => methods.iter().map(String::as_str).collect(),
+            FigureSpec::Mazes { method, .. } => vec![*method],
+            FigureSpec::Panels { methods, .. } => methods.clone(),
             _ => Vec::new(),
         }
     }
@@ -144,7 +144,7 @@ impl FigureSpec {
 pub(crate) fn check_paired(
     path: &Path,
     registered: Option<&super::Registration>,
-    methods: &[(String, String)],
+    methods: &[(Method, String)],
 ) -> Result<()> {
     let Some([baseline, variant]) = registered.and_then(|r| r.paired.as_ref()) else {
         return Ok(());
@@ -170,7 +170,7 @@ pub(crate) fn check_paired(
 pub(crate) fn check_figures(
     path: &Path,
     figures: &[FigureSpec],
-    methods: &[(String, String)],
+    methods: &[(Method, String)],
 ) -> Result<()> {
     let mut names = BTreeSet::new();
     for (i, f) in figures.iter().enumerate() {
@@ -193,7 +193,7 @@ pub(crate) fn check_figures(
             ));
         }
         for m in f.methods() {
-            if !methods.iter().any(|(n, _)| n == m) {
+            if !methods.iter().any(|(n, _)| *n == m) {
                 return Err(Error::invalid(
                     field("method"),
                     format!("the experiment has no method `{m}`"),
@@ -223,7 +223,7 @@ pub(crate) fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> 
     ] {
         let ok = cells
             .iter()
-            .any(|c| &c.method == method && matches!(c.job, Job::Pbcs(_)) == pbcs);
+            .any(|c| c.method == *method && matches!(c.job, Job::Pbcs(_)) == pbcs);
         if !ok {
             return Err(Error::invalid(
                 format!("report.settings.{field} in {}", path.display()),

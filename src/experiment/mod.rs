@@ -22,7 +22,7 @@
 //!
 //! let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), Some("smoke"))
 //!     .unwrap();
-//! assert!(exp.cells.iter().any(|c| c.id == "pbcs-maze2"));
+//! assert!(exp.cells.iter().any(|c| c.id == "pbcs-maze2".parse().unwrap()));
 //! assert_eq!(exp.seeds(), vec![0]);
 //! ```
 //!
@@ -35,6 +35,7 @@
 //! draw).
 
 mod declared;
+mod key;
 mod layout;
 mod merge;
 mod row;
@@ -43,6 +44,7 @@ mod spec;
 mod sweep;
 
 pub use declared::{Baseline, FigureSpec, ReportSpec, SettingsSpec};
+pub use key::{CellKey, Method};
 pub use layout::run_file;
 pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
@@ -124,9 +126,9 @@ impl Job {
 pub struct Cell {
     /// `<method>-<site id>` (`pbcs-maze5`, `pbcs-rooms`): the cell's folder name and its name
     /// on the command line.
-    pub id: String,
-    /// Method name.
-    pub method: String,
+    pub id: CellKey,
+    /// Its method (`id.method`).
+    pub method: Method,
     /// Method label for figures and tables.
     pub label: String,
     /// Where it runs: a maze size or another environment.
@@ -221,7 +223,7 @@ pub struct Experiment {
     /// The grid's rows: its maze sizes, then its other environments, in the file's order.
     pub sites: Vec<Site>,
     /// Methods (name, label), in order.
-    pub methods: Vec<(String, String)>,
+    pub methods: Vec<(Method, String)>,
     /// Cells, site-major in the file's order of sites and methods.
     pub cells: Vec<Cell>,
     /// The figures it declares, in order.
@@ -248,7 +250,7 @@ pub struct Registration {
     /// of the file's methods, run on the same sites and seeds (`pbcs aggregate` writes
     /// `<experiment>.paired.csv`, [`crate::tables::paired`]).
     #[serde(default)]
-    pub paired: Option<[String; 2]>,
+    pub paired: Option<[Method; 2]>,
     /// Where the preset file is: `preset` in the experiment file's folder (set by
     /// [`Experiment::load`]).
     #[serde(skip)]
@@ -350,26 +352,46 @@ impl Experiment {
             .sum()
     }
 
-    /// The cell called `id`, or an error listing the cells.
+    /// The cell written `id` (`pbcs-maze5`, as on the command line), or an error listing the
+    /// cells.
     pub fn cell(&self, id: &str) -> Result<&Cell> {
-        self.cells.iter().find(|c| c.id == id).ok_or_else(|| {
+        match id.parse::<CellKey>() {
+            Ok(key) => self.cell_at(key),
+            Err(e) => Err(Error::invalid(
+                "cell",
+                format!("{e} (experiment `{}` has: {})", self.name, self.cell_list()),
+            )),
+        }
+    }
+
+    /// The cell of `key`, or an error listing the cells.
+    pub fn cell_at(&self, key: CellKey) -> Result<&Cell> {
+        self.cells.iter().find(|c| c.id == key).ok_or_else(|| {
             Error::invalid(
                 "cell",
                 format!(
-                    "experiment `{}` has no cell `{id}` (it has: {})",
+                    "experiment `{}` has no cell `{key}` (it has: {})",
                     self.name,
-                    self.cells
-                        .iter()
-                        .map(|c| c.id.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    self.cell_list()
                 ),
             )
         })
     }
 
+    /// The cells' keys, comma-separated (for messages).
+    fn cell_list(&self) -> String {
+        self.cells
+            .iter()
+            .map(|c| c.id.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The folder of a cell's raw results under `results`.
     pub fn cell_dir(&self, results: &Path, cell: &Cell) -> PathBuf {
-        results.join("raw").join(&self.name).join(&cell.id)
+        results
+            .join("raw")
+            .join(&self.name)
+            .join(cell.id.to_string())
     }
 }

@@ -1,6 +1,6 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
-use super::{Cell, Experiment, Job, Kind, Site};
+use super::{Cell, CellKey, Experiment, Job, Kind, Method, Site};
 use crate::config::{Located, PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
@@ -14,10 +14,10 @@ use std::path::Path;
 pub struct RawRow {
     /// Experiment name.
     pub experiment: String,
-    /// Cell id (`<method>-maze<N>`, `<method>-rooms`).
-    pub cell: String,
-    /// Method name.
-    pub method: String,
+    /// The cell (`<method>-maze<N>`, `<method>-rooms`).
+    pub cell: CellKey,
+    /// Its method.
+    pub method: Method,
     /// `vanilla` or `pbcs`.
     pub kind: Kind,
     /// Where it ran: the maze size N, or another environment's name (column `maze`).
@@ -81,8 +81,8 @@ impl RawRow {
         };
         RawRow {
             experiment: exp.name.clone(),
-            cell: cell.id.clone(),
-            method: cell.method.clone(),
+            cell: cell.id,
+            method: cell.method,
             kind: Kind::Vanilla,
             site: Site::of(&job.env_spec()),
             maze_seed: layout_seed(job),
@@ -110,8 +110,8 @@ impl RawRow {
     pub fn pbcs(exp: &Experiment, cell: &Cell, job: &PbcsJob, r: RunRecord) -> RawRow {
         RawRow {
             experiment: exp.name.clone(),
-            cell: cell.id.clone(),
-            method: cell.method.clone(),
+            cell: cell.id,
+            method: cell.method,
             kind: Kind::Pbcs,
             site: Site::of(&job.env_spec()),
             maze_seed: layout_seed(job),
@@ -156,8 +156,7 @@ pub fn read_row(path: &Path) -> Result<RawRow> {
 /// line and the column, never a run of another cell counted here.
 pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Result<RawRow> {
     let (row, line) = read_row_at(path)?;
-    let starts =
-        |s: Option<StartMode>| s.map_or(String::new(), |s| format!("{s:?}").to_lowercase());
+    let starts = |s: Option<StartMode>| s.map_or("", <&str>::from).to_string();
     let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
         Job::Vanilla(j) => (
             Kind::Vanilla,
@@ -180,8 +179,8 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
     };
     let fields: [(&str, String, String); 12] = [
         ("experiment", row.experiment.clone(), exp.name.clone()),
-        ("cell", row.cell.clone(), cell.id.clone()),
-        ("method", row.method.clone(), cell.method.clone()),
+        ("cell", row.cell.to_string(), cell.id.to_string()),
+        ("method", row.method.to_string(), cell.method.to_string()),
         ("kind", row.kind.name().into(), kind.name().into()),
         ("maze", row.site.to_string(), cell.site.to_string()),
         (

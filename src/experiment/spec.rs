@@ -4,7 +4,9 @@
 use super::declared::{check_figures, check_report};
 use super::merge::merge;
 use super::site::{paper_run, place};
-use super::{check_seeds, Cell, Experiment, FigureSpec, Job, Kind, ReportSpec, Site};
+use super::{
+    check_seeds, Cell, CellKey, Experiment, FigureSpec, Job, Kind, Method, ReportSpec, Site,
+};
 use crate::config::{PbcsJob, TrainJob};
 use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::EnvName;
@@ -187,19 +189,8 @@ fn site_key(key: &str, sites: &[Site]) -> Option<Site> {
     key.parse::<Site>().ok().filter(|s| sites.contains(s))
 }
 
-/// A method name is a folder name and part of cell ids: letters, digits and `_` only.
-pub(crate) fn check_method_name(name: &str) -> Result<()> {
-    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-        return Err(Error::invalid(
-            "method.name",
-            format!("`{name}`: use letters, digits and `_` only"),
-        ));
-    }
-    Ok(())
-}
-
 /// A method's name and its label in tables and figures.
-type MethodLabel = (String, String);
+type MethodLabel = (Method, String);
 
 impl ExperimentSpec {
     /// The profile named `profile` of the file at `path` (None: the committed grid, an empty
@@ -285,7 +276,7 @@ impl ExperimentSpec {
     fn check_methods(&self, all_methods: &[&MethodSpec]) -> Result<()> {
         let mut names = BTreeSet::new();
         for m in all_methods.iter().copied() {
-            check_method_name(&m.name)?;
+            Method::new(&m.name)?;
             if !names.insert(m.name.clone()) {
                 return Err(Error::invalid(
                     "method.name",
@@ -378,7 +369,7 @@ impl ExperimentSpec {
             let mut table: toml::Table = crate::validate::read_toml(&folder.join(&m.base))?;
             merge(&mut table, &m.set);
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
-            methods.push((m.name.clone(), label.clone()));
+            methods.push((Method::new(&m.name)?, label.clone()));
             resolved.push((m, label, table));
         }
         let own_map = self.own_map(path, sites)?;
@@ -401,9 +392,10 @@ impl ExperimentSpec {
                 if let Some(t) = prof.by_maze.get(&key) {
                     merge(&mut table, t.of(m.kind));
                 }
+                let method = Method::new(&m.name)?;
                 cells.push(Cell {
-                    id: format!("{}-{}", m.name, site.id()),
-                    method: m.name.clone(),
+                    id: CellKey::new(method, site),
+                    method,
                     label: label.clone(),
                     site,
                     job: cell_job(path, m, table, site, own_map.as_ref())?,
@@ -538,12 +530,12 @@ impl Experiment {
     /// ```
     /// use pbcs::experiment::Experiment;
     /// let exp = Experiment::of_job("mine", &pbcs::config::PbcsJob::default(), &[2, 5], 3).unwrap();
-    /// assert_eq!(exp.cells[1].id, "mine-maze5");
+    /// assert_eq!(exp.cells[1].id, "mine-maze5".parse().unwrap());
     /// assert_eq!(exp.seeds(), vec![0, 1, 2]);
     /// assert!(Experiment::of_job("mine", &Default::default(), &[2, 2], 3).is_err());
     /// ```
     pub fn of_job(name: &str, job: &PbcsJob, sizes: &[usize], seeds: u64) -> Result<Experiment> {
-        check_method_name(name)?;
+        let method = Method::new(name)?;
         let sites: Vec<Site> = sizes.iter().map(|&n| Site::Maze(n)).collect();
         check_sites(&sites)?;
         check_seeds("--seeds", 0, seeds, &default_picture_seeds())?;
@@ -555,8 +547,8 @@ impl Experiment {
                 j.check().map_err(|e| located(e, &site.title()))?;
                 let (paper_steps, paper_solved) = paper_run(job.phase2.variant(), site);
                 Ok(Cell {
-                    id: format!("{name}-{}", site.id()),
-                    method: name.to_string(),
+                    id: CellKey::new(method, site),
+                    method,
                     label: name.to_string(),
                     site,
                     job: Job::Pbcs(j),
@@ -577,7 +569,7 @@ impl Experiment {
             registered: None,
             in_progress: false,
             sites,
-            methods: vec![(name.to_string(), name.to_string())],
+            methods: vec![(method, name.to_string())],
             cells,
             figures: vec![FigureSpec::Bars {
                 name: name.to_string(),

@@ -122,7 +122,7 @@ pub fn sweep(
                 }
             })
             .map_err(|e| Error::Run {
-                cell: p.cell.id.clone(),
+                cell: p.cell.id.to_string(),
                 seed: p.seed,
                 cause: Box::new(e),
             })?;

@@ -14,8 +14,9 @@ use plotters::prelude::*;
 pub struct SuccessBars {
     title: String,
     mazes: Vec<Site>,
-    methods: Vec<(String, String)>,
-    stats: Vec<CellStats>,
+    /// One colour each, in drawing order: a label and its cells (a method's, or a baseline's
+    /// from another experiment).
+    series: Vec<(String, Vec<CellStats>)>,
 }
 
 impl SuccessBars {
@@ -24,25 +25,26 @@ impl SuccessBars {
         SuccessBars {
             title: exp.title.clone(),
             mazes: exp.sites.clone(),
-            methods: exp.methods.clone(),
-            stats: stats.to_vec(),
+            series: exp
+                .methods
+                .iter()
+                .map(|(m, label)| {
+                    let cells = stats.iter().filter(|s| s.method == *m).cloned().collect();
+                    (label.clone(), cells)
+                })
+                .collect(),
         }
     }
 
     /// Draws `baseline`'s cells (from its experiment's table `stats`) first, on this
     /// figure's mazes.
     pub fn with_baseline(mut self, baseline: &Baseline, stats: &[CellStats]) -> SuccessBars {
-        let method = format!("{}:{}", baseline.experiment, baseline.method);
-        self.stats.extend(
-            stats
-                .iter()
-                .filter(|s| s.method == baseline.method && self.mazes.contains(&s.site))
-                .map(|s| CellStats {
-                    method: method.clone(),
-                    ..s.clone()
-                }),
-        );
-        self.methods.insert(0, (method, baseline.label.clone()));
+        let cells = stats
+            .iter()
+            .filter(|s| s.method == baseline.method && self.mazes.contains(&s.site))
+            .cloned()
+            .collect();
+        self.series.insert(0, (baseline.label.clone(), cells));
         self
     }
 }
@@ -53,7 +55,7 @@ const BAR_LEGEND_WIDTH: u32 = 300;
 impl SuccessBars {
     /// The legend beside the chart: a colour swatch and a label per method.
     fn draw_legend<DB: DrawingBackend>(&self, side: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        for (j, (_, label)) in self.methods.iter().enumerate() {
+        for (j, (label, _)) in self.series.iter().enumerate() {
             let (x, y) = (10, 60 + 26 * j as i32);
             let colour = PALETTE[j % PALETTE.len()];
             side.draw(&Rectangle::new(
@@ -69,16 +71,14 @@ impl SuccessBars {
         Ok(())
     }
 
-    /// Each maze's group holds the methods that ran on it (all of them in a full grid), side
-    /// by side in the file's order.
-    fn slots(&self) -> Vec<Vec<&str>> {
+    /// Each maze's group holds the series that ran on it (all of them in a full grid), side
+    /// by side in drawing order: their indices.
+    fn slots(&self) -> Vec<Vec<usize>> {
         self.mazes
             .iter()
             .map(|&n| {
-                self.methods
-                    .iter()
-                    .map(|(name, _)| name.as_str())
-                    .filter(|name| self.stats.iter().any(|s| s.site == n && s.method == *name))
+                (0..self.series.len())
+                    .filter(|&j| self.series[j].1.iter().any(|s| s.site == n))
                     .collect()
             })
             .collect()
@@ -116,18 +116,18 @@ impl Figure for SuccessBars {
             .label_style(("sans-serif", 15))
             .draw()?;
         let slots = self.slots();
-        for (j, (name, _)) in self.methods.iter().enumerate() {
+        for (j, (_, cells)) in self.series.iter().enumerate() {
             let colour = PALETTE[j % PALETTE.len()];
             let bars: Vec<(f64, f64, &CellStats)> = self
                 .mazes
                 .iter()
                 .enumerate()
                 .filter_map(|(g, &n)| {
-                    let rank = slots[g].iter().position(|m| m == name)?;
+                    let rank = slots[g].iter().position(|&i| i == j)?;
                     let width = 0.8 / slots[g].len() as f64;
-                    self.stats
+                    cells
                         .iter()
-                        .find(|s| s.site == n && &s.method == name)
+                        .find(|s| s.site == n)
                         .map(|s| (g as f64 + 0.1 + rank as f64 * width, width, s))
                 })
                 .collect();
@@ -194,7 +194,7 @@ impl Profile {
             .filter_map(|(m, label)| {
                 let own: Vec<_> = runs
                     .iter()
-                    .filter(|r| &r.method == m && r.paper_steps.is_some())
+                    .filter(|r| r.method == *m && r.paper_steps.is_some())
                     .cloned()
                     .collect();
                 (!own.is_empty()).then(|| {

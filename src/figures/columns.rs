@@ -2,33 +2,33 @@
 //! [`super::routes::Routes`]): one column per method and maze, each holding that cell's runs
 //! as dots, the methods that have no run left out.
 
-use crate::experiment::{Experiment, Site};
+use crate::experiment::{Experiment, Method, Site};
 
 /// The columns of a per-run figure: `(method index, site, runs)` in the order of the
 /// experiment's methods, then its mazes; empty columns left out.
 pub(crate) struct RunColumns<R> {
     /// The methods (name, label) with at least one run, in the experiment's order.
-    pub methods: Vec<(String, String)>,
+    pub methods: Vec<(Method, String)>,
     /// One column per method and maze that has runs.
     pub columns: Vec<(usize, Site, Vec<R>)>,
 }
 
 impl<R> RunColumns<R> {
     /// The columns of `exp` from `runs(method, maze)`, the runs of one cell.
-    pub fn new(exp: &Experiment, runs: impl Fn(&str, Site) -> Vec<R>) -> RunColumns<R> {
+    pub fn new(exp: &Experiment, runs: impl Fn(Method, Site) -> Vec<R>) -> RunColumns<R> {
         let mut methods = Vec::new();
         let mut columns = Vec::new();
         for (m, label) in &exp.methods {
             let j = methods.len();
             let before = columns.len();
             for &n in &exp.sites {
-                let cell = runs(m, n);
+                let cell = runs(*m, n);
                 if !cell.is_empty() {
                     columns.push((j, n, cell));
                 }
             }
             if columns.len() > before {
-                methods.push((m.clone(), label.clone()));
+                methods.push((*m, label.clone()));
             }
         }
         RunColumns { methods, columns }

@@ -32,7 +32,7 @@ impl Curves {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (m, label) in &exp.methods {
             let mut lines = Vec::new();
-            for c in exp.cells.iter().filter(|c| &c.method == m) {
+            for c in exp.cells.iter().filter(|c| c.method == *m) {
                 let line: Vec<(f64, f64, f64)> = points
                     .iter()
                     .filter(|p| p.cell == c.id)

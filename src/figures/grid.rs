@@ -5,7 +5,7 @@
 use super::{cell_picture, centred_text, stats_of, summary, DrawResult, GREEN_BG, RED_BG};
 use crate::env::Scene;
 use crate::error::Result;
-use crate::experiment::Experiment;
+use crate::experiment::{CellKey, Experiment};
 use crate::picture::PictureData;
 use crate::plot::{draw_scene, Figure};
 use crate::tables::CellStats;
@@ -45,11 +45,7 @@ impl ResultsGrid {
         for &n in &exp.sites {
             let mut row = Vec::new();
             for (m, _) in &exp.methods {
-                let cell = exp
-                    .cells
-                    .iter()
-                    .find(|c| c.site == n && &c.method == m)
-                    .expect("every site × method is a cell");
+                let cell = exp.cell_at(CellKey::new(*m, n))?;
                 row.push(
                     match (stats_of(stats, cell), cell_picture(exp, results, cell)?) {
                         (Some(s), Some(p)) => Some((cell.scene()?, p, s.clone())),

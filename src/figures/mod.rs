@@ -18,7 +18,7 @@ pub use routes::Routes;
 pub use scaling::Scaling;
 
 use crate::error::{Error, Result};
-use crate::experiment::{picture_file, Cell, Experiment, FigureSpec, Site};
+use crate::experiment::{picture_file, Cell, CellKey, Experiment, FigureSpec, Method, Site};
 use crate::fmt::human_steps;
 use crate::picture::PictureData;
 use crate::plot::render_figure;
@@ -167,7 +167,7 @@ pub fn render_experiment(
                 files.extend(render_figure(&grid, &stem)?);
             }
             FigureSpec::Mazes { name, method } => {
-                files.extend(maze_pictures(exp, results, stats, out, name, method)?);
+                files.extend(maze_pictures(exp, results, stats, out, name, *method)?);
             }
             FigureSpec::Curves { .. } => {
                 let path = curves_path(results, &exp.name);
@@ -232,7 +232,7 @@ fn maze_pictures(
     stats: &[CellStats],
     out: &Path,
     name: &str,
-    method: &str,
+    method: Method,
 ) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for c in exp.cells.iter().filter(|c| c.method == method) {
@@ -267,9 +267,9 @@ fn panels(
     exp: &Experiment,
     results: &Path,
     stats: &[CellStats],
-    methods: &[String],
+    methods: &[Method],
 ) -> Result<Option<Panels>> {
-    let solved = |n: Site, m: &str| {
+    let solved = |n: Site, m: Method| {
         stats
             .iter()
             .find(|s| s.site == n && s.method == m)
@@ -277,14 +277,14 @@ fn panels(
     };
     let pick = exp.sites.iter().copied().max_by_key(|&n| {
         (
-            (solved(n, &methods[0]) - solved(n, &methods[1])).abs(),
+            (solved(n, methods[0]) - solved(n, methods[1])).abs(),
             std::cmp::Reverse(n),
         )
     });
     let Some(n) = pick else { return Ok(None) };
     let mut panels = Vec::new();
-    for m in methods {
-        let Some(c) = exp.cells.iter().find(|c| c.site == n && &c.method == m) else {
+    for &m in methods {
+        let Ok(c) = exp.cell_at(CellKey::new(m, n)) else {
             continue;
         };
         if let (Some(s), Some(data)) = (stats_of(stats, c), cell_picture(exp, results, c)?) {
@@ -308,8 +308,8 @@ mod tests {
     fn stats(successes: u64, steps_median: f64, solved: Option<f64>) -> CellStats {
         CellStats {
             experiment: "table".into(),
-            cell: "pbcs-maze5".into(),
-            method: "pbcs".into(),
+            cell: "pbcs-maze5".parse().unwrap(),
+            method: "pbcs".parse().unwrap(),
             label: "PBCS".into(),
             site: crate::experiment::Site::Maze(5),
             n: 10,

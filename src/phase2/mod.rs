@@ -44,8 +44,9 @@ pub use starts::ArchiveStarts;
 use task::StepCounts;
 
 /// Where Backplay's episodes start.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum StartMode {
     /// Uniformly in B_ε(τ_K), as the paper requires (appendix "Need for resetting in unseen
     /// states").

@@ -276,7 +276,7 @@ pub fn scaling_numbers_tex(
 pub fn results_table_tex(
     rows: &[CellStats],
     mazes: &[crate::experiment::Site],
-    methods: &[(String, String)],
+    methods: &[(crate::experiment::Method, String)],
 ) -> String {
     let mut s = String::from(GENERATED);
     let _ = writeln!(s, "\\begin{{tabular}}{{r{}}}", "c".repeat(methods.len()));
@@ -287,7 +287,7 @@ pub fn results_table_tex(
     s.push_str(" \\\\\n\\midrule\n");
     for &n in mazes {
         let cells: Vec<Option<&CellStats>> =
-            methods.iter().map(|(m, _)| find(rows, m, n)).collect();
+            methods.iter().map(|(m, _)| find(rows, *m, n)).collect();
         let _ = match n {
             crate::experiment::Site::Maze(n) => write!(s, "${n}\\times{n}$"),
             other => write!(s, "{}", tex(&other.to_string())),

@@ -14,8 +14,8 @@ fn the_results_table_puts_counts_interval_and_paper_on_three_lines() {
         ..CellStats::counted(&exp, &exp.cells[0], 9, 10)
     };
     let methods = [
-        ("pbcs".to_string(), "PBCS".to_string()),
-        ("other".to_string(), "Other".to_string()),
+        ("pbcs".parse().unwrap(), "PBCS".to_string()),
+        ("other".parse().unwrap(), "Other".to_string()),
     ];
     let tex = results_table_tex(&[cell], &[crate::experiment::Site::Maze(2)], &methods);
     let lines: Vec<&str> = tex
@@ -57,8 +57,8 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
     );
     let run = |seed: u64, rate: f32| ChainSuccess {
         experiment: "m".into(),
-        cell: "m-maze5".into(),
-        method: "m".into(),
+        cell: "m-maze5".parse().unwrap(),
+        method: "m".parse().unwrap(),
         label: "m".into(),
         site: crate::experiment::Site::Maze(5),
         seed,
@@ -83,8 +83,8 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
     )
     .unwrap();
     let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
-        cell: "m-maze5".into(),
-        method: "m".into(),
+        cell: "m-maze5".parse().unwrap(),
+        method: "m".parse().unwrap(),
         site: crate::experiment::Site::Maze(5),
         seed,
         solved: true,
@@ -127,8 +127,11 @@ fn the_report_groups_rows_whatever_their_order() {
     let dir = tempfile::tempdir().unwrap();
     let chain = |n: usize, seed: u64| ChainSuccess {
         experiment: "m".into(),
-        cell: format!("m-maze{n}"),
-        method: "m".into(),
+        cell: crate::experiment::CellKey::new(
+            "m".parse().unwrap(),
+            crate::experiment::Site::Maze(n),
+        ),
+        method: "m".parse().unwrap(),
         label: "m".into(),
         site: crate::experiment::Site::Maze(n),
         seed,
@@ -139,8 +142,11 @@ fn the_report_groups_rows_whatever_their_order() {
         paper_steps: None,
     };
     let route = |n: usize, seed: u64| Route {
-        cell: format!("m-maze{n}"),
-        method: "m".into(),
+        cell: crate::experiment::CellKey::new(
+            "m".parse().unwrap(),
+            crate::experiment::Site::Maze(n),
+        ),
+        method: "m".parse().unwrap(),
         site: crate::experiment::Site::Maze(n),
         seed,
         solved: true,
@@ -228,8 +234,8 @@ fn the_code_constants_are_quoted_in_their_units() {
 fn the_routes_numbers_give_the_spread_over_cells() {
     use crate::tables::routes::Route;
     let route = |cell: &str, chain: Option<f64>, tau: usize, fewest: usize| Route {
-        cell: cell.into(),
-        method: "m".into(),
+        cell: cell.parse().unwrap(),
+        method: "m".parse().unwrap(),
         site: crate::experiment::Site::Maze(5),
         seed: 0,
         solved: chain.is_some(),
@@ -243,9 +249,9 @@ fn the_routes_numbers_give_the_spread_over_cells() {
     let tex = routes_numbers_tex(
         "x",
         &cells(&[
-            route("a", Some(110.0), 440, 100),
-            route("b", Some(120.0), 600, 100),
-            route("b", None, 600, 100),
+            route("m-maze2", Some(110.0), 440, 100),
+            route("m-maze5", Some(120.0), 600, 100),
+            route("m-maze5", None, 600, 100),
         ]),
     );
     for (key, value) in [
@@ -262,13 +268,13 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         assert!(tex.contains(&line), "{key}: {tex}");
     }
     assert_eq!(
-        routes_numbers_tex("x", &cells(&[route("a", None, 1, 1)])),
+        routes_numbers_tex("x", &cells(&[route("m-maze2", None, 1, 1)])),
         ""
     );
     // A shortened τ: phase 2 worked on 440 steps, phase 1's τ had 880.
     let shortened = crate::tables::routes::Route {
         tau_steps: 880,
-        ..route("a", Some(110.0), 440, 100)
+        ..route("m-maze2", Some(110.0), 440, 100)
     };
     let tex = routes_numbers_tex("x", &cells(&[shortened]));
     assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");

@@ -4,7 +4,7 @@
 //! `s<seed>.evals.csv` so that the figure reads a table only.
 
 use crate::error::{Error, Result};
-use crate::experiment::{evals_file, Experiment, Job};
+use crate::experiment::{evals_file, CellKey, Experiment, Job, Method};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -14,9 +14,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Maze size N or another environment's name (column `maze`).
     #[serde(rename = "maze")]
     pub site: crate::experiment::Site,
@@ -83,8 +83,8 @@ pub fn curve_points(exp: &Experiment, results: &Path) -> Result<Vec<CurvePoint>>
             }
         }
         out.extend(by_step.into_iter().map(|(steps, (k, n, r))| CurvePoint {
-            cell: c.id.clone(),
-            method: c.method.clone(),
+            cell: c.id,
+            method: c.method,
             site: c.site,
             steps,
             seeds: n,

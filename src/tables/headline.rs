@@ -6,7 +6,7 @@ use super::judged::{judged_path, JudgedCell};
 use super::outside::{Library, PointMazeBaseline};
 use super::{read_table, table_path, CellStats};
 use crate::error::{Error, Result};
-use crate::experiment::Site;
+use crate::experiment::{CellKey, Method, Site};
 use crate::fmt::human_steps;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -25,16 +25,14 @@ pub fn headline_markdown(results: &Path) -> Result<String> {
 }
 
 /// The cell of `method` at `site` in `stats`, or an error naming both.
-fn cell<'a>(stats: &'a [CellStats], method: &str, site: &Site) -> Result<&'a CellStats> {
-    stats
-        .iter()
-        .find(|c| c.method == method && &c.site == site)
-        .ok_or_else(|| {
-            Error::parse(
-                Path::new("results/tables"),
-                format!("no cell of method `{method}` at {site}"),
-            )
-        })
+fn cell(stats: &[CellStats], method: Method, site: Site) -> Result<&CellStats> {
+    let key = CellKey::new(method, site);
+    stats.iter().find(|c| c.cell == key).ok_or_else(|| {
+        Error::parse(
+            Path::new("results/tables"),
+            format!("no cell of method `{method}` at {site}"),
+        )
+    })
 }
 
 /// `9/10` (solved of runs).
@@ -53,8 +51,10 @@ fn maze_table(stats: &[CellStats]) -> Result<String> {
         "| maze | the paper's PBCS (1 run) | DDPG, 1M steps | TD3, 1M steps | PBCS `paper` | \
          PBCS `fast` |\n| --- | --- | --- | --- | --- | --- |\n",
     );
-    for site in &sizes {
-        let pbcs = cell(stats, "pbcs", site)?;
+    let [pbcs, ddpg, td3, fast] = ["pbcs", "ddpg", "td3", "pbcs_fast"].map(Method::new);
+    let (pbcs, ddpg, td3, fast) = (pbcs?, ddpg?, td3?, fast?);
+    for &site in &sizes {
+        let pbcs = cell(stats, pbcs, site)?;
         // The paper's round figures as it writes them: 5M, not 5.00M.
         let paper = pbcs.paper_steps.map_or("–".into(), |p| {
             let h = human_steps(p as f64);
@@ -64,10 +64,10 @@ fn maze_table(stats: &[CellStats]) -> Result<String> {
         let _ = writeln!(
             s,
             "| {label} | {paper} | {} | {} | {} | **{}** |",
-            solved(cell(stats, "ddpg", site)?),
-            solved(cell(stats, "td3", site)?),
+            solved(cell(stats, ddpg, site)?),
+            solved(cell(stats, td3, site)?),
             solved_steps(pbcs),
-            solved_steps(cell(stats, "pbcs_fast", site)?),
+            solved_steps(cell(stats, fast, site)?),
         );
     }
     Ok(s)
@@ -91,7 +91,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         let name: &str = env.into();
         let map = env.point_map().map_or(name, <&str>::from);
         let judged_cell = |cells: &[JudgedCell], stats: &[CellStats]| -> Result<String> {
-            let stats = cell(stats, &c.method, &c.site)?;
+            let stats = cell(stats, c.method, c.site)?;
             let j = cells.iter().find(|j| j.cell == stats.cell).ok_or_else(|| {
                 Error::parse(
                     Path::new("results/tables"),
@@ -106,6 +106,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
             ))
         };
         let baseline = |method: &str| -> Result<String> {
+            let method = Method::new(method)?;
             let b = baselines
                 .iter()
                 .find(|b| b.method == method && b.env == env)
@@ -124,17 +125,18 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         // those with rows (the grid may still be running: `–` where none has a row yet), and
         // the median steps of the solved ones.
         let goals = env.goals_task();
-        let ours = |method: &str| {
+        let ours = |method: &str| -> Result<String> {
+            let method = Method::new(method)?;
             let line = baselines
                 .iter()
                 .find(|b| b.library == Library::Ours && b.method == method && Some(b.env) == goals);
-            match line {
+            Ok(match line {
                 None => "–".to_string(),
                 Some(b) => match b.solved_at_median {
                     Some(m) => format!("{}/{}, {}", b.solved, b.runs, human_steps(m as f64)),
                     None => format!("{}/{}", b.solved, b.runs),
                 },
-            }
+            })
         };
         let _ = writeln!(
             s,
@@ -144,8 +146,8 @@ fn pointmaze_table(results: &Path) -> Result<String> {
             baseline("ddpg")?,
             baseline("td3")?,
             baseline("sac_her")?,
-            ours("sac_her"),
-            ours("td3_her"),
+            ours("sac_her")?,
+            ours("td3_her")?,
         );
     }
     Ok(s)

@@ -6,7 +6,7 @@
 //! not the one measured in our own environment.
 
 use crate::error::{Error, Result};
-use crate::experiment::{Experiment, RawRow};
+use crate::experiment::{CellKey, Experiment, RawRow};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -18,7 +18,7 @@ pub const SOLVED_SUCCESSES: u32 = 95;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct JudgedRun {
     /// The cell, as in the run's row.
-    pub cell: String,
+    pub cell: CellKey,
     /// The run seed.
     pub seed: u64,
     /// The judge: gymnasium-robotics' environment id.
@@ -51,7 +51,7 @@ pub struct JudgedRun {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct JudgedCell {
     /// The cell.
-    pub cell: String,
+    pub cell: CellKey,
     /// The judge.
     pub gym_id: String,
     /// Seeds judged (all the cell's seeds).
@@ -73,7 +73,12 @@ pub fn judged_path(results: &Path, experiment: &str) -> PathBuf {
 /// naming its cell and seed, successes within the episodes, `gym_solved` agreeing with them,
 /// and the run it judged the one of the cell's row (`rows`: the same env steps and our own
 /// verdict), so that a verdict left from an earlier run is refused.
-fn judged_runs(dir: &Path, cell: &str, seeds: &[u64], rows: &[RawRow]) -> Result<Vec<JudgedRun>> {
+fn judged_runs(
+    dir: &Path,
+    cell: CellKey,
+    seeds: &[u64],
+    rows: &[RawRow],
+) -> Result<Vec<JudgedRun>> {
     let paths: Vec<PathBuf> = seeds
         .iter()
         .map(|s| dir.join(format!("s{s}.gym.csv")))
@@ -142,7 +147,7 @@ pub fn judged_cells(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result
     for cell in &exp.cells {
         let seeds = exp.seeds_of(cell);
         let dir = exp.cell_dir(results, cell);
-        let runs = judged_runs(&dir, &cell.id, &seeds, rows)?;
+        let runs = judged_runs(&dir, cell.id, &seeds, rows)?;
         let Some(first) = runs.first() else { continue };
         if let Some(other) = runs.iter().find(|r| r.gym_id != first.gym_id) {
             return Err(Error::parse(
@@ -154,7 +159,7 @@ pub fn judged_cells(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result
             ));
         }
         cells.push(JudgedCell {
-            cell: cell.id.clone(),
+            cell: cell.id,
             gym_id: first.gym_id.clone(),
             seeds: runs.len(),
             solved: runs.iter().filter(|r| r.gym_solved).count(),

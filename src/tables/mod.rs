@@ -19,7 +19,7 @@ pub mod scope;
 pub mod statistics;
 
 use crate::error::{Error, Result};
-use crate::experiment::{Cell, Experiment, RawRow, Site};
+use crate::experiment::{Cell, CellKey, Experiment, Method, RawRow, Site};
 use crate::stats::{median, quantile, wilson, Z95};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -30,9 +30,9 @@ pub struct CellStats {
     /// Experiment name.
     pub experiment: String,
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Method label.
     pub label: String,
     /// Where the cell runs: maze size N or another environment's name (column `maze`).
@@ -84,8 +84,8 @@ impl CellStats {
     pub fn counted(exp: &Experiment, c: &Cell, k: u64, n: u64) -> CellStats {
         CellStats {
             experiment: exp.name.clone(),
-            cell: c.id.clone(),
-            method: c.method.clone(),
+            cell: c.id,
+            method: c.method,
             label: c.label.clone(),
             site: c.site,
             n: 0,
@@ -261,11 +261,11 @@ pub fn methods_by_maze_markdown(
     runs: &[crate::criteria::ChainSuccess],
 ) -> String {
     use crate::fmt::human_steps;
-    let mut labels: Vec<(&str, &str)> = Vec::new();
+    let mut labels: Vec<(Method, &str)> = Vec::new();
     let mut mazes: Vec<Site> = Vec::new();
     for c in stats {
         if !labels.iter().any(|(m, _)| *m == c.method) {
-            labels.push((&c.method, &c.label));
+            labels.push((c.method, &c.label));
         }
         if !mazes.contains(&c.site) {
             mazes.push(c.site);
@@ -379,7 +379,7 @@ pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CellTiming {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Runs with a timing file.
     pub n: u64,
     /// Median wall seconds per run.
@@ -410,7 +410,7 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
             let total: f64 = secs.iter().sum();
             let steps: u64 = runs.iter().map(|r| r.1).sum();
             Some(CellTiming {
-                cell: c.id.clone(),
+                cell: c.id,
                 n: runs.len() as u64,
                 wall_median_s: median(&mut secs),
                 wall_total_s: total,
@@ -429,8 +429,8 @@ mod tests {
         let c = &exp.cells[0];
         RawRow {
             experiment: exp.name.clone(),
-            cell: c.id.clone(),
-            method: c.method.clone(),
+            cell: c.id,
+            method: c.method,
             kind: crate::experiment::Kind::Pbcs,
             site: c.site,
             maze_seed: 0,
@@ -462,7 +462,7 @@ mod tests {
         ];
         let stats = cell_stats(&exp, &rows);
         let timings = [CellTiming {
-            cell: "mine-maze2".into(),
+            cell: "mine-maze2".parse().unwrap(),
             n: 3,
             wall_median_s: 20.0,
             wall_total_s: 60.0,

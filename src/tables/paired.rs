@@ -7,7 +7,7 @@
 //! (`\res{<experiment>:paired:<site>:<field>}`, the pooled row's site being `all`).
 
 use super::scope::Scope;
-use crate::experiment::{Experiment, RawRow, Site};
+use crate::experiment::{CellKey, Experiment, Method, RawRow, Site};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -17,9 +17,9 @@ pub struct PairedSite {
     /// The site (`pointmaze_medium`), or all of them pooled (written `all`).
     pub site: Scope<Site>,
     /// The baseline method.
-    pub baseline: String,
+    pub baseline: Method,
     /// The variant method.
-    pub variant: String,
+    pub variant: Method,
     /// Seeds with a row in both methods' cells.
     pub pairs: u64,
     /// Pairs where the variant used fewer env steps.
@@ -49,16 +49,13 @@ pub fn paired_path(results: &Path, experiment: &str) -> PathBuf {
 /// assert!(pbcs::tables::paired::paired_sites(&exp, &[]).is_empty());
 /// ```
 pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
-    let Some([baseline, variant]) = exp.registered.as_ref().and_then(|r| r.paired.clone()) else {
+    let Some([baseline, variant]) = exp.registered.as_ref().and_then(|r| r.paired) else {
         return Vec::new();
     };
-    let steps = |method: &str, site, seed| {
-        let cell = exp
-            .cells
-            .iter()
-            .find(|c| c.method == method && c.site == site)?;
+    let steps = |method, site, seed| {
+        let cell = CellKey::new(method, site);
         rows.iter()
-            .find(|r| r.cell == cell.id && r.seed == seed)
+            .find(|r| r.cell == cell && r.seed == seed)
             .map(|r| r.env_steps)
     };
     let row = |site: Scope<Site>, diffs: &[std::cmp::Ordering]| {
@@ -69,8 +66,8 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
         );
         PairedSite {
             site,
-            baseline: baseline.clone(),
-            variant: variant.clone(),
+            baseline,
+            variant,
             pairs: diffs.len() as u64,
             fewer,
             more,
@@ -84,7 +81,7 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
         let diffs: Vec<_> = exp
             .seeds()
             .into_iter()
-            .filter_map(|s| Some(steps(&variant, site, s)?.cmp(&steps(&baseline, site, s)?)))
+            .filter_map(|s| Some(steps(variant, site, s)?.cmp(&steps(baseline, site, s)?)))
             .collect();
         if !diffs.is_empty() {
             all.extend_from_slice(&diffs);
@@ -150,37 +147,32 @@ mod known {
         let mut ours = Vec::new();
         for r in rows.iter().filter(|r| r.seed < 4) {
             let site = r.site;
-            let base = exp
-                .cells
-                .iter()
-                .find(|c| c.method == "pbcs_pm" && c.site == site);
-            let var = exp
-                .cells
-                .iter()
-                .find(|c| c.method == "pbcs_pm_velocity" && c.site == site);
-            let (base, var) = (base.unwrap(), var.unwrap());
+            let cell = |m| CellKey::new(Method::new(m).unwrap(), site);
+            let (base, var) = (cell("pbcs_pm"), cell("pbcs_pm_velocity"));
             let seed = r.seed + 20;
             ours.push(RawRow {
-                cell: base.id.clone(),
+                cell: base,
                 seed,
                 ..r.clone()
             });
             // UMaze: seeds 20, 21 fewer, 22 equal, 23 more; other maps: every seed fewer.
-            let delta: i64 = match (site.to_string().as_str(), r.seed) {
-                ("pointmaze_umaze", 2) => 0,
-                ("pointmaze_umaze", 3) => 1,
+            let umaze = Site::Env(crate::envs::EnvName::PointmazeUmaze);
+            let delta: i64 = match r.seed {
+                2 if site == umaze => 0,
+                3 if site == umaze => 1,
                 _ => -1,
             };
             let env_steps = r.env_steps.checked_add_signed(delta).unwrap();
             ours.push(RawRow {
-                cell: var.id.clone(),
+                cell: var,
                 seed,
                 env_steps,
                 ..r.clone()
             });
         }
         // Medium's seed 23 has no variant row: not a pair.
-        ours.retain(|r| !(r.cell == "pbcs_pm_velocity-pointmaze_medium" && r.seed == 23));
+        let medium: CellKey = "pbcs_pm_velocity-pointmaze_medium".parse().unwrap();
+        ours.retain(|r| !(r.cell == medium && r.seed == 23));
         let got: Vec<_> = paired_sites(&exp, &ours)
             .into_iter()
             .map(|s| (s.site.to_string(), s.pairs, s.fewer, s.more, s.ties))

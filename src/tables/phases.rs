@@ -8,7 +8,7 @@
 //! so both are tabled. `pbcs figures` writes their numbers
 //! (`\res{<experiment>:<cell>:phases:<field>}`).
 
-use crate::experiment::{Experiment, Kind, RawRow, Site};
+use crate::experiment::{CellKey, Experiment, Kind, Method, RawRow, Site};
 use crate::fmt::human_steps;
 use crate::stats::median;
 use serde::{Deserialize, Serialize};
@@ -18,9 +18,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CellPhases {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Maze size N or another environment's name (column `maze`).
     #[serde(rename = "maze")]
     pub site: Site,
@@ -75,8 +75,8 @@ pub fn cell_phases(exp: &Experiment, rows: &[RawRow]) -> Vec<CellPhases> {
         let learning = |r: &RawRow| r.phase1_steps + r.train_steps;
         let sum = |part: fn(&RawRow) -> u64| runs.iter().map(|r| part(r)).sum::<u64>() as f64;
         out.push(CellPhases {
-            cell: c.id.clone(),
-            method: c.method.clone(),
+            cell: c.id,
+            method: c.method,
             site: c.site,
             runs: runs.len() as u64,
             env_steps_median: mid(|r| r.env_steps),

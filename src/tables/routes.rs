@@ -13,7 +13,7 @@
 
 use crate::envs::maze::Maze;
 use crate::error::{Error, Result};
-use crate::experiment::{evaluation_file, Experiment, Job, Kind, RawRow};
+use crate::experiment::{evaluation_file, CellKey, Experiment, Job, Kind, Method, RawRow};
 use crate::rng::{Seeds, Stream};
 use crate::runs::EvalEpisode;
 use serde::{Deserialize, Serialize};
@@ -23,9 +23,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Route {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Method name.
-    pub method: String,
+    pub method: Method,
     /// Maze size N or another environment's name (column `maze`).
     #[serde(rename = "maze")]
     pub site: crate::experiment::Site,
@@ -87,7 +87,7 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
     let mut out = Vec::new();
     let on_maze = |r: &&RawRow| r.kind == Kind::Pbcs && r.site.size().is_some();
     for r in rows.iter().filter(on_maze) {
-        let cell = exp.cell(&r.cell)?;
+        let cell = exp.cell_at(r.cell)?;
         let path = evaluation_file(exp, results, cell, r.seed);
         if !path.exists() {
             continue;
@@ -109,8 +109,8 @@ pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<R
             Error::invalid("maze", format!("{}: the target cannot be reached", r.cell))
         })?;
         out.push(Route {
-            cell: r.cell.clone(),
-            method: r.method.clone(),
+            cell: r.cell,
+            method: r.method,
             site: r.site,
             seed: r.seed,
             solved: r.solved,
@@ -134,7 +134,7 @@ pub fn read_routes(path: &Path) -> Result<Vec<Route>> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RouteCell {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Runs with a route.
     pub runs: u64,
     /// Of them, runs with a successful evaluation episode (a chain's path).
@@ -164,7 +164,7 @@ pub fn route_cells_path(results: &Path, experiment: &str) -> PathBuf {
 /// Each cell's [`RouteCell`] from the routes table, cells in the order they first appear
 /// (whatever the rows' order).
 pub fn route_cells(routes: &[Route]) -> Vec<RouteCell> {
-    super::distinct(routes.iter().map(|r| r.cell.as_str()))
+    super::distinct(routes.iter().map(|r| r.cell))
         .into_iter()
         .map(|cell| {
             let runs: Vec<&Route> = routes.iter().filter(|r| r.cell == cell).collect();
@@ -175,7 +175,7 @@ pub fn route_cells(routes: &[Route]) -> Vec<RouteCell> {
             let of =
                 |f: fn(&Route) -> Option<f64>| median(runs.iter().filter_map(|r| f(r)).collect());
             RouteCell {
-                cell: cell.to_string(),
+                cell,
                 runs: runs.len() as u64,
                 chain_runs: runs.iter().filter(|r| r.chain_steps.is_some()).count() as u64,
                 shorter: runs

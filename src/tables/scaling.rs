@@ -5,7 +5,7 @@
 
 use crate::envs::maze::Maze;
 use crate::error::Result;
-use crate::experiment::{Cell, Experiment, Job};
+use crate::experiment::{Cell, CellKey, Experiment, Job};
 use crate::tables::CellStats;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PathLength {
     /// Cell id.
-    pub cell: String,
+    pub cell: CellKey,
     /// Maze size N.
     pub maze: usize,
     /// Moves between maze cells on the shortest path ([`Maze::path_cells`]).
@@ -44,7 +44,7 @@ pub fn path_lengths(exp: &Experiment) -> Result<Vec<PathLength>> {
         let Some(n) = c.site.size() else { continue };
         if let Some(l) = cell_maze(c)?.path_cells() {
             out.push(PathLength {
-                cell: c.id.clone(),
+                cell: c.id,
                 maze: n,
                 path_cells: l,
             });

@@ -122,7 +122,7 @@ fn sb3_evaluations_give_known_values() {
     let lines = pointmaze_baselines(&[], tmp.path()).unwrap();
     // Seed 3 stopped before its first evaluation: left out; seed 2 was resumed once.
     let want = PointMazeBaseline {
-        method: "sac_her".into(),
+        method: "sac_her".parse().unwrap(),
         library: Library::Sb3,
         env: EnvName::PointmazeUmaze,
         runs: 3,

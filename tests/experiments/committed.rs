@@ -248,7 +248,7 @@ fn the_rooms_grid_goes_through_rows_tables_and_figures_like_a_maze() {
     let exp = Experiment::load(Path::new("experiments/rooms.toml"), None).unwrap();
     let rooms = Site::Env(EnvName::Rooms);
     assert_eq!(exp.sites, [rooms]);
-    let ids: Vec<&str> = exp.cells.iter().map(|c| c.id.as_str()).collect();
+    let ids: Vec<String> = exp.cells.iter().map(|c| c.id.to_string()).collect();
     assert_eq!(ids, ["pbcs-rooms", "pbcs_fast-rooms"]);
     for c in &exp.cells {
         let pbcs::experiment::Job::Pbcs(j) = &c.job else {

@@ -17,7 +17,7 @@ fn every_experiment_file_parses_with_unique_cells() {
         for profile in [None, Some("smoke")] {
             let exp = Experiment::load(&f, profile)
                 .unwrap_or_else(|e| panic!("{} ({profile:?}): {e}", f.display()));
-            let ids: BTreeSet<&str> = exp.cells.iter().map(|c| c.id.as_str()).collect();
+            let ids: BTreeSet<String> = exp.cells.iter().map(|c| c.id.to_string()).collect();
             assert_eq!(
                 ids.len(),
                 exp.cells.len(),
@@ -117,7 +117,7 @@ fn a_method_may_run_a_subset_of_the_sizes() {
         )
     };
     let exp = Experiment::load(&write(dir.path(), "sub.toml", &text("[3]")), None).unwrap();
-    let ids: Vec<&str> = exp.cells.iter().map(|c| c.id.as_str()).collect();
+    let ids: Vec<String> = exp.cells.iter().map(|c| c.id.to_string()).collect();
     assert_eq!(ids, ["a-maze2", "a-maze3", "b-maze3"]);
     for bad in ["[5]", "[]"] {
         let err = Experiment::load(&write(dir.path(), "bad.toml", &text(bad)), None)
@@ -365,9 +365,9 @@ fn the_papers_step_counts_come_from_the_table_experiment() {
     for c in exp
         .cells
         .iter()
-        .filter(|c| c.method == "pbcs" || c.method == "pbcs_no_chaining")
+        .filter(|c| ["pbcs", "pbcs_no_chaining"].contains(&c.method.as_str()))
     {
-        let variant = if c.method == "pbcs" {
+        let variant = if c.method.as_str() == "pbcs" {
             Variant::Pbcs
         } else {
             Variant::PbcsNoChaining
@@ -547,7 +547,7 @@ fn methods_and_profiles_choose_their_environments() {
     let path = write(dir.path(), "mixed.toml", text);
     let ids = |profile| -> Vec<String> {
         let exp = Experiment::load(&path, profile).unwrap();
-        exp.cells.iter().map(|c| c.id.clone()).collect()
+        exp.cells.iter().map(|c| c.id.to_string()).collect()
     };
     assert_eq!(ids(None), ["p-maze2", "v-maze2", "p-rooms"]);
     assert_eq!(ids(Some("mazes_only")), ["p-maze2", "v-maze2"]);

@@ -14,7 +14,7 @@ fn two_runs(exp: &Experiment) -> Vec<Pending<'_>> {
     let runs: Vec<Pending> = plan(exp, None, None)
         .unwrap()
         .into_iter()
-        .filter(|p| p.cell.id == "ddpg-maze2" || p.cell.id == "td3-maze2")
+        .filter(|p| ["ddpg-maze2", "td3-maze2"].contains(&p.cell.id.to_string().as_str()))
         .collect();
     assert_eq!(runs.len(), 2);
     runs

@@ -31,8 +31,8 @@ fn made_up_row(exp: &Experiment, cell: &Cell, seed: u64) -> RawRow {
     };
     RawRow {
         experiment: exp.name.clone(),
-        cell: cell.id.clone(),
-        method: cell.method.clone(),
+        cell: cell.id,
+        method: cell.method,
         kind: Kind::Pbcs,
         site: cell.site,
         maze_seed: j.maze.seed,
@@ -179,8 +179,8 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
             ..made_up_row(&exp, cell, seed as u64)
         })
         .chain([RawRow {
-            cell: "ddpg-maze2".into(),
-            method: "ddpg".into(),
+            cell: "ddpg-maze2".parse().unwrap(),
+            method: "ddpg".parse().unwrap(),
             kind: Kind::Vanilla,
             ..made_up_row(&exp, cell, 0)
         }])
@@ -188,7 +188,7 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
     let table = cell_phases(&exp, &rows);
     assert_eq!(table.len(), 1, "only the cell with PBCS rows");
     let c = &table[0];
-    assert_eq!((c.cell.as_str(), c.runs), ("pbcs-maze2", 3));
+    assert_eq!((c.cell.to_string().as_str(), c.runs), ("pbcs-maze2", 3));
     assert_eq!(
         [
             c.phase1_median,

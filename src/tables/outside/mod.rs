@@ -23,7 +23,7 @@
 
 use super::scope::Scope;
 use crate::error::{Error, Result};
-use crate::experiment::{evals_file, run_file, Experiment};
+use crate::experiment::{evals_file, run_file, CellKey, Experiment, Method, Site};
 use crate::learner::td3::Algo;
 use crate::stats::{fisher_exact, least_successes, wilson, Z95};
 use crate::vanilla::EvalRow;
@@ -179,13 +179,7 @@ fn ours_at(
     maze: usize,
     steps: u64,
 ) -> Result<Vec<(u64, bool)>> {
-    let id = format!("{algo}-maze{maze}");
-    let cell = table.cells.iter().find(|c| c.id == id).ok_or_else(|| {
-        Error::invalid(
-            "outside",
-            format!("experiment {} has no cell {id}", table.name),
-        )
-    })?;
+    let cell = table.cell_at(CellKey::new(Method::new(algo.name())?, Site::Maze(maze)))?;
     let mut out = Vec::new();
     for seed in table.seeds() {
         let path = evals_file(table, results, cell, seed);

@@ -13,7 +13,7 @@ use super::{seed_files, seed_rows, seeds_text};
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::experiment::run_file;
-use crate::experiment::{Cell, Experiment, RawRow};
+use crate::experiment::{Cell, Experiment, Method, RawRow};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -80,7 +80,7 @@ impl Sb3Eval {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointMazeBaseline {
     /// `ddpg`, `td3`, `sac_her`, `td3_her` (ours) or `sac_her` (SB3).
-    pub method: String,
+    pub method: Method,
     /// `ours` or `sb3`.
     pub library: Library,
     /// The registry's name of the task (`pointmaze_umaze`; `pointmaze_umaze_goals` for ours
@@ -131,7 +131,7 @@ pub fn pointmaze_baselines(
     for &exp in vanilla {
         let rows = crate::experiment::read_raw(exp, results)?;
         let mut cells: Vec<&Cell> = exp.cells.iter().collect();
-        cells.sort_by(|a, b| a.id.cmp(&b.id));
+        cells.sort_by_key(|a| a.id);
         for cell in cells {
             let runs: Vec<&RawRow> = rows.iter().filter(|r| r.cell == cell.id).collect();
             if !runs.is_empty() {
@@ -139,7 +139,10 @@ pub fn pointmaze_baselines(
             }
         }
     }
-    for f in folders(&results.join("pointmaze").join("sb3"), &["sac_her"])? {
+    for f in folders(
+        &results.join("pointmaze").join("sb3"),
+        &[Method::new("sac_her")?],
+    )? {
         out.push(sb3_line(&f)?);
     }
     Ok(out)
@@ -147,14 +150,14 @@ pub fn pointmaze_baselines(
 
 /// One learner's folder `<method>-<env>`.
 struct Folder {
-    method: String,
+    method: Method,
     env: EnvName,
     dir: PathBuf,
 }
 
 /// The folders `<method>-<env>` of `root` (none without `root`), sorted by name: every folder
 /// there must name one of `methods` and a PointMaze map of the registry; files are left alone.
-fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
+fn folders(root: &Path, methods: &[Method]) -> Result<Vec<Folder>> {
     if !root.is_dir() {
         return Ok(Vec::new());
     }
@@ -166,7 +169,7 @@ fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
         }
         let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
         let parsed = name.split_once('-').and_then(|(m, env)| {
-            let env = env.parse::<EnvName>().ok()?;
+            let (m, env) = (m.parse::<Method>().ok()?, env.parse::<EnvName>().ok()?);
             (methods.contains(&m) && env.point_map().is_some()).then_some((m, env))
         });
         let Some((method, env)) = parsed else {
@@ -177,7 +180,7 @@ fn folders(root: &Path, methods: &[&str]) -> Result<Vec<Folder>> {
             return Err(Error::parse(&dir, why));
         };
         found.push(Folder {
-            method: method.to_string(),
+            method,
             env,
             dir: dir.clone(),
         });
@@ -249,7 +252,7 @@ fn vanilla_line(
         }
     }
     Ok(PointMazeBaseline {
-        method: cell.method.clone(),
+        method: cell.method,
         library: Library::Ours,
         env: cell.site.env(),
         runs: runs.len() as u64,
@@ -327,7 +330,7 @@ fn sb3_evals(dir: &Path, seed: u64) -> Result<Vec<Sb3Eval>> {
 /// SB3's line from one folder: every run's evaluations; a run ended where its `s<seed>.csv`
 /// exists, and then it must agree with them (its best, and its stop at a solving evaluation).
 fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
-    let (method, env, dir) = (f.method.as_str(), f.env, f.dir.as_path());
+    let (method, env, dir) = (f.method, f.env, f.dir.as_path());
     let ended: Vec<(PathBuf, Sb3Row)> = seed_rows(dir, |r: &Sb3Row| r.seed)?;
     if let Some((path, _)) = ended.iter().find(|(_, r)| r.algo != method || r.map != env) {
         return Err(Error::parse(
@@ -360,7 +363,7 @@ fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
         .max_by_key(|&(top, at)| (top, std::cmp::Reverse(at)))
         .unwrap_or((0, 0));
     Ok(PointMazeBaseline {
-        method: method.to_string(),
+        method,
         library: Library::Sb3,
         env,
         runs: runs.len() as u64,
@@ -435,7 +438,7 @@ fn sb3_run(seed: u64, evals: &[Sb3Eval], row: Option<&(PathBuf, Sb3Row)>) -> Res
 #[derive(Debug, Clone, Deserialize)]
 struct Sb3Row {
     library: String,
-    algo: String,
+    algo: Method,
     map: EnvName,
     seed: u64,
     env_steps: u64,
@@ -453,7 +456,7 @@ pub const SB3_BUDGET: u64 = 500_000;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointMazeSb3Comparison {
     /// Our method (`sac_her`).
-    pub method: String,
+    pub method: Method,
     /// Our task (`pointmaze_umaze_goals`).
     pub env: EnvName,
     /// SB3's map folder (`pointmaze_umaze`).
@@ -522,7 +525,7 @@ pub fn sb3_comparisons(
             .collect();
         let (k1, n1, k2, n2) = (solved.len() as u64, runs.len() as u64, sb3.solved, sb3.runs);
         out.push(PointMazeSb3Comparison {
-            method: ours.method.clone(),
+            method: ours.method,
             env: ours.env,
             sb3_env: map,
             budget: SB3_BUDGET,

@@ -1,0 +1,202 @@
+//! The names results are joined by, as values: a [`Method`] (a name an experiment declares)
+//! and a [`CellKey`] (a method at a [`Site`]). Both are `Copy` and compare as values, so a
+//! table joins rows on keys, never on strings; each is written and read in one place here.
+//!
+//! A cell key is written `<method>-<site id>` (`pbcs-maze5`, `td3_her-pointmaze_umaze_goals`):
+//! a cell's folder name, its name on the command line and its `cell` column. A method name
+//! holds letters, digits and `_` only, so the first `-` ends it.
+//!
+//! Method names are interned ([`ustr`]): an experiment declares a handful, each is stored
+//! once for the life of the process and a copy is a pointer. They order as their text does,
+//! and a cell key orders as its written form, so sorting by key sorts as the tables always
+//! have.
+//!
+//! ```
+//! use pbcs::envs::EnvName;
+//! use pbcs::experiment::{CellKey, Method, Site};
+//!
+//! let key: CellKey = "pbcs_pm-pointmaze_medium".parse().unwrap();
+//! assert_eq!(key.method, Method::new("pbcs_pm").unwrap());
+//! assert_eq!(key.site, Site::Env(EnvName::PointmazeMedium));
+//! assert_eq!(CellKey::new(Method::new("td3").unwrap(), Site::Maze(5)).to_string(), "td3-maze5");
+//! assert!("pbcs-maze".parse::<CellKey>().is_err()); // a maze is written with its size
+//! assert!("pbcs maze5".parse::<CellKey>().is_err()); // no method-site separator
+//! assert!(Method::new("pbcs-pm").is_err()); // `-` separates a method from its site
+//! ```
+
+use super::Site;
+use crate::envs::EnvName;
+use crate::error::{Error, Result};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::cmp::Ordering;
+use std::fmt;
+use std::str::FromStr;
+use ustr::Ustr;
+
+/// A method's name as its experiment declares it (`pbcs`, `td3_her`, `pbcs_pm_velocity`):
+/// letters, digits and `_`.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Method(Ustr);
+
+impl Method {
+    /// The method called `name`, or an error if it holds anything but letters, digits and `_`
+    /// (a method name is a folder name and the first part of a cell key).
+    pub fn new(name: &str) -> Result<Method> {
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(Error::invalid(
+                "method.name",
+                format!("`{name}`: use letters, digits and `_` only"),
+            ));
+        }
+        Ok(Method(Ustr::from(name)))
+    }
+
+    /// The name.
+    pub fn as_str(self) -> &'static str {
+        self.0.as_str()
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl fmt::Debug for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+impl FromStr for Method {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Method> {
+        Method::new(s)
+    }
+}
+
+/// A cell of an experiment's grid: a method at a site. Two cells of one experiment never
+/// share a key ([`super::Experiment`] checks it).
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CellKey {
+    /// The method.
+    pub method: Method,
+    /// Where it runs.
+    pub site: Site,
+}
+
+impl CellKey {
+    /// `method` at `site`.
+    pub fn new(method: Method, site: Site) -> CellKey {
+        CellKey { method, site }
+    }
+}
+
+impl fmt::Display for CellKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}-{}", self.method, self.site.id())
+    }
+}
+
+impl fmt::Debug for CellKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:?}", self.to_string())
+    }
+}
+
+/// As the written key (`pbcs-maze10` before `pbcs-maze5`), the order every table was sorted
+/// in when keys were strings.
+impl Ord for CellKey {
+    fn cmp(&self, other: &CellKey) -> Ordering {
+        self.to_string().cmp(&other.to_string())
+    }
+}
+
+impl PartialOrd for CellKey {
+    fn partial_cmp(&self, other: &CellKey) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl FromStr for CellKey {
+    type Err = Error;
+
+    /// `<method>-maze<N>` or `<method>-<environment>`.
+    fn from_str(s: &str) -> Result<CellKey> {
+        let bad = |why: String| Error::invalid("cell", format!("`{s}` is not a cell key: {why}"));
+        let (method, site) = s
+            .split_once('-')
+            .ok_or_else(|| bad("it has no `-` between its method and its site".into()))?;
+        let method = Method::new(method).map_err(|e| bad(e.to_string()))?;
+        let site = match site.strip_prefix("maze").map(str::parse::<usize>) {
+            Some(Ok(n)) => Site::Maze(n),
+            _ => match site.parse::<EnvName>() {
+                Ok(EnvName::Maze) | Err(_) => {
+                    return Err(bad(format!(
+                        "its site `{site}` is neither `maze<N>` nor an environment ({})",
+                        EnvName::others()
+                    )))
+                }
+                Ok(e) => Site::Env(e),
+            },
+        };
+        Ok(CellKey { method, site })
+    }
+}
+
+/// Both are written as their text, so a row's CSV reads as it did when they were strings.
+macro_rules! as_text {
+    ($t:ty) => {
+        impl Serialize for $t {
+            fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+                s.collect_str(self)
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $t {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<$t, D::Error> {
+                let s = std::borrow::Cow::<str>::deserialize(d)?;
+                s.parse().map_err(serde::de::Error::custom)
+            }
+        }
+    };
+}
+as_text!(Method);
+as_text!(CellKey);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn site() -> impl Strategy<Value = Site> {
+        prop_oneof![
+            (1usize..200).prop_map(Site::Maze),
+            proptest::sample::select(
+                EnvName::all()
+                    .iter()
+                    .copied()
+                    .filter(|e| *e != EnvName::Maze)
+                    .collect::<Vec<_>>()
+            )
+            .prop_map(Site::Env),
+        ]
+    }
+
+    proptest! {
+        /// A key written and read back is the same key, for any method name and site.
+        #[test]
+        fn a_key_reads_back_as_written(m in "[a-z0-9_]{1,12}", s in site()) {
+            let key = CellKey::new(Method::new(&m).unwrap(), s);
+            prop_assert_eq!(key.to_string().parse::<CellKey>().unwrap(), key);
+        }
+
+        /// Keys order as their written form.
+        #[test]
+        fn keys_order_as_text(a in "[a-z_]{1,6}", b in "[a-z_]{1,6}", s in site(), t in site()) {
+            let (x, y) = (CellKey::new(Method::new(&a).unwrap(), s), CellKey::new(Method::new(&b).unwrap(), t));
+            prop_assert_eq!(x.cmp(&y), x.to_string().cmp(&y.to_string()));
+        }
+    }
+}
