@@ -15,7 +15,7 @@ use polars::prelude::*;
 
 fn err(exp: &Experiment, e: impl std::fmt::Display) -> Error {
     Error::Aggregate {
-        experiment: exp.name.clone(),
+        experiment: exp.name.to_string(),
         message: e.to_string(),
     }
 }

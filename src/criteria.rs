@@ -13,7 +13,7 @@
 //! use pbcs::criteria::{criteria, ChainSuccess};
 //!
 //! let run = |seed, complete, success_rate| ChainSuccess {
-//!     experiment: "t".into(), cell: "pbcs-maze2".parse().unwrap(), method: "pbcs".parse().unwrap(),
+//!     experiment: "t".parse().unwrap(), cell: "pbcs-maze2".parse().unwrap(), method: "pbcs".parse().unwrap(),
 //!     label: "PBCS".into(), site: pbcs::experiment::Site::Maze(2), seed, complete, success_rate,
 //!     solved: complete && success_rate >= 0.95, env_steps: 1000, paper_steps: Some(321_000),
 //! };
@@ -21,7 +21,7 @@
 //! assert_eq!((c.n, c.complete, c.at_0_50, c.at_0_90, c.at_0_95, c.at_1_00), (3, 2, 2, 2, 1, 1));
 //! ```
 
-use crate::experiment::{CellKey, Experiment, Kind, Method, RawRow};
+use crate::experiment::{CellKey, Experiment, ExperimentName, Kind, Method, RawRow};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -33,7 +33,7 @@ pub const THRESHOLDS: [f32; 4] = [0.5, 0.9, crate::stats::SOLVED_AT, 1.0];
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChainSuccess {
     /// Experiment name.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// Cell id.
     pub cell: CellKey,
     /// Method name.
@@ -62,7 +62,7 @@ pub struct ChainSuccess {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Criteria {
     /// Experiment name.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// Cell id.
     pub cell: CellKey,
     /// Method name.
@@ -113,7 +113,7 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
     rows.iter()
         .filter(|r| r.kind == Kind::Pbcs)
         .map(|r| ChainSuccess {
-            experiment: r.experiment.clone(),
+            experiment: r.experiment,
             cell: r.cell,
             method: r.method,
             label: exp
@@ -138,7 +138,7 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
             Some(i) => i,
             None => {
                 out.push(Criteria {
-                    experiment: r.experiment.clone(),
+                    experiment: r.experiment,
                     cell: r.cell,
                     method: r.method,
                     label: r.label.clone(),
@@ -168,14 +168,14 @@ pub fn criteria(runs: &[ChainSuccess]) -> Vec<Criteria> {
 }
 
 /// `results/tables/<experiment>.chains.csv`.
-pub fn chains_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn chains_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.chains.csv"))
 }
 
 /// `results/tables/<experiment>.criteria.csv`.
-pub fn criteria_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn criteria_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.criteria.csv"))
@@ -220,7 +220,7 @@ pub fn read_chains(path: &Path) -> crate::Result<Vec<ChainSuccess>> {
 /// use pbcs::criteria::{profile, ChainSuccess};
 ///
 /// let run = |steps, solved| ChainSuccess {
-///     experiment: "t".into(), cell: "m-maze2".parse().unwrap(), method: "m".parse().unwrap(),
+///     experiment: "t".parse().unwrap(), cell: "m-maze2".parse().unwrap(), method: "m".parse().unwrap(),
 ///     label: "m".into(),
 ///     site: pbcs::experiment::Site::Maze(2), seed: 0, complete: true, success_rate: 1.0,
 ///     solved, env_steps: steps,

@@ -53,7 +53,7 @@ pub enum Error {
     /// One run of a sweep failed: which cell and seed, and why.
     #[error("cell {cell} seed {seed}: {cause}")]
     Run {
-        /// The cell's id.
+        /// The cell (its key, written: errors sit below every module).
         cell: String,
         /// The run seed.
         seed: u64,

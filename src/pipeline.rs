@@ -7,7 +7,7 @@
 
 use crate::claims::Claim;
 use crate::error::Result;
-use crate::experiment::{experiment_files, Experiment, FigureSpec, RawRow};
+use crate::experiment::{experiment_files, Experiment, ExperimentName, FigureSpec, RawRow};
 use crate::record::{write_atomic, write_records};
 use crate::report;
 use crate::tables::curves::curves_path;
@@ -100,7 +100,7 @@ pub fn load_experiments(dir: &Path, profile: Option<&str>) -> Result<Vec<Experim
 #[derive(Debug, Clone, PartialEq)]
 pub struct Aggregated {
     /// Experiment name.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// Finished runs read (0: none, nothing written).
     pub runs: usize,
     /// Runs of the full grid (cells × seeds).
@@ -153,9 +153,9 @@ pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>>
 pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {
     let mut out = Vec::new();
     for (exp, rows) in exps.iter().zip(read_all_raw(exps, results)?) {
-        let table = crate::tables::table_path(results, &exp.name);
+        let table = crate::tables::table_path(results, exp.name);
         let mut done = Aggregated {
-            experiment: exp.name.clone(),
+            experiment: exp.name,
             runs: rows.len(),
             expected: exp.run_count(),
             cells: 0,
@@ -177,7 +177,7 @@ pub struct Rendered {
     /// Each experiment with a table, and its table.
     pub tables: Vec<(Experiment, Vec<CellStats>)>,
     /// Experiments without a table (name, the missing path): skipped.
-    pub skipped: Vec<(String, PathBuf)>,
+    pub skipped: Vec<(ExperimentName, PathBuf)>,
     /// The paper's claims judged against the tables.
     pub claims: Vec<Claim>,
     /// Under a profile, the claims its smaller grid cannot judge (why, per claim); empty for
@@ -229,12 +229,12 @@ pub fn render(
     let mut tables = Vec::new();
     let mut skipped = Vec::new();
     for exp in exps {
-        let path = crate::tables::table_path(results, &exp.name);
+        let path = crate::tables::table_path(results, exp.name);
         if path.exists() {
             let stats = crate::tables::read_table(&path)?;
             tables.push((exp, stats));
         } else {
-            skipped.push((exp.name.clone(), path));
+            skipped.push((exp.name, path));
         }
     }
     if tables.is_empty() {
@@ -252,10 +252,8 @@ pub fn render(
             )),
         ));
     }
-    let named: Vec<(String, Vec<CellStats>)> = tables
-        .iter()
-        .map(|(e, s)| (e.name.clone(), s.clone()))
-        .collect();
+    let named: Vec<(ExperimentName, Vec<CellStats>)> =
+        tables.iter().map(|(e, s)| (e.name, s.clone())).collect();
     // The committed grids judge every claim (one that cannot be judged is an error); a
     // profile's smaller grid judges those it can.
     let (claims, unjudged) = if tables.iter().any(|(e, _)| e.profile.is_some()) {
@@ -299,12 +297,12 @@ pub fn write_tables(
     stats: &[CellStats],
     rows: &[RawRow],
 ) -> Result<()> {
-    crate::tables::write_table(&crate::tables::table_path(results, &exp.name), stats)?;
+    crate::tables::write_table(&crate::tables::table_path(results, exp.name), stats)?;
     let chains = crate::criteria::chain_successes(exp, rows);
     if !chains.is_empty() {
-        write_records(&crate::criteria::chains_path(results, &exp.name), &chains)?;
+        write_records(&crate::criteria::chains_path(results, exp.name), &chains)?;
         write_records(
-            &crate::criteria::criteria_path(results, &exp.name),
+            &crate::criteria::criteria_path(results, exp.name),
             &crate::criteria::criteria(&chains),
         )?;
     }
@@ -312,16 +310,16 @@ pub fn write_tables(
         match figure {
             FigureSpec::Curves { .. } => {
                 let points = crate::tables::curves::curve_points(exp, results)?;
-                write_records(&curves_path(results, &exp.name), &points)?;
+                write_records(&curves_path(results, exp.name), &points)?;
             }
             FigureSpec::Scaling { .. } => {
                 let paths = crate::tables::scaling::path_lengths(exp)?;
-                write_records(&paths_path(results, &exp.name), &paths)?;
+                write_records(&paths_path(results, exp.name), &paths)?;
             }
             _ => {}
         }
     }
-    let name = exp.name.as_str();
+    let name = exp.name;
     let routes = crate::tables::routes::routes(exp, results, rows)?;
     write_nonempty(&routes_path(results, name), &routes)?;
     write_nonempty(
@@ -370,7 +368,7 @@ pub fn render_all(
         let text = report::cells_table_tex(stats);
         write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
         files.push(path);
-        let criteria = crate::criteria::criteria_path(results, &exp.name);
+        let criteria = crate::criteria::criteria_path(results, exp.name);
         if criteria.exists() {
             let criteria = crate::criteria::read_criteria(&criteria)?;
             let path = tex_dir.join(format!("{}_criteria.tex", exp.name));
@@ -394,13 +392,13 @@ pub fn render_all(
             files.push(path);
         }
     }
-    let tables: Vec<(String, Vec<CellStats>)> = experiments
+    let tables: Vec<(ExperimentName, Vec<CellStats>)> = experiments
         .iter()
-        .map(|(e, s)| (e.name.clone(), s.clone()))
+        .map(|(e, s)| (e.name, s.clone()))
         .collect();
     let mut numbers = report::numbers_tex(&tables);
     for (exp, stats) in experiments {
-        let paths = paths_path(results, &exp.name);
+        let paths = paths_path(results, exp.name);
         if paths.exists() {
             numbers.push_str(&report::scaling_numbers_tex(
                 exp,
@@ -408,10 +406,10 @@ pub fn render_all(
                 &read_paths(&paths)?,
             ));
         }
-        let route_cells = crate::tables::routes::route_cells_path(results, &exp.name);
+        let route_cells = crate::tables::routes::route_cells_path(results, exp.name);
         if route_cells.exists() {
             let cells = crate::record::read_records(&route_cells)?;
-            numbers.push_str(&report::routes_numbers_tex(&exp.name, &cells));
+            numbers.push_str(&report::routes_numbers_tex(exp.name, &cells));
         }
         numbers.push_str(&report::extra_numbers_tex(exp, results)?);
     }
@@ -510,10 +508,12 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
 pub fn aggregate_outside(exps: &[Experiment], results: &Path) -> Result<Vec<PathBuf>> {
     match exps.iter().find(|e| e.report.results_table) {
         Some(table) if crate::tables::outside::outside_dir(results).is_dir() => {
-            let pointmaze: Vec<&Experiment> = ["pointmaze_vanilla", "pointmaze_her"]
-                .iter()
-                .filter_map(|n| exps.iter().find(|e| e.name == *n))
-                .collect();
+            let names = ["pointmaze_vanilla", "pointmaze_her"].map(ExperimentName::new);
+            let mut pointmaze: Vec<&Experiment> = Vec::new();
+            for name in names {
+                let name = name?;
+                pointmaze.extend(exps.iter().find(|e| e.name == name));
+            }
             crate::tables::outside::write_outside_tables(table, &pointmaze, results)
         }
         _ => Ok(Vec::new()),

@@ -9,28 +9,28 @@
 //! picture fails the test and is looked at.
 
 use pbcs::claims::{beats, fails, solves, Claim, Verdict};
-use pbcs::experiment::{read_raw, Experiment, Method};
+use pbcs::experiment::{read_raw, Experiment, ExperimentName, Method};
 use pbcs::tables::{cell_stats, read_table, table_path, CellStats};
 use std::path::Path;
 
 /// Every claim of `experiments/claims.toml`, evaluated on `tables` (experiment name, table).
-fn claims(tables: &[(String, Vec<CellStats>)]) -> pbcs::error::Result<Vec<Claim>> {
+fn claims(tables: &[(ExperimentName, Vec<CellStats>)]) -> pbcs::error::Result<Vec<Claim>> {
     let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
     pbcs::claims::claims(&specs, tables)
 }
 
 /// The committed table of every experiment that a claim names (its own, `longer` and
 /// `than_experiment`): a missing one fails here.
-fn claim_tables() -> Vec<(String, Vec<CellStats>)> {
+fn claim_tables() -> Vec<(ExperimentName, Vec<CellStats>)> {
     let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
-    let mut names: Vec<String> = Vec::new();
+    let mut names: Vec<ExperimentName> = Vec::new();
     for c in &specs {
-        let mut add = |n: &str| {
-            if !names.iter().any(|m| m == n) {
-                names.push(n.to_string());
+        let mut add = |n: ExperimentName| {
+            if !names.contains(&n) {
+                names.push(n);
             }
         };
-        add(&c.experiment);
+        add(c.experiment);
         match &c.test {
             pbcs::claims::ClaimTest::FailsEverywhere {
                 longer: Some(other),
@@ -39,15 +39,15 @@ fn claim_tables() -> Vec<(String, Vec<CellStats>)> {
             | pbcs::claims::ClaimTest::Beats {
                 than_experiment: Some(other),
                 ..
-            } => add(other),
+            } => add(*other),
             _ => {}
         }
     }
-    names.into_iter().map(|n| (n.clone(), table(&n))).collect()
+    names.into_iter().map(|n| (n, table(n.as_str()))).collect()
 }
 
 fn table(name: &str) -> Vec<CellStats> {
-    read_table(&table_path(Path::new("results"), name))
+    read_table(&table_path(Path::new("results"), name.parse().unwrap()))
         .unwrap_or_else(|e| panic!("committed table {name}: {e}"))
 }
 
@@ -426,7 +426,7 @@ fn the_fast_preset_solves_the_development_grid_at_a_cost_near_linear_in_the_path
     }
     let b = table("beyond");
     use pbcs::tables::scaling::{paths_path, read_paths, ScalingData};
-    let paths = read_paths(&paths_path(Path::new("results"), "beyond")).unwrap();
+    let paths = read_paths(&paths_path(Path::new("results"), "beyond".parse().unwrap())).unwrap();
     let (_, exponent) = ScalingData::new(&exp, &b, &paths).power_law().unwrap();
     assert!(
         exponent > 1.0 && exponent <= 1.2,
@@ -575,7 +575,7 @@ fn the_claims_file_names_real_experiments_and_methods() {
         assert!(e.contains("claims.toml"), "{e}");
     }
     // A claim whose experiment has no table here is an error naming the claim and the table.
-    let e = pbcs::claims::claims(&specs, &[("gamma".to_string(), table("gamma"))])
+    let e = pbcs::claims::claims(&specs, &[("gamma".parse().unwrap(), table("gamma"))])
         .unwrap_err()
         .to_string();
     assert!(

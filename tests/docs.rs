@@ -225,9 +225,16 @@ fn the_docs_quote_the_generated_settings_table() {
 #[test]
 fn the_docs_quote_the_held_out_results_as_generated() {
     let results = Path::new("results");
-    let stats = pbcs::tables::read_table(&pbcs::tables::table_path(results, "heldout")).unwrap();
-    let runs =
-        pbcs::criteria::read_chains(&pbcs::criteria::chains_path(results, "heldout")).unwrap();
+    let stats = pbcs::tables::read_table(&pbcs::tables::table_path(
+        results,
+        "heldout".parse().unwrap(),
+    ))
+    .unwrap();
+    let runs = pbcs::criteria::read_chains(&pbcs::criteria::chains_path(
+        results,
+        "heldout".parse().unwrap(),
+    ))
+    .unwrap();
     assert_eq!(runs.len(), 56, "every registered run has its chain row");
     let generated = pbcs::tables::methods_by_maze_markdown(&stats, &runs);
     assert_block("docs/results.md", "heldout", &generated);

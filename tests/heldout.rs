@@ -40,15 +40,17 @@ fn the_held_out_grid_runs_the_preset_it_was_registered_for() {
 /// Known values: one maze, two methods, one chain below 100 %.
 #[test]
 fn the_methods_by_maze_table_reads_by_size_and_names_imperfect_chains() {
-    let stats =
-        pbcs::tables::read_table(&pbcs::tables::table_path(Path::new("results"), "heldout"))
-            .unwrap();
+    let stats = pbcs::tables::read_table(&pbcs::tables::table_path(
+        Path::new("results"),
+        "heldout".parse().unwrap(),
+    ))
+    .unwrap();
     let eight: Vec<_> = stats
         .into_iter()
         .filter(|c| c.site.size() == Some(8))
         .collect();
     let run = |cell: &str, label: &str, seed: u64, rate: f32| pbcs::criteria::ChainSuccess {
-        experiment: "heldout".into(),
+        experiment: "heldout".parse().unwrap(),
         cell: cell.parse().unwrap(),
         method: cell[..1].parse().unwrap(),
         label: label.into(),

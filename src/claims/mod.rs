@@ -9,7 +9,7 @@
 //! is *inconclusive*.
 
 use crate::error::{Error, Result};
-use crate::experiment::{Method, Site};
+use crate::experiment::{ExperimentName, Method, Site};
 use crate::fmt::human_steps;
 use crate::tables::CellStats;
 pub use rules::{beats, exact_better, exact_p, fails, solves, Counts, Pooled, EXACT_TEST_LEVEL};
@@ -205,7 +205,7 @@ pub struct ClaimSpec {
     /// What the paper says (math spans `$…$` as [`crate::report::tex`] reads them).
     pub paper: String,
     /// The experiment whose table judges it.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// How it is judged.
     pub test: ClaimTest,
 }
@@ -221,7 +221,7 @@ pub enum ClaimTest {
         method: Method,
         /// An experiment with the same method at a larger budget.
         #[serde(default)]
-        longer: Option<String>,
+        longer: Option<ExperimentName>,
     },
     /// `method` solves every maze: agrees when every maze is solved reliably, disagrees when
     /// one fails reliably.
@@ -246,7 +246,7 @@ pub enum ClaimTest {
         /// The experiment whose table holds `than`'s cells, when not the claim's own (an
         /// ablation compared with the results table's cell of the unchanged preset).
         #[serde(default)]
-        than_experiment: Option<String>,
+        than_experiment: Option<ExperimentName>,
     },
     /// The median steps of `method`'s solved runs lie below the paper's, on every maze with a
     /// solved run and a paper figure (inconclusive otherwise).
@@ -293,14 +293,17 @@ pub fn load_claims(path: &Path) -> Result<Vec<ClaimSpec>> {
 /// claim is judged: one whose experiment (or `longer`, or `than_experiment`) has no table
 /// here, or whose table lacks the cells it compares, is an error naming the claim
 /// ([`Error::Claim`]), never a silent skip.
-pub fn claims(specs: &[ClaimSpec], tables: &[(String, Vec<CellStats>)]) -> Result<Vec<Claim>> {
+pub fn claims(
+    specs: &[ClaimSpec],
+    tables: &[(ExperimentName, Vec<CellStats>)],
+) -> Result<Vec<Claim>> {
     specs
         .iter()
         .map(|spec| {
-            let table = |name: &str| -> Result<&[CellStats]> {
+            let table = |name: ExperimentName| -> Result<&[CellStats]> {
                 tables
                     .iter()
-                    .find(|(n, _)| n == name)
+                    .find(|(n, _)| *n == name)
                     .map(|(_, s)| s.as_slice())
                     .ok_or_else(|| {
                         missing(
@@ -321,7 +324,7 @@ pub fn claims(specs: &[ClaimSpec], tables: &[(String, Vec<CellStats>)]) -> Resul
 /// any claim that cannot be judged is an error.
 pub fn claims_partial(
     specs: &[ClaimSpec],
-    tables: &[(String, Vec<CellStats>)],
+    tables: &[(ExperimentName, Vec<CellStats>)],
 ) -> (Vec<Claim>, Vec<Error>) {
     let mut judged = Vec::new();
     let mut errors = Vec::new();
@@ -343,7 +346,7 @@ fn missing(spec: &ClaimSpec, message: String) -> Error {
 }
 
 /// The error of a claim whose table has no cell of `method`.
-fn no_cells(spec: &ClaimSpec, experiment: &str, method: Method) -> Error {
+fn no_cells(spec: &ClaimSpec, experiment: ExperimentName, method: Method) -> Error {
     missing(
         spec,
         format!("the table of experiment `{experiment}` has no cell of method `{method}`"),
@@ -352,9 +355,9 @@ fn no_cells(spec: &ClaimSpec, experiment: &str, method: Method) -> Error {
 
 fn evaluate<'a>(
     spec: &ClaimSpec,
-    table: &dyn Fn(&str) -> Result<&'a [CellStats]>,
+    table: &dyn Fn(ExperimentName) -> Result<&'a [CellStats]>,
 ) -> Result<Claim> {
-    let stats = table(&spec.experiment)?;
+    let stats = table(spec.experiment)?;
     let claim = |ours: String, verdict: Verdict| Claim {
         id: spec.id.clone(),
         paper: spec.paper.clone(),
@@ -364,11 +367,11 @@ fn evaluate<'a>(
     match &spec.test {
         ClaimTest::FailsEverywhere { method, longer } => {
             let longer = match longer {
-                Some(name) => table(name)?,
+                Some(name) => table(*name)?,
                 None => &[],
             };
             fails_everywhere(&spec.id, &spec.paper, stats, longer, *method)
-                .ok_or_else(|| no_cells(spec, &spec.experiment, *method))
+                .ok_or_else(|| no_cells(spec, spec.experiment, *method))
         }
         ClaimTest::SolvesEverywhere { method } => {
             let (ours, verdict) = solves_everywhere(spec, stats, *method)?;
@@ -386,7 +389,7 @@ fn evaluate<'a>(
             // own cells.
             let mut both = stats.to_vec();
             if let Some(other) = than_experiment {
-                both.extend(table(other)?.iter().filter(|s| s.method == *than).cloned());
+                both.extend(table(*other)?.iter().filter(|s| s.method == *than).cloned());
             }
             let (ours, verdict) =
                 beats_claim(&both, (*method, label), (*than, than_label), *pooled).ok_or_else(
@@ -424,7 +427,7 @@ fn method_cells<'a>(
 ) -> Result<Vec<&'a CellStats>> {
     let c = cells(stats, method);
     if c.is_empty() {
-        return Err(no_cells(spec, &spec.experiment, method));
+        return Err(no_cells(spec, spec.experiment, method));
     }
     Ok(c)
 }
@@ -504,7 +507,7 @@ fn pooled_claim(
     stats: &[CellStats],
     methods: &[(Method, String)],
 ) -> Result<String> {
-    let pool = |m: Method| pooled(stats, m).ok_or_else(|| no_cells(spec, &spec.experiment, m));
+    let pool = |m: Method| pooled(stats, m).ok_or_else(|| no_cells(spec, spec.experiment, m));
     let (m0, l0) = &methods[0];
     let (m1, l1) = &methods[1];
     let (a, b) = (pool(*m0)?, pool(*m1)?);

@@ -11,7 +11,7 @@ fn m(name: &str) -> Method {
 /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
 fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
     CellStats {
-        experiment: "t".into(),
+        experiment: "t".parse().unwrap(),
         cell: CellKey::new(m(method), Site::Maze(maze)),
         method: m(method),
         label: method.into(),
@@ -43,7 +43,7 @@ fn pooled_counts_only_the_mazes_both_methods_ran() {
     let spec = ClaimSpec {
         id: "x".into(),
         paper: "p".into(),
-        experiment: "t".into(),
+        experiment: "t".parse().unwrap(),
         test: ClaimTest::Beats {
             method: m("a"),
             label: "A".into(),
@@ -59,7 +59,7 @@ fn pooled_counts_only_the_mazes_both_methods_ran() {
         cell("b", 2, 3, 10),
         cell("a", 5, 0, 10),
     ];
-    let c = &claims(&[spec], &[("t".to_string(), stats)]).unwrap()[0];
+    let c = &claims(&[spec], &[("t".parse().unwrap(), stats)]).unwrap()[0];
     assert!(c.ours.contains("pooled: A 9/10"), "{}", c.ours);
     assert_eq!(c.verdict, Verdict::ExactTestOnly);
 }
@@ -188,7 +188,7 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
     let spec = |test: ClaimTest| ClaimSpec {
         id: "x".into(),
         paper: "p".into(),
-        experiment: "t".into(),
+        experiment: "t".parse().unwrap(),
         test,
     };
     let beats = |pooled: bool| {
@@ -209,7 +209,7 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
         cell("a", 3, 7, 10),
         cell("b", 3, 2, 10),
     ];
-    let tables = [("t".to_string(), stats)];
+    let tables = [("t".parse().unwrap(), stats)];
     let verdict = |s: ClaimSpec| claims(&[s], &tables).unwrap()[0].verdict;
     assert_eq!(verdict(beats(false)), Verdict::Inconclusive);
     assert_eq!(verdict(beats(true)), Verdict::Agrees);
@@ -219,13 +219,13 @@ fn pooled_beats_decides_only_where_no_maze_does_and_pooled_shows_counts_without_
         .iter()
         .cloned()
         .partition(|c| c.method == m("a"));
-    let split = [("t".to_string(), own), ("u".to_string(), other)];
+    let split = [("t".parse().unwrap(), own), ("u".parse().unwrap(), other)];
     let mut across = beats(true);
     if let ClaimTest::Beats {
         than_experiment, ..
     } = &mut across.test
     {
-        *than_experiment = Some("u".into());
+        *than_experiment = Some("u".parse().unwrap());
     }
     let c = &claims(&[across], &split).unwrap()[0];
     assert_eq!(c.verdict, Verdict::Agrees);
@@ -251,7 +251,7 @@ fn a_claim_without_its_table_or_cells_is_an_error() {
     let spec = |test: ClaimTest| ClaimSpec {
         id: "x".into(),
         paper: "p".into(),
-        experiment: "t".into(),
+        experiment: "t".parse().unwrap(),
         test,
     };
     let beats = |than_experiment: Option<&str>| {
@@ -261,11 +261,11 @@ fn a_claim_without_its_table_or_cells_is_an_error() {
             than: m("b"),
             than_label: "B".into(),
             pooled: false,
-            than_experiment: than_experiment.map(String::from),
+            than_experiment: than_experiment.map(|n: &str| n.parse().unwrap()),
         })
     };
     let tables = [(
-        "t".to_string(),
+        "t".parse().unwrap(),
         vec![cell("a", 2, 7, 10), cell("b", 2, 2, 10)],
     )];
     assert!(claims(&[beats(None)], &tables).is_ok());
@@ -279,7 +279,7 @@ fn a_claim_without_its_table_or_cells_is_an_error() {
     assert!(e.contains("no table of experiment `u`"), "{e}");
     // The cells missing: `b` ran no maze that `a` ran.
     let apart = [(
-        "t".to_string(),
+        "t".parse().unwrap(),
         vec![cell("a", 2, 7, 10), cell("b", 3, 2, 10)],
     )];
     let e = claims(&[beats(None)], &apart).unwrap_err().to_string();

@@ -2,7 +2,7 @@
 //! (`[[figure]]`) and what the report's generated LaTeX takes from it (`[report]`), with the
 //! checks that tie both to the experiment's methods.
 
-use super::{Cell, Job, Method};
+use super::{Cell, ExperimentName, Job, Method};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use std::collections::BTreeSet;
@@ -37,7 +37,7 @@ pub struct SettingsSpec {
 #[serde(deny_unknown_fields)]
 pub struct Baseline {
     /// The experiment whose table holds it (e.g. `table`).
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// Its method there (e.g. `pbcs`).
     pub method: Method,
     /// Its label in the figure.

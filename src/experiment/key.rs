@@ -1,13 +1,14 @@
-//! The names results are joined by, as values: a [`Method`] (a name an experiment declares)
-//! and a [`CellKey`] (a method at a [`Site`]). Both are `Copy` and compare as values, so a
-//! table joins rows on keys, never on strings; each is written and read in one place here.
+//! The names results are joined by, as values: an [`ExperimentName`] (an experiment file's
+//! stem), a [`Method`] (a name an experiment declares) and a [`CellKey`] (a method at a
+//! [`Site`]). All are `Copy` and compare as values, so a table joins rows on keys, never on
+//! strings; each is written and read in one place here.
 //!
 //! A cell key is written `<method>-<site id>` (`pbcs-maze5`, `td3_her-pointmaze_umaze_goals`):
 //! a cell's folder name, its name on the command line and its `cell` column. A method name
 //! holds letters, digits and `_` only, so the first `-` ends it.
 //!
-//! Method names are interned ([`ustr`]): an experiment declares a handful, each is stored
-//! once for the life of the process and a copy is a pointer. They order as their text does,
+//! Names are interned ([`ustr`]): there are a few dozen experiments and a handful of methods
+//! each, every name is stored once for the life of the process and a copy is a pointer. They order as their text does,
 //! and a cell key orders as its written form, so sorting by key sorts as the tables always
 //! have.
 //!
@@ -73,6 +74,60 @@ impl FromStr for Method {
     type Err = Error;
     fn from_str(s: &str) -> Result<Method> {
         Method::new(s)
+    }
+}
+
+/// An experiment's name: its file's stem (`table`, `pointmaze_her`), the folder of its raw
+/// rows and the first part of its tables' names; letters, digits, `_` and `-`.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ExperimentName(Ustr);
+
+impl ExperimentName {
+    /// The experiment called `name`, or an error if it holds anything but letters, digits, `_`
+    /// and `-` (it names folders and files, and LaTeX keys).
+    pub fn new(name: &str) -> Result<ExperimentName> {
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        {
+            return Err(Error::invalid(
+                "experiment",
+                format!("`{name}`: an experiment's name (its file's stem) holds letters, digits, `_` and `-` only"),
+            ));
+        }
+        Ok(ExperimentName(Ustr::from(name)))
+    }
+
+    /// The name.
+    pub fn as_str(self) -> &'static str {
+        self.0.as_str()
+    }
+}
+
+impl fmt::Display for ExperimentName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl fmt::Debug for ExperimentName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+impl FromStr for ExperimentName {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<ExperimentName> {
+        ExperimentName::new(s)
+    }
+}
+
+/// Its folder under `raw/`.
+impl AsRef<std::path::Path> for ExperimentName {
+    fn as_ref(&self) -> &std::path::Path {
+        std::path::Path::new(self.as_str())
     }
 }
 
@@ -162,6 +217,7 @@ macro_rules! as_text {
         }
     };
 }
+as_text!(ExperimentName);
 as_text!(Method);
 as_text!(CellKey);
 

@@ -44,7 +44,7 @@ mod spec;
 mod sweep;
 
 pub use declared::{Baseline, FigureSpec, ReportSpec, SettingsSpec};
-pub use key::{CellKey, Method};
+pub use key::{CellKey, ExperimentName, Method};
 pub use layout::run_file;
 pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
@@ -198,7 +198,7 @@ pub fn check_seeds(field: &str, first_seed: u64, count: u64, pictures: &[u64]) -
 pub struct Experiment {
     /// The file stem (`table` for `experiments/table.toml`; for [`Experiment::of_job`], the
     /// name given): the name of its raw folder.
-    pub name: String,
+    pub name: ExperimentName,
     /// Title, for tables and figures.
     pub title: String,
     /// What the experiment shows.
@@ -271,13 +271,13 @@ impl Registration {
     /// use pbcs::experiment::Experiment;
     /// use std::path::Path;
     /// let exp = Experiment::load(Path::new("experiments/heldout.toml"), None).unwrap();
-    /// exp.registered.as_ref().unwrap().check("heldout").unwrap();
+    /// exp.registered.as_ref().unwrap().check(exp.name).unwrap();
     /// let mut moved = exp.registered.clone().unwrap();
     /// moved.sha256 = "0".repeat(64);
-    /// let e = moved.check("heldout").unwrap_err().to_string();
+    /// let e = moved.check(exp.name).unwrap_err().to_string();
     /// assert!(e.contains(&"0".repeat(64)) && e.contains("pbcs_fast.toml"), "{e}");
     /// ```
-    pub fn check(&self, experiment: &str) -> Result<()> {
+    pub fn check(&self, experiment: ExperimentName) -> Result<()> {
         let now = self.preset_sha256()?;
         if now == self.sha256 {
             return Ok(());
@@ -391,7 +391,7 @@ impl Experiment {
     pub fn cell_dir(&self, results: &Path, cell: &Cell) -> PathBuf {
         results
             .join("raw")
-            .join(&self.name)
+            .join(self.name)
             .join(cell.id.to_string())
     }
 }

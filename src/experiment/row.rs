@@ -1,6 +1,6 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
-use super::{Cell, CellKey, Experiment, Job, Kind, Method, Site};
+use super::{Cell, CellKey, Experiment, ExperimentName, Job, Kind, Method, Site};
 use crate::config::{Located, PbcsJob, TrainJob};
 use crate::error::{Error, Result};
 use crate::phase2::{Failure, StartMode};
@@ -13,7 +13,7 @@ use std::path::Path;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RawRow {
     /// Experiment name.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// The cell (`<method>-maze<N>`, `<method>-rooms`).
     pub cell: CellKey,
     /// Its method.
@@ -80,7 +80,7 @@ impl RawRow {
             final_eval.iter().filter(|e| e.success).count() as f32 / final_eval.len() as f32
         };
         RawRow {
-            experiment: exp.name.clone(),
+            experiment: exp.name,
             cell: cell.id,
             method: cell.method,
             kind: Kind::Vanilla,
@@ -109,7 +109,7 @@ impl RawRow {
     /// the record's τ lengths and ε are left to the job file.
     pub fn pbcs(exp: &Experiment, cell: &Cell, job: &PbcsJob, r: RunRecord) -> RawRow {
         RawRow {
-            experiment: exp.name.clone(),
+            experiment: exp.name,
             cell: cell.id,
             method: cell.method,
             kind: Kind::Pbcs,
@@ -178,7 +178,11 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ),
     };
     let fields: [(&str, String, String); 12] = [
-        ("experiment", row.experiment.clone(), exp.name.clone()),
+        (
+            "experiment",
+            row.experiment.to_string(),
+            exp.name.to_string(),
+        ),
         ("cell", row.cell.to_string(), cell.id.to_string()),
         ("method", row.method.to_string(), cell.method.to_string()),
         ("kind", row.kind.name().into(), kind.name().into()),

@@ -5,7 +5,8 @@ use super::declared::{check_figures, check_report};
 use super::merge::merge;
 use super::site::{paper_run, place};
 use super::{
-    check_seeds, Cell, CellKey, Experiment, FigureSpec, Job, Kind, Method, ReportSpec, Site,
+    check_seeds, Cell, CellKey, Experiment, ExperimentName, FigureSpec, Job, Kind, Method,
+    ReportSpec, Site,
 };
 use crate::config::{PbcsJob, TrainJob};
 use crate::envs::pointmaze::PointMazeConfig;
@@ -457,10 +458,11 @@ impl Experiment {
     /// grid and keys that a job does not have are errors naming the method or field.
     pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
         let spec: ExperimentSpec = crate::validate::read_toml(path)?;
-        let name = path
+        let stem = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .ok_or_else(|| Error::parse(path, "no file name"))?;
+        let name = ExperimentName::new(&stem).map_err(|e| Error::parse(path, e.to_string()))?;
         let prof = spec.profile(path, profile)?;
         check_seeds("seeds", spec.first_seed, spec.seeds, &spec.picture_seeds)?;
         let seed_count = prof.seeds.unwrap_or(spec.seeds);
@@ -508,7 +510,7 @@ impl Experiment {
             report: spec.report,
             figures: if spec.figures.is_empty() {
                 vec![FigureSpec::Bars {
-                    name: name.clone(),
+                    name: name.to_string(),
                     baselines: Vec::new(),
                 }]
             } else {
@@ -558,7 +560,7 @@ impl Experiment {
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(Experiment {
-            name: name.to_string(),
+            name: ExperimentName::new(name)?,
             title: format!("PBCS ({name}) on mazes {sizes:?}"),
             description: String::new(),
             profile: None,

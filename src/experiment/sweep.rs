@@ -93,7 +93,7 @@ pub fn sweep(
 ) -> Result<Vec<RawRow>> {
     // A registered grid runs only with the preset it was registered for.
     if let Some(registration) = &exp.registered {
-        registration.check(&exp.name)?;
+        registration.check(exp.name)?;
     }
     let _folder = crate::record::FolderLock::acquire(results, runs.len() <= 1)?;
     // Finished runs first (cheap), so that a config mismatch is reported before any work.

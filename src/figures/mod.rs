@@ -170,7 +170,7 @@ pub fn render_experiment(
                 files.extend(maze_pictures(exp, results, stats, out, name, *method)?);
             }
             FigureSpec::Curves { .. } => {
-                let path = curves_path(results, &exp.name);
+                let path = curves_path(results, exp.name);
                 if path.exists() {
                     if let Some(curves) = Curves::new(exp, &read_curves(&path)?) {
                         files.extend(render_figure(&curves, &stem)?);
@@ -181,7 +181,7 @@ pub fn render_experiment(
                 let mut bars = SuccessBars::new(exp, stats);
                 // Each is put first: the last listed goes in first, so they end in their order.
                 for b in baselines.iter().rev() {
-                    let path = crate::tables::table_path(results, &b.experiment);
+                    let path = crate::tables::table_path(results, b.experiment);
                     if path.exists() {
                         bars = bars.with_baseline(b, &crate::tables::read_table(&path)?);
                     }
@@ -189,28 +189,28 @@ pub fn render_experiment(
                 files.extend(render_figure(&bars, &stem)?);
             }
             FigureSpec::Chains { .. } => {
-                let path = crate::criteria::chains_path(results, &exp.name);
+                let path = crate::criteria::chains_path(results, exp.name);
                 if path.exists() {
                     let chains = ChainSpread::new(exp, &crate::criteria::read_chains(&path)?);
                     files.extend(render_figure(&chains, &stem)?);
                 }
             }
             FigureSpec::Profile { .. } => {
-                let path = crate::criteria::chains_path(results, &exp.name);
+                let path = crate::criteria::chains_path(results, exp.name);
                 if path.exists() {
                     let runs = crate::criteria::read_chains(&path)?;
                     files.extend(render_figure(&Profile::new(exp, &runs), &stem)?);
                 }
             }
             FigureSpec::Routes { .. } => {
-                let path = crate::tables::routes::routes_path(results, &exp.name);
+                let path = crate::tables::routes::routes_path(results, exp.name);
                 if path.exists() {
                     let routes = crate::tables::routes::read_routes(&path)?;
                     files.extend(render_figure(&Routes::new(exp, &routes), &stem)?);
                 }
             }
             FigureSpec::Scaling { .. } => {
-                let paths = read_paths(&paths_path(results, &exp.name))?;
+                let paths = read_paths(&paths_path(results, exp.name))?;
                 let data = ScalingData::new(exp, stats, &paths);
                 files.extend(render_figure(&Scaling::new(exp, data), &stem)?);
             }
@@ -307,7 +307,7 @@ mod tests {
 
     fn stats(successes: u64, steps_median: f64, solved: Option<f64>) -> CellStats {
         CellStats {
-            experiment: "table".into(),
+            experiment: "table".parse().unwrap(),
             cell: "pbcs-maze5".parse().unwrap(),
             method: "pbcs".parse().unwrap(),
             label: "PBCS".into(),

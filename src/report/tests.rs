@@ -56,7 +56,7 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
         "{tex}"
     );
     let run = |seed: u64, rate: f32| ChainSuccess {
-        experiment: "m".into(),
+        experiment: "m".parse().unwrap(),
         cell: "m-maze5".parse().unwrap(),
         method: "m".parse().unwrap(),
         label: "m".into(),
@@ -76,9 +76,13 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
             ..run(7, 0.0)
         },
     ];
-    crate::record::write_records(&crate::criteria::chains_path(dir.path(), "m"), &chains).unwrap();
     crate::record::write_records(
-        &crate::criteria::criteria_path(dir.path(), "m"),
+        &crate::criteria::chains_path(dir.path(), "m".parse().unwrap()),
+        &chains,
+    )
+    .unwrap();
+    crate::record::write_records(
+        &crate::criteria::criteria_path(dir.path(), "m".parse().unwrap()),
         &crate::criteria::criteria(&chains),
     )
     .unwrap();
@@ -95,7 +99,7 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
         fewest_steps: 62,
     };
     crate::record::write_records(
-        &crate::tables::routes::route_cells_path(dir.path(), "m"),
+        &crate::tables::routes::route_cells_path(dir.path(), "m".parse().unwrap()),
         &crate::tables::routes::route_cells(&[
             route(0, 400, 100),
             route(1, 400, 120),
@@ -126,7 +130,7 @@ fn the_report_groups_rows_whatever_their_order() {
     let exp = Experiment::of_job("m", &Default::default(), &[2, 5], 10).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let chain = |n: usize, seed: u64| ChainSuccess {
-        experiment: "m".into(),
+        experiment: "m".parse().unwrap(),
         cell: crate::experiment::CellKey::new(
             "m".parse().unwrap(),
             crate::experiment::Site::Maze(n),
@@ -158,14 +162,18 @@ fn the_report_groups_rows_whatever_their_order() {
     };
     let interleaved = [(5, 0), (2, 0), (5, 1), (2, 1)];
     let chains = interleaved.map(|(n, s)| chain(n, s));
-    crate::record::write_records(&crate::criteria::chains_path(dir.path(), "m"), &chains).unwrap();
     crate::record::write_records(
-        &crate::criteria::criteria_path(dir.path(), "m"),
+        &crate::criteria::chains_path(dir.path(), "m".parse().unwrap()),
+        &chains,
+    )
+    .unwrap();
+    crate::record::write_records(
+        &crate::criteria::criteria_path(dir.path(), "m".parse().unwrap()),
         &crate::criteria::criteria(&chains),
     )
     .unwrap();
     crate::record::write_records(
-        &crate::tables::routes::route_cells_path(dir.path(), "m"),
+        &crate::tables::routes::route_cells_path(dir.path(), "m".parse().unwrap()),
         &crate::tables::routes::route_cells(&interleaved.map(|(n, s)| route(n, s))),
     )
     .unwrap();
@@ -190,7 +198,7 @@ fn the_report_refuses_a_missing_or_inconsistent_summary() {
     // A chains table (its header is enough) without the criteria table beside it.
     std::fs::create_dir_all(dir.path().join("tables")).unwrap();
     std::fs::write(
-        crate::criteria::chains_path(dir.path(), "m"),
+        crate::criteria::chains_path(dir.path(), "m".parse().unwrap()),
         "experiment,cell,method,label,maze,seed,complete,success_rate,solved,env_steps,paper_steps\n",
     )
     .unwrap();
@@ -199,7 +207,7 @@ fn the_report_refuses_a_missing_or_inconsistent_summary() {
         err.contains("m.criteria.csv") && err.contains("pbcs aggregate"),
         "{err}"
     );
-    let path = criteria_path(dir.path(), "m");
+    let path = criteria_path(dir.path(), "m".parse().unwrap());
     std::fs::write(
         &path,
         "experiment,cell,method,label,maze,n,complete,at_0_50,at_0_90,at_0_95,at_1_00,at_zero\n\
@@ -247,7 +255,7 @@ fn the_routes_numbers_give_the_spread_over_cells() {
     };
     let cells = |routes: &[Route]| crate::tables::routes::route_cells(routes);
     let tex = routes_numbers_tex(
-        "x",
+        "x".parse().unwrap(),
         &cells(&[
             route("m-maze2", Some(110.0), 440, 100),
             route("m-maze5", Some(120.0), 600, 100),
@@ -268,7 +276,10 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         assert!(tex.contains(&line), "{key}: {tex}");
     }
     assert_eq!(
-        routes_numbers_tex("x", &cells(&[route("m-maze2", None, 1, 1)])),
+        routes_numbers_tex(
+            "x".parse().unwrap(),
+            &cells(&[route("m-maze2", None, 1, 1)])
+        ),
         ""
     );
     // A shortened τ: phase 2 worked on 440 steps, phase 1's τ had 880.
@@ -276,7 +287,7 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         tau_steps: 880,
         ..route("m-maze2", Some(110.0), 440, 100)
     };
-    let tex = routes_numbers_tex("x", &cells(&[shortened]));
+    let tex = routes_numbers_tex("x".parse().unwrap(), &cells(&[shortened]));
     assert!(tex.contains("res:x:routes:taulo\\endcsname{4.0}"), "{tex}");
     assert!(
         tex.contains("res:x:routes:phase1lo\\endcsname{8.0}"),

@@ -6,12 +6,12 @@
 
 use super::CellTiming;
 use crate::error::{Error, Result};
-use crate::experiment::Experiment;
+use crate::experiment::{Experiment, ExperimentName};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// `results/tables/<experiment>.timing.csv`.
-pub fn timing_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn timing_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.timing.csv"))
@@ -70,7 +70,7 @@ pub fn cost_markdown(exps: &[Experiment], results: &Path) -> Result<String> {
     );
     let (mut runs, mut seconds) = (0, 0.0);
     for exp in exps {
-        let path = timing_path(results, &exp.name);
+        let path = timing_path(results, exp.name);
         if !path.exists() {
             continue;
         }

@@ -4,7 +4,7 @@
 //! `s<seed>.evals.csv` so that the figure reads a table only.
 
 use crate::error::{Error, Result};
-use crate::experiment::{evals_file, CellKey, Experiment, Job, Method};
+use crate::experiment::{evals_file, CellKey, Experiment, ExperimentName, Job, Method};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -31,7 +31,7 @@ pub struct CurvePoint {
 }
 
 /// `<results>/tables/<experiment>.curves.csv`.
-pub fn curves_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn curves_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.curves.csv"))

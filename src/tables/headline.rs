@@ -6,7 +6,7 @@ use super::judged::{judged_path, JudgedCell};
 use super::outside::{Library, PointMazeBaseline};
 use super::{read_table, table_path, CellStats};
 use crate::error::{Error, Result};
-use crate::experiment::{CellKey, Method, Site};
+use crate::experiment::{CellKey, ExperimentName, Method, Site};
 use crate::fmt::human_steps;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -18,7 +18,10 @@ use std::path::Path;
 /// and the learners alone (`outside.pointmaze.csv`; our SAC+HER and TD3+HER by SB3's protocol
 /// `–` until their grid has a row there). A missing table or cell is an error naming it.
 pub fn headline_markdown(results: &Path) -> Result<String> {
-    let mut s = maze_table(&read_table(&table_path(results, "table"))?)?;
+    let mut s = maze_table(&read_table(&table_path(
+        results,
+        ExperimentName::new("table")?,
+    ))?)?;
     s.push('\n');
     s.push_str(&pointmaze_table(results)?);
     Ok(s)
@@ -74,12 +77,14 @@ fn maze_table(stats: &[CellStats]) -> Result<String> {
 }
 
 fn pointmaze_table(results: &Path) -> Result<String> {
-    let grid = read_table(&table_path(results, "pointmaze"))?;
-    let held = read_table(&table_path(results, "pointmaze_heldout"))?;
-    let judged = |name: &str| -> Result<Vec<JudgedCell>> {
+    let [grid_name, held_name] = ["pointmaze", "pointmaze_heldout"].map(ExperimentName::new);
+    let (grid_name, held_name) = (grid_name?, held_name?);
+    let grid = read_table(&table_path(results, grid_name))?;
+    let held = read_table(&table_path(results, held_name))?;
+    let judged = |name| -> Result<Vec<JudgedCell>> {
         crate::record::read_records(&judged_path(results, name))
     };
-    let (grid_judged, held_judged) = (judged("pointmaze")?, judged("pointmaze_heldout")?);
+    let (grid_judged, held_judged) = (judged(grid_name)?, judged(held_name)?);
     let baselines: Vec<PointMazeBaseline> =
         crate::record::read_records(&super::outside::outside_table(results, "pointmaze"))?;
     let mut s = String::from(

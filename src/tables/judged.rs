@@ -6,7 +6,7 @@
 //! not the one measured in our own environment.
 
 use crate::error::{Error, Result};
-use crate::experiment::{CellKey, Experiment, RawRow};
+use crate::experiment::{CellKey, Experiment, ExperimentName, RawRow};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -63,7 +63,7 @@ pub struct JudgedCell {
 }
 
 /// `results/tables/<experiment>.judged.csv`.
-pub fn judged_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn judged_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.judged.csv"))
@@ -171,7 +171,7 @@ pub fn judged_cells(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result
 
 /// `\res{<experiment>:<cell>:judged:<field>}` (`seeds`, `solved`, `min`, `judge`) from the
 /// judged table, where it exists.
-pub fn judged_numbers(name: &str, results: &Path) -> Result<Vec<(String, String)>> {
+pub fn judged_numbers(name: ExperimentName, results: &Path) -> Result<Vec<(String, String)>> {
     super::table_numbers(&judged_path(results, name), |c: &JudgedCell| {
         let fields = [
             ("seeds", c.seeds.to_string()),

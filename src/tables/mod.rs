@@ -19,7 +19,7 @@ pub mod scope;
 pub mod statistics;
 
 use crate::error::{Error, Result};
-use crate::experiment::{Cell, CellKey, Experiment, Method, RawRow, Site};
+use crate::experiment::{Cell, CellKey, Experiment, ExperimentName, Method, RawRow, Site};
 use crate::stats::{median, quantile, wilson, Z95};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CellStats {
     /// Experiment name.
-    pub experiment: String,
+    pub experiment: ExperimentName,
     /// Cell id.
     pub cell: CellKey,
     /// Method name.
@@ -83,7 +83,7 @@ impl CellStats {
     /// them in with struct-update syntax.
     pub fn counted(exp: &Experiment, c: &Cell, k: u64, n: u64) -> CellStats {
         CellStats {
-            experiment: exp.name.clone(),
+            experiment: exp.name,
             cell: c.id,
             method: c.method,
             label: c.label.clone(),
@@ -163,7 +163,7 @@ pub fn distinct<T: PartialEq>(items: impl IntoIterator<Item = T>) -> Vec<T> {
 }
 
 /// Where an experiment's table lives under `results`.
-pub fn table_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn table_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results.join("tables").join(format!("{experiment}.csv"))
 }
 
@@ -428,7 +428,7 @@ mod tests {
     fn row(exp: &Experiment, seed: u64, solved: bool, steps: u64, skills: usize) -> RawRow {
         let c = &exp.cells[0];
         RawRow {
-            experiment: exp.name.clone(),
+            experiment: exp.name,
             cell: c.id,
             method: c.method,
             kind: crate::experiment::Kind::Pbcs,

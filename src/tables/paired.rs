@@ -7,7 +7,7 @@
 //! (`\res{<experiment>:paired:<site>:<field>}`, the pooled row's site being `all`).
 
 use super::scope::Scope;
-use crate::experiment::{CellKey, Experiment, Method, RawRow, Site};
+use crate::experiment::{CellKey, Experiment, ExperimentName, Method, RawRow, Site};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -33,7 +33,7 @@ pub struct PairedSite {
 }
 
 /// `results/tables/<experiment>.paired.csv`.
-pub fn paired_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn paired_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.paired.csv"))
@@ -96,7 +96,10 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
 
 /// `\res{<experiment>:paired:<site>:<field>}` (`pairs`, `fewer`, `more`, `ties`, `p`: the
 /// p-value to two significant digits) from the paired table, where it exists.
-pub fn paired_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
+pub fn paired_numbers(
+    name: ExperimentName,
+    results: &Path,
+) -> crate::Result<Vec<(String, String)>> {
     super::table_numbers(&paired_path(results, name), |s: &PairedSite| {
         let fields = [
             ("pairs", s.pairs.to_string()),

@@ -8,7 +8,7 @@
 //! so both are tabled. `pbcs figures` writes their numbers
 //! (`\res{<experiment>:<cell>:phases:<field>}`).
 
-use crate::experiment::{CellKey, Experiment, Kind, Method, RawRow, Site};
+use crate::experiment::{CellKey, Experiment, ExperimentName, Kind, Method, RawRow, Site};
 use crate::fmt::human_steps;
 use crate::stats::median;
 use serde::{Deserialize, Serialize};
@@ -45,7 +45,7 @@ pub struct CellPhases {
 }
 
 /// `<results>/tables/<experiment>.phases.csv`.
-pub fn phases_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn phases_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.phases.csv"))
@@ -95,7 +95,10 @@ pub fn cell_phases(exp: &Experiment, rows: &[RawRow]) -> Vec<CellPhases> {
 /// `\res{<experiment>:<cell>:phases:<field>}` from the phases table, where it exists:
 /// `learning`, `learningmin`, `learningmax`, `phase1`, `train`, `test` (env steps as people
 /// write them, [`human_steps`]) and `testshare` (percent, no decimals).
-pub fn phases_numbers(name: &str, results: &Path) -> crate::Result<Vec<(String, String)>> {
+pub fn phases_numbers(
+    name: ExperimentName,
+    results: &Path,
+) -> crate::Result<Vec<(String, String)>> {
     super::table_numbers(&phases_path(results, name), |c: &CellPhases| {
         let fields = [
             ("learning", human_steps(c.learning_median)),

@@ -13,7 +13,9 @@
 
 use crate::envs::maze::Maze;
 use crate::error::{Error, Result};
-use crate::experiment::{evaluation_file, CellKey, Experiment, Job, Kind, Method, RawRow};
+use crate::experiment::{
+    evaluation_file, CellKey, Experiment, ExperimentName, Job, Kind, Method, RawRow,
+};
 use crate::rng::{Seeds, Stream};
 use crate::runs::EvalEpisode;
 use serde::{Deserialize, Serialize};
@@ -74,7 +76,7 @@ impl Route {
 }
 
 /// `<results>/tables/<experiment>.routes.csv`.
-pub fn routes_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn routes_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.routes.csv"))
@@ -155,7 +157,7 @@ pub struct RouteCell {
 }
 
 /// `<results>/tables/<experiment>.route_cells.csv`.
-pub fn route_cells_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn route_cells_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.route_cells.csv"))

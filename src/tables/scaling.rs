@@ -5,7 +5,7 @@
 
 use crate::envs::maze::Maze;
 use crate::error::Result;
-use crate::experiment::{Cell, CellKey, Experiment, Job};
+use crate::experiment::{Cell, CellKey, Experiment, ExperimentName, Job};
 use crate::tables::CellStats;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -22,7 +22,7 @@ pub struct PathLength {
 }
 
 /// `<results>/tables/<experiment>.paths.csv`.
-pub fn paths_path(results: &Path, experiment: &str) -> PathBuf {
+pub fn paths_path(results: &Path, experiment: ExperimentName) -> PathBuf {
     results
         .join("tables")
         .join(format!("{experiment}.paths.csv"))

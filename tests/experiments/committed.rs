@@ -138,7 +138,7 @@ fn committed_rows_were_computed_from_the_experiment_files_as_they_are() {
     for f in files() {
         let exp = Experiment::load(&f, None).unwrap();
         // Every experiment file's every (cell, seed) is committed.
-        let entries = std::fs::read_dir(raw.join(&exp.name))
+        let entries = std::fs::read_dir(raw.join(exp.name))
             .unwrap_or_else(|e| panic!("{}: no rows ({e})", exp.name));
         for e in entries {
             let dir = e.unwrap().path();
@@ -184,7 +184,8 @@ fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
     let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
     let paths = pbcs::tables::scaling::path_lengths(&exp).unwrap();
     assert_eq!(paths.len(), exp.cells.len());
-    let mut stats = read_table(&table_path(Path::new("results"), "beyond")).unwrap();
+    let mut stats =
+        read_table(&table_path(Path::new("results"), "beyond".parse().unwrap())).unwrap();
     assert_eq!(stats.len(), exp.cells.len());
     for s in &mut stats {
         let l = &paths.iter().find(|p| p.cell == s.cell).unwrap().path_cells;
@@ -259,7 +260,9 @@ fn the_rooms_grid_goes_through_rows_tables_and_figures_like_a_maze() {
     let rows = read_raw(&exp, results).unwrap();
     assert_eq!(rows.len(), 20);
     assert!(rows.iter().all(|r| r.site == rooms && r.maze_seed == 0));
-    let table = pbcs::tables::read_table(&pbcs::tables::table_path(results, "rooms")).unwrap();
+    let table =
+        pbcs::tables::read_table(&pbcs::tables::table_path(results, "rooms".parse().unwrap()))
+            .unwrap();
     let plain = pbcs::tables::cell_stats(&exp, &rows);
     assert_eq!(table.len(), plain.len());
     for (t, p) in table.iter().zip(&plain) {
@@ -329,6 +332,7 @@ fn the_criteria_tables_agree_with_the_chains_and_the_solved_rule() {
         let Some(exp) = name.strip_suffix(".chains.csv") else {
             continue;
         };
+        let exp: pbcs::experiment::ExperimentName = exp.parse().unwrap();
         let results = Path::new("results");
         let chains = read_chains(&chains_path(results, exp)).unwrap();
         let committed = read_criteria(&criteria_path(results, exp)).unwrap();

@@ -30,7 +30,7 @@ fn every_experiment_file_parses_with_unique_cells() {
                 assert!(exp.sites.contains(&c.site), "{}: {}", f.display(), c.id);
                 assert!(exp.methods.iter().any(|(m, _)| *m == c.method), "{}", c.id);
             }
-            if exp.name != "ablations" {
+            if exp.name.as_str() != "ablations" {
                 assert_eq!(exp.cells.len(), exp.sites.len() * exp.methods.len());
             }
         }
@@ -511,7 +511,7 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
 fn the_makefile_runs_every_experiment_file() {
     let names: BTreeSet<String> = files()
         .iter()
-        .map(|f| Experiment::load(f, None).unwrap().name)
+        .map(|f| Experiment::load(f, None).unwrap().name.to_string())
         .collect();
     let Ok(out) = std::process::Command::new("make")
         .args(["--no-print-directory", "-s", "experiments"])

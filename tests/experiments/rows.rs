@@ -30,7 +30,7 @@ fn made_up_row(exp: &Experiment, cell: &Cell, seed: u64) -> RawRow {
         panic!("{}: not a PBCS cell", cell.id)
     };
     RawRow {
-        experiment: exp.name.clone(),
+        experiment: exp.name,
         cell: cell.id,
         method: cell.method,
         kind: Kind::Pbcs,
@@ -204,10 +204,10 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
     );
     assert!((c.test_share - 3400.0 / 11000.0).abs() < 1e-12);
     let dir = tempfile::tempdir().unwrap();
-    let path = phases_path(dir.path(), &exp.name);
+    let path = phases_path(dir.path(), exp.name);
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
     pbcs::record::write_records(&path, &table).unwrap();
-    let numbers = phases_numbers(&exp.name, dir.path()).unwrap();
+    let numbers = phases_numbers(exp.name, dir.path()).unwrap();
     let get = |k: &str| {
         let key = format!("pbcs-maze2:phases:{k}");
         numbers

@@ -68,17 +68,13 @@ fn smoke_profile_runs_end_to_end_deterministically() {
         let stats = pbcs::tables::cell_stats(&exp, &rows);
         assert_eq!(stats.len(), exp.cells.len());
         pbcs::pipeline::write_tables(&exp, a.path(), &stats, &rows).unwrap();
-        let back =
-            pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), &exp.name)).unwrap();
+        let back = pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), exp.name)).unwrap();
         assert_eq!(back, stats);
         loaded.push((exp, stats));
     }
     let figures = a.path().join("figures");
     let tex = a.path().join("tex");
-    let tables: Vec<(String, Vec<pbcs::tables::CellStats>)> = loaded
-        .iter()
-        .map(|(e, s)| (e.name.clone(), s.clone()))
-        .collect();
+    let tables: Vec<_> = loaded.iter().map(|(e, s)| (e.name, s.clone())).collect();
     let specs = pbcs::claims::load_claims(Path::new("experiments/claims.toml")).unwrap();
     // The smoke grid judges the claims its cells allow (the maze-15 ablations it has not).
     let (claims, unjudged) = pbcs::claims::claims_partial(&specs, &tables);

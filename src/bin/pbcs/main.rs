@@ -165,14 +165,14 @@ fn table(
     let plan = pbcs::experiment::plan(&exp, None, None)?;
     let (rows, ran) = sweep(&exp, &plan, out, jobs, kernel)?;
     let stats = pbcs::tables::cell_stats(&exp, &rows);
-    let table = pbcs::tables::table_path(out, &exp.name);
+    let table = pbcs::tables::table_path(out, exp.name);
     pbcs::tables::write_table(&table, &stats)?;
     println!(
         "{name} ({}), seeds 0..{seeds}: {ran} ran now, {} were finished; raw rows in {}, \
          statistics in {}",
         job.phase2.variant().name(),
         rows.len() - ran,
-        out.join("raw").join(&exp.name).display(),
+        out.join("raw").join(exp.name).display(),
         table.display()
     );
     let timings = pbcs::tables::cell_timings(&exp, out, &rows);
@@ -219,7 +219,7 @@ fn exp_run(
         exp.profile.as_deref().unwrap_or("committed grid"),
         rows.len(),
         rows.len() - ran,
-        results.join("raw").join(&exp.name).display()
+        results.join("raw").join(exp.name).display()
     );
     print!(
         "{}",

@@ -23,7 +23,7 @@
 
 use super::scope::Scope;
 use crate::error::{Error, Result};
-use crate::experiment::{evals_file, run_file, CellKey, Experiment, Method, Site};
+use crate::experiment::{evals_file, run_file, CellKey, Experiment, ExperimentName, Method, Site};
 use crate::learner::td3::Algo;
 use crate::stats::{fisher_exact, least_successes, wilson, Z95};
 use crate::vanilla::EvalRow;
@@ -435,7 +435,8 @@ pub fn write_outside_tables(
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
     let pointmaze = pointmaze_baselines(pointmaze_vanilla, results)?;
-    let against_sb3 = match pointmaze_vanilla.iter().find(|e| e.name == "pointmaze_her") {
+    let her = ExperimentName::new("pointmaze_her")?;
+    let against_sb3 = match pointmaze_vanilla.iter().find(|e| e.name == her) {
         Some(her) => sb3_comparisons(her, &pointmaze, results)?,
         None => Vec::new(),
     };
