@@ -122,9 +122,9 @@ pub struct TrainJob {
 impl TrainJob {
     /// The learner's name in result rows: [`LearnerConfig::record_name`], with `_her` when
     /// it trains with hindsight experience replay (`sac_her`, `td3_her`).
-    pub fn learner_name(&self) -> String {
+    pub fn learner_name(&self) -> crate::learner::LearnerName {
         let her = if self.train.her.is_some() { "_her" } else { "" };
-        format!("{}{her}", self.learner.record_name())
+        crate::learner::LearnerName::of_family(&format!("{}{her}", self.learner.record_name()))
     }
 }
 

@@ -64,6 +64,7 @@ pub mod fmt;
 pub mod launch;
 pub mod learner;
 pub mod mathtext;
+pub mod name;
 pub mod nn;
 pub mod phase1;
 pub mod phase2;

@@ -5,7 +5,9 @@
 //! between machines ([`crate::nn::kernel::Kernel`]).
 
 use crate::error::{Error, Result};
-use crate::experiment::{plan, read_finished, run_file, sweep, Event, Experiment, Pending, RawRow};
+use crate::experiment::{
+    plan, read_finished, run_file, sweep, CellKey, Event, Experiment, Pending, RawRow,
+};
 use crate::nn::kernel::Kernel;
 use crate::record::Timing;
 use crate::stats::wilson;
@@ -32,8 +34,8 @@ pub struct SeedCheck {
 /// What re-running a cell found.
 #[derive(Debug, Clone)]
 pub struct CellCheck {
-    /// The cell's id.
-    pub cell: String,
+    /// The cell.
+    pub cell: CellKey,
     /// Every seed re-run, in order.
     pub seeds: Vec<SeedCheck>,
     /// The kernels that computed the committed rows (sorted, each once; `matrixmultiply` for
@@ -115,7 +117,7 @@ impl CellCheck {
 impl CellCheck {
     /// What `pbcs exp check` prints for cell `cell`: one line per seed (identical or not, the
     /// committed and the fresh row), then the counts and the committed Wilson interval.
-    pub fn report(&self, cell: &str) -> String {
+    pub fn report(&self, cell: CellKey) -> String {
         let mut s = String::new();
         for c in &self.seeds {
             s.push_str(&format!(
@@ -144,7 +146,7 @@ impl CellCheck {
     /// The verdict `pbcs exp check` ends with: `MATCH`, or different bytes inside the
     /// committed interval (an error with `exact`), preceded by the kernel note where it
     /// explains a difference; an error when the fresh success rate lies outside the interval.
-    pub fn verdict(&self, cell: &str, exact: bool) -> crate::error::Result<String> {
+    pub fn verdict(&self, cell: CellKey, exact: bool) -> crate::error::Result<String> {
         let reproduced = self.reproduced();
         let mut s = match (reproduced == Reproduced::Match, self.kernel_note()) {
             (false, Some(note)) => format!("note: {note}\n"),
@@ -193,14 +195,14 @@ impl CellCheck {
 pub fn check_cell(
     exp: &Experiment,
     results: &Path,
-    cell: &str,
+    cell: CellKey,
     seed: Option<u64>,
     jobs: usize,
     kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<CellCheck> {
     let runs = plan(exp, Some(cell), seed)?;
-    let c = exp.cell(cell)?;
+    let c = exp.cell_at(cell)?;
     let committed_dir = exp.cell_dir(results, c);
     let mut committed = Vec::new();
     for p in &runs {
@@ -251,7 +253,7 @@ pub fn check_cell(
     committed_kernels.sort();
     committed_kernels.dedup();
     Ok(CellCheck {
-        cell: cell.to_string(),
+        cell,
         seeds,
         committed_kernels,
         kernel: kernel.name().to_string(),

@@ -513,3 +513,44 @@ fn a_map_of_ones_own_is_checked_naming_its_field() {
     );
     assert!(!out.exists());
 }
+
+/// Every learner's name in result rows, each family and variant with and without HER, is a
+/// valid [`pbcs::learner::LearnerName`] (a family's name that were not would panic here) and
+/// the one the rows have always carried.
+#[test]
+fn every_family_names_its_learner_validly() {
+    use pbcs::learner::LearnerConfig;
+    let mut names = Vec::new();
+    for learner in [
+        "algo = \"ddpg\"",
+        "algo = \"td3\"",
+        "algo = \"ddpg\"\nactor_update = \"argmax\"",
+        "algo = \"td3\"\nactor_update = \"argmax\"",
+        "algo = \"sac\"",
+    ] {
+        let learner: LearnerConfig = toml::from_str(learner).unwrap();
+        for her in [false, true] {
+            let mut job = pbcs::config::TrainJob {
+                learner: learner.clone(),
+                ..Default::default()
+            };
+            job.train.her = her.then(Default::default);
+            names.push(job.learner_name().to_string());
+        }
+    }
+    assert_eq!(
+        names,
+        [
+            "ddpg",
+            "ddpg_her",
+            "td3",
+            "td3_her",
+            "ddpg_am",
+            "ddpg_am_her",
+            "td3_am",
+            "td3_am_her",
+            "sac",
+            "sac_her"
+        ]
+    );
+}

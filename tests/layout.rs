@@ -154,3 +154,110 @@ fn the_library_modules_import_one_way() {
         visit(m, &edges, &mut Vec::new(), &mut done);
     }
 }
+
+/// The names results are joined by (issue 50): cells, methods, experiments, learners,
+/// environments and sites.
+const IDENTITIES: [&str; 11] = [
+    "cell",
+    "method",
+    "experiment",
+    "learner",
+    "algo",
+    "env",
+    "map",
+    "site",
+    "baseline",
+    "variant",
+    "than",
+];
+
+/// The lines of `text` (comments left out) that keep an identity as a string: a field or
+/// parameter `<identity>: String` (or `&str`, `Option<String>`, `Vec<String>`), or a
+/// comparison of an identity with a string (`.method == "pbcs"`, `.cell.as_str() != …`,
+/// `.experiment.to_string() == …`).
+fn identity_strings(text: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    for line in text.lines() {
+        let code = line.trim_start();
+        if code.starts_with("//") {
+            continue;
+        }
+        let declared = code
+            .trim_start_matches("pub(crate) ")
+            .trim_start_matches("pub(super) ")
+            .trim_start_matches("pub ");
+        for id in IDENTITIES {
+            let string_typed = ["String", "&str", "Option<String>", "Vec<String>"]
+                .iter()
+                .any(|t| {
+                    declared.starts_with(&format!("{id}: {t},"))
+                        || declared.starts_with(&format!("{id}: {t})"))
+                });
+            let compared = ["", ".as_str()", ".to_string()"].iter().any(|via| {
+                ["==", "!="].iter().any(|op| {
+                    let at = format!(".{id}{via} {op} ");
+                    code.match_indices(&at).any(|(i, _)| {
+                        let rest = &code[i + at.len()..];
+                        !via.is_empty() || rest.starts_with('"')
+                    })
+                })
+            });
+            if string_typed || compared {
+                found.push(line.trim().to_string());
+            }
+        }
+    }
+    found
+}
+
+/// Results are joined on keys, never on strings: no code under src/ keeps a cell, method,
+/// experiment, learner, environment or site as a string or compares one with a string (they
+/// are `CellKey`, `Method`, `ExperimentName`, `LearnerName`, `EnvName`, `Site`).
+#[test]
+fn identities_are_keys_not_strings() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    // Not identities: a PointMaze map's rows of text; `--algo`, a learner family's tag that
+    // clap checks against the families' names and the job's `[learner]` table takes as its
+    // `algo`; errors, which sit below every module (`error.rs` cannot name the key types) and
+    // hold keys as their text.
+    let allowed = [
+        ("envs/pointmaze/own.rs", "pub map: Vec<String>,"),
+        ("bin/pbcs/args.rs", "pub algo: Option<String>,"),
+        ("error.rs", "cell: String,"),
+        ("error.rs", "experiment: String,"),
+    ];
+    let mut found = Vec::new();
+    for f in files {
+        let rel = f.strip_prefix(&src).unwrap().to_string_lossy().into_owned();
+        for line in identity_strings(&std::fs::read_to_string(&f).unwrap()) {
+            if !allowed.contains(&(rel.as_str(), line.as_str())) {
+                found.push(format!("{rel}: {line}"));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "identities kept as strings:\n{}",
+        found.join("\n")
+    );
+    // The check sees what it forbids.
+    for bad in [
+        "    pub cell: String,",
+        "    method: &str,",
+        "    .filter(|c| c.method == \"pbcs\")",
+        "    if r.cell.as_str() != id {",
+        "    e.experiment.to_string() == name",
+    ] {
+        assert_eq!(identity_strings(bad).len(), 1, "{bad}");
+    }
+    for fine in [
+        "    pub cell: CellKey,",
+        "    .filter(|c| c.method == m)",
+        "    // the cell: String",
+        "    pub label: String,",
+    ] {
+        assert!(identity_strings(fine).is_empty(), "{fine}");
+    }
+}

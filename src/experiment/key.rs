@@ -7,8 +7,7 @@
 //! a cell's folder name, its name on the command line and its `cell` column. A method name
 //! holds letters, digits and `_` only, so the first `-` ends it.
 //!
-//! Names are interned ([`ustr`]): there are a few dozen experiments and a handful of methods
-//! each, every name is stored once for the life of the process and a copy is a pointer. They order as their text does,
+//! Names are interned ([`crate::name`]). They order as their text does,
 //! and a cell key orders as its written form, so sorting by key sorts as the tables always
 //! have.
 //!
@@ -28,101 +27,29 @@
 use super::Site;
 use crate::envs::EnvName;
 use crate::error::{Error, Result};
-use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::cmp::Ordering;
 use std::fmt;
 use std::str::FromStr;
-use ustr::Ustr;
 
-/// A method's name as its experiment declares it (`pbcs`, `td3_her`, `pbcs_pm_velocity`):
-/// letters, digits and `_`.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct Method(Ustr);
+crate::name!(
+    /// A method's name as its experiment declares it (`pbcs`, `td3_her`, `pbcs_pm_velocity`):
+    /// letters, digits and `_` (a method name is a folder name and the first part of a cell
+    /// key).
+    Method,
+    field = "method.name",
+    what = "a method's name",
+    dash = false
+);
 
-impl Method {
-    /// The method called `name`, or an error if it holds anything but letters, digits and `_`
-    /// (a method name is a folder name and the first part of a cell key).
-    pub fn new(name: &str) -> Result<Method> {
-        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-            return Err(Error::invalid(
-                "method.name",
-                format!("`{name}`: use letters, digits and `_` only"),
-            ));
-        }
-        Ok(Method(Ustr::from(name)))
-    }
-
-    /// The name.
-    pub fn as_str(self) -> &'static str {
-        self.0.as_str()
-    }
-}
-
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl fmt::Debug for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{:?}", self.as_str())
-    }
-}
-
-impl FromStr for Method {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Method> {
-        Method::new(s)
-    }
-}
-
-/// An experiment's name: its file's stem (`table`, `pointmaze_her`), the folder of its raw
-/// rows and the first part of its tables' names; letters, digits, `_` and `-`.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ExperimentName(Ustr);
-
-impl ExperimentName {
-    /// The experiment called `name`, or an error if it holds anything but letters, digits, `_`
-    /// and `-` (it names folders and files, and LaTeX keys).
-    pub fn new(name: &str) -> Result<ExperimentName> {
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-        {
-            return Err(Error::invalid(
-                "experiment",
-                format!("`{name}`: an experiment's name (its file's stem) holds letters, digits, `_` and `-` only"),
-            ));
-        }
-        Ok(ExperimentName(Ustr::from(name)))
-    }
-
-    /// The name.
-    pub fn as_str(self) -> &'static str {
-        self.0.as_str()
-    }
-}
-
-impl fmt::Display for ExperimentName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl fmt::Debug for ExperimentName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{:?}", self.as_str())
-    }
-}
-
-impl FromStr for ExperimentName {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<ExperimentName> {
-        ExperimentName::new(s)
-    }
-}
+crate::name!(
+    /// An experiment's name: its file's stem (`table`, `pointmaze_her`), the folder of its raw
+    /// rows and the first part of its tables' names and LaTeX keys; letters, digits, `_` and
+    /// `-`.
+    ExperimentName,
+    field = "experiment",
+    what = "an experiment's name (its file's stem)",
+    dash = true
+);
 
 /// Its folder under `raw/`.
 impl AsRef<std::path::Path> for ExperimentName {
@@ -200,26 +127,7 @@ impl FromStr for CellKey {
     }
 }
 
-/// Both are written as their text, so a row's CSV reads as it did when they were strings.
-macro_rules! as_text {
-    ($t:ty) => {
-        impl Serialize for $t {
-            fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-                s.collect_str(self)
-            }
-        }
-
-        impl<'de> Deserialize<'de> for $t {
-            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<$t, D::Error> {
-                let s = std::borrow::Cow::<str>::deserialize(d)?;
-                s.parse().map_err(serde::de::Error::custom)
-            }
-        }
-    };
-}
-as_text!(ExperimentName);
-as_text!(Method);
-as_text!(CellKey);
+crate::as_text!(CellKey);
 
 #[cfg(test)]
 mod tests {

@@ -30,7 +30,7 @@ pub struct RawRow {
     /// The learner: [`crate::learner::LearnerConfig::record_name`] (`ddpg`, `td3`, with `_am`
     /// for the argmax actor; `sac`), with `_her` for a vanilla run with HER
     /// ([`crate::config::TrainJob::learner_name`]).
-    pub learner: String,
+    pub learner: crate::learner::LearnerName,
     /// γ.
     pub gamma: f32,
     /// PBCS: whether skill chaining was on.
@@ -193,7 +193,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
             maze_seed.to_string(),
         ),
         ("seed", row.seed.to_string(), seed.to_string()),
-        ("learner", row.learner.clone(), learner),
+        ("learner", row.learner.to_string(), learner.to_string()),
         ("gamma", row.gamma.to_string(), gamma.to_string()),
         ("chaining", row.chaining.to_string(), chaining.to_string()),
         ("starts", starts(row.starts), starts(start)),

@@ -232,7 +232,8 @@ mod tests {
 
     #[derive(Debug, PartialEq, Serialize, Deserialize)]
     struct Row {
-        cell: String,
+        #[serde(rename = "cell")]
+        label: String,
         maze: Site,
     }
 
@@ -243,7 +244,7 @@ mod tests {
             (Site::Env(EnvName::Rooms), "cell,maze\nc,rooms\n"),
         ] {
             let row = Row {
-                cell: "c".into(),
+                label: "c".into(),
                 maze: site,
             };
             let mut w = csv::Writer::from_writer(Vec::new());

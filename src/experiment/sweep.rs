@@ -168,11 +168,11 @@ pub fn run_parallel<T: Sync, R: Send>(
 /// cell, or one seed.
 pub fn plan<'a>(
     exp: &'a Experiment,
-    cell: Option<&str>,
+    cell: Option<super::CellKey>,
     seed: Option<u64>,
 ) -> Result<Vec<Pending<'a>>> {
     let cells: Vec<&Cell> = match cell {
-        Some(id) => vec![exp.cell(id)?],
+        Some(key) => vec![exp.cell_at(key)?],
         None => exp.cells.iter().collect(),
     };
     let seeds = match seed {

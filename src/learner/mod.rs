@@ -18,7 +18,7 @@
 //! use pbcs::nn::kernel::Kernel;
 //! use pbcs::rng::{Seeds, Stream};
 //! let sac: LearnerConfig = toml::from_str("algo = \"sac\"\nhidden = [16, 16]").unwrap();
-//! assert_eq!(sac.record_name(), "sac");
+//! assert_eq!(sac.record_name().as_str(), "sac");
 //! let mut learner = sac.build(2, &[0.1, 0.1], &Seeds::new(0), Kernel::detect()).unwrap();
 //! learner.begin_episodes(1);
 //! let mut rng = Seeds::new(0).stream(Stream::Noise);
@@ -132,6 +132,24 @@ pub trait Family:
     /// The actions its policy gives per observation, for a network of `sizes` (at least two
     /// layers): TD3's actor its output, SAC's half of it (μ and ℓ per action).
     fn policy_action_dim(sizes: &[usize]) -> usize;
+}
+
+crate::name!(
+    /// A learner as result rows name it: its family's record name (`ddpg`, `td3`, `td3_am`,
+    /// `sac`), with `_her` for a vanilla run with hindsight experience replay
+    /// ([`crate::config::TrainJob::learner_name`]).
+    LearnerName,
+    field = "learner",
+    what = "a learner's name",
+    dash = false
+);
+
+impl LearnerName {
+    /// The name a family gives its learner ([`Family::record_name`]): letters, digits and `_`
+    /// by every family's construction, which `every_family_names_its_learner_validly` holds.
+    pub(crate) fn of_family(name: &str) -> LearnerName {
+        LearnerName::new(name).unwrap_or_else(|e| panic!("a learner family's record name: {e}"))
+    }
 }
 
 /// Declares the learner families: each entry `Variant(module::Settings)` is a module of this
@@ -331,8 +349,8 @@ impl LearnerConfig {
 
     /// The learner's name in result rows: `ddpg` or `td3`, with `_am` for the argmax actor;
     /// `sac`.
-    pub fn record_name(&self) -> String {
-        self.get().record_name()
+    pub fn record_name(&self) -> LearnerName {
+        LearnerName::of_family(&self.get().record_name())
     }
 
     /// The discount γ.

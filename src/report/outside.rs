@@ -172,7 +172,7 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
             &v,
         );
     }
-    let algos: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.algo.as_str()).collect();
+    let algos: std::collections::BTreeSet<_> = rows.iter().map(|r| r.algo).collect();
     for a in algos {
         let find = |w| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
         use crate::tables::outside::Library;

@@ -99,7 +99,7 @@ pub fn pbcs_suffix(job: &PbcsJob) -> String {
 /// The part of a vanilla run's default folder that names its learner: `-ddpg`, `-td3`, with
 /// `-am` for the argmax actor; `-sac`; then `-her` with hindsight experience replay.
 pub fn train_suffix(job: &TrainJob) -> String {
-    format!("-{}", job.learner_name().replace('_', "-"))
+    format!("-{}", job.learner_name().as_str().replace('_', "-"))
 }
 
 /// The name of a procedure given as a config file or a preset (`pbcs run`'s folder,

@@ -33,7 +33,7 @@ pub struct RunRecord {
     pub variant: Variant,
     /// [`crate::learner::LearnerConfig::record_name`]: `ddpg`, `td3`, with `_am` for the
     /// argmax actor; `sac`.
-    pub learner: String,
+    pub learner: crate::learner::LearnerName,
     /// `ball`, `exact` or `archive` starts.
     pub starts: StartMode,
     /// γ of the learner.

@@ -435,7 +435,7 @@ mod tests {
             site: c.site,
             maze_seed: 0,
             seed,
-            learner: "ddpg".into(),
+            learner: "ddpg".parse().unwrap(),
             gamma: 0.9,
             chaining: true,
             starts: Some(crate::phase2::StartMode::Ball),

@@ -302,7 +302,7 @@ fn bad_experiment_files_name_the_problem() {
     let err = Experiment::load(&ok, Some("nope")).unwrap_err().to_string();
     assert!(err.contains("profile") && err.contains("nope"), "{err}");
     let exp = Experiment::load(&ok, None).unwrap();
-    assert!(plan(&exp, Some("a-maze3"), None)
+    assert!(plan(&exp, Some("a-maze3".parse().unwrap()), None)
         .unwrap_err()
         .to_string()
         .contains("a-maze2"));

@@ -112,7 +112,7 @@ fn an_edited_raw_row_is_refused_naming_its_file_line_and_column() {
         );
         // A resumed sweep reads finished rows the same way: refused, not trusted (the run
         // is not re-run either).
-        let runs = plan(&exp, Some("pbcs-maze2"), Some(3)).unwrap();
+        let runs = plan(&exp, Some("pbcs-maze2".parse().unwrap()), Some(3)).unwrap();
         let kernel = pbcs::nn::kernel::Kernel::detect();
         let e = sweep(&exp, &runs, results, 1, kernel, |_, _| {})
             .unwrap_err()
@@ -227,8 +227,8 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
 #[test]
 fn an_exact_check_names_the_columns_that_differ() {
     let exp = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
-    let id = "pbcs_fast-maze2";
-    let cell = exp.cell(id).unwrap();
+    let id: pbcs::experiment::CellKey = "pbcs_fast-maze2".parse().unwrap();
+    let cell = exp.cell_at(id).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let (from, to) = (
         exp.cell_dir(Path::new("results"), cell),

@@ -110,7 +110,7 @@ fn smoke_profile_runs_end_to_end_deterministically() {
 fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     let dir = tempfile::tempdir().unwrap();
     let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
-    let runs = plan(&exp, Some("exact-maze2"), None).unwrap();
+    let runs = plan(&exp, Some("exact-maze2".parse().unwrap()), None).unwrap();
     sweep(
         &exp,
         &runs,
@@ -124,7 +124,7 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     if let pbcs::experiment::Job::Pbcs(j) = &mut changed.cells[1].job {
         j.phase2.epsilon = 0.2;
     }
-    let runs = plan(&changed, Some("exact-maze2"), None).unwrap();
+    let runs = plan(&changed, Some("exact-maze2".parse().unwrap()), None).unwrap();
     let err = sweep(
         &changed,
         &runs,
@@ -144,7 +144,7 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
 fn a_run_another_sweep_holds_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let exp = Experiment::load(Path::new("experiments/unseen.toml"), Some("smoke")).unwrap();
-    let runs = plan(&exp, Some("exact-maze2"), Some(0)).unwrap();
+    let runs = plan(&exp, Some("exact-maze2".parse().unwrap()), Some(0)).unwrap();
     let cell_dir = exp.cell_dir(dir.path(), runs[0].cell);
     let lock = pbcs::record::WorkLock::acquire(&cell_dir.join("s0.lock")).unwrap();
     let err = sweep(

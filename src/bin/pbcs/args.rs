@@ -332,7 +332,7 @@ pub enum ExpCommand {
         exp: ExpArgs,
         /// Only this cell (`<method>-maze<N>`, `<method>-rooms`, see `pbcs exp list`).
         #[arg(long)]
-        cell: Option<String>,
+        cell: Option<pbcs::experiment::CellKey>,
         /// Only this seed.
         #[arg(long)]
         seed: Option<u64>,
@@ -372,7 +372,7 @@ pub enum ExpCommand {
         exp: ExpArgs,
         /// The cell (`<method>-maze<N>`, `<method>-rooms`).
         #[arg(long)]
-        cell: String,
+        cell: pbcs::experiment::CellKey,
         /// Only this seed.
         #[arg(long)]
         seed: Option<u64>,

@@ -106,13 +106,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 seed,
                 jobs,
                 skip_unavailable,
-            } => exp_run(
-                &args,
-                (cell.as_deref(), seed),
-                jobs,
-                skip_unavailable,
-                kernel,
-            ),
+            } => exp_run(&args, (cell, seed), jobs, skip_unavailable, kernel),
             ExpCommand::List {
                 exp: args,
                 make,
@@ -125,7 +119,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 seed,
                 jobs,
                 exact,
-            } => exp_check(&args, &cell, seed, jobs, kernel, exact),
+            } => exp_check(&args, cell, seed, jobs, kernel, exact),
         },
     }
 }
@@ -200,7 +194,7 @@ fn render(
 /// experiment this build cannot run is refused before any work, or skipped with one line.
 fn exp_run(
     args: &ExpArgs,
-    (cell, seed): (Option<&str>, Option<u64>),
+    (cell, seed): (Option<pbcs::experiment::CellKey>, Option<u64>),
     jobs: usize,
     skip_unavailable: bool,
     kernel: Kernel,
@@ -306,7 +300,7 @@ fn sweep(
 
 fn exp_check(
     args: &ExpArgs,
-    cell: &str,
+    cell: pbcs::experiment::CellKey,
     seed: Option<u64>,
     jobs: usize,
     kernel: Kernel,

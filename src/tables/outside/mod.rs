@@ -25,6 +25,7 @@ use super::scope::Scope;
 use crate::error::{Error, Result};
 use crate::experiment::{evals_file, run_file, CellKey, Experiment, ExperimentName, Method, Site};
 use crate::learner::td3::Algo;
+use crate::learner::LearnerName;
 use crate::stats::{fisher_exact, least_successes, wilson, Z95};
 use crate::vanilla::EvalRow;
 use serde::{Deserialize, Serialize};
@@ -102,7 +103,7 @@ pub struct MazeComparison {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct UpdateCost {
     /// `ddpg` or `td3`.
-    pub algo: String,
+    pub algo: LearnerName,
     /// `pbcs` or `sb3-<version>`.
     pub library: String,
     /// Microseconds per environment step after the warm-up (one update each).

@@ -5,6 +5,7 @@
 
 use super::{outside_dir, seed_rows};
 use crate::error::{Error, Result};
+use crate::learner::LearnerName;
 use crate::stats::{mean_sd, t_interval, welch};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -15,7 +16,7 @@ pub struct PendulumRun {
     /// `pbcs` or `sb3-<version>`.
     pub library: String,
     /// The learner (`td3`, `sac`).
-    pub algo: String,
+    pub algo: LearnerName,
     /// The run's seed.
     pub seed: u64,
     /// Environment steps of training.
@@ -33,7 +34,7 @@ pub struct Published {
     /// Where it is published (a file and commit a reader can open).
     pub source: String,
     /// The learner.
-    pub algo: String,
+    pub algo: LearnerName,
     /// Environment steps of training.
     pub steps: u64,
     /// Episodes its evaluation averaged.
