@@ -1,11 +1,10 @@
-//! Aggregation of raw results with polars (cargo feature `polars`): raw rows → per-cell
-//! statistics ([`CellStats`]): n, successes, Wilson 95 % interval, median and quartiles of
-//! environment steps, and the paper's figure beside ours.
-//!
-//! polars does the grouping, the order statistics and the Wilson interval (written there a
-//! second time, [`wilson_exprs`]). Every number is then checked against the plain-Rust computation of
-//! [`crate::tables::cell_stats`], and a disagreement is an error: the two implementations keep
-//! each other honest every time `make figures` runs.
+//! The check of the per-cell statistics ([`CellStats`]) by polars (cargo feature `polars`):
+//! the table is the plain-Rust computation declared in [`crate::tables::statistics`], and
+//! polars computes the statistics again from the raw rows, its own way (grouping, order
+//! statistics, the Wilson interval written a second time, [`wilson_exprs`]). Every statistic
+//! it has an expression for, matched by column name, must agree, and a disagreement is an
+//! error naming the cell and the column: the two implementations keep each other honest every
+//! time `make figures` runs.
 
 use crate::error::{Error, Result};
 use crate::experiment::{Experiment, RawRow};
@@ -67,17 +66,24 @@ pub fn group_cells(frame: DataFrame) -> PolarsResult<DataFrame> {
                 .filter(col("solved").eq(lit(1.0)))
                 .median()
                 .alias("solved_steps_median"),
-            col("solved")
-                .eq(lit(1.0))
-                .and(steps().lt_eq(col("paper_steps")))
-                .cast(DataType::Float64)
-                .sum()
+            // Empty where the cell has no paper figure, as the plain statistic.
+            when(col("paper_steps").first().is_null())
+                .then(lit(NULL).cast(DataType::Float64))
+                .otherwise(
+                    col("solved")
+                        .eq(lit(1.0))
+                        .and(steps().lt_eq(col("paper_steps")))
+                        .cast(DataType::Float64)
+                        .sum(),
+                )
                 .alias("solved_within_paper"),
             col("skills").median().alias("skills_median"),
             col("success_rate").median().alias("success_rate_median"),
             col("budget").first().alias("budget"),
+            col("paper_steps").first().alias("paper_steps"),
         ])
         .with_columns(wilson_exprs())
+        .with_columns([(col("successes") / col("n")).alias("success_rate")])
         .sort(["cell"], SortMultipleOptions::default())
         .collect()
 }
@@ -113,70 +119,70 @@ fn wilson_exprs() -> [Expr; 2] {
     ]
 }
 
-/// Aggregates `rows` of `exp` with polars into one [`CellStats`] per cell with runs, in the
-/// experiment's cell order, and checks every number against the plain-Rust computation.
+/// The statistics of `rows` of `exp`, one [`CellStats`] per cell with runs in the
+/// experiment's cell order ([`cell_stats`]), once polars has computed every statistic it has
+/// an expression for and agreed with each (an error names the cell, the column and both
+/// values).
 pub fn aggregate(exp: &Experiment, rows: &[RawRow]) -> Result<Vec<CellStats>> {
     let grouped = raw_frame(exp, rows)
         .and_then(group_cells)
         .map_err(|e| err(exp, e))?;
-    let cells = grouped
-        .column("cell")
-        .and_then(|c| c.u32().cloned())
-        .map_err(|e| err(exp, e))?;
-    let num = |name: &str, i: usize| -> Result<Option<f64>> {
-        grouped
-            .column(name)
-            .and_then(|c| c.f64().map(|c| c.get(i)))
-            .map_err(|e| err(exp, e))
-    };
-    let mut out = Vec::new();
-    for (index, c) in exp.cells.iter().enumerate() {
-        let Some(i) = (0..grouped.height()).find(|&i| cells.get(i) == Some(index as u32)) else {
-            continue;
-        };
-        let get = |name: &str| -> Result<f64> {
-            num(name, i)?.ok_or_else(|| err(exp, format!("{}: no `{name}`", c.id)))
-        };
-        let (n, k) = (get("n")? as u64, get("successes")? as u64);
-        // Every declared statistic polars computes, by its column's name (polars' own Wilson
-        // interval among them: `same` checks it against the plain one).
-        let mut stats = CellStats::counted(exp, c, k, n);
-        for stat in STATISTICS {
-            if grouped.column(stat.column).is_ok() {
-                (stat.set)(&mut stats, num(stat.column, i)?);
-            }
-        }
-        // Null paper steps count nothing; the paper's figure decides whether there is one.
-        if c.paper_steps.is_none() {
-            stats.solved_within_paper = None;
-        }
-        out.push(stats);
-    }
     let plain = cell_stats(exp, rows);
-    if !same(&out, &plain) {
-        return Err(err(
+    match disagreement(exp, &grouped, &plain).map_err(|e| err(exp, e))? {
+        None => Ok(plain),
+        Some(why) => Err(err(
             exp,
-            format!("polars and the plain computation disagree:\n{out:?}\n{plain:?}"),
-        ));
+            format!("polars and the plain computation disagree: {why}"),
+        )),
     }
-    Ok(out)
 }
 
-/// Equal cell by cell in every declared statistic
-/// ([`crate::tables::statistics::STATISTICS`]), up to floating-point noise (relative 1e-9).
-fn same(a: &[CellStats], b: &[CellStats]) -> bool {
+/// Where polars' per-cell numbers (`grouped`) and the plain statistics `plain` of `exp`
+/// differ, if anywhere: a cell one has and the other not, or a declared statistic
+/// ([`STATISTICS`]) polars computes whose values differ beyond floating-point noise
+/// (relative 1e-9), or where one is empty and the other not.
+fn disagreement(
+    exp: &Experiment,
+    grouped: &DataFrame,
+    plain: &[CellStats],
+) -> PolarsResult<Option<String>> {
     let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0);
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.cell == y.cell
-                && STATISTICS
-                    .iter()
-                    .all(|stat| match ((stat.value)(x), (stat.value)(y)) {
-                        (Some(p), Some(q)) => close(p, q),
-                        (None, None) => true,
-                        _ => false,
-                    })
-        })
+    let cells = grouped.column("cell")?.u32()?.clone();
+    if cells.len() != plain.len() {
+        return Ok(Some(format!(
+            "{} cells against {}",
+            cells.len(),
+            plain.len()
+        )));
+    }
+    for s in plain {
+        let index = exp
+            .cells
+            .iter()
+            .position(|c| c.id == s.cell)
+            .map(|i| i as u32);
+        let Some(i) = (0..cells.len()).find(|&i| cells.get(i) == index) else {
+            return Ok(Some(format!("{}: no cell in polars' grouping", s.cell)));
+        };
+        for stat in STATISTICS {
+            let Ok(column) = grouped.column(stat.column) else {
+                continue;
+            };
+            let (ours, theirs) = ((stat.value)(s), column.f64()?.get(i));
+            let agree = match (ours, theirs) {
+                (Some(p), Some(q)) => close(p, q),
+                (None, None) => true,
+                _ => false,
+            };
+            if !agree {
+                return Ok(Some(format!(
+                    "{}, column `{}`: {ours:?} (plain) against {theirs:?} (polars)",
+                    s.cell, stat.column
+                )));
+            }
+        }
+    }
+    Ok(None)
 }
 
 #[cfg(test)]
@@ -184,28 +190,35 @@ mod tests {
     use super::*;
 
     /// polars' aggregation of the committed table's rows agrees with the plain computation,
-    /// and the comparison sees a difference in any declared statistic (here the first
-    /// quartile, a missing median of solved runs, the paper's figure).
+    /// and the check sees a difference in a statistic polars computes (here the first
+    /// quartile, a missing median of solved runs, the paper's figure, the interquartile
+    /// range), naming the column.
     #[test]
     fn polars_agrees_with_the_plain_computation_and_the_check_sees_a_difference() {
         let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), None).unwrap();
         let rows = crate::experiment::read_raw(&exp, std::path::Path::new("results")).unwrap();
-        let ours = aggregate(&exp, &rows).unwrap();
+        let grouped = raw_frame(&exp, &rows).and_then(group_cells).unwrap();
         let plain = cell_stats(&exp, &rows);
-        assert!(same(&ours, &plain));
-        let changed: [fn(&mut CellStats); 3] = [
-            |s| s.steps_q1 += 1.0,
-            |s| s.solved_steps_median = None,
-            |s| s.paper_steps = s.paper_steps.map(|p| p + 1).or(Some(1)),
+        assert_eq!(disagreement(&exp, &grouped, &plain).unwrap(), None);
+        assert_eq!(aggregate(&exp, &rows).unwrap(), plain);
+        type Change = (&'static str, fn(&mut CellStats));
+        let changed: [Change; 4] = [
+            ("steps_q1", |s| s.steps_q1 += 1.0),
+            ("solved_steps_median", |s| s.solved_steps_median = None),
+            ("paper_steps", |s| {
+                s.paper_steps = s.paper_steps.map(|p| p + 1).or(Some(1))
+            }),
+            ("steps_iqr", |s| s.steps_iqr *= 2.0),
         ];
-        for change in changed {
+        for (column, change) in changed {
             let mut other = plain.clone();
             let cell = other
                 .iter_mut()
-                .find(|s| s.solved_steps_median.is_some())
+                .find(|s| s.solved_steps_median.is_some() && s.steps_iqr > 0.0)
                 .unwrap();
             change(cell);
-            assert!(!same(&ours, &other));
+            let why = disagreement(&exp, &grouped, &other).unwrap().unwrap();
+            assert!(why.contains(&format!("`{column}`")), "{column}: {why}");
         }
     }
 }

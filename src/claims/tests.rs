@@ -10,30 +10,19 @@ fn m(name: &str) -> Method {
 
 /// A cell with `k` of `n` seeds solved and its 95 % Wilson interval.
 fn cell(method: &str, maze: usize, k: u64, n: u64) -> CellStats {
+    let empty = CellStats::empty(
+        "t".parse().unwrap(),
+        CellKey::new(m(method), Site::Maze(maze)),
+        method,
+    );
     CellStats {
-        experiment: "t".parse().unwrap(),
-        cell: CellKey::new(m(method), Site::Maze(maze)),
-        method: m(method),
-        label: method.into(),
-        site: crate::experiment::Site::Maze(maze),
-        n: 0,
-        successes: 0,
-        success_rate: 0.0,
-        wilson_lo: 0.0,
-        wilson_hi: 0.0,
         steps_median: 1.0,
         steps_q1: 1.0,
         steps_q3: 1.0,
-        steps_iqr: 0.0,
         steps_min: 1.0,
         steps_max: 1.0,
-        solved_steps_median: None,
-        solved_within_paper: None,
-        skills_median: 0.0,
-        success_rate_median: 0.0,
         budget: 1,
-        paper_steps: None,
-        paper_solved: None,
+        ..empty
     }
     .with_counts(k, n)
 }

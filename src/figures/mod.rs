@@ -306,30 +306,21 @@ mod tests {
     use super::*;
 
     fn stats(successes: u64, steps_median: f64, solved: Option<f64>) -> CellStats {
+        let empty = CellStats::empty(
+            "table".parse().unwrap(),
+            "pbcs-maze5".parse().unwrap(),
+            "PBCS",
+        );
         CellStats {
-            experiment: "table".parse().unwrap(),
-            cell: "pbcs-maze5".parse().unwrap(),
-            method: "pbcs".parse().unwrap(),
-            label: "PBCS".into(),
-            site: crate::experiment::Site::Maze(5),
-            n: 10,
-            successes,
-            success_rate: successes as f64 / 10.0,
-            wilson_lo: 0.0,
-            wilson_hi: 1.0,
             steps_median,
             steps_q1: steps_median,
             steps_q3: steps_median,
-            steps_iqr: 0.0,
             steps_min: steps_median,
             steps_max: steps_median,
             solved_steps_median: solved,
-            solved_within_paper: None,
             skills_median: 1.0,
-            success_rate_median: 0.0,
             budget: 400_000,
-            paper_steps: None,
-            paper_solved: None,
+            ..empty.with_counts(successes, 10)
         }
     }
 

@@ -8,10 +8,13 @@ use crate::experiment::Experiment;
 #[test]
 fn the_results_table_puts_counts_interval_and_paper_on_three_lines() {
     let exp = Experiment::of_job("pbcs", &Default::default(), &[2], 10).unwrap();
+    let c = &exp.cells[0];
     let cell = CellStats {
         steps_median: 195_000.0,
         solved_within_paper: Some(8),
-        ..CellStats::counted(&exp, &exp.cells[0], 9, 10)
+        paper_steps: c.paper_steps,
+        paper_solved: c.paper_solved,
+        ..CellStats::empty(exp.name, c.id, &c.label).with_counts(9, 10)
     };
     let methods = [
         ("pbcs".parse().unwrap(), "PBCS".to_string()),

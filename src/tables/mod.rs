@@ -19,111 +19,12 @@ pub mod scope;
 pub mod statistics;
 
 use crate::error::{Error, Result};
-use crate::experiment::{Cell, CellKey, Experiment, ExperimentName, Method, RawRow, Site};
-use crate::stats::{median, quantile, wilson, Z95};
+use crate::experiment::{CellKey, Experiment, ExperimentName, Method, RawRow, Site};
+use crate::stats::median;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// One cell's statistics over its seeds.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CellStats {
-    /// Experiment name.
-    pub experiment: ExperimentName,
-    /// Cell id.
-    pub cell: CellKey,
-    /// Method name.
-    pub method: Method,
-    /// Method label.
-    pub label: String,
-    /// Where the cell runs: maze size N or another environment's name (column `maze`).
-    #[serde(rename = "maze")]
-    pub site: Site,
-    /// Finished runs (seeds).
-    pub n: u64,
-    /// Runs that solved the maze.
-    pub successes: u64,
-    /// successes / n.
-    pub success_rate: f64,
-    /// Wilson 95 % interval, lower end.
-    pub wilson_lo: f64,
-    /// Wilson 95 % interval, upper end.
-    pub wilson_hi: f64,
-    /// Environment steps: median over runs.
-    pub steps_median: f64,
-    /// First quartile (linear interpolation).
-    pub steps_q1: f64,
-    /// Third quartile.
-    pub steps_q3: f64,
-    /// Interquartile range: `steps_q3 − steps_q1`.
-    pub steps_iqr: f64,
-    /// Fewest.
-    pub steps_min: f64,
-    /// Most.
-    pub steps_max: f64,
-    /// Median environment steps of the solved runs (empty if none solved).
-    pub solved_steps_median: Option<f64>,
-    /// Runs solved within the paper's environment steps for the cell (empty where the paper
-    /// gives none): with a budget of twice the paper's steps, how many also fit in 1×.
-    pub solved_within_paper: Option<u64>,
-    /// Median number of skills (PBCS; 0 for vanilla).
-    pub skills_median: f64,
-    /// Median of the final evaluation's success rate.
-    pub success_rate_median: f64,
-    /// The step budget of each run.
-    pub budget: u64,
-    /// The paper's environment steps for this cell (one seed), if reported.
-    pub paper_steps: Option<u64>,
-    /// Whether the paper's run solved it, if reported.
-    pub paper_solved: Option<bool>,
-}
-
-impl CellStats {
-    /// Cell `c` of `exp` with `k` of `n` runs solved (see [`CellStats::with_counts`]), its
-    /// identity and the paper's figures from `c`, and the step statistics zero: callers fill
-    /// them in with struct-update syntax.
-    pub fn counted(exp: &Experiment, c: &Cell, k: u64, n: u64) -> CellStats {
-        CellStats {
-            experiment: exp.name,
-            cell: c.id,
-            method: c.method,
-            label: c.label.clone(),
-            site: c.site,
-            n: 0,
-            successes: 0,
-            success_rate: 0.0,
-            wilson_lo: 0.0,
-            wilson_hi: 0.0,
-            steps_median: 0.0,
-            steps_q1: 0.0,
-            steps_q3: 0.0,
-            steps_iqr: 0.0,
-            steps_min: 0.0,
-            steps_max: 0.0,
-            solved_steps_median: None,
-            solved_within_paper: None,
-            skills_median: 0.0,
-            success_rate_median: 0.0,
-            budget: 0,
-            paper_steps: c.paper_steps,
-            paper_solved: c.paper_solved,
-        }
-        .with_counts(k, n)
-    }
-
-    /// The same cell with `k` successes out of `n` runs, and the success rate and 95 % Wilson
-    /// interval that follow from them.
-    pub fn with_counts(self, k: u64, n: u64) -> CellStats {
-        let (lo, hi) = wilson(k, n, Z95);
-        CellStats {
-            n,
-            successes: k,
-            success_rate: k as f64 / n as f64,
-            wilson_lo: lo,
-            wilson_hi: hi,
-            ..self
-        }
-    }
-}
+pub use statistics::{CellStats, Runs};
 
 /// The `\res` numbers of a table written beside an experiment's (`judged`, `paired`,
 /// `phases`), where it exists: `fields(row)` gives a row's key prefix and its fields, each
@@ -335,43 +236,12 @@ pub fn write_table(path: &Path, rows: &[CellStats]) -> Result<()> {
 }
 
 /// The statistics of each cell of `exp` that has finished runs, in the experiment's cell
-/// order, computed in plain Rust from the raw rows.
+/// order, computed in plain Rust from the raw rows ([`CellStats::of`]).
 pub fn cell_stats(exp: &Experiment, rows: &[RawRow]) -> Vec<CellStats> {
     exp.cells
         .iter()
-        .filter_map(|c| {
-            let runs: Vec<&RawRow> = rows.iter().filter(|r| r.cell == c.id).collect();
-            if runs.is_empty() {
-                return None;
-            }
-            let n = runs.len() as u64;
-            let k = runs.iter().filter(|r| r.solved).count() as u64;
-            let mut steps: Vec<f64> = runs.iter().map(|r| r.env_steps as f64).collect();
-            let mut solved: Vec<f64> = runs
-                .iter()
-                .filter(|r| r.solved)
-                .map(|r| r.env_steps as f64)
-                .collect();
-            let mut skills: Vec<f64> = runs.iter().map(|r| r.skills as f64).collect();
-            let mut rate: Vec<f64> = runs.iter().map(|r| r.success_rate as f64).collect();
-            let (q1, q3) = (quantile(&mut steps, 0.25), quantile(&mut steps, 0.75));
-            Some(CellStats {
-                steps_median: median(&mut steps),
-                steps_q1: q1,
-                steps_q3: q3,
-                steps_iqr: q3 - q1,
-                steps_min: steps[0],
-                steps_max: steps[steps.len() - 1],
-                solved_within_paper: c
-                    .paper_steps
-                    .map(|p| solved.iter().filter(|&&s| s <= p as f64).count() as u64),
-                solved_steps_median: (!solved.is_empty()).then(|| median(&mut solved)),
-                skills_median: median(&mut skills),
-                success_rate_median: median(&mut rate),
-                budget: runs[0].budget,
-                ..CellStats::counted(exp, c, k, n)
-            })
-        })
+        .filter_map(|c| Runs::of(c, rows))
+        .map(|runs| CellStats::of(exp, &runs))
         .collect()
 }
 
