@@ -35,7 +35,7 @@ pub fn raw_frame(exp: &Experiment, rows: &[RawRow]) -> PolarsResult<DataFrame> {
         "seed" => rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
         "solved" => rows.iter().map(|r| f64::from(u8::from(r.solved))).collect::<Vec<_>>(),
         "env_steps" => rows.iter().map(|r| r.env_steps as f64).collect::<Vec<_>>(),
-        "skills" => rows.iter().map(|r| r.skills as f64).collect::<Vec<_>>(),
+        "skills" => rows.iter().map(|r| r.skills() as f64).collect::<Vec<_>>(),
         "success_rate" => rows.iter().map(|r| f64::from(r.success_rate)).collect::<Vec<_>>(),
         "budget" => rows.iter().map(|r| r.budget as f64).collect::<Vec<_>>(),
     )

@@ -111,7 +111,7 @@ impl Criteria {
 /// have no chain).
 pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
     rows.iter()
-        .filter(|r| r.kind == Kind::Pbcs)
+        .filter(|r| r.kind() == Kind::Pbcs)
         .map(|r| ChainSuccess {
             experiment: r.experiment,
             cell: r.cell,
@@ -121,7 +121,7 @@ pub fn chain_successes(exp: &Experiment, rows: &[RawRow]) -> Vec<ChainSuccess> {
                 .map_or_else(|_| r.method.to_string(), |c| c.label.clone()),
             site: r.site,
             seed: r.seed,
-            complete: r.failure.is_none(),
+            complete: r.failure().is_none(),
             success_rate: r.success_rate,
             solved: r.solved,
             env_steps: r.env_steps,

@@ -205,8 +205,8 @@ fn every_unsolved_pbcs_run_built_a_complete_chain_that_failed_its_evaluation() {
     );
     for r in unsolved {
         let id = format!("{} seed {}", r.cell, r.seed);
-        assert_eq!(r.failure, None, "{id}");
-        assert!(r.skills > 0 && r.env_steps < r.budget, "{id}");
+        assert_eq!(r.failure(), None, "{id}");
+        assert!(r.skills() > 0 && r.env_steps < r.budget, "{id}");
         assert!(r.success_rate < 0.95, "{id}: {}", r.success_rate);
     }
 }
@@ -393,8 +393,8 @@ fn unseen_states_ball_starts_beat_exact_starts() {
         .filter(|r| r.method.as_str() == "exact")
     {
         let id = format!("{} seed {}", r.cell, r.seed);
-        assert_eq!(r.failure, None, "{id}");
-        assert!(r.skills > 0 && r.env_steps < r.budget, "{id}");
+        assert_eq!(r.failure(), None, "{id}");
+        assert!(r.skills() > 0 && r.env_steps < r.budget, "{id}");
     }
     let claims = claims(&claim_tables()).unwrap();
     let unseen = claims.iter().find(|c| c.id == "unseen_states").unwrap();

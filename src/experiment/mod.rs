@@ -39,6 +39,7 @@ mod key;
 mod layout;
 mod merge;
 mod row;
+mod row_record;
 mod site;
 mod spec;
 mod sweep;
@@ -50,7 +51,7 @@ pub use layout::{
     evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
     read_wall_seconds,
 };
-pub use row::{read_row, read_run_row, RawRow};
+pub use row::{read_row, read_run_row, KindRow, PbcsRow, RawRow, VanillaRow};
 pub use site::{paper_run, Site};
 pub use sweep::{plan, run_cell_seed, run_parallel, sweep, Event, Pending};
 

@@ -1,5 +1,6 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
+use super::row_record::RowRecord;
 use super::{Cell, CellKey, Experiment, ExperimentName, Job, Kind, Method, Site};
 use crate::config::{Located, PbcsJob, TrainJob};
 use crate::error::{Error, Result};
@@ -8,9 +9,12 @@ use crate::runs::{RunRecord, TrainSummary};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// One run's raw result: the row every table and figure is computed from. Vanilla and PBCS
-/// runs share the columns; a column that does not apply holds 0 or is empty.
+/// One run's raw result: the row every table and figure is computed from. What every run
+/// records is a field here; what only a vanilla or only a PBCS run records is its [`KindRow`].
+/// On disk both kinds share one header ([`super::row_record`]); reading a row turns it into its
+/// kind, checking that the other kind's columns are empty.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RowRecord", into = "RowRecord")]
 pub struct RawRow {
     /// Experiment name.
     pub experiment: ExperimentName,
@@ -18,10 +22,7 @@ pub struct RawRow {
     pub cell: CellKey,
     /// Its method.
     pub method: Method,
-    /// `vanilla` or `pbcs`.
-    pub kind: Kind,
     /// Where it ran: the maze size N, or another environment's name (column `maze`).
-    #[serde(rename = "maze")]
     pub site: Site,
     /// Maze layout seed (0 for another environment).
     pub maze_seed: u64,
@@ -33,10 +34,6 @@ pub struct RawRow {
     pub learner: crate::learner::LearnerName,
     /// γ.
     pub gamma: f32,
-    /// PBCS: whether skill chaining was on.
-    pub chaining: bool,
-    /// PBCS: `ball`, `exact` or `archive` starts; empty for vanilla.
-    pub starts: Option<StartMode>,
     /// Solved: PBCS, the chain reaches the target in ≥ 95 % of the evaluation episodes;
     /// vanilla, the final greedy evaluation does (or, with `train.final_eval_episodes`, ≥ 95 %
     /// of PBCS's evaluation episodes).
@@ -48,21 +45,72 @@ pub struct RawRow {
     pub env_steps: u64,
     /// The step budget of the run (PBCS: `phase2.max_env_steps`; vanilla: `train.steps`).
     pub budget: u64,
-    /// Vanilla: environment steps at the first successful greedy evaluation, if any.
+    /// What only its kind of run records.
+    pub kind: KindRow,
+}
+
+/// What only one kind of run records.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum KindRow {
+    /// A vanilla run.
+    Vanilla(VanillaRow),
+    /// A PBCS run.
+    Pbcs(PbcsRow),
+}
+
+/// What only a vanilla run records.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VanillaRow {
+    /// Environment steps at the first successful greedy evaluation, if any.
     pub first_success_steps: Option<u64>,
-    /// PBCS: steps of phase 1.
+}
+
+/// What only a PBCS run records.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PbcsRow {
+    /// Whether skill chaining was on.
+    pub chaining: bool,
+    /// `ball`, `exact` or `archive` starts.
+    pub starts: StartMode,
+    /// Steps of phase 1.
     pub phase1_steps: u64,
-    /// PBCS: steps of phase-2 training episodes.
+    /// Steps of phase-2 training episodes.
     pub train_steps: u64,
-    /// PBCS: steps of Backplay's tests.
+    /// Steps of Backplay's tests.
     pub test_steps: u64,
-    /// PBCS: skills in the chain.
+    /// Skills in the chain.
     pub skills: usize,
-    /// PBCS: why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or empty.
+    /// Why phase 2 stopped early (`backplay_failed`, `no_chaining`, `budget`), or none.
     pub failure: Option<Failure>,
 }
 
 impl RawRow {
+    /// `vanilla` or `pbcs`.
+    pub fn kind(&self) -> Kind {
+        match self.kind {
+            KindRow::Vanilla(_) => Kind::Vanilla,
+            KindRow::Pbcs(_) => Kind::Pbcs,
+        }
+    }
+
+    /// What a PBCS run records; none for a vanilla run.
+    pub fn pbcs_row(&self) -> Option<&PbcsRow> {
+        match &self.kind {
+            KindRow::Pbcs(p) => Some(p),
+            KindRow::Vanilla(_) => None,
+        }
+    }
+
+    /// Skills in the chain (0 for a vanilla run, which has none).
+    pub fn skills(&self) -> usize {
+        self.pbcs_row().map_or(0, |p| p.skills)
+    }
+
+    /// Why phase 2 stopped early (none for a vanilla run).
+    pub fn failure(&self) -> Option<Failure> {
+        self.pbcs_row().and_then(|p| p.failure)
+    }
+
     /// The row of a vanilla run of `cell` (`job` with its seed): its summary, under the
     /// cell's names; the PBCS columns hold 0 or are empty. With `final_eval` (PBCS's protocol,
     /// `train.final_eval_episodes`), the run is judged on those episodes as a PBCS run is;
@@ -83,24 +131,18 @@ impl RawRow {
             experiment: exp.name,
             cell: cell.id,
             method: cell.method,
-            kind: Kind::Vanilla,
             site: Site::of(&job.env_spec()),
             maze_seed: layout_seed(job),
             seed: job.seed,
             learner: job.learner_name(),
             gamma: job.learner.gamma(),
-            chaining: false,
-            starts: None,
             solved: crate::stats::solved(false, success_rate),
             success_rate,
             env_steps: s.env_steps,
             budget: job.train.steps,
-            first_success_steps: s.first_success_steps,
-            phase1_steps: 0,
-            train_steps: 0,
-            test_steps: 0,
-            skills: 0,
-            failure: None,
+            kind: KindRow::Vanilla(VanillaRow {
+                first_success_steps: s.first_success_steps,
+            }),
         }
     }
 
@@ -112,24 +154,24 @@ impl RawRow {
             experiment: exp.name,
             cell: cell.id,
             method: cell.method,
-            kind: Kind::Pbcs,
             site: Site::of(&job.env_spec()),
             maze_seed: layout_seed(job),
             seed: r.seed,
             learner: r.learner,
             gamma: r.gamma,
-            chaining: job.phase2.chaining,
-            starts: Some(r.starts),
             solved: r.solved,
             success_rate: r.success_rate,
             env_steps: r.total_steps,
             budget: job.phase2.max_env_steps,
-            first_success_steps: None,
-            phase1_steps: r.phase1_steps,
-            train_steps: r.train_steps,
-            test_steps: r.test_steps,
-            skills: r.skills,
-            failure: r.failure,
+            kind: KindRow::Pbcs(PbcsRow {
+                chaining: job.phase2.chaining,
+                starts: r.starts,
+                phase1_steps: r.phase1_steps,
+                train_steps: r.train_steps,
+                test_steps: r.test_steps,
+                skills: r.skills,
+                failure: r.failure,
+            }),
         }
     }
 }
@@ -185,7 +227,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ),
         ("cell", row.cell.to_string(), cell.id.to_string()),
         ("method", row.method.to_string(), cell.method.to_string()),
-        ("kind", row.kind.name().into(), kind.name().into()),
+        ("kind", row.kind().name().into(), kind.name().into()),
         ("maze", row.site.to_string(), cell.site.to_string()),
         (
             "maze_seed",
@@ -195,8 +237,16 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ("seed", row.seed.to_string(), seed.to_string()),
         ("learner", row.learner.to_string(), learner.to_string()),
         ("gamma", row.gamma.to_string(), gamma.to_string()),
-        ("chaining", row.chaining.to_string(), chaining.to_string()),
-        ("starts", starts(row.starts), starts(start)),
+        (
+            "chaining",
+            row.pbcs_row().is_some_and(|p| p.chaining).to_string(),
+            chaining.to_string(),
+        ),
+        (
+            "starts",
+            starts(row.pbcs_row().map(|p| p.starts)),
+            starts(start),
+        ),
         ("budget", row.budget.to_string(), budget.to_string()),
     ];
     // (γ is compared as written: the row holds the job's f32, which prints the same.)
@@ -205,7 +255,7 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
         Job::Pbcs(_) => true,
     };
-    if !stops && row.kind == Kind::Vanilla && row.env_steps != row.budget {
+    if !stops && row.kind() == Kind::Vanilla && row.env_steps != row.budget {
         return Err(Error::parse(
             path,
             format!(
@@ -258,14 +308,14 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
     };
     match (&cell.job, evaluation) {
         (Job::Pbcs(_), Some(e)) if e.is_empty() => {
-            if r.failure.is_none() && r.skills > 0 {
+            if r.failure().is_none() && r.skills() > 0 {
                 return wrong(
                     "failure",
                     format!(
                         "empty, but {} holds no evaluation episode: a chain of {} skills with \
                          no failure is evaluated",
                         evaluation_path.display(),
-                        r.skills
+                        r.skills()
                     ),
                 );
             }
@@ -292,7 +342,7 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
                     ),
                 );
             }
-            if let Some(f) = r.failure {
+            if let Some(f) = r.failure() {
                 return wrong(
                     "failure",
                     format!(
@@ -455,11 +505,11 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
     if r.budget == 0 {
         return fail("budget", "0: a run's step budget is at least 1".into());
     }
-    match r.kind {
-        Kind::Vanilla => vanilla_value_error(r)?,
-        Kind::Pbcs => pbcs_value_error(r)?,
+    match &r.kind {
+        KindRow::Vanilla(v) => vanilla_value_error(r, v)?,
+        KindRow::Pbcs(p) => pbcs_value_error(r, p)?,
     }
-    let solved = crate::stats::solved(r.failure.is_some(), r.success_rate);
+    let solved = crate::stats::solved(r.failure().is_some(), r.success_rate);
     if r.solved != solved {
         return fail(
             "solved",
@@ -468,7 +518,7 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
                  a success rate of at least {})",
                 r.solved,
                 r.success_rate,
-                r.failure.map_or("no failure".to_string(), |f| format!(
+                r.failure().map_or("no failure".to_string(), |f| format!(
                     "failure {}",
                     f.name()
                 )),
@@ -480,33 +530,13 @@ fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
     Ok(())
 }
 
-/// [`value_error`] of a vanilla row: PBCS's columns empty or 0, the whole budget trained.
-fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
+/// [`value_error`] of a vanilla row: the whole budget trained, or stopped where it solved.
+/// (That PBCS's columns are empty was checked when the row was read, [`super::row_record`].)
+fn vanilla_value_error(
+    r: &RawRow,
+    v: &VanillaRow,
+) -> std::result::Result<(), (&'static str, String)> {
     let fail = |column, message: String| Err((column, message));
-    let zero = [
-        ("phase1_steps", r.phase1_steps),
-        ("train_steps", r.train_steps),
-        ("test_steps", r.test_steps),
-        ("skills", r.skills as u64),
-    ];
-    if let Some((column, n)) = zero.into_iter().find(|&(_, n)| n != 0) {
-        return fail(column, format!("{n} in a vanilla row (PBCS only: 0 here)"));
-    }
-    if r.chaining {
-        return fail("chaining", "true in a vanilla row (PBCS only)".into());
-    }
-    if let Some(s) = r.starts {
-        return fail(
-            "starts",
-            format!("{s:?} in a vanilla row (PBCS only: empty)"),
-        );
-    }
-    if let Some(f) = r.failure {
-        return fail(
-            "failure",
-            format!("{} in a vanilla row (PBCS only: empty)", f.name()),
-        );
-    }
     // A run trains its whole budget, or stops earlier at an evaluation that solved it
     // (`train.stop_at_successes`; whether its job has that stop is checked against the cell,
     // [`read_run_row`]).
@@ -522,7 +552,7 @@ fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, Str
             ),
         );
     }
-    if let Some(first) = r.first_success_steps.filter(|&s| s > r.env_steps) {
+    if let Some(first) = v.first_success_steps.filter(|&s| s > r.env_steps) {
         return fail(
             "first_success_steps",
             format!("{first}, after the run's {} env steps", r.env_steps),
@@ -531,32 +561,19 @@ fn vanilla_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, Str
     Ok(())
 }
 
-/// [`value_error`] of a PBCS row: its starts set, no vanilla column, its steps summing up.
-fn pbcs_value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
-    let fail = |column, message: String| Err((column, message));
-    if r.starts.is_none() {
-        return fail(
-            "starts",
-            "empty in a PBCS row (`ball`, `exact` or `archive`)".into(),
-        );
-    }
-    if let Some(first) = r.first_success_steps {
-        return fail(
-            "first_success_steps",
-            format!("{first} in a PBCS row (vanilla only: empty)"),
-        );
-    }
-    let sum = [r.phase1_steps, r.train_steps, r.test_steps]
+/// [`value_error`] of a PBCS row: its steps summing up.
+fn pbcs_value_error(r: &RawRow, p: &PbcsRow) -> std::result::Result<(), (&'static str, String)> {
+    let sum = [p.phase1_steps, p.train_steps, p.test_steps]
         .into_iter()
         .try_fold(0u64, u64::checked_add);
     if sum != Some(r.env_steps) {
-        return fail(
+        return Err((
             "env_steps",
             format!(
                 "{}, but phase1_steps + train_steps + test_steps = {} + {} + {}",
-                r.env_steps, r.phase1_steps, r.train_steps, r.test_steps
+                r.env_steps, p.phase1_steps, p.train_steps, p.test_steps
             ),
-        );
+        ));
     }
     Ok(())
 }
@@ -574,7 +591,7 @@ impl std::fmt::Display for RawRow {
             self.success_rate,
             self.env_steps
         )?;
-        match self.failure {
+        match self.failure() {
             Some(failure) => write!(f, ", {}", failure.name()),
             None => Ok(()),
         }

@@ -294,6 +294,7 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
 mod tests {
     use super::*;
     use crate::config::PbcsJob;
+    use crate::experiment::{KindRow, PbcsRow};
 
     fn row(exp: &Experiment, seed: u64, solved: bool, steps: u64, skills: usize) -> RawRow {
         let c = &exp.cells[0];
@@ -301,24 +302,24 @@ mod tests {
             experiment: exp.name,
             cell: c.id,
             method: c.method,
-            kind: crate::experiment::Kind::Pbcs,
             site: c.site,
             maze_seed: 0,
             seed,
             learner: "ddpg".parse().unwrap(),
             gamma: 0.9,
-            chaining: true,
-            starts: Some(crate::phase2::StartMode::Ball),
             solved,
             success_rate: if solved { 1.0 } else { 0.0 },
             env_steps: steps,
             budget: 1_000_000,
-            first_success_steps: None,
-            phase1_steps: 0,
-            train_steps: steps,
-            test_steps: 0,
-            skills,
-            failure: None,
+            kind: KindRow::Pbcs(PbcsRow {
+                chaining: true,
+                starts: crate::phase2::StartMode::Ball,
+                phase1_steps: 0,
+                train_steps: steps,
+                test_steps: 0,
+                skills,
+                failure: None,
+            }),
         }
     }
 

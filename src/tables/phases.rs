@@ -8,7 +8,7 @@
 //! so both are tabled. `pbcs figures` writes their numbers
 //! (`\res{<experiment>:<cell>:phases:<field>}`).
 
-use crate::experiment::{CellKey, Experiment, ExperimentName, Kind, Method, RawRow, Site};
+use crate::experiment::{CellKey, Experiment, ExperimentName, Method, PbcsRow, RawRow, Site};
 use crate::fmt::human_steps;
 use crate::stats::median;
 use serde::{Deserialize, Serialize};
@@ -62,31 +62,32 @@ pub fn phases_path(results: &Path, experiment: ExperimentName) -> PathBuf {
 pub fn cell_phases(exp: &Experiment, rows: &[RawRow]) -> Vec<CellPhases> {
     let mut out = Vec::new();
     for c in &exp.cells {
-        let runs: Vec<&RawRow> = rows
+        // Each PBCS run of the cell: its row and its phases.
+        let runs: Vec<(&RawRow, &PbcsRow)> = rows
             .iter()
-            .filter(|r| r.cell == c.id && r.kind == Kind::Pbcs)
+            .filter(|r| r.cell == c.id)
+            .filter_map(|r| Some((r, r.pbcs_row()?)))
             .collect();
         if runs.is_empty() {
             continue;
         }
-        let mid = |part: fn(&RawRow) -> u64| {
-            median(&mut runs.iter().map(|r| part(r) as f64).collect::<Vec<_>>())
-        };
-        let learning = |r: &RawRow| r.phase1_steps + r.train_steps;
-        let sum = |part: fn(&RawRow) -> u64| runs.iter().map(|r| part(r)).sum::<u64>() as f64;
+        type Part = fn(&(&RawRow, &PbcsRow)) -> u64;
+        let mid = |part: Part| median(&mut runs.iter().map(|r| part(r) as f64).collect::<Vec<_>>());
+        let learning: Part = |(_, p)| p.phase1_steps + p.train_steps;
+        let sum = |part: Part| runs.iter().map(part).sum::<u64>() as f64;
         out.push(CellPhases {
             cell: c.id,
             method: c.method,
             site: c.site,
             runs: runs.len() as u64,
-            env_steps_median: mid(|r| r.env_steps),
-            phase1_median: mid(|r| r.phase1_steps),
-            train_median: mid(|r| r.train_steps),
-            test_median: mid(|r| r.test_steps),
+            env_steps_median: mid(|(r, _)| r.env_steps),
+            phase1_median: mid(|(_, p)| p.phase1_steps),
+            train_median: mid(|(_, p)| p.train_steps),
+            test_median: mid(|(_, p)| p.test_steps),
             learning_median: mid(learning),
-            learning_min: runs.iter().map(|r| learning(r)).min().unwrap_or(0),
-            learning_max: runs.iter().map(|r| learning(r)).max().unwrap_or(0),
-            test_share: sum(|r| r.test_steps) / sum(|r| r.env_steps).max(1.0),
+            learning_min: runs.iter().map(learning).min().unwrap_or(0),
+            learning_max: runs.iter().map(learning).max().unwrap_or(0),
+            test_share: sum(|(_, p)| p.test_steps) / sum(|(r, _)| r.env_steps).max(1.0),
         });
     }
     out

@@ -87,7 +87,7 @@ pub fn routes_path(results: &Path, experiment: ExperimentName) -> PathBuf {
 /// before `s<seed>.evaluation.csv` existed are left out), in the rows' order.
 pub fn routes(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Result<Vec<Route>> {
     let mut out = Vec::new();
-    let on_maze = |r: &&RawRow| r.kind == Kind::Pbcs && r.site.size().is_some();
+    let on_maze = |r: &&RawRow| r.kind() == Kind::Pbcs && r.site.size().is_some();
     for r in rows.iter().filter(on_maze) {
         let cell = exp.cell_at(r.cell)?;
         let path = evaluation_file(exp, results, cell, r.seed);

@@ -217,7 +217,7 @@ statistics! {
         });
     /// Median number of skills (PBCS; 0 for vanilla).
     skills_median: f64, res Some("skills"), print |s| s.skills_median.to_string(),
-        of |r| median_of(r.each(|r| r.skills as f64));
+        of |r| median_of(r.each(|r| r.skills() as f64));
     /// Median of the final evaluation's success rate.
     success_rate_median: f64, res Some("evalmedian"),
         print |s| format!("{:.2}", s.success_rate_median),
@@ -257,6 +257,7 @@ pub const IDENTITY: [&str; 5] = ["experiment", "cell", "method", "label", "maze"
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiment::{KindRow, PbcsRow};
 
     /// The table's header is the identity and then every declared statistic in order, each
     /// `\res` field is declared once, and a known cell prints as the report quotes it.
@@ -301,24 +302,24 @@ mod tests {
             experiment: exp.name,
             cell: cell.id,
             method: cell.method,
-            kind: crate::experiment::Kind::Pbcs,
             site: cell.site,
             maze_seed: 0,
             seed,
             learner: "ddpg".parse().unwrap(),
             gamma: 0.9,
-            chaining: true,
-            starts: Some(crate::phase2::StartMode::Ball),
             solved,
             success_rate: if solved { 1.0 } else { 0.5 },
             env_steps: steps,
             budget: 1000,
-            first_success_steps: None,
-            phase1_steps: 0,
-            train_steps: steps,
-            test_steps: 0,
-            skills,
-            failure: None,
+            kind: KindRow::Pbcs(PbcsRow {
+                chaining: true,
+                starts: crate::phase2::StartMode::Ball,
+                phase1_steps: 0,
+                train_steps: steps,
+                test_steps: 0,
+                skills,
+                failure: None,
+            }),
         };
         let rows = [
             row(0, 100, true, 1),

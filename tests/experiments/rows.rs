@@ -4,7 +4,7 @@
 //! or carried NaN into the tables, and lines after the first record were ignored.
 
 use super::*;
-use pbcs::experiment::{read_run_row, run_file, Cell, Job, Kind, RawRow};
+use pbcs::experiment::{read_run_row, run_file, Cell, Job, KindRow, PbcsRow, RawRow, VanillaRow};
 use std::path::PathBuf;
 
 /// Writes a made-up finished PBCS run of (`cell`, `seed`) of `exp` into `results` as a sweep
@@ -33,24 +33,24 @@ fn made_up_row(exp: &Experiment, cell: &Cell, seed: u64) -> RawRow {
         experiment: exp.name,
         cell: cell.id,
         method: cell.method,
-        kind: Kind::Pbcs,
         site: cell.site,
         maze_seed: j.maze.seed,
         seed,
         learner: j.learner.record_name(),
         gamma: j.learner.gamma(),
-        chaining: j.phase2.chaining,
-        starts: Some(j.phase2.start),
         solved: true,
         success_rate: 0.97,
         env_steps: 3300,
         budget: j.phase2.max_env_steps,
-        first_success_steps: None,
-        phase1_steps: 1000,
-        train_steps: 2000,
-        test_steps: 300,
-        skills: 2,
-        failure: None,
+        kind: KindRow::Pbcs(PbcsRow {
+            chaining: j.phase2.chaining,
+            starts: j.phase2.start,
+            phase1_steps: 1000,
+            train_steps: 2000,
+            test_steps: 300,
+            skills: 2,
+            failure: None,
+        }),
     }
 }
 
@@ -171,17 +171,28 @@ fn the_phases_table_splits_env_steps_as_the_rows_do() {
     let rows: Vec<RawRow> = [(100, 1000, 900), (300, 4000, 1700), (200, 2000, 800)]
         .into_iter()
         .enumerate()
-        .map(|(seed, (phase1, train, test))| RawRow {
-            phase1_steps: phase1,
-            train_steps: train,
-            test_steps: test,
-            env_steps: phase1 + train + test,
-            ..made_up_row(&exp, cell, seed as u64)
+        .map(|(seed, (phase1, train, test))| {
+            let row = made_up_row(&exp, cell, seed as u64);
+            let KindRow::Pbcs(p) = row.kind else {
+                unreachable!("a PBCS row")
+            };
+            RawRow {
+                env_steps: phase1 + train + test,
+                kind: KindRow::Pbcs(PbcsRow {
+                    phase1_steps: phase1,
+                    train_steps: train,
+                    test_steps: test,
+                    ..p
+                }),
+                ..row
+            }
         })
         .chain([RawRow {
             cell: "ddpg-maze2".parse().unwrap(),
             method: "ddpg".parse().unwrap(),
-            kind: Kind::Vanilla,
+            kind: KindRow::Vanilla(VanillaRow {
+                first_success_steps: None,
+            }),
             ..made_up_row(&exp, cell, 0)
         }])
         .collect();
@@ -453,5 +464,35 @@ fn a_row_is_checked_against_its_evaluation_file() {
             err.contains(&format!("column `{column}`")) && err.contains("evaluation"),
             "seed {seed}: {err}"
         );
+    }
+}
+
+/// A row is read as its kind: a vanilla row holding a PBCS column, or a PBCS row without its
+/// starts or with a vanilla column, is refused naming the kind and the column (the committed
+/// rows read as they are, `committed_raw_rows_round_trip_byte_for_byte`).
+#[test]
+fn a_row_holding_the_other_kinds_columns_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |from: &str| {
+        let to = dir.path().join("s0.csv");
+        std::fs::copy(from, &to).unwrap();
+        to
+    };
+    for (column, value) in [("skills", "2"), ("phase1_steps", "10"), ("starts", "ball")] {
+        let path = copy("results/raw/table/ddpg-maze2/s0.csv");
+        edit(&path, column, value);
+        let e = pbcs::experiment::read_row(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("line 2")
+                && e.contains("column `kind`: vanilla")
+                && e.contains(&format!("column `{column}` holds")),
+            "{column}: {e}"
+        );
+    }
+    for (column, value) in [("starts", ""), ("first_success_steps", "7")] {
+        let path = copy("results/raw/table/pbcs-maze2/s0.csv");
+        edit(&path, column, value);
+        let e = pbcs::experiment::read_row(&path).unwrap_err().to_string();
+        assert!(e.contains(&format!("column `{column}`: ")), "{column}: {e}");
     }
 }
