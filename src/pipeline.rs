@@ -322,10 +322,18 @@ pub fn write_tables(
     let name = exp.name;
     let routes = crate::tables::routes::routes(exp, results, rows)?;
     write_nonempty(&routes_path(results, name), &routes)?;
+    let route_cells = crate::tables::routes::route_cells(&routes);
     write_nonempty(
         &crate::tables::routes::route_cells_path(results, name),
-        &crate::tables::routes::route_cells(&routes),
+        &route_cells,
     )?;
+    if !routes.is_empty() {
+        let spread = crate::tables::routes::route_spread(&route_cells);
+        write_records(
+            &crate::tables::routes::route_spread_path(results, name),
+            &[spread],
+        )?;
+    }
     let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
     write_nonempty(&crate::tables::judged::judged_path(results, name), &judged)?;
     let paired = crate::tables::paired::paired_sites(exp, rows);
@@ -406,10 +414,22 @@ pub fn render_all(
                 &read_paths(&paths)?,
             ));
         }
-        let route_cells = crate::tables::routes::route_cells_path(results, exp.name);
-        if route_cells.exists() {
-            let cells = crate::record::read_records(&route_cells)?;
-            numbers.push_str(&report::routes_numbers_tex(exp.name, &cells));
+        let spread = crate::tables::routes::route_spread_path(results, exp.name);
+        report::summary_beside(
+            &crate::tables::routes::routes_path(results, exp.name),
+            &spread,
+        )?;
+        if spread.exists() {
+            let [spread]: [crate::tables::routes::RouteSpread; 1] =
+                crate::record::read_records(&spread)?
+                    .try_into()
+                    .map_err(|lines: Vec<_>| {
+                        crate::Error::parse(
+                            &spread,
+                            format!("holds {} lines, one expected", lines.len()),
+                        )
+                    })?;
+            numbers.push_str(&report::routes_numbers_tex(exp.name, &spread));
         }
         numbers.push_str(&report::extra_numbers_tex(exp, results)?);
     }

@@ -1,7 +1,8 @@
 //! The names results are joined by, as values: an [`ExperimentName`] (an experiment file's
 //! stem), a [`Method`] (a name an experiment declares) and a [`CellKey`] (a method at a
 //! [`Site`]). All are `Copy` and compare as values, so a table joins rows on keys, never on
-//! strings; each is written and read in one place here.
+//! strings. The names are declared in [`crate::name`]; a cell key is written and read here,
+//! one way only (`pbcs-maze05` is refused: it is written `pbcs-maze5`).
 //!
 //! A cell key is written `<method>-<site id>` (`pbcs-maze5`, `td3_her-pointmaze_umaze_goals`):
 //! a cell's folder name, its name on the command line and its `cell` column. A method name
@@ -22,6 +23,7 @@
 //! assert!("pbcs-maze".parse::<CellKey>().is_err()); // a maze is written with its size
 //! assert!("pbcs maze5".parse::<CellKey>().is_err()); // no method-site separator
 //! assert!(Method::new("pbcs-pm").is_err()); // `-` separates a method from its site
+//! assert!("pbcs-maze05".parse::<CellKey>().is_err()); // one way to write a key
 //! ```
 
 use super::Site;
@@ -88,10 +90,11 @@ impl fmt::Debug for CellKey {
 }
 
 /// As the written key (`pbcs-maze10` before `pbcs-maze5`), the order every table was sorted
-/// in when keys were strings.
+/// in when keys were strings: by method, then by site id (the same order, since `-` sorts
+/// below every character of a method name).
 impl Ord for CellKey {
     fn cmp(&self, other: &CellKey) -> Ordering {
-        self.to_string().cmp(&other.to_string())
+        (self.method.cmp(&other.method)).then_with(|| self.site.id().cmp(&other.site.id()))
     }
 }
 
@@ -123,6 +126,11 @@ impl FromStr for CellKey {
                 Ok(e) => Site::Env(e),
             },
         };
+        let key = CellKey { method, site };
+        // One way to write a key: `maze05` or `maze+5` would read as `maze5`.
+        if key.to_string() != s {
+            return Err(bad(format!("it is written `{key}`")));
+        }
         Ok(CellKey { method, site })
     }
 }

@@ -73,6 +73,13 @@ impl TryFrom<RowRecord> for RawRow {
     /// The row of its kind; an error (`column `kind`: …, but column `skills` holds 2`) where a
     /// column of the other kind holds something, or a PBCS row has no starts.
     fn try_from(r: RowRecord) -> Result<RawRow, String> {
+        if r.cell.method != r.method || r.cell.site != r.maze {
+            let (method, site) = (r.method, r.maze);
+            return Err(format!(
+                "column `cell`: {}, but column `method` holds {method} and column `maze` {site}",
+                r.cell
+            ));
+        }
         let kind = match r.kind {
             Kind::Vanilla => {
                 let pbcs_only = [
@@ -85,8 +92,16 @@ impl TryFrom<RowRecord> for RawRow {
                     ("test_steps", r.test_steps.to_string(), r.test_steps != 0),
                     ("skills", r.skills.to_string(), r.skills != 0),
                     ("chaining", r.chaining.to_string(), r.chaining),
-                    ("starts", format!("{:?}", r.starts), r.starts.is_some()),
-                    ("failure", format!("{:?}", r.failure), r.failure.is_some()),
+                    (
+                        "starts",
+                        r.starts.map_or("", <&str>::from).to_string(),
+                        r.starts.is_some(),
+                    ),
+                    (
+                        "failure",
+                        r.failure.map_or("", Failure::name).to_string(),
+                        r.failure.is_some(),
+                    ),
                 ];
                 if let Some((column, value, _)) = pbcs_only.into_iter().find(|c| c.2) {
                     return Err(format!(

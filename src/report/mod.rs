@@ -46,44 +46,34 @@ fn def_res(s: &mut String, prefix: impl std::fmt::Display, key: &str, value: &st
     );
 }
 
-/// For an experiment with a routes table (PBCS runs with evaluation episodes), from its cells'
-/// summaries (`<experiment>.route_cells.csv`, [`crate::tables::routes::route_cells`]): how the
-/// chains' paths compare with τ and with the fewest steps, as
+/// For an experiment with a routes table (PBCS runs with evaluation episodes), from its routes
+/// over every cell (`<experiment>.route_spread.csv`, [`crate::tables::routes::route_spread`]):
+/// how the chains' paths compare with τ and with the fewest steps, as
 /// `\res{<experiment>:routes:<key>}`:
 /// `runs` (runs with a successful evaluation episode), `shorter` (of those, runs whose chain's
 /// median successful path is shorter than the τ phase 2 worked on), `fewestlo`/`fewesthi` (the
 /// least and largest, over cells, of the median chain path / fewest steps), `taulo`/`tauhi`
 /// (the same for the τ phase 2 worked on / chain path) and `phase1lo`/`phase1hi` (for phase 1's
 /// τ / chain path: what the abstract's "improve on the trajectory obtained by the motion
-/// planning phase" compares; the two τ differ where `shorten` is on); empty without routes.
+/// planning phase" compares; the two τ differ where `shorten` is on); empty without a chain's
+/// path.
 pub fn routes_numbers_tex(
     experiment: ExperimentName,
-    cells: &[crate::tables::routes::RouteCell],
+    spread: &crate::tables::routes::RouteSpread,
 ) -> String {
     let mut s = String::new();
-    let runs: u64 = cells.iter().map(|c| c.chain_runs).sum();
-    if runs == 0 {
+    if spread.chain_runs == 0 {
         return s;
     }
-    let shorter: u64 = cells.iter().map(|c| c.shorter).sum();
-    let spread = |f: fn(&crate::tables::routes::RouteCell) -> Option<f64>| {
-        let v: Vec<f64> = cells.iter().filter_map(f).collect();
-        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        (lo, hi)
-    };
-    let fewest = spread(|c| c.chain_over_fewest);
-    let tau = spread(|c| c.phase2_tau_over_chain);
-    let phase1 = spread(|c| c.phase1_tau_over_chain);
     for (key, value) in [
-        ("runs", runs.to_string()),
-        ("shorter", shorter.to_string()),
-        ("fewestlo", format!("{:.2}", fewest.0)),
-        ("fewesthi", format!("{:.2}", fewest.1)),
-        ("taulo", format!("{:.1}", tau.0)),
-        ("tauhi", format!("{:.1}", tau.1)),
-        ("phase1lo", format!("{:.1}", phase1.0)),
-        ("phase1hi", format!("{:.1}", phase1.1)),
+        ("runs", spread.chain_runs.to_string()),
+        ("shorter", spread.shorter.to_string()),
+        ("fewestlo", format!("{:.2}", spread.fewest_lo)),
+        ("fewesthi", format!("{:.2}", spread.fewest_hi)),
+        ("taulo", format!("{:.1}", spread.tau_lo)),
+        ("tauhi", format!("{:.1}", spread.tau_hi)),
+        ("phase1lo", format!("{:.1}", spread.phase1_lo)),
+        ("phase1hi", format!("{:.1}", spread.phase1_hi)),
     ] {
         def_res(&mut s, experiment, &format!("routes:{key}"), &value);
     }
@@ -207,7 +197,10 @@ fn chain_numbers_tex(
 /// Refuses a table of runs (`rows`) without the per-cell summary written beside it
 /// (`summary`): a results folder aggregated before the summary existed would otherwise lose
 /// the report's numbers without a word (`\res` prints nothing for an undefined name).
-fn summary_beside(rows: &std::path::Path, summary: &std::path::Path) -> crate::Result<()> {
+pub(crate) fn summary_beside(
+    rows: &std::path::Path,
+    summary: &std::path::Path,
+) -> crate::Result<()> {
     if rows.exists() && !summary.exists() {
         return Err(crate::Error::parse(
             summary,

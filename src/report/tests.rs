@@ -256,7 +256,9 @@ fn the_routes_numbers_give_the_spread_over_cells() {
         successes: u64::from(chain.is_some()),
         fewest_steps: fewest,
     };
-    let cells = |routes: &[Route]| crate::tables::routes::route_cells(routes);
+    let cells = |routes: &[Route]| {
+        crate::tables::routes::route_spread(&crate::tables::routes::route_cells(routes))
+    };
     let tex = routes_numbers_tex(
         "x".parse().unwrap(),
         &cells(&[

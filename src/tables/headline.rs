@@ -77,6 +77,8 @@ fn maze_table(stats: &[CellStats]) -> Result<String> {
 }
 
 fn pointmaze_table(results: &Path) -> Result<String> {
+    let [ddpg, td3, sac_her, td3_her] = ["ddpg", "td3", "sac_her", "td3_her"].map(Method::new);
+    let (ddpg, td3, sac_her, td3_her) = (ddpg?, td3?, sac_her?, td3_her?);
     let [grid_name, held_name] = ["pointmaze", "pointmaze_heldout"].map(ExperimentName::new);
     let (grid_name, held_name) = (grid_name?, held_name?);
     let grid = read_table(&table_path(results, grid_name))?;
@@ -110,8 +112,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
                 human_steps(stats.steps_median)
             ))
         };
-        let baseline = |method: &str| -> Result<String> {
-            let method = Method::new(method)?;
+        let baseline = |method: Method| -> Result<String> {
             let b = baselines
                 .iter()
                 .find(|b| b.method == method && b.env == env)
@@ -130,8 +131,7 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         // those with rows (the grid may still be running: `–` where none has a row yet), and
         // the median steps of the solved ones.
         let goals = env.goals_task();
-        let ours = |method: &str| -> Result<String> {
-            let method = Method::new(method)?;
+        let ours = |method: Method| -> Result<String> {
             let line = baselines
                 .iter()
                 .find(|b| b.library == Library::Ours && b.method == method && Some(b.env) == goals);
@@ -148,11 +148,11 @@ fn pointmaze_table(results: &Path) -> Result<String> {
             "| {map} | **{}** | {} | {} | {} | {} | {} | {} |",
             judged_cell(&grid_judged, &grid)?,
             judged_cell(&held_judged, &held)?,
-            baseline("ddpg")?,
-            baseline("td3")?,
-            baseline("sac_her")?,
-            ours("sac_her")?,
-            ours("td3_her")?,
+            baseline(ddpg)?,
+            baseline(td3)?,
+            baseline(sac_her)?,
+            ours(sac_her)?,
+            ours(td3_her)?,
         );
     }
     Ok(s)

@@ -194,3 +194,57 @@ pub fn route_cells(routes: &[Route]) -> Vec<RouteCell> {
         })
         .collect()
 }
+
+/// The line of `<results>/tables/<experiment>.route_spread.csv`: the routes over every cell,
+/// what the report quotes as `\res{<experiment>:routes:<key>}` (it reads this line and
+/// aggregates nothing). The spreads are the least and largest, over cells, of a cell's median
+/// ([`RouteCell`]); ±∞ where no cell has the ratio.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RouteSpread {
+    /// Runs with a chain's path, over every cell.
+    pub chain_runs: u64,
+    /// Of them, runs whose chain's path is shorter than the τ phase 2 worked on.
+    pub shorter: u64,
+    /// Least cell median of the chain's path over the fewest steps.
+    pub fewest_lo: f64,
+    /// Largest.
+    pub fewest_hi: f64,
+    /// Least cell median of the τ phase 2 worked on over the chain's path.
+    pub tau_lo: f64,
+    /// Largest.
+    pub tau_hi: f64,
+    /// Least cell median of phase 1's τ over the chain's path.
+    pub phase1_lo: f64,
+    /// Largest.
+    pub phase1_hi: f64,
+}
+
+/// `<results>/tables/<experiment>.route_spread.csv`.
+pub fn route_spread_path(results: &Path, experiment: ExperimentName) -> PathBuf {
+    results
+        .join("tables")
+        .join(format!("{experiment}.route_spread.csv"))
+}
+
+/// The routes of `cells` over every cell.
+pub fn route_spread(cells: &[RouteCell]) -> RouteSpread {
+    let spread = |f: fn(&RouteCell) -> Option<f64>| {
+        let v: Vec<f64> = cells.iter().filter_map(f).collect();
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
+    };
+    let (fewest_lo, fewest_hi) = spread(|c| c.chain_over_fewest);
+    let (tau_lo, tau_hi) = spread(|c| c.phase2_tau_over_chain);
+    let (phase1_lo, phase1_hi) = spread(|c| c.phase1_tau_over_chain);
+    RouteSpread {
+        chain_runs: cells.iter().map(|c| c.chain_runs).sum(),
+        shorter: cells.iter().map(|c| c.shorter).sum(),
+        fewest_lo,
+        fewest_hi,
+        tau_lo,
+        tau_hi,
+        phase1_lo,
+        phase1_hi,
+    }
+}

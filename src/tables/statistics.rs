@@ -8,7 +8,8 @@
 //!
 //! Adding a statistic is one entry: its doc line, `name: type`, `res`, `print` and `of`. polars
 //! checks the statistics it has an expression for (`aggregate::group_cells`, by column name);
-//! one without stays unchecked by it, which its tests say.
+//! its test `polars_checks_every_statistic_but_the_papers_verdict` lists the one it does not,
+//! so a new statistic is checked by polars or named there.
 
 use crate::experiment::{Cell, CellKey, Experiment, ExperimentName, Method, RawRow, Site};
 use crate::fmt::human_steps;

@@ -353,3 +353,33 @@ fn the_criteria_tables_agree_with_the_chains_and_the_solved_rule() {
     }
     assert!(checked >= 10, "{checked} chains tables");
 }
+
+/// The committed routes summaries are what the routes tables give: each cell's line of
+/// `<exp>.route_cells.csv`, and the spread over cells of `<exp>.route_spread.csv` (what the
+/// report quotes).
+#[test]
+fn the_route_summaries_agree_with_the_routes() {
+    use pbcs::tables::routes::{
+        read_routes, route_cells, route_cells_path, route_spread, route_spread_path, RouteCell,
+        RouteSpread,
+    };
+    let mut checked = 0;
+    for entry in std::fs::read_dir("results/tables").unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(exp) = name.strip_suffix(".routes.csv") else {
+            continue;
+        };
+        let exp: pbcs::experiment::ExperimentName = exp.parse().unwrap();
+        let results = Path::new("results");
+        let cells = route_cells(&read_routes(&path).unwrap());
+        let committed: Vec<RouteCell> =
+            pbcs::record::read_records(&route_cells_path(results, exp)).unwrap();
+        assert_eq!(committed, cells, "{exp}");
+        let spread: Vec<RouteSpread> =
+            pbcs::record::read_records(&route_spread_path(results, exp)).unwrap();
+        assert_eq!(spread, [route_spread(&cells)], "{exp}");
+        checked += 1;
+    }
+    assert!(checked >= 6, "{checked} routes tables");
+}
