@@ -291,12 +291,19 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::config::PbcsJob;
     use crate::experiment::{KindRow, PbcsRow};
 
-    fn row(exp: &Experiment, seed: u64, solved: bool, steps: u64, skills: usize) -> RawRow {
+    /// A made-up PBCS row of the first cell of `exp`.
+    pub(crate) fn row(
+        exp: &Experiment,
+        seed: u64,
+        solved: bool,
+        steps: u64,
+        skills: usize,
+    ) -> RawRow {
         let c = &exp.cells[0];
         RawRow {
             experiment: exp.name,

@@ -258,7 +258,6 @@ pub const IDENTITY: [&str; 5] = ["experiment", "cell", "method", "label", "maze"
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::{KindRow, PbcsRow};
 
     /// The table's header is the identity and then every declared statistic in order, each
     /// `\res` field is declared once, and a known cell prints as the report quotes it.
@@ -299,28 +298,8 @@ mod tests {
         let exp = Experiment::load(std::path::Path::new("experiments/table.toml"), None).unwrap();
         let mut cell = exp.cells[0].clone();
         cell.paper_steps = Some(250);
-        let row = |seed: u64, steps: u64, solved: bool, skills: usize| RawRow {
-            experiment: exp.name,
-            cell: cell.id,
-            method: cell.method,
-            site: cell.site,
-            maze_seed: 0,
-            seed,
-            learner: "ddpg".parse().unwrap(),
-            gamma: 0.9,
-            solved,
-            success_rate: if solved { 1.0 } else { 0.5 },
-            env_steps: steps,
-            budget: 1000,
-            kind: KindRow::Pbcs(PbcsRow {
-                chaining: true,
-                starts: crate::phase2::StartMode::Ball,
-                phase1_steps: 0,
-                train_steps: steps,
-                test_steps: 0,
-                skills,
-                failure: None,
-            }),
+        let row = |seed, steps, solved, skills| {
+            crate::tables::tests::row(&exp, seed, solved, steps, skills)
         };
         let rows = [
             row(0, 100, true, 1),
