@@ -79,16 +79,7 @@ fn the_extra_numbers_give_settings_runs_and_routes() {
             ..run(7, 0.0)
         },
     ];
-    crate::record::write_records(
-        &crate::criteria::chains_path(dir.path(), "m".parse().unwrap()),
-        &chains,
-    )
-    .unwrap();
-    crate::record::write_records(
-        &crate::criteria::criteria_path(dir.path(), "m".parse().unwrap()),
-        &crate::criteria::criteria(&chains),
-    )
-    .unwrap();
+    write_chains(dir.path(), &chains);
     let route = |seed: u64, tau: usize, phase2_tau: usize| Route {
         cell: "m-maze5".parse().unwrap(),
         method: "m".parse().unwrap(),
@@ -165,16 +156,7 @@ fn the_report_groups_rows_whatever_their_order() {
     };
     let interleaved = [(5, 0), (2, 0), (5, 1), (2, 1)];
     let chains = interleaved.map(|(n, s)| chain(n, s));
-    crate::record::write_records(
-        &crate::criteria::chains_path(dir.path(), "m".parse().unwrap()),
-        &chains,
-    )
-    .unwrap();
-    crate::record::write_records(
-        &crate::criteria::criteria_path(dir.path(), "m".parse().unwrap()),
-        &crate::criteria::criteria(&chains),
-    )
-    .unwrap();
+    write_chains(dir.path(), &chains);
     crate::record::write_records(
         &crate::tables::routes::route_cells_path(dir.path(), "m".parse().unwrap()),
         &crate::tables::routes::route_cells(&interleaved.map(|(n, s)| route(n, s))),
@@ -392,4 +374,13 @@ fn settings_texts_are_plain_in_markdown_and_math_in_latex() {
         "{tex}"
     );
     assert!(tex.contains("\\texttt{phase2.\\allowbreak{}chain\\_\\allowbreak{}verify\\_"));
+}
+
+/// Writes experiment `m`'s chains table under `results` and the criteria table beside it, as
+/// `pbcs aggregate` does.
+fn write_chains(results: &std::path::Path, chains: &[crate::criteria::ChainSuccess]) {
+    let m = "m".parse().unwrap();
+    crate::record::write_records(&crate::criteria::chains_path(results, m), chains).unwrap();
+    let criteria = crate::criteria::criteria(chains);
+    crate::record::write_records(&crate::criteria::criteria_path(results, m), &criteria).unwrap();
 }
