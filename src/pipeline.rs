@@ -12,7 +12,7 @@ use crate::record::{write_atomic, write_records};
 use crate::report;
 use crate::tables::curves::curves_path;
 use crate::tables::routes::routes_path;
-use crate::tables::scaling::{paths_path, read_paths};
+use crate::tables::scaling::{paths_path, read_paths, read_scaling_fit, scaling_fit_path};
 use crate::tables::CellStats;
 use std::path::{Path, PathBuf};
 
@@ -284,8 +284,9 @@ pub fn render(
 /// Writes every table of an experiment under `<results>/tables/` (the one writer of that
 /// folder): `<name>.csv` (`stats`), `<name>.chains.csv` and `<name>.criteria.csv` (PBCS runs'
 /// chain success and the table under other success criteria), `<name>.curves.csv` (with a
-/// curves figure: the vanilla learning curves), `<name>.paths.csv` (with a scaling figure:
-/// each cell's shortest path), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
+/// curves figure: the vanilla learning curves), `<name>.paths.csv` and
+/// `<name>.scaling_fit.csv` (with a scaling figure: each cell's shortest path, and the power
+/// law fitted through the cells' medians), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
 /// chain's path beside |τ| and the fewest steps) and `<name>.route_cells.csv` (their medians
 /// per cell, what the report quotes), `<name>.judged.csv` (chains judged by an
 /// outside environment), `<name>.paired.csv` (a registered paired comparison),
@@ -315,6 +316,8 @@ pub fn write_tables(
             FigureSpec::Scaling { .. } => {
                 let paths = crate::tables::scaling::path_lengths(exp)?;
                 write_records(&paths_path(results, exp.name), &paths)?;
+                let fit = crate::tables::scaling::ScalingFit::of(exp, stats, &paths);
+                write_records(&scaling_fit_path(results, exp.name), &[fit])?;
             }
             _ => {}
         }
@@ -405,30 +408,25 @@ pub fn render_all(
         .map(|(e, s)| (e.name, s.clone()))
         .collect();
     let mut numbers = report::numbers_tex(&tables);
-    for (exp, stats) in experiments {
+    for (exp, _) in experiments {
         let paths = paths_path(results, exp.name);
         if paths.exists() {
+            let fit = scaling_fit_path(results, exp.name);
+            crate::tables::summary_beside(&paths, &fit)?;
             numbers.push_str(&report::scaling_numbers_tex(
                 exp,
-                stats,
                 &read_paths(&paths)?,
+                &read_scaling_fit(&fit)?,
             ));
         }
         let spread = crate::tables::routes::route_spread_path(results, exp.name);
-        report::summary_beside(
+        crate::tables::summary_beside(
             &crate::tables::routes::routes_path(results, exp.name),
             &spread,
         )?;
         if spread.exists() {
-            let [spread]: [crate::tables::routes::RouteSpread; 1] =
-                crate::record::read_records(&spread)?
-                    .try_into()
-                    .map_err(|lines: Vec<_>| {
-                        crate::Error::parse(
-                            &spread,
-                            format!("holds {} lines, one expected", lines.len()),
-                        )
-                    })?;
+            let spread: crate::tables::routes::RouteSpread =
+                crate::record::read_one_record(&spread)?;
             numbers.push_str(&report::routes_numbers_tex(exp.name, &spread));
         }
         numbers.push_str(&report::extra_numbers_tex(exp, results)?);
@@ -502,9 +500,15 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
     }
     let cost = outside_table(results, "timing");
     if cost.exists() {
-        numbers.push_str(&report::outside::outside_cost_numbers(&read_records(
-            &cost,
-        )?));
+        let rows = read_records(&cost)?;
+        let ratios = outside_table(results, "cost_ratio");
+        let ratios = if crate::tables::outside::cost_ratios(&rows).is_empty() {
+            Vec::new()
+        } else {
+            crate::tables::summary_beside(&cost, &ratios)?;
+            read_records(&ratios)?
+        };
+        numbers.push_str(&report::outside::outside_cost_numbers(&rows, &ratios));
     }
     let pointmaze = outside_table(results, "pointmaze");
     if pointmaze.exists() {

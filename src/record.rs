@@ -459,6 +459,16 @@ pub fn read_records<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T
         .map_err(|e| Error::csv(path, e))
 }
 
+/// Reads a CSV file that holds exactly one serde record (a summary line); any other count is
+/// an error naming the file.
+pub fn read_one_record<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let mut lines: Vec<T> = read_records(path)?;
+    match lines.len() {
+        1 => Ok(lines.remove(0)),
+        n => Err(Error::parse(path, format!("holds {n} lines, one expected"))),
+    }
+}
+
 /// A run's `timing.toml`: the wall clock, which is not deterministic and so never goes into a
 /// CSV, and the layer kernel that ran (`PBCS_KERNEL`; every kernel but `matrixmultiply` gives
 /// the same bytes, so a byte difference between machines can be told apart). Files of runs

@@ -425,9 +425,11 @@ fn the_fast_preset_solves_the_development_grid_at_a_cost_near_linear_in_the_path
         );
     }
     let b = table("beyond");
-    use pbcs::tables::scaling::{paths_path, read_paths, ScalingData};
-    let paths = read_paths(&paths_path(Path::new("results"), "beyond".parse().unwrap())).unwrap();
-    let (_, exponent) = ScalingData::new(&exp, &b, &paths).power_law().unwrap();
+    use pbcs::tables::scaling::{paths_path, read_paths, read_scaling_fit, scaling_fit_path};
+    let results = Path::new("results");
+    let paths = read_paths(&paths_path(results, exp.name)).unwrap();
+    let fit = read_scaling_fit(&scaling_fit_path(results, exp.name)).unwrap();
+    let (_, exponent) = fit.power_law().unwrap();
     assert!(
         exponent > 1.0 && exponent <= 1.2,
         "steps ∝ L^{exponent} — update the report"

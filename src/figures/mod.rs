@@ -23,7 +23,9 @@ use crate::fmt::human_steps;
 use crate::picture::PictureData;
 use crate::plot::render_figure;
 use crate::tables::curves::{curves_path, read_curves};
-use crate::tables::scaling::{paths_path, read_paths, ScalingData};
+use crate::tables::scaling::{
+    paths_path, read_paths, read_scaling_fit, scaling_fit_path, ScalingData,
+};
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -210,8 +212,11 @@ pub fn render_experiment(
                 }
             }
             FigureSpec::Scaling { .. } => {
-                let paths = read_paths(&paths_path(results, exp.name))?;
-                let data = ScalingData::new(exp, stats, &paths);
+                let paths = paths_path(results, exp.name);
+                let fit = scaling_fit_path(results, exp.name);
+                crate::tables::summary_beside(&paths, &fit)?;
+                let (paths, fit) = (read_paths(&paths)?, read_scaling_fit(&fit)?);
+                let data = ScalingData::new(exp, stats, &paths, fit);
                 files.extend(render_figure(&Scaling::new(exp, data), &stem)?);
             }
             FigureSpec::Panels { methods, .. } => {

@@ -42,7 +42,7 @@ impl Figure for Scaling {
         if x0 > x1 {
             (x0, y0) = (1.0, 1.0);
         }
-        let caption = match self.data.fit {
+        let caption = match self.data.fit.line() {
             Some((_, b)) => format!("{} — fit over the cells: steps ∝ L^{b:.2}", self.title),
             None => self.title.clone(),
         };
@@ -60,7 +60,7 @@ impl Figure for Scaling {
             .y_label_formatter(&|y| human_steps(*y))
             .label_style(("sans-serif", 13))
             .draw()?;
-        if let Some((a, b)) = self.data.fit {
+        if let Some((a, b)) = self.data.fit.line() {
             let line = [x0, x1].map(|x| (x, (a + b * x.ln()).exp()));
             chart
                 .draw_series(LineSeries::new(line, BLACK.mix(0.5).stroke_width(1)))?

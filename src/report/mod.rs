@@ -179,7 +179,7 @@ fn chain_numbers_tex(
         }
     }
     let criteria = crate::criteria::criteria_path(results, name);
-    summary_beside(&chains, &criteria)?;
+    crate::tables::summary_beside(&chains, &criteria)?;
     if criteria.exists() {
         for c in crate::criteria::read_criteria(&criteria)? {
             for (field, count) in [
@@ -194,26 +194,6 @@ fn chain_numbers_tex(
     Ok(())
 }
 
-/// Refuses a table of runs (`rows`) without the per-cell summary written beside it
-/// (`summary`): a results folder aggregated before the summary existed would otherwise lose
-/// the report's numbers without a word (`\res` prints nothing for an undefined name).
-pub(crate) fn summary_beside(
-    rows: &std::path::Path,
-    summary: &std::path::Path,
-) -> crate::Result<()> {
-    if rows.exists() && !summary.exists() {
-        return Err(crate::Error::parse(
-            summary,
-            format!(
-                "missing beside {}: the report reads its numbers from it; run `pbcs aggregate` \
-                 again to write it",
-                rows.display()
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// Per cell the median fewest steps and the median share of τ phase 2 kept, from the cells'
 /// routes table (`<experiment>.route_cells.csv`).
 fn route_numbers_tex(
@@ -222,7 +202,7 @@ fn route_numbers_tex(
     results: &std::path::Path,
 ) -> crate::Result<()> {
     let path = crate::tables::routes::route_cells_path(results, name);
-    summary_beside(&crate::tables::routes::routes_path(results, name), &path)?;
+    crate::tables::summary_beside(&crate::tables::routes::routes_path(results, name), &path)?;
     if path.exists() {
         let cells: Vec<crate::tables::routes::RouteCell> = crate::record::read_records(&path)?;
         for c in &cells {
@@ -239,11 +219,11 @@ fn route_numbers_tex(
 /// For an experiment with a `scaling` figure: each cell's shortest path as
 /// `\res{<experiment>:<cell>:pathlen}` and the fitted power law steps ≈ c · L^b as
 /// `\res{<experiment>:<figure>:exponent}` (b, two decimals) and `…:factor` (c, whole from 10
-/// up, else three decimals); empty otherwise.
+/// up, else three decimals), read from its fit table; empty otherwise.
 pub fn scaling_numbers_tex(
     exp: &crate::experiment::Experiment,
-    stats: &[CellStats],
     paths: &[crate::tables::scaling::PathLength],
+    fit: &crate::tables::scaling::ScalingFit,
 ) -> String {
     use crate::experiment::FigureSpec;
     let mut s = String::new();
@@ -261,8 +241,7 @@ pub fn scaling_numbers_tex(
                 );
             }
         }
-        let data = crate::tables::scaling::ScalingData::new(exp, stats, paths);
-        if let Some((c, b)) = data.power_law() {
+        if let Some((c, b)) = fit.power_law() {
             def(&mut s, &format!("{name}:exponent"), &format!("{b:.2}"));
             let factor = if c >= 10.0 {
                 format!("{c:.0}")

@@ -154,9 +154,13 @@ pub fn outside_pendulum_tex(
 }
 
 /// The numbers `\res{outside:cost:<algo>:sb3}` and `\res{outside:cost:<algo>:ours}` (the time
-/// per environment step of a library whose name starts with `sb3`, and of any other: ours) and
-/// `\res{outside:cost:<algo>:ratio}` (SB3's over ours, where both are finite and positive).
-pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> String {
+/// per environment step of a library whose name starts with `sb3`, and of any other: ours,
+/// from `outside.timing.csv`) and `\res{outside:cost:<algo>:ratio}` (SB3's over ours, from
+/// `outside.cost_ratio.csv`: whole from 10 up, else one decimal).
+pub fn outside_cost_numbers(
+    rows: &[crate::tables::outside::UpdateCost],
+    ratios: &[crate::tables::outside::CostRatio],
+) -> String {
     let mut s = String::new();
     let who = |l: &str| crate::tables::outside::Library::of_version(l);
     for r in rows {
@@ -172,21 +176,13 @@ pub fn outside_cost_numbers(rows: &[crate::tables::outside::UpdateCost]) -> Stri
             &v,
         );
     }
-    let algos: std::collections::BTreeSet<_> = rows.iter().map(|r| r.algo).collect();
-    for a in algos {
-        let find = |w| rows.iter().find(|r| r.algo == a && who(&r.library) == w);
-        use crate::tables::outside::Library;
-        if let (Some(sb3), Some(ours)) = (find(Library::Sb3), find(Library::Ours)) {
-            let ratio = sb3.us_per_step / ours.us_per_step;
-            if ratio.is_finite() && ratio > 0.0 {
-                let ratio = if ratio >= 10.0 {
-                    format!("{ratio:.0}")
-                } else {
-                    format!("{ratio:.1}")
-                };
-                def_res(&mut s, "outside", &format!("cost:{a}:ratio"), &ratio);
-            }
-        }
+    for r in ratios {
+        let ratio = if r.ratio >= 10.0 {
+            format!("{:.0}", r.ratio)
+        } else {
+            format!("{:.1}", r.ratio)
+        };
+        def_res(&mut s, "outside", &format!("cost:{}:ratio", r.algo), &ratio);
     }
     s
 }

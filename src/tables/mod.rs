@@ -290,6 +290,26 @@ pub fn cell_timings(exp: &Experiment, results: &Path, rows: &[RawRow]) -> Vec<Ce
         .collect()
 }
 
+/// Refuses a table (`rows`) without the summary written beside it (`summary`): a results
+/// folder aggregated before the summary existed would otherwise lose the report's numbers
+/// without a word (`\res` prints nothing for an undefined name).
+pub(crate) fn summary_beside(
+    rows: &std::path::Path,
+    summary: &std::path::Path,
+) -> crate::Result<()> {
+    if rows.exists() && !summary.exists() {
+        return Err(crate::Error::parse(
+            summary,
+            format!(
+                "missing beside {}: the report and the figures read it; run `pbcs aggregate` \
+                 again to write it",
+                rows.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

@@ -202,7 +202,9 @@ fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
         s.steps_median = 500.0 * (*l as f64).powf(1.5);
         (s.steps_q1, s.steps_q3) = (s.steps_median, s.steps_median);
     }
-    let tex = pbcs::report::scaling_numbers_tex(&exp, &stats, &paths);
+    let fit = pbcs::tables::scaling::ScalingFit::of(&exp, &stats, &paths);
+    assert_eq!(fit.cells, exp.cells.len() as u64);
+    let tex = pbcs::report::scaling_numbers_tex(&exp, &paths, &fit);
     assert!(
         tex.contains("\\csname res:beyond:scaling:exponent\\endcsname{1.50}"),
         "{tex}"
@@ -215,7 +217,15 @@ fn the_scaling_fit_in_the_reports_numbers_recovers_a_known_power_law() {
     assert!(tex.contains(&format!("res:beyond:{cell}:pathlen\\endcsname{{{l}}}")));
     // An experiment without a scaling figure adds nothing.
     let table = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
-    assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[], &[]), "");
+    assert_eq!(pbcs::report::scaling_numbers_tex(&table, &[], &fit), "");
+    // Nor does a fit without a line (fewer than two distinct path lengths).
+    let one = pbcs::tables::scaling::ScalingFit::of(&exp, &stats[..1], &paths);
+    assert_eq!((one.cells, one.line()), (1, None));
+    let tex = pbcs::report::scaling_numbers_tex(&exp, &paths, &one);
+    assert!(
+        !tex.contains("exponent") && tex.contains("pathlen"),
+        "{tex}"
+    );
 }
 
 /// The routes table of the committed ablation rows: no chain beats the fewest steps possible
@@ -382,4 +392,42 @@ fn the_route_summaries_agree_with_the_routes() {
         checked += 1;
     }
     assert!(checked >= 6, "{checked} routes tables");
+}
+
+/// The committed scaling fits and the outside cost ratios are what their inputs give: each
+/// `<exp>.scaling_fit.csv` is the fit through its experiment's committed table and paths, and
+/// `outside.cost_ratio.csv` the ratios of `outside.timing.csv` (what the report quotes and the
+/// scaling figure draws).
+#[test]
+fn the_fits_and_cost_ratios_agree_with_their_tables() {
+    use pbcs::tables::scaling::{
+        paths_path, read_paths, read_scaling_fit, scaling_fit_path, ScalingFit,
+    };
+    let results = Path::new("results");
+    let mut checked = 0;
+    for file in files() {
+        let exp = Experiment::load(&file, None).unwrap();
+        let paths = paths_path(results, exp.name);
+        if !paths.exists() {
+            continue;
+        }
+        let stats = pbcs::tables::read_table(&pbcs::tables::table_path(results, exp.name)).unwrap();
+        let fit = ScalingFit::of(&exp, &stats, &read_paths(&paths).unwrap());
+        let committed = read_scaling_fit(&scaling_fit_path(results, exp.name)).unwrap();
+        assert_eq!(committed, fit, "{}", exp.name);
+        assert!(
+            fit.line().is_some() && fit.cells >= 2,
+            "{}: {fit:?}",
+            exp.name
+        );
+        checked += 1;
+    }
+    assert!(checked >= 1, "{checked} scaling fits");
+    use pbcs::tables::outside::{cost_ratios, outside_table, CostRatio, UpdateCost};
+    let timing: Vec<UpdateCost> =
+        pbcs::record::read_records(&outside_table(results, "timing")).unwrap();
+    let ratios: Vec<CostRatio> =
+        pbcs::record::read_records(&outside_table(results, "cost_ratio")).unwrap();
+    assert_eq!(ratios, cost_ratios(&timing));
+    assert_eq!(ratios.len(), 2, "ddpg and td3");
 }

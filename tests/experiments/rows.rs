@@ -496,3 +496,30 @@ fn a_row_holding_the_other_kinds_columns_is_refused() {
         assert!(e.contains(&format!("column `{column}`: ")), "{column}: {e}");
     }
 }
+
+/// The scaling figure and the report read the fit written beside the paths table: a results
+/// folder without it (aggregated before the fit was a table) is an error naming the file and
+/// saying to aggregate again, not a figure without its line or a report without its numbers.
+#[test]
+fn a_paths_table_without_its_fit_is_refused() {
+    let exp = Experiment::load(Path::new("experiments/beyond.toml"), None).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let tables = tmp.path().join("tables");
+    std::fs::create_dir_all(&tables).unwrap();
+    std::fs::copy(
+        "results/tables/beyond.paths.csv",
+        tables.join("beyond.paths.csv"),
+    )
+    .unwrap();
+    let stats = pbcs::tables::read_table(Path::new("results/tables/beyond.csv")).unwrap();
+    let out = tmp.path().join("figures");
+    std::fs::create_dir_all(&out).unwrap();
+    let err = pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("beyond.scaling_fit.csv") && err.contains("pbcs aggregate"),
+        "{err}"
+    );
+    assert!(std::fs::read_dir(&out).unwrap().next().is_none());
+}

@@ -114,6 +114,60 @@ pub struct UpdateCost {
     pub machine: String,
 }
 
+/// One line of `outside.cost_ratio.csv`: per learner, SB3's time per environment step over
+/// ours, from the first line of each library in `outside.timing.csv` ([`cost_ratios`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CostRatio {
+    /// `ddpg` or `td3`.
+    pub algo: LearnerName,
+    /// SB3's microseconds per step.
+    pub sb3_us_per_step: f64,
+    /// Ours.
+    pub ours_us_per_step: f64,
+    /// `sb3_us_per_step / ours_us_per_step`.
+    pub ratio: f64,
+}
+
+/// Per learner with a time per step from both libraries (the first line of each), SB3's over
+/// ours, where that ratio is finite and positive; in learner order.
+///
+/// ```
+/// use pbcs::tables::outside::{cost_ratios, UpdateCost};
+/// let line = |library: &str, us_per_step| UpdateCost {
+///     algo: "td3".parse().unwrap(),
+///     library: library.into(),
+///     us_per_step,
+///     steps: 5000,
+///     machine: "m".into(),
+/// };
+/// let ratios = cost_ratios(&[line("sb3-2.9.2", 2000.0), line("pbcs", 80.0), line("pbcs", 1.0)]);
+/// assert_eq!(ratios.len(), 1);
+/// assert_eq!(ratios[0].ratio, 25.0);
+/// // Ours alone, or a time of zero, gives no ratio.
+/// assert!(cost_ratios(&[line("pbcs", 80.0)]).is_empty());
+/// assert!(cost_ratios(&[line("sb3", 2000.0), line("pbcs", 0.0)]).is_empty());
+/// ```
+pub fn cost_ratios(rows: &[UpdateCost]) -> Vec<CostRatio> {
+    let algos: std::collections::BTreeSet<LearnerName> = rows.iter().map(|r| r.algo).collect();
+    let first = |algo, library| {
+        rows.iter()
+            .find(|r| r.algo == algo && Library::of_version(&r.library) == library)
+    };
+    algos
+        .into_iter()
+        .filter_map(|algo| {
+            let (sb3, ours) = (first(algo, Library::Sb3)?, first(algo, Library::Ours)?);
+            let ratio = sb3.us_per_step / ours.us_per_step;
+            (ratio.is_finite() && ratio > 0.0).then_some(CostRatio {
+                algo,
+                sb3_us_per_step: sb3.us_per_step,
+                ours_us_per_step: ours.us_per_step,
+                ratio,
+            })
+        })
+        .collect()
+}
+
 /// The files `s<seed><suffix>` of `dir` (`suffix` `.csv`, `.evals.csv`) with their seeds, in
 /// seed order (a file of another name, such as `s01.csv`, is ignored).
 fn seed_files(dir: &Path, suffix: &str) -> Result<Vec<(u64, PathBuf)>> {
@@ -411,7 +465,7 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
 }
 
 /// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.pendulum_sac.csv`,
-/// `outside.timing.csv`, `outside.pointmaze.csv` and `outside.pointmaze_sb3.csv`
+/// `outside.timing.csv`, `outside.cost_ratio.csv` ([`cost_ratios`]), `outside.pointmaze.csv` and `outside.pointmaze_sb3.csv`
 /// ([`sb3_comparisons`]) under `<results>/tables/` from the rows under `<results>/outside/`
 /// (PointMaze's: the raw rows of `pointmaze_vanilla`, `pointmaze_her` and `<results>/pointmaze/sb3/`,
 /// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
@@ -435,6 +489,11 @@ pub fn write_outside_tables(
     )?;
     let cost = update_costs(results)?;
     put_or_remove(&outside_table(results, "timing"), &cost, &mut files)?;
+    put_or_remove(
+        &outside_table(results, "cost_ratio"),
+        &cost_ratios(&cost),
+        &mut files,
+    )?;
     let pointmaze = pointmaze_baselines(pointmaze_vanilla, results)?;
     let her = ExperimentName::new("pointmaze_her")?;
     let against_sb3 = match pointmaze_vanilla.iter().find(|e| e.name == her) {
