@@ -198,7 +198,7 @@ pub fn read_row(path: &Path) -> Result<RawRow> {
 /// line and the column, never a run of another cell counted here.
 pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Result<RawRow> {
     let (row, line) = read_row_at(path)?;
-    let starts = |s: Option<StartMode>| s.map_or("", <&str>::from).to_string();
+    let starts = |s: Option<StartMode>| s.map_or("", <&str>::from);
     let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
         Job::Vanilla(j) => (
             Kind::Vanilla,
@@ -219,37 +219,29 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
             j.phase2.max_env_steps,
         ),
     };
-    let fields: [(&str, String, String); 12] = [
-        (
-            "experiment",
-            row.experiment.to_string(),
-            exp.name.to_string(),
-        ),
-        ("cell", row.cell.to_string(), cell.id.to_string()),
-        ("method", row.method.to_string(), cell.method.to_string()),
-        ("kind", row.kind().name().into(), kind.name().into()),
-        ("maze", row.site.to_string(), cell.site.to_string()),
-        (
-            "maze_seed",
-            row.maze_seed.to_string(),
-            maze_seed.to_string(),
-        ),
-        ("seed", row.seed.to_string(), seed.to_string()),
-        ("learner", row.learner.to_string(), learner.to_string()),
-        ("gamma", row.gamma.to_string(), gamma.to_string()),
+    // Each column the job fixes, compared as its type (γ: the job's f32, which the row holds);
+    // in words where they differ.
+    fn differ<T: PartialEq + std::fmt::Display>(found: T, want: T) -> Option<(String, String)> {
+        (found != want).then(|| (found.to_string(), want.to_string()))
+    }
+    let row_starts = row.pbcs_row().map(|p| p.starts);
+    let fields: [(&str, Option<(String, String)>); 12] = [
+        ("experiment", differ(row.experiment, exp.name)),
+        ("cell", differ(row.cell, cell.id)),
+        ("method", differ(row.method, cell.method)),
+        ("kind", differ(row.kind().name(), kind.name())),
+        ("maze", differ(&row.site, &cell.site)),
+        ("maze_seed", differ(row.maze_seed, maze_seed)),
+        ("seed", differ(row.seed, seed)),
+        ("learner", differ(row.learner, learner)),
+        ("gamma", differ(row.gamma, gamma)),
         (
             "chaining",
-            row.pbcs_row().is_some_and(|p| p.chaining).to_string(),
-            chaining.to_string(),
+            differ(row.pbcs_row().is_some_and(|p| p.chaining), chaining),
         ),
-        (
-            "starts",
-            starts(row.pbcs_row().map(|p| p.starts)),
-            starts(start),
-        ),
-        ("budget", row.budget.to_string(), budget.to_string()),
+        ("starts", differ(starts(row_starts), starts(start))),
+        ("budget", differ(row.budget, budget)),
     ];
-    // (γ is compared as written: the row holds the job's f32, which prints the same.)
     // A vanilla run stops before its budget only with `train.stop_at_successes`.
     let stops = match &cell.job {
         Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
@@ -265,7 +257,10 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
             ),
         ));
     }
-    match fields.into_iter().find(|(_, found, want)| found != want) {
+    let differs = fields
+        .into_iter()
+        .find_map(|(c, d)| d.map(|(found, want)| (c, found, want)));
+    match differs {
         None => {
             check_values(&row, path, line)?;
             check_summary(&row, cell, seed, path, line)?;

@@ -89,6 +89,11 @@ fn an_edited_raw_row_is_refused_naming_its_file_line_and_column() {
         ("method", "pbcs_fast"),
         ("kind", "vanilla"),
         ("budget", "5"),
+        // Another job's value of a column the job fixes.
+        ("gamma", "0.5"),
+        ("maze_seed", "3"),
+        ("chaining", "false"),
+        ("learner", "sac"),
         // Values out of range, or that contradict each other.
         ("success_rate", "NaN"),
         ("success_rate", "inf"),
