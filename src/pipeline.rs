@@ -12,7 +12,7 @@ use crate::record::{write_atomic, write_records};
 use crate::report;
 use crate::tables::curves::curves_path;
 use crate::tables::routes::routes_path;
-use crate::tables::scaling::{paths_path, read_paths, read_scaling_fit, scaling_fit_path};
+use crate::tables::scaling::{paths_path, read_paths_and_fit, scaling_fit_path};
 use crate::tables::CellStats;
 use std::path::{Path, PathBuf};
 
@@ -286,9 +286,9 @@ pub fn render(
 /// chain success and the table under other success criteria), `<name>.curves.csv` (with a
 /// curves figure: the vanilla learning curves), `<name>.paths.csv` and
 /// `<name>.scaling_fit.csv` (with a scaling figure: each cell's shortest path, and the power
-/// law fitted through the cells' medians), `<name>.routes.csv` (PBCS runs with evaluation episodes: the
-/// chain's path beside |τ| and the fewest steps) and `<name>.route_cells.csv` (their medians
-/// per cell, what the report quotes), `<name>.judged.csv` (chains judged by an
+/// law fitted through the cells' medians), `<name>.routes.csv` (PBCS runs with evaluation
+/// episodes: the chain's path beside |τ| and the fewest steps) and `<name>.route_cells.csv`
+/// (their medians per cell, what the report quotes), `<name>.judged.csv` (chains judged by an
 /// outside environment), `<name>.paired.csv` (a registered paired comparison),
 /// `<name>.phases.csv` (PBCS cells: env steps by phase) and the wall-clock companion
 /// `<name>.timing.csv`.
@@ -409,15 +409,9 @@ pub fn render_all(
         .collect();
     let mut numbers = report::numbers_tex(&tables);
     for (exp, _) in experiments {
-        let paths = paths_path(results, exp.name);
-        if paths.exists() {
-            let fit = scaling_fit_path(results, exp.name);
-            crate::tables::summary_beside(&paths, &fit)?;
-            numbers.push_str(&report::scaling_numbers_tex(
-                exp,
-                &read_paths(&paths)?,
-                &read_scaling_fit(&fit)?,
-            ));
+        if paths_path(results, exp.name).exists() {
+            let (paths, fit) = read_paths_and_fit(results, exp.name)?;
+            numbers.push_str(&report::scaling_numbers_tex(exp, &paths, &fit));
         }
         let spread = crate::tables::routes::route_spread_path(results, exp.name);
         crate::tables::summary_beside(
@@ -463,9 +457,9 @@ fn render_settings(experiments: &Path, tex_dir: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// The report's LaTeX of the outside checks from `<results>/tables/outside.*.csv` (each only
-/// where its table exists): `outside_maze.tex`, `outside_pendulum.tex` and
-/// `outside_pendulum_sac.tex` into `tex_dir` (added
-/// to `files`), and their numbers for `numbers.tex` (returned).
+/// where its table exists; `outside.timing.csv` without `outside.cost_ratio.csv` beside it is
+/// refused): `outside_maze.tex`, `outside_pendulum.tex` and `outside_pendulum_sac.tex` into
+/// `tex_dir` (added to `files`), and their numbers for `numbers.tex` (returned).
 fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> Result<String> {
     use crate::record::read_records;
     use crate::tables::outside::outside_table;
@@ -500,15 +494,11 @@ fn render_outside(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> R
     }
     let cost = outside_table(results, "timing");
     if cost.exists() {
-        let rows = read_records(&cost)?;
         let ratios = outside_table(results, "cost_ratio");
-        let ratios = if crate::tables::outside::cost_ratios(&rows).is_empty() {
-            Vec::new()
-        } else {
-            crate::tables::summary_beside(&cost, &ratios)?;
-            read_records(&ratios)?
-        };
-        numbers.push_str(&report::outside::outside_cost_numbers(&rows, &ratios));
+        crate::tables::summary_beside(&cost, &ratios)?;
+        numbers.push_str(&report::outside::outside_cost_numbers(
+            &crate::tables::outside::read_cost_ratios(&ratios)?,
+        ));
     }
     let pointmaze = outside_table(results, "pointmaze");
     if pointmaze.exists() {

@@ -23,9 +23,7 @@ use crate::fmt::human_steps;
 use crate::picture::PictureData;
 use crate::plot::render_figure;
 use crate::tables::curves::{curves_path, read_curves};
-use crate::tables::scaling::{
-    paths_path, read_paths, read_scaling_fit, scaling_fit_path, ScalingData,
-};
+use crate::tables::scaling::{read_paths_and_fit, ScalingData};
 use crate::tables::CellStats;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -151,9 +149,12 @@ fn decades(lo: f64, hi: f64) -> std::ops::Range<f64> {
     lo..hi
 }
 
-/// Draws every figure `exp` declares ([`FigureSpec`]) into `out` from its table `stats` and
-/// the raw picture and evaluation files under `results`; returns the files written. A figure
-/// whose data is missing (no picture kept, no vanilla method for curves) is skipped.
+/// Draws every figure `exp` declares ([`FigureSpec`]) into `out` from its table `stats`, the
+/// raw picture and evaluation files under `results` and the tables beside `stats` (chains,
+/// routes; for a scaling figure, `<exp>.paths.csv` and the fit `<exp>.scaling_fit.csv`, which
+/// must be there and agree with `stats`); returns the files written. A figure whose data is
+/// missing (no picture kept, no vanilla method for curves, no chains or routes table) is
+/// skipped.
 pub fn render_experiment(
     exp: &Experiment,
     results: &Path,
@@ -212,11 +213,8 @@ pub fn render_experiment(
                 }
             }
             FigureSpec::Scaling { .. } => {
-                let paths = paths_path(results, exp.name);
-                let fit = scaling_fit_path(results, exp.name);
-                crate::tables::summary_beside(&paths, &fit)?;
-                let (paths, fit) = (read_paths(&paths)?, read_scaling_fit(&fit)?);
-                let data = ScalingData::new(exp, stats, &paths, fit);
+                let (paths, fit) = read_paths_and_fit(results, exp.name)?;
+                let data = ScalingData::new(exp, stats, &paths, fit)?;
                 files.extend(render_figure(&Scaling::new(exp, data), &stem)?);
             }
             FigureSpec::Panels { methods, .. } => {

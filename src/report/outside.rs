@@ -154,35 +154,44 @@ pub fn outside_pendulum_tex(
 }
 
 /// The numbers `\res{outside:cost:<algo>:sb3}` and `\res{outside:cost:<algo>:ours}` (the time
-/// per environment step of a library whose name starts with `sb3`, and of any other: ours,
-/// from `outside.timing.csv`) and `\res{outside:cost:<algo>:ratio}` (SB3's over ours, from
-/// `outside.cost_ratio.csv`: whole from 10 up, else one decimal).
-pub fn outside_cost_numbers(
-    rows: &[crate::tables::outside::UpdateCost],
-    ratios: &[crate::tables::outside::CostRatio],
-) -> String {
+/// per environment step of a library whose name starts with `sb3`, and of any other: ours) and
+/// `\res{outside:cost:<algo>:ratio}` (SB3's over ours: whole from 10 up, else one decimal),
+/// each where `outside.cost_ratio.csv` gives it: the times of every learner first, then the
+/// ratios.
+pub fn outside_cost_numbers(ratios: &[crate::tables::outside::CostRatio]) -> String {
     let mut s = String::new();
-    let who = |l: &str| crate::tables::outside::Library::of_version(l);
-    for r in rows {
-        let v = if r.us_per_step >= 1000.0 {
-            format!("{:.1} ms", r.us_per_step / 1000.0)
+    let time = |us: f64| {
+        if us >= 1000.0 {
+            format!("{:.1} ms", us / 1000.0)
         } else {
-            format!("{:.0} µs", r.us_per_step)
-        };
-        def_res(
-            &mut s,
-            "outside",
-            &format!("cost:{}:{}", r.algo, who(&r.library)),
-            &v,
-        );
+            format!("{us:.0} µs")
+        }
+    };
+    for r in ratios {
+        use crate::tables::outside::Library;
+        for (who, us) in [
+            (Library::Sb3, r.sb3_us_per_step),
+            (Library::Ours, r.ours_us_per_step),
+        ] {
+            if let Some(us) = us {
+                def_res(
+                    &mut s,
+                    "outside",
+                    &format!("cost:{}:{who}", r.algo),
+                    &time(us),
+                );
+            }
+        }
     }
     for r in ratios {
-        let ratio = if r.ratio >= 10.0 {
-            format!("{:.0}", r.ratio)
-        } else {
-            format!("{:.1}", r.ratio)
-        };
-        def_res(&mut s, "outside", &format!("cost:{}:ratio", r.algo), &ratio);
+        if let Some(ratio) = r.ratio {
+            let ratio = if ratio >= 10.0 {
+                format!("{ratio:.0}")
+            } else {
+                format!("{ratio:.1}")
+            };
+            def_res(&mut s, "outside", &format!("cost:{}:ratio", r.algo), &ratio);
+        }
     }
     s
 }

@@ -94,10 +94,7 @@ fn judged_runs(
                 std::io::Error::other("missing: a cell is judged for all its seeds or none"),
             ));
         }
-        let read: Vec<JudgedRun> = crate::record::read_records(path)?;
-        let [run] = <[JudgedRun; 1]>::try_from(read).map_err(|read| {
-            Error::parse(path, format!("holds {} rows, one expected", read.len()))
-        })?;
+        let run: JudgedRun = crate::record::read_one_record(path)?;
         let bad = if run.cell != cell || run.seed != seed {
             Some(format!(
                 "is cell {} seed {}, expected {cell} seed {seed}",

@@ -74,17 +74,27 @@ pub struct ScalingData {
 
 impl ScalingData {
     /// The points of every cell of `exp` with statistics in `stats` and a path in `paths`,
-    /// with the fit read from `<experiment>.scaling_fit.csv`.
+    /// with the fit read from `<experiment>.scaling_fit.csv`; refused where the fit went
+    /// through another number of cells than the points (a fit written for other tables).
     pub fn new(
         exp: &Experiment,
         stats: &[CellStats],
         paths: &[PathLength],
         fit: ScalingFit,
-    ) -> ScalingData {
-        ScalingData {
-            series: series(exp, stats, paths),
-            fit,
+    ) -> Result<ScalingData> {
+        let series = series(exp, stats, paths);
+        let points: usize = series.iter().map(|(_, p)| p.len()).sum();
+        if fit.cells != points as u64 {
+            return Err(Error::invalid(
+                format!("{}.scaling_fit.csv", exp.name),
+                format!(
+                    "the fit went through {} cells, the tables give {points}: run `pbcs \
+                     aggregate` again",
+                    fit.cells
+                ),
+            ));
         }
+        Ok(ScalingData { series, fit })
     }
 }
 
@@ -168,7 +178,27 @@ pub fn read_scaling_fit(path: &Path) -> Result<ScalingFit> {
             "gives one of ln_factor and exponent without the other",
         ));
     }
+    if fit
+        .line()
+        .is_some_and(|(a, b)| !a.is_finite() || !b.is_finite())
+    {
+        return Err(Error::parse(path, "gives a line that is not finite"));
+    }
     Ok(fit)
+}
+
+/// The paths table of `experiment` and the fit written beside it, each checked: a paths
+/// table without its fit (aggregated before the fit was a table) is refused.
+pub fn read_paths_and_fit(
+    results: &Path,
+    experiment: ExperimentName,
+) -> Result<(Vec<PathLength>, ScalingFit)> {
+    let (paths, fit) = (
+        paths_path(results, experiment),
+        scaling_fit_path(results, experiment),
+    );
+    super::summary_beside(&paths, &fit)?;
+    Ok((read_paths(&paths)?, read_scaling_fit(&fit)?))
 }
 
 #[cfg(test)]
@@ -196,5 +226,7 @@ mod tests {
         assert!(two.contains("holds 2 lines, one expected"), "{two}");
         let none = read("cells,ln_factor,exponent\n").unwrap_err();
         assert!(none.contains("holds 0 lines"), "{none}");
+        let nan = read("cells,ln_factor,exponent\n3,NaN,1.5\n").unwrap_err();
+        assert!(nan.contains("not finite"), "{nan}");
     }
 }

@@ -423,11 +423,27 @@ fn the_fits_and_cost_ratios_agree_with_their_tables() {
         checked += 1;
     }
     assert!(checked >= 1, "{checked} scaling fits");
-    use pbcs::tables::outside::{cost_ratios, outside_table, CostRatio, UpdateCost};
+    use pbcs::tables::outside::{cost_ratios, outside_table, read_cost_ratios, UpdateCost};
     let timing: Vec<UpdateCost> =
         pbcs::record::read_records(&outside_table(results, "timing")).unwrap();
-    let ratios: Vec<CostRatio> =
-        pbcs::record::read_records(&outside_table(results, "cost_ratio")).unwrap();
+    let path = outside_table(results, "cost_ratio");
+    let ratios = read_cost_ratios(&path).unwrap();
     assert_eq!(ratios, cost_ratios(&timing));
     assert_eq!(ratios.len(), 2, "ddpg and td3");
+    assert!(ratios.iter().all(|r| r.ratio.is_some()), "{ratios:?}");
+    // The report quotes the times and the ratio from that table.
+    let tex = pbcs::report::outside::outside_cost_numbers(&ratios);
+    assert_eq!(tex.lines().count(), 6, "{tex}");
+    let ours = "\\csname res:outside:cost:td3:ours\\endcsname{72 \\textmu{}s}";
+    assert!(tex.contains(ours), "{tex}");
+    // A line whose ratio is not its times' is refused, naming the learner.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let edited = dir.path().join("outside.cost_ratio.csv");
+    std::fs::write(&edited, text.replacen(",71.5,", ",70.5,", 1)).unwrap();
+    let err = read_cost_ratios(&edited).unwrap_err().to_string();
+    assert!(
+        err.contains("td3") && err.contains("not SB3's time over ours"),
+        "{err}"
+    );
 }

@@ -527,4 +527,17 @@ fn a_paths_table_without_its_fit_is_refused() {
         "{err}"
     );
     assert!(std::fs::read_dir(&out).unwrap().next().is_none());
+    // A fit through another number of cells than the tables give is refused too.
+    let fit = std::fs::read_to_string("results/tables/beyond.scaling_fit.csv").unwrap();
+    let (header, line) = fit.split_once('\n').unwrap();
+    let (cells, rest) = line.split_once(',').unwrap();
+    let other = format!("{header}\n{},{rest}", cells.parse::<u64>().unwrap() - 1);
+    std::fs::write(tables.join("beyond.scaling_fit.csv"), other).unwrap();
+    let err = pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("beyond.scaling_fit.csv") && err.contains("the tables give"),
+        "{err}"
+    );
 }

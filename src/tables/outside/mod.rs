@@ -114,22 +114,41 @@ pub struct UpdateCost {
     pub machine: String,
 }
 
-/// One line of `outside.cost_ratio.csv`: per learner, SB3's time per environment step over
-/// ours, from the first line of each library in `outside.timing.csv` ([`cost_ratios`]).
+/// One line of `outside.cost_ratio.csv`, per learner of `outside.timing.csv` ([`cost_ratios`]):
+/// the first time per environment step of each library, and SB3's over ours.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CostRatio {
     /// `ddpg` or `td3`.
     pub algo: LearnerName,
-    /// SB3's microseconds per step.
-    pub sb3_us_per_step: f64,
-    /// Ours.
-    pub ours_us_per_step: f64,
-    /// `sb3_us_per_step / ours_us_per_step`.
-    pub ratio: f64,
+    /// SB3's microseconds per step (its first line), empty without one.
+    pub sb3_us_per_step: Option<f64>,
+    /// Ours (the first line of any other library), empty without one.
+    pub ours_us_per_step: Option<f64>,
+    /// `sb3_us_per_step / ours_us_per_step`, empty unless both are given and it is finite and
+    /// positive.
+    pub ratio: Option<f64>,
 }
 
-/// Per learner with a time per step from both libraries (the first line of each), SB3's over
-/// ours, where that ratio is finite and positive; in learner order.
+impl CostRatio {
+    /// Whether the line's ratio is its times' (given exactly where that is finite and
+    /// positive) and its times are finite.
+    fn consistent(&self) -> bool {
+        let ratio = ratio_of(self.sb3_us_per_step, self.ours_us_per_step);
+        let finite = [self.sb3_us_per_step, self.ours_us_per_step]
+            .iter()
+            .all(|t| t.is_none_or(f64::is_finite));
+        finite && ratio == self.ratio
+    }
+}
+
+/// SB3's time per step over ours, where both are given and it is finite and positive.
+fn ratio_of(sb3: Option<f64>, ours: Option<f64>) -> Option<f64> {
+    let ratio = sb3? / ours?;
+    (ratio.is_finite() && ratio > 0.0).then_some(ratio)
+}
+
+/// Per learner of `rows` (in learner order), the first time per step of each library and
+/// SB3's over ours, where that ratio is finite and positive.
 ///
 /// ```
 /// use pbcs::tables::outside::{cost_ratios, UpdateCost};
@@ -142,30 +161,47 @@ pub struct CostRatio {
 /// };
 /// let ratios = cost_ratios(&[line("sb3-2.9.2", 2000.0), line("pbcs", 80.0), line("pbcs", 1.0)]);
 /// assert_eq!(ratios.len(), 1);
-/// assert_eq!(ratios[0].ratio, 25.0);
+/// assert_eq!(ratios[0].ours_us_per_step, Some(80.0));
+/// assert_eq!(ratios[0].ratio, Some(25.0));
 /// // Ours alone, or a time of zero, gives no ratio.
-/// assert!(cost_ratios(&[line("pbcs", 80.0)]).is_empty());
-/// assert!(cost_ratios(&[line("sb3", 2000.0), line("pbcs", 0.0)]).is_empty());
+/// assert_eq!(cost_ratios(&[line("pbcs", 80.0)])[0].ratio, None);
+/// assert_eq!(cost_ratios(&[line("sb3", 2000.0), line("pbcs", 0.0)])[0].ratio, None);
 /// ```
 pub fn cost_ratios(rows: &[UpdateCost]) -> Vec<CostRatio> {
     let algos: std::collections::BTreeSet<LearnerName> = rows.iter().map(|r| r.algo).collect();
     let first = |algo, library| {
         rows.iter()
             .find(|r| r.algo == algo && Library::of_version(&r.library) == library)
+            .map(|r| r.us_per_step)
     };
     algos
         .into_iter()
-        .filter_map(|algo| {
-            let (sb3, ours) = (first(algo, Library::Sb3)?, first(algo, Library::Ours)?);
-            let ratio = sb3.us_per_step / ours.us_per_step;
-            (ratio.is_finite() && ratio > 0.0).then_some(CostRatio {
+        .map(|algo| {
+            let (sb3, ours) = (first(algo, Library::Sb3), first(algo, Library::Ours));
+            CostRatio {
                 algo,
-                sb3_us_per_step: sb3.us_per_step,
-                ours_us_per_step: ours.us_per_step,
-                ratio,
-            })
+                sb3_us_per_step: sb3,
+                ours_us_per_step: ours,
+                ratio: ratio_of(sb3, ours),
+            }
         })
         .collect()
+}
+
+/// Reads `outside.cost_ratio.csv`, each line checked: its ratio is its times' where that is
+/// finite and positive, and empty otherwise.
+pub fn read_cost_ratios(path: &Path) -> Result<Vec<CostRatio>> {
+    let lines: Vec<CostRatio> = crate::record::read_records(path)?;
+    match lines.iter().find(|l| !l.consistent()) {
+        Some(l) => Err(Error::parse(
+            path,
+            format!(
+                "the line of {} gives a ratio that is not SB3's time over ours: {l:?}",
+                l.algo
+            ),
+        )),
+        None => Ok(lines),
+    }
 }
 
 /// The files `s<seed><suffix>` of `dir` (`suffix` `.csv`, `.evals.csv`) with their seeds, in
@@ -465,7 +501,8 @@ fn put_or_remove<T: Serialize>(path: &Path, records: &[T], files: &mut Vec<PathB
 }
 
 /// Writes `outside.maze.csv`, `outside.pendulum.csv`, `outside.pendulum_sac.csv`,
-/// `outside.timing.csv`, `outside.cost_ratio.csv` ([`cost_ratios`]), `outside.pointmaze.csv` and `outside.pointmaze_sb3.csv`
+/// `outside.timing.csv`, `outside.cost_ratio.csv` ([`cost_ratios`]), `outside.pointmaze.csv`
+/// and `outside.pointmaze_sb3.csv`
 /// ([`sb3_comparisons`]) under `<results>/tables/` from the rows under `<results>/outside/`
 /// (PointMaze's: the raw rows of `pointmaze_vanilla`, `pointmaze_her` and `<results>/pointmaze/sb3/`,
 /// [`pointmaze_baselines`]) (each only where it has rows; a table without rows any more is
