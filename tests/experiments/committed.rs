@@ -447,3 +447,27 @@ fn the_fits_and_cost_ratios_agree_with_their_tables() {
         "{err}"
     );
 }
+
+/// The report's section on the goal-conditioned baselines says "Medium and Large have no run
+/// yet" in words: true while `pointmaze_her` has no finished row on those maps (the sentence
+/// must change with the first one).
+#[test]
+fn the_her_section_says_medium_and_large_have_no_run_only_while_true() {
+    let report = std::fs::read_to_string("paper/report.tex").unwrap();
+    let exp = Experiment::load(Path::new("experiments/pointmaze_her.toml"), None).unwrap();
+    let rows = read_raw(&exp, Path::new("results")).unwrap();
+    let on = |map: &str| {
+        rows.iter()
+            .filter(|r| r.site.to_string() == format!("pointmaze_{map}_goals"))
+            .count()
+    };
+    assert!(on("umaze") > 0, "the grid's UMaze rows are read");
+    let says = report.contains("Medium and Large have no run yet");
+    assert_eq!(
+        says,
+        on("medium") + on("large") == 0,
+        "Medium {} rows, Large {}: update paper/report.tex's sentence",
+        on("medium"),
+        on("large")
+    );
+}

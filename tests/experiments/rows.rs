@@ -519,9 +519,12 @@ fn a_paths_table_without_its_fit_is_refused() {
     let stats = pbcs::tables::read_table(Path::new("results/tables/beyond.csv")).unwrap();
     let out = tmp.path().join("figures");
     std::fs::create_dir_all(&out).unwrap();
-    let err = pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
-        .unwrap_err()
-        .to_string();
+    let refused = || {
+        pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
+            .unwrap_err()
+            .to_string()
+    };
+    let err = refused();
     assert!(
         err.contains("beyond.scaling_fit.csv") && err.contains("pbcs aggregate"),
         "{err}"
@@ -533,9 +536,7 @@ fn a_paths_table_without_its_fit_is_refused() {
     let (cells, rest) = line.split_once(',').unwrap();
     let other = format!("{header}\n{},{rest}", cells.parse::<u64>().unwrap() - 1);
     std::fs::write(tables.join("beyond.scaling_fit.csv"), other).unwrap();
-    let err = pbcs::figures::render_experiment(&exp, tmp.path(), &stats, &out)
-        .unwrap_err()
-        .to_string();
+    let err = refused();
     assert!(
         err.contains("beyond.scaling_fit.csv") && err.contains("the tables give"),
         "{err}"
