@@ -28,8 +28,9 @@ pub struct Step<S> {
 /// value; it must compare equal to itself so that phase 1 can recognise a step that did not
 /// move.
 pub trait Env {
-    /// The full simulator state (a 2D point for the maze).
-    type State: Clone + PartialEq + std::fmt::Debug;
+    /// The full simulator state (a 2D point for the maze); serde's, so that a run's
+    /// checkpoint holds it ([`crate::vanilla::resume`]).
+    type State: Clone + PartialEq + std::fmt::Debug + Serialize + serde::de::DeserializeOwned;
 
     /// Length of the observation vector.
     fn obs_dim(&self) -> usize;

@@ -487,3 +487,19 @@ fn goal_resets_refuse_what_needs_one_goal() {
     train.train.her = Some(pbcs::learner::her::HerConfig::default());
     train.check().unwrap();
 }
+
+#[path = "common/cut_run.rs"]
+mod cut_run;
+
+/// Issue 48's SAC+HER and TD3+HER cells on PointMaze UMaze (their smoke budget), cut
+/// mid-episode and resumed from their checkpoints: the same rows as uncut runs, so the
+/// checkpoint holds the whole MuJoCo state (the warm start too) and the episode so far.
+#[test]
+fn a_cut_her_run_on_pointmaze_resumes_to_the_same_row() {
+    let exp = pbcs::experiment::Experiment::load(
+        Path::new("experiments/pointmaze_her.toml"),
+        Some("smoke"),
+    )
+    .unwrap();
+    assert_eq!(cut_run::resumes_to_the_same_rows(&exp), 2);
+}

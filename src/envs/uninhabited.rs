@@ -7,11 +7,11 @@
 macro_rules! uninhabited_env {
     ($name:ident, $what:literal) => {
         #[doc = concat!("Without MuJoCo, ", $what, " has no values.")]
-        #[derive(Debug, Clone)]
+        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
         pub enum $name {}
 
         impl crate::env::Env for $name {
-            type State = std::convert::Infallible;
+            type State = $name;
             fn obs_dim(&self) -> usize {
                 match *self {}
             }

@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::runs::run_outcome;
 use crate::validate::Check;
+use crate::vanilla::resume::Checkpoint;
 use std::path::Path;
 
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
@@ -13,7 +14,10 @@ use std::path::Path;
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
 /// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS, and vanilla runs judged by
 /// PBCS's protocol), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
-/// job) and `s<seed>.csv` (the row). The learners run on `kernel`.
+/// job) and `s<seed>.csv` (the row). The learners run on `kernel`. A vanilla run saves itself
+/// to `s<seed>.resume` every ten minutes and goes on from there when run again after a cut
+/// ([`crate::vanilla::resume`]: the same bytes as an uncut run); the file goes once the row is
+/// written.
 pub fn run_cell_seed(
     exp: &Experiment,
     cell: &Cell,
@@ -22,9 +26,12 @@ pub fn run_cell_seed(
     kernel: Kernel,
 ) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
+    let config = job.to_toml();
+    let checkpoint = checkpoint(cell, seed, dir, kernel);
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
-            let run = crate::runs::train_outcome(&j.clone().valid()?, kernel, |_, _| {})?;
+            let valid = j.clone().valid()?;
+            let run = crate::runs::train_outcome(&valid, kernel, &checkpoint, |_, _| {})?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
             let final_eval = &run.result.final_eval;
             if !final_eval.is_empty() {
@@ -49,12 +56,23 @@ pub fn run_cell_seed(
     if exp.picture_seeds.contains(&seed) {
         picture.write_csv(&run_file(dir, seed, ".picture.csv"))?;
     }
-    let config = job.to_toml();
     crate::record::write_atomic(&run_file(dir, seed, ".toml"), |w| {
         w.write_all(config.as_bytes())
     })?;
     crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
+    checkpoint.remove()?;
     Ok(row)
+}
+
+/// The checkpoint of the vanilla run (cell, seed) on `kernel` whose raw files are in `dir`:
+/// `s<seed>.resume`, of the job's TOML and the kernel.
+pub fn checkpoint(cell: &Cell, seed: u64, dir: &Path, kernel: Kernel) -> Checkpoint {
+    let job = cell.job.with_seed(seed).to_toml();
+    let kernel = kernel.name();
+    Checkpoint::new(
+        run_file(dir, seed, ".resume"),
+        format!("{job}# kernel: {kernel}\n"),
+    )
 }
 
 /// A (cell, seed) pair of a sweep.

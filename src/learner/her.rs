@@ -96,7 +96,7 @@ impl HerConfig {
 }
 
 /// Whole episodes of transitions with their goals, sampled with relabelled goals.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HerReplay {
     config: HerConfig,
     capacity: usize,

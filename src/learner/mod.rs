@@ -86,6 +86,12 @@ pub trait Learner: std::fmt::Debug + Send {
     fn subnormal_moments(&self) -> usize;
     /// A boxed copy.
     fn boxed(&self) -> Box<dyn Learner>;
+    /// Its whole state (weights, targets, optimiser moments, the position of its update
+    /// stream, its exploration state), as a run's checkpoint holds it ([`crate::vanilla::resume`]).
+    fn save_state(&self) -> Result<Vec<u8>>;
+    /// Becomes the learner whose [`Learner::save_state`] gave `bytes`; refused, unchanged,
+    /// when they are not its family's or were saved with other settings or sizes.
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<()>;
     /// As `Any` (tests and benchmarks reach a family's own methods through it).
     fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
@@ -150,6 +156,46 @@ impl LearnerName {
     pub(crate) fn of_family(name: &str) -> LearnerName {
         LearnerName::new(name).unwrap_or_else(|e| panic!("a learner family's record name: {e}"))
     }
+}
+
+/// [`Learner::save_state`] of a family whose learner is serde's: its postcard bytes.
+pub(crate) fn save_whole<L: Serialize>(learner: &L) -> Result<Vec<u8>> {
+    postcard::to_stdvec(learner).map_err(|e| Error::invalid("learner state", e.to_string()))
+}
+
+/// A family's settings in its learner's saved state, as their TOML text: postcard, which
+/// writes the state, cannot read serde's untagged enums back (SAC's `ent_coef`), TOML can.
+pub(crate) mod settings_as_toml {
+    use serde::de::{DeserializeOwned, Error as _};
+    use serde::ser::Error as _;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&toml::to_string(v).map_err(S::Error::custom)?)
+    }
+
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<T, D::Error> {
+        toml::from_str(&String::deserialize(d)?).map_err(D::Error::custom)
+    }
+}
+
+/// [`Learner::restore_state`] of such a family: the learner `bytes` hold, when `same` says it
+/// has the settings and sizes of the one it replaces.
+pub(crate) fn restore_whole<L: DeserializeOwned>(
+    bytes: &[u8],
+    same: impl FnOnce(&L) -> bool,
+) -> Result<L> {
+    let saved: L = postcard::from_bytes(bytes)
+        .map_err(|e| Error::invalid("learner state", format!("not this family's learner ({e})")))?;
+    if !same(&saved) {
+        return Err(Error::invalid(
+            "learner state",
+            "saved with other settings or sizes than this learner's",
+        ));
+    }
+    Ok(saved)
 }
 
 /// Declares the learner families: each entry `Variant(module::Settings)` is a module of this

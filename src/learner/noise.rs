@@ -16,7 +16,7 @@ pub enum NoiseKind {
 
 /// A noise process for `dim` action components; σ is absolute (already scaled to the action
 /// bound).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Noise {
     kind: NoiseKind,
     sigma: f32,

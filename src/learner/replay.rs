@@ -5,7 +5,7 @@ use crate::rng::Rng;
 use rand::Rng as _;
 
 /// A sampled mini-batch, flat row-major arrays of `len` rows.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Batch {
     /// Rows.
     pub len: usize,
@@ -26,7 +26,7 @@ pub struct Batch {
 /// Each transition is one row `[s, a, r, s', terminal]` of a single array, so sampling one
 /// reads one place in memory (one cache line for the maze's 8 floats) rather than five: the
 /// random reads of a million-transition buffer were 6 % of a PBCS run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Replay {
     capacity: usize,
     obs_dim: usize,

@@ -193,7 +193,7 @@ impl Family for SacConfig {
 }
 
 /// SAC's greedy policy b ⊙ tanh(μ(s)); its network's output row is [μ | ℓ].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SacPolicy {
     /// The actor network (linear output, 2·dim(A) wide).
     pub net: Mlp,
@@ -239,8 +239,9 @@ impl Policy for SacPolicy {
 }
 
 /// SAC's actor, twin critics, their targets, α and their optimisers.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Sac {
+    #[serde(with = "super::settings_as_toml")]
     config: SacConfig,
     obs_dim: usize,
     /// The policy π (its greedy part and the network of μ and ℓ).
@@ -399,6 +400,14 @@ impl Learner for Sac {
     }
     fn boxed(&self) -> Box<dyn Learner> {
         Box::new(self.clone())
+    }
+    fn save_state(&self) -> Result<Vec<u8>> {
+        super::save_whole(self)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<()> {
+        let same = |saved: &Self| (&saved.config, saved.obs_dim) == (&self.config, self.obs_dim);
+        *self = super::restore_whole(bytes, same)?;
+        Ok(())
     }
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self

@@ -222,7 +222,7 @@ impl Check for Td3Config {
 }
 
 /// Scratch buffers of the update, kept to allocate nothing per step.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Scratch {
     ws_actor: Workspace,
     ws_actor_target: Workspace,
@@ -262,8 +262,9 @@ impl Scratch {
 }
 
 /// Actor, critics, their targets and optimisers.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Td3 {
+    #[serde(with = "super::settings_as_toml")]
     config: Td3Config,
     obs_dim: usize,
     bounds: Vec<f32>,
@@ -574,6 +575,14 @@ impl Learner for Td3 {
     }
     fn boxed(&self) -> Box<dyn Learner> {
         Box::new(self.clone())
+    }
+    fn save_state(&self) -> Result<Vec<u8>> {
+        super::save_whole(self)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<()> {
+        let same = |saved: &Self| (&saved.config, saved.obs_dim) == (&self.config, self.obs_dim);
+        *self = super::restore_whole(bytes, same)?;
+        Ok(())
     }
     fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self

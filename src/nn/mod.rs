@@ -36,7 +36,7 @@ use rand::Rng as _;
 use std::path::Path;
 
 /// The output layer's activation.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Head {
     /// Identity (critics).
     Linear,
@@ -45,7 +45,7 @@ pub enum Head {
 }
 
 /// A ReLU multi-layer perceptron with flat parameters.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mlp {
     sizes: Vec<usize>,
     head: Head,
@@ -56,7 +56,7 @@ pub struct Mlp {
 /// Activations kept by [`Mlp::forward`] for [`Mlp::backward`], and scratch buffers. One per
 /// network and use, reused across calls so the hot path allocates nothing. It also names the
 /// [`Kernel`] that does the arithmetic.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Workspace {
     /// `acts[0]` is the input batch, `acts[l]` the output of layer l.
     acts: Vec<Vec<f32>>,
@@ -328,7 +328,7 @@ impl Mlp {
 /// thousand updates, and subnormal arithmetic is slow enough on x86 to slow the whole update
 /// by 1.5–1.7×. A moment that small changes no parameter (lr·m̂/(√v̂ + ε) with ε = 1e-8 is
 /// far below one ulp of any weight), so flushing it changes no result that matters.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Adam {
     /// Learning rate.
     pub lr: f32,

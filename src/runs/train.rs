@@ -11,6 +11,7 @@ use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
 use crate::validate::Valid;
+use crate::vanilla::resume::{train_vanilla_resumable, Checkpoint};
 use crate::vanilla::train_vanilla;
 use serde::Serialize;
 use std::path::Path;
@@ -59,30 +60,30 @@ pub struct TrainRun {
     pub picture: PictureData,
     /// The layer kernel the learner ran on.
     pub kernel: Kernel,
-    /// Wall-clock seconds of the run (not deterministic).
+    /// Wall-clock seconds of the run (not deterministic), with those before a resume.
     pub seconds: f64,
 }
 
 impl TrainRun {
     /// Trains the vanilla baseline of `job` on `env`'s own reward (the environment `job`
     /// names: [`run_train`] and the sweeps make it from the name), the learner's layers on
-    /// `kernel`; `progress(steps, success)` is called at each evaluation. Writes nothing.
+    /// `kernel`; `progress(steps, success)` is called at each evaluation. With `checkpoint`,
+    /// the run is saved to it now and then and resumed from it where it holds this run
+    /// ([`crate::vanilla::resume`]). Writes nothing else.
     pub fn compute<E: Planar>(
         env: E,
         job: &Valid<TrainJob>,
         kernel: Kernel,
+        checkpoint: Option<&Checkpoint>,
         progress: impl FnMut(u64, f32),
     ) -> Result<TrainRun> {
         let clock = Instant::now();
-        let result = train_vanilla(
-            &env,
-            &job.learner,
-            &job.train,
-            &Seeds::new(job.seed),
-            kernel,
-            progress,
-        )?;
-        let seconds = clock.elapsed().as_secs_f64();
+        let (learner, train, seeds) = (&job.learner, &job.train, &Seeds::new(job.seed));
+        let result = match checkpoint {
+            Some(c) => train_vanilla_resumable(&env, learner, train, seeds, kernel, c, progress),
+            None => train_vanilla(&env, learner, train, seeds, kernel, progress),
+        }?;
+        let seconds = result.earlier_seconds + clock.elapsed().as_secs_f64();
         let (maze, maze_seed) = job.env_spec().maze_columns();
         let summary = TrainSummary {
             maze,
@@ -191,20 +192,23 @@ pub fn run_train(
 ) -> Result<(TrainSummary, f64)> {
     let built = job.env_spec().build()?;
     claim(job, out)?;
-    let run = crate::with_env!(built, |env| TrainRun::compute(env, job, kernel, progress)?);
+    let run = crate::with_env!(built, |env| {
+        TrainRun::compute(env, job, kernel, None, progress)?
+    });
     run.write(job, out, draw)?;
     Ok((run.summary, run.seconds))
 }
 
 /// [`TrainRun::compute`] on the environment `job` names: what an experiment's vanilla
-/// (cell, seed) runs.
+/// (cell, seed) runs, saved to and resumed from `checkpoint`.
 pub fn train_outcome(
     job: &Valid<TrainJob>,
     kernel: Kernel,
+    checkpoint: &Checkpoint,
     progress: impl FnMut(u64, f32),
 ) -> Result<TrainRun> {
     crate::with_env!(job.env_spec().build()?, |env| {
-        TrainRun::compute(env, job, kernel, progress)
+        TrainRun::compute(env, job, kernel, Some(checkpoint), progress)
     })
 }
 

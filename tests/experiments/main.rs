@@ -14,6 +14,8 @@ fn files() -> Vec<std::path::PathBuf> {
 mod absurd;
 mod baselines;
 mod committed;
+#[path = "../common/cut_run.rs"]
+mod cut_run;
 mod files;
 mod judged;
 mod locks;

@@ -293,3 +293,15 @@ fn a_sweep_starts_no_more_threads_than_runs() {
             .unwrap();
     assert_eq!(threads, vec![3, 3, 3]);
 }
+
+/// A vanilla run cut short goes on from its checkpoint (`s<seed>.resume`, what `pbcs exp run`
+/// saves every ten minutes): the same row, job and evaluations as the uncut run, the wall clock
+/// counted from its first start, and the checkpoint gone once the row is written.
+#[test]
+fn a_cut_vanilla_run_resumes_from_its_checkpoint_to_the_same_row() {
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    assert!(
+        cut_run::resumes_to_the_same_rows(&exp) > 0,
+        "a vanilla cell"
+    );
+}

@@ -29,7 +29,7 @@ pub const FRAME_SKIP: usize = 5;
 /// positions and velocities alone does not replay contacts exactly) — and the episode's goal
 /// (gymnasium-robotics' `self.goal`). The model has no activations, mocap bodies or
 /// equality constraints; controls are the step's action and applied forces stay zero.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AntState {
     /// `qpos` ([`NQ`]).
     pub qpos: [f64; NQ],

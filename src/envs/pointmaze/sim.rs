@@ -24,7 +24,7 @@ const BALL_DRAWS: usize = 16;
 /// floor, so the solver runs every step and starts from it: a state without it does not replay
 /// exactly), and the episode's goal (gymnasium-robotics' `self.goal`: the task's goal, or the
 /// one a goal-drawing reset drew, [`Resets::Gym`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointState {
     /// Position (x, y), metres (`qpos`).
     pub qpos: [f64; 2],

@@ -10,7 +10,7 @@ use crate::nn::Workspace;
 
 /// A squashed sample of the actor for a batch: ε, σ, a = tanh(μ + σ·ε) and log π(a|s), and
 /// whether ℓ was inside its clamp (else it gets no gradient).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Sample {
     eps: Vec<f32>,
     sigma: Vec<f32>,
@@ -48,7 +48,7 @@ impl Sample {
 }
 
 /// Scratch buffers of the update.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(super) struct Scratch {
     pub(super) ws_actor: Workspace,
     pub(super) ws_next: Workspace,

@@ -53,8 +53,19 @@
 use crate::error::{Error, Result};
 
 /// One implementation of the layer arithmetic (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    strum::IntoStaticStr,
+    serde::Serialize,
+    serde::Deserialize,
+)]
 #[strum(serialize_all = "snake_case")]
+#[serde(rename_all = "snake_case")]
 pub enum Kernel {
     /// Plain Rust loops (the compiler vectorises what it can for the baseline target).
     Portable,

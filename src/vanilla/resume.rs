@@ -1,0 +1,194 @@
+//! Checkpoints of a vanilla run: its whole state saved now and then, so that a run cut short
+//! (a session's end, a killed process) goes on where it was saved and ends with the same bytes
+//! as a run never cut.
+//!
+//! A checkpoint holds the learner's state ([`crate::learner::Learner::save_state`]: weights,
+//! targets, optimiser moments, the update stream's position) and the rest of the run's (the
+//! replay buffer, the generators' positions, the environment's state, the episode so far, the
+//! evaluations and visited bins), postcard-encoded, with the job it belongs to, the wall-clock
+//! seconds so far and a SHA-256 of the two. It is saved after an evaluation, atomically; a file
+//! of another job, of another format or damaged is refused with what to do, and never
+//! replaced: nothing is lost.
+//!
+//! ```
+//! use pbcs::envs::toy::Toy1D;
+//! use pbcs::learner::LearnerConfig;
+//! use pbcs::nn::kernel::Kernel;
+//! use pbcs::rng::Seeds;
+//! use pbcs::vanilla::resume::Checkpoint;
+//! use pbcs::vanilla::{train_vanilla, TrainConfig, VanillaRun};
+//! let learner: LearnerConfig = toml::from_str("algo = \"td3\"\nhidden = [8]").unwrap();
+//! let train = TrainConfig { steps: 300, learning_starts: 100, eval_every: 100,
+//!                           max_episode_steps: 20, ..TrainConfig::default() };
+//! let (seeds, kernel) = (Seeds::new(0), Kernel::detect());
+//! let dir = tempfile::tempdir().unwrap();
+//! let checkpoint = Checkpoint::new(dir.path().join("s0.resume"), "toy, seed 0");
+//! // A run cut after 200 steps, saved...
+//! let mut cut = VanillaRun::new(&Toy1D, &learner, &train, &seeds, kernel).unwrap();
+//! cut.train_until(200, |_, _, _| Ok(())).unwrap();
+//! checkpoint.save(&cut, 1.5).unwrap();
+//! // ...goes on from there, and ends as the run never cut.
+//! let mut resumed = checkpoint.resume(&Toy1D, &learner, &train, &seeds, kernel).unwrap().unwrap();
+//! assert_eq!(resumed.steps(), 200);
+//! resumed.train_until(u64::MAX, |_, _, _| Ok(())).unwrap();
+//! let whole = train_vanilla(&Toy1D, &learner, &train, &seeds, kernel, |_, _| {}).unwrap();
+//! assert_eq!(resumed.finish().unwrap().evals, whole.evals);
+//! // A checkpoint is resumed only by its own job.
+//! let other = Checkpoint::new(checkpoint.path.clone(), "toy, seed 1");
+//! let err = other.resume(&Toy1D, &learner, &train, &seeds, kernel).err().unwrap();
+//! assert!(err.to_string().contains("another job"), "{err}");
+//! ```
+
+use super::{TrainConfig, TrainOutcome, VanillaRun};
+use crate::env::Env;
+use crate::error::{Error, Result};
+use crate::learner::LearnerConfig;
+use crate::nn::kernel::Kernel;
+use crate::rng::Seeds;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// How often `pbcs exp run` saves a vanilla run: at the first evaluation ten minutes or more
+/// after the run (re)started or was last saved.
+pub const EVERY: Duration = Duration::from_secs(600);
+
+/// The first field of every checkpoint: a file of another format is refused by it.
+const FORMAT: &str = "pbcs vanilla run checkpoint, version 1";
+
+/// Where a run saves its state, for which job, and how often.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// The file (an experiment's run: `s<seed>.resume` beside its row).
+    pub path: PathBuf,
+    /// What identifies the run (an experiment's run: its job's TOML and its kernel): a
+    /// checkpoint is resumed only by a run of the same job.
+    pub job: String,
+    /// Saved at the first evaluation this long after the run (re)started or was last saved.
+    pub every: Duration,
+}
+
+/// What a checkpoint file holds.
+#[derive(Serialize, Deserialize)]
+struct Envelope {
+    format: String,
+    job: String,
+    /// Wall-clock seconds of the run so far.
+    seconds: f64,
+    steps: u64,
+    /// SHA-256 of `learner` followed by `progress`.
+    sha256: String,
+    learner: Vec<u8>,
+    progress: Vec<u8>,
+}
+
+impl Checkpoint {
+    /// The checkpoint at `path` of the run of `job`, saved every [`EVERY`].
+    pub fn new(path: impl Into<PathBuf>, job: impl Into<String>) -> Self {
+        Checkpoint {
+            path: path.into(),
+            job: job.into(),
+            every: EVERY,
+        }
+    }
+
+    /// Saves `run`, `seconds` of wall clock into it, replacing the file at once and whole.
+    pub fn save<E: Env>(&self, run: &VanillaRun<'_, E>, seconds: f64) -> Result<()> {
+        let (learner, progress) = run.saved()?;
+        let envelope = Envelope {
+            format: FORMAT.into(),
+            job: self.job.clone(),
+            seconds,
+            steps: run.steps(),
+            sha256: checksum(&learner, &progress),
+            learner,
+            progress,
+        };
+        let bytes = postcard::to_stdvec(&envelope).map_err(|e| self.refused(e))?;
+        crate::record::write_atomic(&self.path, |w| w.write_all(&bytes))
+    }
+
+    /// The run saved at [`Checkpoint::path`], or `None` where there is no file. A file that
+    /// does not decode, is damaged, is another job's or does not fit the run that `env`,
+    /// `learner`, `train`, `seeds` and `kernel` make is refused, naming it; it is left as it is.
+    pub fn resume<'a, E: Env>(
+        &self,
+        env: &'a E,
+        learner: &LearnerConfig,
+        train: &'a TrainConfig,
+        seeds: &'a Seeds,
+        kernel: Kernel,
+    ) -> Result<Option<VanillaRun<'a, E>>> {
+        let bytes = match std::fs::read(&self.path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::io(&self.path, e)),
+        };
+        let afresh = "delete it to start the run afresh";
+        let envelope: Envelope = postcard::from_bytes(&bytes)
+            .ok()
+            .filter(|e: &Envelope| e.format == FORMAT)
+            .ok_or_else(|| self.refused(format!("not a {FORMAT}, or cut short; {afresh}")))?;
+        if envelope.sha256 != checksum(&envelope.learner, &envelope.progress) {
+            return Err(self.refused(format!("damaged: its checksum does not match; {afresh}")));
+        }
+        if envelope.job != self.job {
+            return Err(self.refused(format!(
+                "saved by another job, not this one; {afresh} (its job:\n{}\n)",
+                envelope.job
+            )));
+        }
+        let mut run = VanillaRun::new(env, learner, train, seeds, kernel)?;
+        run.restore(&envelope.learner, &envelope.progress)
+            .map_err(|e| self.refused(format!("{e}; {afresh}")))?;
+        run.earlier_seconds = envelope.seconds;
+        Ok(Some(run))
+    }
+
+    /// Deletes the file (once the run's results are written); no file is not an error.
+    pub fn remove(&self) -> Result<()> {
+        match std::fs::remove_file(&self.path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(&self.path, e)),
+            _ => Ok(()),
+        }
+    }
+
+    fn refused(&self, message: impl std::fmt::Display) -> Error {
+        Error::parse(&self.path, format!("checkpoint {message}"))
+    }
+}
+
+fn checksum(learner: &[u8], progress: &[u8]) -> String {
+    crate::record::sha256_hex(&[learner, progress].concat())
+}
+
+/// [`super::train_vanilla`], saved to `checkpoint` every [`Checkpoint::every`] and resumed
+/// from it where it holds a run of this job: the outcome is the same bytes as an uncut run's.
+/// The outcome's `earlier_seconds` are the wall-clock seconds before this process resumed it.
+/// The checkpoint is left in place (delete it, [`Checkpoint::remove`], once the results are
+/// written).
+pub fn train_vanilla_resumable<E: Env>(
+    env: &E,
+    learner: &LearnerConfig,
+    train: &TrainConfig,
+    seeds: &Seeds,
+    kernel: Kernel,
+    checkpoint: &Checkpoint,
+    mut progress: impl FnMut(u64, f32),
+) -> Result<TrainOutcome> {
+    let mut run = match checkpoint.resume(env, learner, train, seeds, kernel)? {
+        Some(run) => run,
+        None => VanillaRun::new(env, learner, train, seeds, kernel)?,
+    };
+    let clock = Instant::now();
+    let mut saved = Instant::now();
+    run.train_until(u64::MAX, |run, steps, success| {
+        progress(steps, success);
+        if !run.done() && saved.elapsed() >= checkpoint.every {
+            checkpoint.save(run, run.earlier_seconds + clock.elapsed().as_secs_f64())?;
+            saved = Instant::now();
+        }
+        Ok(())
+    })?;
+    run.finish()
+}

@@ -1,0 +1,248 @@
+//! Checkpoints of vanilla runs (`pbcs::vanilla::resume`): a run cut anywhere and resumed from
+//! its checkpoint ends with the uncut run's bytes, learner state included; a checkpoint that is
+//! damaged, cut short, another job's, another kernel's or another learner's is refused, naming
+//! the file, and left as it was.
+
+use pbcs::env::Env;
+use pbcs::envs::maze::{Maze, MazeConfig};
+use pbcs::envs::toy::Toy1D;
+use pbcs::learner::her::HerConfig;
+use pbcs::learner::LearnerConfig;
+use pbcs::nn::kernel::Kernel;
+use pbcs::rng::Seeds;
+use pbcs::vanilla::resume::Checkpoint;
+use pbcs::vanilla::{train_vanilla, TrainConfig, TrainOutcome, Updates, VanillaRun};
+
+fn maze() -> Maze {
+    Maze::new(&MazeConfig {
+        size: 2,
+        ..MazeConfig::default()
+    })
+    .unwrap()
+}
+
+fn schedule(her: bool) -> TrainConfig {
+    TrainConfig {
+        steps: 1_500,
+        max_episode_steps: 90,
+        learning_starts: 300,
+        eval_every: 500,
+        eval_episodes: 2,
+        her: her.then(HerConfig::default),
+        // PBCS's protocol after training, on the runs without HER.
+        final_eval_episodes: if her { 0 } else { 2 },
+        ..TrainConfig::default()
+    }
+}
+
+fn learner(text: &str) -> LearnerConfig {
+    toml::from_str(text).unwrap()
+}
+
+/// Every part of two outcomes, the learners' whole states byte for byte.
+fn assert_same(a: &TrainOutcome, b: &TrainOutcome, what: &str) {
+    assert_eq!(a.evals, b.evals, "{what}: evaluations");
+    assert_eq!(a.visited, b.visited, "{what}: visited bins");
+    assert_eq!(
+        (
+            a.steps,
+            a.episodes,
+            a.terminal_transitions,
+            a.truncated_episodes
+        ),
+        (
+            b.steps,
+            b.episodes,
+            b.terminal_transitions,
+            b.truncated_episodes
+        ),
+        "{what}: counts"
+    );
+    assert_eq!(a.final_eval, b.final_eval, "{what}: final evaluation");
+    assert_eq!(
+        a.learner.save_state().unwrap(),
+        b.learner.save_state().unwrap(),
+        "{what}: the learner's whole state"
+    );
+}
+
+/// The run cut after `cut` steps, saved, and resumed from a fresh process's point of view (a
+/// new environment, a new run of the same job).
+fn cut_and_resume<E: Env>(
+    env: &E,
+    learner: &LearnerConfig,
+    train: &TrainConfig,
+    cut: u64,
+    path: &std::path::Path,
+) -> TrainOutcome {
+    let (seeds, kernel) = (Seeds::new(5), Kernel::detect());
+    let checkpoint = Checkpoint::new(path, "the job");
+    let mut run = VanillaRun::new(env, learner, train, &seeds, kernel).unwrap();
+    run.train_until(cut, |_, _, _| Ok(())).unwrap();
+    assert_eq!(run.steps(), cut);
+    checkpoint.save(&run, 2.0).unwrap();
+    drop(run);
+    let mut resumed = checkpoint
+        .resume(env, learner, train, &seeds, kernel)
+        .unwrap()
+        .expect("a checkpoint was saved");
+    assert_eq!(resumed.steps(), cut);
+    resumed.train_until(u64::MAX, |_, _, _| Ok(())).unwrap();
+    let out = resumed.finish().unwrap();
+    assert_eq!(out.earlier_seconds, 2.0);
+    out
+}
+
+/// Cuts before learning starts, mid-episode, at an evaluation and one step after it, for TD3
+/// and SAC, with and without HER, on the maze; DDPG's Ornstein–Uhlenbeck noise with updates at
+/// each episode's end on the toy: the same bytes as the uncut run each time.
+#[test]
+fn a_run_cut_anywhere_and_resumed_ends_as_the_uncut_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s5.resume");
+    let maze = maze();
+    let small = [
+        "algo = \"td3\"\nhidden = [16, 16]\nbatch_size = 32\nreplay_size = 1000",
+        "algo = \"sac\"\nhidden = [16, 16]\nbatch_size = 32\nreplay_size = 1000",
+    ];
+    for text in small {
+        for her in [false, true] {
+            let (l, train) = (learner(text), schedule(her));
+            let whole = train_vanilla(
+                &maze,
+                &l,
+                &train,
+                &Seeds::new(5),
+                Kernel::detect(),
+                |_, _| {},
+            )
+            .unwrap();
+            assert_eq!(whole.evals.len(), 3);
+            for cut in [120, 437, 500, 501] {
+                let out = cut_and_resume(&maze, &l, &train, cut, &path);
+                assert_same(&whole, &out, &format!("{text:?}, HER {her}, cut at {cut}"));
+            }
+        }
+    }
+    let ddpg = learner(
+        "algo = \"ddpg\"\nhidden = [8]\nbatch_size = 16\nreplay_size = 1000\nnoise = \"ornstein_uhlenbeck\"",
+    );
+    let train = TrainConfig {
+        max_episode_steps: 25,
+        updates: Updates::Episode,
+        final_eval_episodes: 0,
+        ..schedule(false)
+    };
+    let whole = train_vanilla(
+        &Toy1D,
+        &ddpg,
+        &train,
+        &Seeds::new(5),
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    for cut in [310, 1_013] {
+        let out = cut_and_resume(&Toy1D, &ddpg, &train, cut, &path);
+        assert_same(&whole, &out, &format!("DDPG on the toy, cut at {cut}"));
+    }
+}
+
+/// A run stopped by `stop_at_successes` stays stopped once resumed, and no file means a fresh
+/// run.
+#[test]
+fn a_stopped_run_stays_stopped_and_no_file_is_a_fresh_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let checkpoint = Checkpoint::new(dir.path().join("s0.resume"), "toy");
+    let (l, seeds, kernel) = (LearnerConfig::td3(), Seeds::new(0), Kernel::detect());
+    let train = TrainConfig {
+        steps: 4_000,
+        eval_every: 200,
+        eval_episodes: 1,
+        stop_at_successes: Some(1),
+        final_eval_episodes: 0,
+        ..schedule(false)
+    };
+    assert!(checkpoint
+        .resume(&Toy1D, &l, &train, &seeds, kernel)
+        .unwrap()
+        .is_none());
+    let mut run = VanillaRun::new(&Toy1D, &l, &train, &seeds, kernel).unwrap();
+    run.train_until(u64::MAX, |_, _, _| Ok(())).unwrap();
+    assert!(run.done() && run.steps() < train.steps, "stopped early");
+    checkpoint.save(&run, 0.0).unwrap();
+    let mut resumed = checkpoint
+        .resume(&Toy1D, &l, &train, &seeds, kernel)
+        .unwrap()
+        .unwrap();
+    assert!(resumed.done());
+    let steps = resumed.steps();
+    resumed.train_until(u64::MAX, |_, _, _| Ok(())).unwrap();
+    assert_eq!(resumed.steps(), steps, "a stopped run took more steps");
+}
+
+/// Each bad checkpoint is refused with the file's name and what to do, and the file is left
+/// byte for byte as it was.
+#[test]
+fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s1.resume");
+    let maze = maze();
+    let l = learner("algo = \"td3\"\nhidden = [8]\nreplay_size = 1000");
+    let (train, seeds) = (schedule(true), Seeds::new(1));
+    let kernel = Kernel::detect();
+    let checkpoint = Checkpoint::new(&path, "job A");
+    let mut run = VanillaRun::new(&maze, &l, &train, &seeds, kernel).unwrap();
+    run.train_until(600, |_, _, _| Ok(())).unwrap();
+    checkpoint.save(&run, 0.0).unwrap();
+    let good = std::fs::read(&path).unwrap();
+    let refused = |bytes: &[u8], checkpoint: &Checkpoint, l: &LearnerConfig, kernel, want: &str| {
+        std::fs::write(&path, bytes).unwrap();
+        let err = checkpoint
+            .resume(&maze, l, &train, &seeds, kernel)
+            .err()
+            .unwrap_or_else(|| panic!("resumed, but wanted: {want}"))
+            .to_string();
+        assert!(
+            err.contains(want) && err.contains("s1.resume"),
+            "{want}: {err}"
+        );
+        assert!(err.contains("delete it to start the run afresh"), "{err}");
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            bytes,
+            "{want}: the file changed"
+        );
+    };
+    // A flipped byte in the learner's weights (past the header).
+    let mut flipped = good.clone();
+    let middle = good.len() / 3;
+    flipped[middle] ^= 0x40;
+    refused(&flipped, &checkpoint, &l, kernel, "damaged");
+    refused(
+        &good[..good.len() - 7],
+        &checkpoint,
+        &l,
+        kernel,
+        "cut short",
+    );
+    refused(b"not a checkpoint", &checkpoint, &l, kernel, "cut short");
+    let other_job = Checkpoint::new(&path, "job B");
+    refused(&good, &other_job, &l, kernel, "another job");
+    // The same job's name but another learner's settings, or another kernel.
+    let wider = learner("algo = \"td3\"\nhidden = [9]\nreplay_size = 1000");
+    refused(&good, &checkpoint, &wider, kernel, "other settings");
+    if kernel != Kernel::Portable {
+        refused(&good, &checkpoint, &l, Kernel::Portable, "kernel");
+    }
+    // And the good file still resumes.
+    std::fs::write(&path, &good).unwrap();
+    let back = checkpoint
+        .resume(&maze, &l, &train, &seeds, kernel)
+        .unwrap()
+        .unwrap();
+    assert_eq!(back.steps(), 600);
+    checkpoint.remove().unwrap();
+    assert!(!path.exists());
+    checkpoint.remove().unwrap();
+}
