@@ -30,11 +30,18 @@ fn temp_builder<'a>(prefix: &'a str, suffix: &'a str) -> tempfile::Builder<'a, '
 /// );
 /// ```
 pub fn sha256_hex(bytes: &[u8]) -> String {
+    sha256_hex_of(&[bytes])
+}
+
+/// The SHA-256 of `parts` one after the other ([`sha256_hex`] of their concatenation, without
+/// making it: a checkpoint's two states).
+pub fn sha256_hex_of(parts: &[&[u8]]) -> String {
     use sha2::{Digest, Sha256};
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    let mut hash = Sha256::new();
+    for part in parts {
+        hash.update(part);
+    }
+    hash.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// The SHA-256 of the file at `path` ([`sha256_hex`]), an error naming it if unreadable.

@@ -66,8 +66,9 @@ fn assert_same(a: &TrainOutcome, b: &TrainOutcome, what: &str) {
     );
 }
 
-/// The run cut after `cut` steps, saved, and resumed from a fresh process's point of view (a
-/// new environment, a new run of the same job).
+/// The run cut after `cut` steps, saved, dropped, and resumed as a new process would: a new
+/// run of the same job made from the file (the environment is shared: the maze and the toy
+/// hold no state; `tests/pointmaze.rs` resumes on a new MuJoCo environment).
 fn cut_and_resume<E: Env>(
     env: &E,
     learner: &LearnerConfig,
@@ -233,7 +234,18 @@ fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
     let wider = learner("algo = \"td3\"\nhidden = [9]\nreplay_size = 1000");
     refused(&good, &checkpoint, &wider, kernel, "other settings");
     if kernel != Kernel::Portable {
-        refused(&good, &checkpoint, &l, Kernel::Portable, "kernel");
+        refused(&good, &checkpoint, &l, Kernel::Portable, "PBCS_KERNEL=");
+    }
+    // AVX2 and AVX-512 compute the same bytes: a run saved on one goes on on the other.
+    std::fs::write(&path, &good).unwrap();
+    for other in [Kernel::Avx2, Kernel::Avx512] {
+        if other != kernel && other.available() && kernel != Kernel::Portable {
+            let back = checkpoint
+                .resume(&maze, &l, &train, &seeds, other)
+                .unwrap()
+                .unwrap();
+            assert_eq!(back.steps(), 600);
+        }
     }
     // And the good file still resumes.
     std::fs::write(&path, &good).unwrap();
@@ -245,4 +257,60 @@ fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
     checkpoint.remove().unwrap();
     assert!(!path.exists());
     checkpoint.remove().unwrap();
+}
+
+/// `train_vanilla_resumable` saves at evaluations (here at every one) and a run killed between
+/// two (here: a panic in its progress callback, as a kill would stop it) goes on from the last
+/// save to the uncut run's bytes; the seconds before the cut are counted.
+#[test]
+fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
+    use pbcs::vanilla::resume::train_vanilla_resumable;
+    let dir = tempfile::tempdir().unwrap();
+    let maze = maze();
+    let l = learner("algo = \"sac\"\nhidden = [16]\nbatch_size = 32\nreplay_size = 1000");
+    let (train, seeds, kernel) = (schedule(true), Seeds::new(2), Kernel::detect());
+    let checkpoint = Checkpoint {
+        every: std::time::Duration::ZERO,
+        ..Checkpoint::new(dir.path().join("s2.resume"), "the job")
+    };
+    let whole = train_vanilla(&maze, &l, &train, &seeds, kernel, |_, _| {}).unwrap();
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train_vanilla_resumable(
+            &maze,
+            &l,
+            &train,
+            &seeds,
+            kernel,
+            &checkpoint,
+            |steps, _| {
+                assert!(steps < 1_000, "killed");
+            },
+        )
+    }));
+    assert!(killed.is_err(), "the run was not killed");
+    // Saved at 500 steps; the callback at 1 000 ran before that evaluation's save.
+    let saved = checkpoint
+        .resume(&maze, &l, &train, &seeds, kernel)
+        .unwrap()
+        .unwrap();
+    assert_eq!(saved.steps(), 500);
+    drop(saved);
+    let mut evaluations = Vec::new();
+    let out = train_vanilla_resumable(&maze, &l, &train, &seeds, kernel, &checkpoint, |s, _| {
+        evaluations.push(s)
+    })
+    .unwrap();
+    assert_eq!(
+        evaluations,
+        [1_000, 1_500],
+        "the resumed run repeated or skipped work"
+    );
+    assert_same(&whole, &out, "killed at 1 000 steps");
+    assert!(out.earlier_seconds > 0.0);
+    // The last evaluation ends the run: no save there, the one at 1 000 stays.
+    let last = checkpoint
+        .resume(&maze, &l, &train, &seeds, kernel)
+        .unwrap()
+        .unwrap();
+    assert_eq!(last.steps(), 1_000);
 }

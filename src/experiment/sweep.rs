@@ -17,7 +17,7 @@ use std::path::Path;
 /// job) and `s<seed>.csv` (the row). The learners run on `kernel`. A vanilla run saves itself
 /// to `s<seed>.resume` every ten minutes and goes on from there when run again after a cut
 /// ([`crate::vanilla::resume`]: the same bytes as an uncut run); the file goes once the row is
-/// written.
+/// written (a failure to delete it is only reported: the row stands).
 pub fn run_cell_seed(
     exp: &Experiment,
     cell: &Cell,
@@ -27,7 +27,7 @@ pub fn run_cell_seed(
 ) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
     let config = job.to_toml();
-    let checkpoint = checkpoint(cell, seed, dir, kernel);
+    let checkpoint = checkpoint(cell, seed, dir);
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
             let valid = j.clone().valid()?;
@@ -60,19 +60,26 @@ pub fn run_cell_seed(
         w.write_all(config.as_bytes())
     })?;
     crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
-    checkpoint.remove()?;
+    drop_checkpoint(&checkpoint);
     Ok(row)
 }
 
-/// The checkpoint of the vanilla run (cell, seed) on `kernel` whose raw files are in `dir`:
-/// `s<seed>.resume`, of the job's TOML and the kernel.
-pub fn checkpoint(cell: &Cell, seed: u64, dir: &Path, kernel: Kernel) -> Checkpoint {
-    let job = cell.job.with_seed(seed).to_toml();
-    let kernel = kernel.name();
+/// The checkpoint of the vanilla run (cell, seed) whose raw files are in `dir`:
+/// `s<seed>.resume`, of the job's TOML (its learner state also names its kernel, which must
+/// compute the bytes of the kernel a resumed run is on: [`Kernel::same_bytes`]).
+pub fn checkpoint(cell: &Cell, seed: u64, dir: &Path) -> Checkpoint {
     Checkpoint::new(
         run_file(dir, seed, ".resume"),
-        format!("{job}# kernel: {kernel}\n"),
+        cell.job.with_seed(seed).to_toml(),
     )
+}
+
+/// Deletes the checkpoint of a run whose row is written; a failure is only reported (the
+/// row stands, and the file is ignored where a row exists).
+fn drop_checkpoint(checkpoint: &Checkpoint) {
+    if let Err(e) = checkpoint.remove() {
+        eprintln!("warning: a finished run's checkpoint stays: {e}");
+    }
 }
 
 /// A (cell, seed) pair of a sweep.
@@ -120,6 +127,8 @@ pub fn sweep(
         let dir = exp.cell_dir(results, p.cell);
         let done = read_finished(exp, p.cell, p.seed, &dir)?;
         if let Some(r) = &done {
+            // A checkpoint left by a process stopped between the row and its deletion.
+            drop_checkpoint(&checkpoint(p.cell, p.seed, &dir));
             on_event(p, &Event::Skipped(r.clone()));
         }
         rows.push(done);

@@ -164,7 +164,8 @@ pub(crate) fn save_whole<L: Serialize>(learner: &L) -> Result<Vec<u8>> {
 }
 
 /// A family's settings in its learner's saved state, as their TOML text: postcard, which
-/// writes the state, cannot read serde's untagged enums back (SAC's `ent_coef`), TOML can.
+/// writes the state, cannot read back serde's untagged enums (SAC's `ent_coef`) nor fields
+/// skipped when empty (SAC's `target_entropy`); TOML can.
 pub(crate) mod settings_as_toml {
     use serde::de::{DeserializeOwned, Error as _};
     use serde::ser::Error as _;

@@ -4,7 +4,7 @@
 //! PBCS's evaluation protocol after training. With `[train.her]`, hindsight experience replay
 //! ([`crate::learner::her`]) on an environment that offers goals: the networks see the
 //! observation followed by the episode's goal.
-
+//!
 //! A run is a [`VanillaRun`] driven to its end; [`resume`] saves one now and then and goes on
 //! from where it was saved, to the same bytes.
 

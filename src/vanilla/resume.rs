@@ -6,9 +6,15 @@
 //! targets, optimiser moments, the update stream's position) and the rest of the run's (the
 //! replay buffer, the generators' positions, the environment's state, the episode so far, the
 //! evaluations and visited bins), postcard-encoded, with the job it belongs to, the wall-clock
-//! seconds so far and a SHA-256 of the two. It is saved after an evaluation, atomically; a file
-//! of another job, of another format or damaged is refused with what to do, and never
-//! replaced: nothing is lost.
+//! seconds so far and a SHA-256 of the two states (it catches a damaged file; the job is
+//! compared whole). It is saved after an evaluation, atomically; a file of another job or
+//! kernel, of another format or version, cut short or damaged is refused with what to do, and
+//! left as it is: nothing is lost.
+//!
+//! The format's version ([`FORMAT`]) is also the version of what a run computes: a change to
+//! the code that changes a run's bytes (as `pbcs exp check --exact` would show) or the layout
+//! of its state bumps it, so that a run is never finished by other arithmetic than it began
+//! with.
 //!
 //! ```
 //! use pbcs::envs::toy::Toy1D;
@@ -53,8 +59,9 @@ use std::time::{Duration, Instant};
 /// after the run (re)started or was last saved.
 pub const EVERY: Duration = Duration::from_secs(600);
 
-/// The first field of every checkpoint: a file of another format is refused by it.
-const FORMAT: &str = "pbcs vanilla run checkpoint, version 1";
+/// The first field of every checkpoint: a file of another format or version is refused by it.
+/// Bump the version with any change to what a vanilla run computes or to its state's layout.
+pub const FORMAT: &str = "pbcs vanilla run checkpoint, version 1";
 
 /// Where a run saves its state, for which job, and how often.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,8 +111,11 @@ impl Checkpoint {
             learner,
             progress,
         };
-        let bytes = postcard::to_stdvec(&envelope).map_err(|e| self.refused(e))?;
-        crate::record::write_atomic(&self.path, |w| w.write_all(&bytes))
+        crate::record::write_atomic(&self.path, |w| {
+            postcard::to_io(&envelope, w)
+                .map(|_| ())
+                .map_err(std::io::Error::other)
+        })
     }
 
     /// The run saved at [`Checkpoint::path`], or `None` where there is no file. A file that
@@ -125,22 +135,25 @@ impl Checkpoint {
             Err(e) => return Err(Error::io(&self.path, e)),
         };
         let afresh = "delete it to start the run afresh";
-        let envelope: Envelope = postcard::from_bytes(&bytes)
-            .ok()
-            .filter(|e: &Envelope| e.format == FORMAT)
-            .ok_or_else(|| self.refused(format!("not a {FORMAT}, or cut short; {afresh}")))?;
+        let decoded: Option<Envelope> = postcard::from_bytes(&bytes).ok();
+        drop(bytes);
+        let envelope = decoded.filter(|e| e.format == FORMAT).ok_or_else(|| {
+            self.refused(format!(
+                "is not a {FORMAT} (another version, another file, or cut short); {afresh}"
+            ))
+        })?;
         if envelope.sha256 != checksum(&envelope.learner, &envelope.progress) {
-            return Err(self.refused(format!("damaged: its checksum does not match; {afresh}")));
+            return Err(self.refused(format!("is damaged: its checksum does not match; {afresh}")));
         }
         if envelope.job != self.job {
             return Err(self.refused(format!(
-                "saved by another job, not this one; {afresh} (its job:\n{}\n)",
+                "was saved by another job, not this one; {afresh} (its job:\n{}\n)",
                 envelope.job
             )));
         }
         let mut run = VanillaRun::new(env, learner, train, seeds, kernel)?;
-        run.restore(&envelope.learner, &envelope.progress)
-            .map_err(|e| self.refused(format!("{e}; {afresh}")))?;
+        run.restore(&envelope.learner, &envelope.progress, envelope.steps)
+            .map_err(|e| self.refused(format!("does not fit this run: {e}; {afresh}")))?;
         run.earlier_seconds = envelope.seconds;
         Ok(Some(run))
     }
@@ -154,18 +167,21 @@ impl Checkpoint {
     }
 
     fn refused(&self, message: impl std::fmt::Display) -> Error {
-        Error::parse(&self.path, format!("checkpoint {message}"))
+        Error::parse(&self.path, format!("this checkpoint {message}"))
     }
 }
 
+/// SHA-256 of the learner's state followed by the run's, in hex.
 fn checksum(learner: &[u8], progress: &[u8]) -> String {
-    crate::record::sha256_hex(&[learner, progress].concat())
+    crate::record::sha256_hex_of(&[learner, progress])
 }
 
 /// [`super::train_vanilla`], saved to `checkpoint` every [`Checkpoint::every`] and resumed
 /// from it where it holds a run of this job: the outcome is the same bytes as an uncut run's.
-/// The outcome's `earlier_seconds` are the wall-clock seconds before this process resumed it.
-/// The checkpoint is left in place (delete it, [`Checkpoint::remove`], once the results are
+/// The outcome's `earlier_seconds` are the wall-clock seconds before this process resumed it
+/// (up to the save it resumed from). A save that fails (a full disk) is reported on standard
+/// error and the run goes on, the older file kept: the checkpoint only saves time. The
+/// checkpoint is left in place (delete it, [`Checkpoint::remove`], once the results are
 /// written).
 pub fn train_vanilla_resumable<E: Env>(
     env: &E,
@@ -185,7 +201,10 @@ pub fn train_vanilla_resumable<E: Env>(
     run.train_until(u64::MAX, |run, steps, success| {
         progress(steps, success);
         if !run.done() && saved.elapsed() >= checkpoint.every {
-            checkpoint.save(run, run.earlier_seconds + clock.elapsed().as_secs_f64())?;
+            let seconds = run.earlier_seconds + clock.elapsed().as_secs_f64();
+            if let Err(e) = checkpoint.save(run, seconds) {
+                eprintln!("warning: the run goes on unsaved at {steps} steps: {e}");
+            }
             saved = Instant::now();
         }
         Ok(())

@@ -184,9 +184,9 @@ impl<'a, E: Env> VanillaRun<'a, E> {
         self.p.stopped || self.p.steps >= self.train.steps
     }
 
-    /// Trains until `until` environment steps have been taken or the run is [`done`]
-    /// (`VanillaRun::done`); `at_eval(run, steps, success)` is called after each evaluation,
-    /// and its error stops the run there.
+    /// Trains until `until` environment steps have been taken or the run is
+    /// [done](Self::done); `at_eval(run, steps, success)` is called after each evaluation, and
+    /// its error stops the run there.
     pub fn train_until(
         &mut self,
         until: u64,
@@ -214,34 +214,37 @@ impl<'a, E: Env> VanillaRun<'a, E> {
     }
 
     /// This fresh run (of the same job) become the one whose [`VanillaRun::saved`] gave
-    /// `learner` and `progress`; refused, unchanged, when they do not fit it.
-    pub(super) fn restore(&mut self, learner: &[u8], progress: &[u8]) -> Result<()> {
+    /// `learner` and `progress` after `steps` steps; refused, unchanged, with the reason, when
+    /// they do not fit it. The learner goes on on this run's kernel, which must compute the
+    /// saved one's bytes ([`Kernel::same_bytes`]).
+    pub(super) fn restore(
+        &mut self,
+        learner: &[u8],
+        progress: &[u8],
+        steps: u64,
+    ) -> std::result::Result<(), String> {
         let p: Progress<E::State> = postcard::from_bytes(progress)
-            .map_err(|e| Error::invalid("run state", format!("does not decode ({e})")))?;
+            .map_err(|e| format!("its run state does not decode ({e})"))?;
         let same_shape = matches!(
             (&p.replay, &self.p.replay),
             (Store::Plain(_), Store::Plain(_)) | (Store::Her(_), Store::Her(_))
         ) && (p.obs.len(), p.action.len(), p.desired.len())
             == (self.p.obs.len(), self.p.action.len(), self.p.desired.len());
-        if !same_shape || p.steps > self.train.steps {
-            return Err(Error::invalid(
-                "run state",
-                "saved by a run of other sizes or a longer budget than this one",
-            ));
+        if !same_shape || p.steps != steps || p.steps > self.train.steps {
+            return Err("its run state has other sizes or steps than this run".into());
         }
         let kernel = self.learner.kernel();
         let mut restored = self.learner.clone();
-        restored.restore_state(learner)?;
-        if restored.kernel() != kernel {
-            return Err(Error::invalid(
-                "run state",
-                format!(
-                    "saved on kernel {} but this run is on {}: its bytes would differ",
-                    restored.kernel().name(),
-                    kernel.name()
-                ),
+        restored.restore_state(learner).map_err(|e| e.to_string())?;
+        let saved_on = restored.kernel().name();
+        if !Kernel::same_bytes(saved_on, kernel.name()) {
+            return Err(format!(
+                "it was saved on kernel {saved_on}, whose bytes differ from this run's {} (run \
+                 with PBCS_KERNEL={saved_on} to go on from it)",
+                kernel.name()
             ));
         }
+        restored.set_kernel(kernel);
         self.learner = restored;
         self.p = p;
         Ok(())

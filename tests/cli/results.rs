@@ -132,3 +132,41 @@ fn a_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
     assert!(!dir.path().join("raw").exists(), "a run went ahead");
     drop(held);
 }
+
+/// A run whose checkpoint is not one (here: a few bytes where `s0.resume` belongs) is announced
+/// as resuming, then refused with the file named and what to do; the file is left as it was and
+/// no row is written.
+#[test]
+fn a_sweep_refuses_a_bad_checkpoint_naming_it_and_keeps_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "exp",
+        "run",
+        "experiments/table.toml",
+        "--profile",
+        "smoke",
+        "--cell",
+        "td3-maze2",
+        "--results",
+        path(dir.path()),
+    ];
+    let cell = dir.path().join("raw/table/td3-maze2");
+    std::fs::create_dir_all(&cell).unwrap();
+    let bad = cell.join("s0.resume");
+    std::fs::write(&bad, b"half a checkpoint").unwrap();
+    let o = pbcs(&args);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("td3-maze2 seed 0: resumes from"), "{e}");
+    assert!(
+        e.contains(path(&bad)) && e.contains("delete it to start the run afresh"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&bad).unwrap(), b"half a checkpoint");
+    assert!(!cell.join("s0.csv").exists(), "a row was written");
+    // Deleted as it says, the run starts afresh and ends with its row, and no checkpoint.
+    std::fs::remove_file(&bad).unwrap();
+    let o = pbcs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(cell.join("s0.csv").exists() && !bad.exists());
+}

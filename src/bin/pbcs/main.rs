@@ -275,6 +275,25 @@ fn sweep(
 ) -> anyhow::Result<(Vec<RawRow>, usize)> {
     use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
     let bar = run_bar(runs.len() as u64);
+    // Runs cut earlier that go on from their checkpoints (vanilla runs, `vanilla::resume`).
+    for p in runs {
+        let dir = exp.cell_dir(results, p.cell);
+        let saved = pbcs::experiment::checkpoint(p.cell, p.seed, &dir);
+        let finished = pbcs::experiment::run_file(&dir, p.seed, ".csv").is_file();
+        if saved.path.is_file() && !finished {
+            let line = format!(
+                "{} seed {}: resumes from {}",
+                p.cell.id,
+                p.seed,
+                saved.path.display()
+            );
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+        }
+    }
     let (steps, ran) = (AtomicU64::new(0), AtomicUsize::new(0));
     let clock = std::time::Instant::now();
     let rows = pbcs::experiment::sweep(exp, runs, results, jobs, kernel, |_, event| {
