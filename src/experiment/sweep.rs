@@ -17,13 +17,15 @@ use std::path::Path;
 /// job) and `s<seed>.csv` (the row). The learners run on `kernel`. A vanilla run saves itself
 /// to `s<seed>.resume` every ten minutes and goes on from there when run again after a cut
 /// ([`crate::vanilla::resume`]: the same bytes as an uncut run); the file goes once the row is
-/// written (a failure to delete it is only reported: the row stands).
+/// written (a failure to delete it is only reported: the row stands). A vanilla run calls
+/// `progress(steps, success)` after each of its evaluations.
 pub fn run_cell_seed(
     exp: &Experiment,
     cell: &Cell,
     seed: u64,
     dir: &Path,
     kernel: Kernel,
+    progress: impl FnMut(u64, f32),
 ) -> Result<RawRow> {
     let job = cell.job.with_seed(seed);
     let config = job.to_toml();
@@ -31,7 +33,7 @@ pub fn run_cell_seed(
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
             let valid = j.clone().valid()?;
-            let run = crate::runs::train_outcome(&valid, kernel, &checkpoint, |_, _| {})?;
+            let run = crate::runs::train_outcome(&valid, kernel, &checkpoint, progress)?;
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
             let final_eval = &run.result.final_eval;
             if !final_eval.is_empty() {
@@ -98,6 +100,21 @@ pub enum Event {
     Skipped(RawRow),
     /// It ran now, in this many wall seconds.
     Ran(RawRow, f64),
+    /// It is running: a vanilla run's evaluation after this many environment steps, with this
+    /// greedy success rate.
+    Evaluated {
+        /// Environment steps so far.
+        steps: u64,
+        /// The evaluation's success rate.
+        success: f32,
+    },
+}
+
+impl Event {
+    /// Whether the (cell, seed) is over (read back or run): a sweep's progress counts these.
+    pub fn is_final(&self) -> bool {
+        matches!(self, Event::Skipped(_) | Event::Ran(..))
+    }
 }
 
 /// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
@@ -145,7 +162,9 @@ pub fn sweep(
                 // Finished by another sweep while this one was planning: read it back.
                 match read_finished(exp, p.cell, p.seed, &dir)? {
                     Some(row) => Ok(row),
-                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel),
+                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel, |steps, success| {
+                        on_event(p, &Event::Evaluated { steps, success })
+                    }),
                 }
             })
             .map_err(|e| Error::Run {

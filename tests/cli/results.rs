@@ -135,7 +135,7 @@ fn a_sweep_on_a_results_folder_in_use_is_refused_at_its_start() {
 
 /// A run whose checkpoint is not one (here: a few bytes where `s0.resume` belongs) is announced
 /// as resuming, then refused with the file named and what to do; the file is left as it was and
-/// no row is written.
+/// no row is written. Deleted, the run goes afresh and logs its evaluations.
 #[test]
 fn a_sweep_refuses_a_bad_checkpoint_naming_it_and_keeps_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -164,9 +164,15 @@ fn a_sweep_refuses_a_bad_checkpoint_naming_it_and_keeps_it() {
     );
     assert_eq!(std::fs::read(&bad).unwrap(), b"half a checkpoint");
     assert!(!cell.join("s0.csv").exists(), "a row was written");
-    // Deleted as it says, the run starts afresh and ends with its row, and no checkpoint.
+    // Deleted as it says, the run starts afresh and ends with its row, and no checkpoint; the
+    // log (no terminal) shows the run's evaluations as it goes (at most one line a minute).
     std::fs::remove_file(&bad).unwrap();
     let o = pbcs(&args);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
     assert!(cell.join("s0.csv").exists() && !bad.exists());
+    assert!(
+        e.contains("td3-maze2 seed 0: ") && e.contains("env steps, greedy success"),
+        "{e}"
+    );
 }

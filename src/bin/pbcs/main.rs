@@ -274,43 +274,68 @@ fn sweep(
     kernel: Kernel,
 ) -> anyhow::Result<(Vec<RawRow>, usize)> {
     use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+    use std::time::Instant;
     let bar = run_bar(runs.len() as u64);
+    // Without a terminal the bar is hidden and drops its lines: a log (nohup, a cluster's job
+    // output) still gets them.
+    let say = |line: String| {
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+    };
     // Runs cut earlier that go on from their checkpoints (vanilla runs, `vanilla::resume`).
     for p in runs {
         let dir = exp.cell_dir(results, p.cell);
         let saved = pbcs::experiment::checkpoint(p.cell, p.seed, &dir);
         let finished = pbcs::experiment::run_file(&dir, p.seed, ".csv").is_file();
         if saved.path.is_file() && !finished {
-            let line = format!(
+            say(format!(
                 "{} seed {}: resumes from {}",
                 p.cell.id,
                 p.seed,
                 saved.path.display()
-            );
-            if bar.is_hidden() {
-                eprintln!("{line}");
-            } else {
-                bar.println(line);
-            }
+            ));
         }
     }
     let (steps, ran) = (AtomicU64::new(0), AtomicUsize::new(0));
-    let clock = std::time::Instant::now();
-    let rows = pbcs::experiment::sweep(exp, runs, results, jobs, kernel, |_, event| {
-        bar.inc(1);
-        if let pbcs::experiment::Event::Ran(row, secs) = event {
-            ran.fetch_add(1, Ordering::SeqCst);
-            let total = steps.fetch_add(row.env_steps, Ordering::SeqCst) + row.env_steps;
-            let line = format!("{row} ({secs:.0} s)");
-            // Without a terminal the bar is hidden and drops its lines: a log (nohup, a
-            // cluster's job output) still gets one line per finished run.
-            if bar.is_hidden() {
-                eprintln!("{line}");
-            } else {
-                bar.println(line);
+    let clock = Instant::now();
+    // Per running vanilla run, its first evaluation seen (time, steps), for its rate; and when
+    // a hidden bar last logged an evaluation (at most one line a minute).
+    let first_seen = std::sync::Mutex::new(std::collections::HashMap::new());
+    let logged = std::sync::Mutex::new(None::<Instant>);
+    let rows = pbcs::experiment::sweep(exp, runs, results, jobs, kernel, |p, event| {
+        use pbcs::experiment::Event;
+        match event {
+            Event::Evaluated { steps, success } => {
+                let (t0, s0) = *first_seen
+                    .lock()
+                    .unwrap()
+                    .entry((p.cell.id, p.seed))
+                    .or_insert((Instant::now(), *steps));
+                let rate = (steps - s0) as f64 / t0.elapsed().as_secs_f64().max(1e-9);
+                let line = format!(
+                    "{} seed {}: {steps} env steps, greedy success {success:.2} ({rate:.0} steps/s)",
+                    p.cell.id, p.seed
+                );
+                let mut last = logged.lock().unwrap();
+                if !bar.is_hidden() {
+                    bar.set_message(line);
+                } else if last.is_none_or(|t| t.elapsed().as_secs() >= 60) {
+                    *last = Some(Instant::now());
+                    eprintln!("{line}");
+                }
             }
-            let rate = total as f64 / clock.elapsed().as_secs_f64().max(1e-9);
-            bar.set_message(format!("{rate:.0} env steps/s"));
+            Event::Ran(row, secs) => {
+                bar.inc(1);
+                ran.fetch_add(1, Ordering::SeqCst);
+                let total = steps.fetch_add(row.env_steps, Ordering::SeqCst) + row.env_steps;
+                say(format!("{row} ({secs:.0} s)"));
+                let rate = total as f64 / clock.elapsed().as_secs_f64().max(1e-9);
+                bar.set_message(format!("{rate:.0} env steps/s"));
+            }
+            Event::Skipped(_) => bar.inc(1),
         }
     })?;
     bar.finish_and_clear();
@@ -328,7 +353,9 @@ fn exp_check(
     use pbcs::reproduce::check_cell;
     let (exp, results) = args.load()?;
     let bar = run_bar(pbcs::experiment::plan(&exp, Some(cell), seed)?.len() as u64);
-    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, _| bar.inc(1))?;
+    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, e| {
+        bar.inc(u64::from(e.is_final()))
+    })?;
     bar.finish_and_clear();
     println!("{}", check.report(cell));
     println!("{}", check.verdict(cell, exact)?);
