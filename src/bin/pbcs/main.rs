@@ -314,9 +314,16 @@ fn sweep(
                     .unwrap()
                     .entry((p.cell.id, p.seed))
                     .or_insert((Instant::now(), *steps));
-                let rate = (steps - s0) as f64 / t0.elapsed().as_secs_f64().max(1e-9);
+                // The rate from the second evaluation this process saw on.
+                let rate = match steps - s0 {
+                    0 => String::new(),
+                    n => format!(
+                        " ({:.0} steps/s)",
+                        n as f64 / t0.elapsed().as_secs_f64().max(1e-9)
+                    ),
+                };
                 let line = format!(
-                    "{} seed {}: {steps} env steps, greedy success {success:.2} ({rate:.0} steps/s)",
+                    "{} seed {}: {steps} env steps, greedy success {success:.2}{rate}",
                     p.cell.id, p.seed
                 );
                 let mut last = logged.lock().unwrap();
