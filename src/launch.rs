@@ -159,7 +159,13 @@ impl<'a> Launch<'a> {
         );
         let _ = writeln!(
             out,
-            "exec \"$PBCS\" exp run {}{}{} --cell \"$cell\" --seed \"$seed\" --jobs 1",
+            "# With PBCS_STOP_AFTER (`sbatch --time=4:00:00 --export=ALL,PBCS_STOP_AFTER=3h50m`), a\n\
+             # vanilla run stops before the time limit, saved, exit status 75; re-submit to go on."
+        );
+        let _ = writeln!(
+            out,
+            "exec \"$PBCS\" exp run {}{}{} --cell \"$cell\" --seed \"$seed\" --jobs 1 \
+             ${{PBCS_STOP_AFTER:+--stop-after \"$PBCS_STOP_AFTER\"}}",
             self.file.display(),
             self.profile_flag,
             self.results_flag

@@ -305,6 +305,7 @@ fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
         [1_000, 1_500],
         "the resumed run repeated or skipped work"
     );
+    let out = out.expect("without a deadline the run finishes");
     assert_same(&whole, &out, "killed at 1 000 steps");
     assert!(out.earlier_seconds > 0.0);
     // The last evaluation ends the run: no save there, the one at 1 000 stays.

@@ -53,7 +53,9 @@ pub use layout::{
 };
 pub use row::{read_row, read_run_row, KindRow, PbcsRow, RawRow, VanillaRow};
 pub use site::{paper_run, Site};
-pub use sweep::{checkpoint, plan, run_cell_seed, run_parallel, sweep, Event, Pending};
+pub use sweep::{
+    checkpoint, plan, run_cell_seed, run_parallel, sweep, sweep_until, Event, Pending, Swept,
+};
 
 use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};

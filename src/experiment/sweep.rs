@@ -8,6 +8,7 @@ use crate::runs::run_outcome;
 use crate::validate::Check;
 use crate::vanilla::resume::Checkpoint;
 use std::path::Path;
+use std::time::Instant;
 
 /// Runs (cell, seed) and writes its raw files into `dir` (the CSV row last): the run is
 /// computed without writing anything ([`crate::runs::train_outcome`], [`run_outcome`]), then only
@@ -19,21 +20,32 @@ use std::path::Path;
 /// ([`crate::vanilla::resume`]: the same bytes as an uncut run); the file goes once the row is
 /// written (a failure to delete it is only reported: the row stands). A vanilla run calls
 /// `progress(steps, success)` after each of its evaluations.
+///
+/// With a deadline `stop_at`, a vanilla run stops at its first evaluation at or past it,
+/// saved to its checkpoint, and `None` is returned (nothing else is written: run it again to
+/// go on). A PBCS run has no checkpoint: it runs to its row whatever the deadline.
 pub fn run_cell_seed(
     exp: &Experiment,
     cell: &Cell,
     seed: u64,
     dir: &Path,
     kernel: Kernel,
+    stop_at: Option<Instant>,
     progress: impl FnMut(u64, f32),
-) -> Result<RawRow> {
+) -> Result<Option<RawRow>> {
     let job = cell.job.with_seed(seed);
     let config = job.to_toml();
-    let checkpoint = checkpoint(cell, seed, dir);
+    let checkpoint = Checkpoint {
+        stop_at,
+        ..checkpoint(cell, seed, dir)
+    };
     let (row, seconds, picture) = match &job {
         Job::Vanilla(j) => {
             let valid = j.clone().valid()?;
-            let run = crate::runs::train_outcome(&valid, kernel, &checkpoint, progress)?;
+            let Some(run) = crate::runs::train_outcome(&valid, kernel, &checkpoint, progress)?
+            else {
+                return Ok(None);
+            };
             crate::record::write_records(&run_file(dir, seed, ".evals.csv"), &run.result.evals)?;
             let final_eval = &run.result.final_eval;
             if !final_eval.is_empty() {
@@ -63,7 +75,7 @@ pub fn run_cell_seed(
     })?;
     crate::record::write_record(&run_file(dir, seed, ".csv"), &row)?;
     drop_checkpoint(&checkpoint);
-    Ok(row)
+    Ok(Some(row))
 }
 
 /// The checkpoint of the vanilla run (cell, seed) whose raw files are in `dir`:
@@ -100,6 +112,12 @@ pub enum Event {
     Skipped(RawRow),
     /// It ran now, in this many wall seconds.
     Ran(RawRow, f64),
+    /// It stopped at the sweep's deadline after this many environment steps, saved to its
+    /// checkpoint ([`sweep_until`]): run the sweep again to go on.
+    Saved {
+        /// Environment steps so far.
+        steps: u64,
+    },
     /// It is running: a vanilla run's evaluation after this many environment steps, with this
     /// greedy success rate.
     Evaluated {
@@ -111,10 +129,23 @@ pub enum Event {
 }
 
 impl Event {
-    /// Whether the (cell, seed) is over (read back or run): a sweep's progress counts these.
+    /// Whether the (cell, seed) is over for this sweep (read back, run, or saved at the
+    /// deadline): a sweep's progress counts these.
     pub fn is_final(&self) -> bool {
-        matches!(self, Event::Skipped(_) | Event::Ran(..))
+        matches!(
+            self,
+            Event::Skipped(_) | Event::Ran(..) | Event::Saved { .. }
+        )
     }
+}
+
+/// What a sweep with a deadline ([`sweep_until`]) did.
+#[derive(Debug, Clone)]
+pub struct Swept {
+    /// The finished runs' rows (read back or run now), in the order of the plan.
+    pub rows: Vec<RawRow>,
+    /// The runs that did not finish: stopped at the deadline and saved, or not begun.
+    pub unfinished: usize,
 }
 
 /// Runs every (cell, seed) of `runs` that is not finished under `results`, `jobs` at a time
@@ -133,6 +164,23 @@ pub fn sweep(
     kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<Vec<RawRow>> {
+    Ok(sweep_until(exp, runs, results, jobs, kernel, None, on_event)?.rows)
+}
+
+/// [`sweep`] with a deadline `stop_at` (a cluster job's time limit): no run begins at or past
+/// it, and a vanilla run in progress stops at its first evaluation past it, saved to its
+/// checkpoint ([`run_cell_seed`], [`Event::Saved`]); a PBCS run in progress runs to its row.
+/// Running the sweep again goes on where it stopped, to the same bytes as a sweep never
+/// stopped.
+pub fn sweep_until(
+    exp: &Experiment,
+    runs: &[Pending],
+    results: &Path,
+    jobs: usize,
+    kernel: Kernel,
+    stop_at: Option<Instant>,
+    on_event: impl Fn(&Pending, &Event) + Sync,
+) -> Result<Swept> {
     // A registered grid runs only with the preset it was registered for.
     if let Some(registration) = &exp.registered {
         registration.check(exp.name)?;
@@ -153,18 +201,31 @@ pub fn sweep(
     let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
     let ran = run_parallel(&todo, jobs, |&i| {
         let p = &runs[i];
-        let clock = std::time::Instant::now();
+        if stop_at.is_some_and(|t| Instant::now() >= t) {
+            return Ok(None);
+        }
+        let clock = Instant::now();
         let dir = exp.cell_dir(results, p.cell);
+        let mut last_steps = 0;
         // One process per run: a second sweep into this folder stops here with a message
         // instead of doing the run again and replacing its row.
         let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
             .and_then(|_lock| {
                 // Finished by another sweep while this one was planning: read it back.
                 match read_finished(exp, p.cell, p.seed, &dir)? {
-                    Some(row) => Ok(row),
-                    None => run_cell_seed(exp, p.cell, p.seed, &dir, kernel, |steps, success| {
-                        on_event(p, &Event::Evaluated { steps, success })
-                    }),
+                    Some(row) => Ok(Some(row)),
+                    None => run_cell_seed(
+                        exp,
+                        p.cell,
+                        p.seed,
+                        &dir,
+                        kernel,
+                        stop_at,
+                        |steps, success| {
+                            last_steps = steps;
+                            on_event(p, &Event::Evaluated { steps, success })
+                        },
+                    ),
                 }
             })
             .map_err(|e| Error::Run {
@@ -172,13 +233,20 @@ pub fn sweep(
                 seed: p.seed,
                 cause: Box::new(e),
             })?;
-        on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64()));
+        match &row {
+            Some(row) => on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64())),
+            None => on_event(p, &Event::Saved { steps: last_steps }),
+        }
         Ok(row)
     })?;
     for (i, row) in todo.into_iter().zip(ran) {
-        rows[i] = Some(row);
+        rows[i] = row;
     }
-    Ok(rows.into_iter().flatten().collect())
+    let unfinished = rows.iter().filter(|r| r.is_none()).count();
+    Ok(Swept {
+        rows: rows.into_iter().flatten().collect(),
+        unfinished,
+    })
 }
 
 /// `f` on every item, `jobs` at a time (a pool of `jobs` threads, at most one per item), the

@@ -66,23 +66,46 @@ pub struct TrainRun {
 
 impl TrainRun {
     /// Trains the vanilla baseline of `job` on `env`'s own reward (the environment `job`
-    /// names: [`run_train`] and the sweeps make it from the name), the learner's layers on
-    /// `kernel`; `progress(steps, success)` is called at each evaluation. With `checkpoint`,
-    /// the run is saved to it now and then and resumed from it where it holds this run
-    /// ([`crate::vanilla::resume`]). Writes nothing else.
+    /// names: [`run_train`] makes it from the name), the learner's layers on `kernel`;
+    /// `progress(steps, success)` is called at each evaluation. Writes nothing.
     pub fn compute<E: Planar>(
         env: E,
         job: &Valid<TrainJob>,
         kernel: Kernel,
-        checkpoint: Option<&Checkpoint>,
         progress: impl FnMut(u64, f32),
     ) -> Result<TrainRun> {
         let clock = Instant::now();
         let (learner, train, seeds) = (&job.learner, &job.train, &Seeds::new(job.seed));
-        let result = match checkpoint {
-            Some(c) => train_vanilla_resumable(&env, learner, train, seeds, kernel, c, progress),
-            None => train_vanilla(&env, learner, train, seeds, kernel, progress),
-        }?;
+        let result = train_vanilla(&env, learner, train, seeds, kernel, progress)?;
+        Ok(Self::of(env, job, kernel, result, clock))
+    }
+
+    /// [`TrainRun::compute`], saved to `checkpoint` now and then and resumed from it where it
+    /// holds this run ([`crate::vanilla::resume`]); `None` when the run stopped, saved, at the
+    /// checkpoint's deadline ([`Checkpoint::stop_at`]).
+    pub fn compute_resumable<E: Planar>(
+        env: E,
+        job: &Valid<TrainJob>,
+        kernel: Kernel,
+        checkpoint: &Checkpoint,
+        progress: impl FnMut(u64, f32),
+    ) -> Result<Option<TrainRun>> {
+        let clock = Instant::now();
+        let (learner, train, seeds) = (&job.learner, &job.train, &Seeds::new(job.seed));
+        let ended =
+            train_vanilla_resumable(&env, learner, train, seeds, kernel, checkpoint, progress)?;
+        Ok(ended.map(|result| Self::of(env, job, kernel, result, clock)))
+    }
+
+    /// The run of `job` on `env` whose training gave `result`, begun (in this process) at
+    /// `clock`.
+    fn of<E: Planar>(
+        env: E,
+        job: &Valid<TrainJob>,
+        kernel: Kernel,
+        result: crate::vanilla::TrainOutcome,
+        clock: Instant,
+    ) -> TrainRun {
         let seconds = result.earlier_seconds + clock.elapsed().as_secs_f64();
         let (maze, maze_seed) = job.env_spec().maze_columns();
         let summary = TrainSummary {
@@ -113,14 +136,14 @@ impl TrainRun {
             red_area_side: side,
             ..PictureData::default()
         };
-        Ok(TrainRun {
+        TrainRun {
             scene: env.scene(),
             summary,
             result,
             picture,
             kernel,
             seconds,
-        })
+        }
     }
 
     /// Writes into `out`: `summary.csv`, `evals.csv` (one row per evaluation),
@@ -193,22 +216,23 @@ pub fn run_train(
     let built = job.env_spec().build()?;
     claim(job, out)?;
     let run = crate::with_env!(built, |env| {
-        TrainRun::compute(env, job, kernel, None, progress)?
+        TrainRun::compute(env, job, kernel, progress)?
     });
     run.write(job, out, draw)?;
     Ok((run.summary, run.seconds))
 }
 
-/// [`TrainRun::compute`] on the environment `job` names: what an experiment's vanilla
-/// (cell, seed) runs, saved to and resumed from `checkpoint`.
+/// [`TrainRun::compute_resumable`] on the environment `job` names: what an experiment's
+/// vanilla (cell, seed) runs, saved to and resumed from `checkpoint`; `None` when it stopped,
+/// saved, at the checkpoint's deadline.
 pub fn train_outcome(
     job: &Valid<TrainJob>,
     kernel: Kernel,
     checkpoint: &Checkpoint,
     progress: impl FnMut(u64, f32),
-) -> Result<TrainRun> {
+) -> Result<Option<TrainRun>> {
     crate::with_env!(job.env_spec().build()?, |env| {
-        TrainRun::compute(env, job, kernel, Some(checkpoint), progress)
+        TrainRun::compute_resumable(env, job, kernel, checkpoint, progress)
     })
 }
 

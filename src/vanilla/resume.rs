@@ -73,6 +73,9 @@ pub struct Checkpoint {
     pub job: String,
     /// Saved at the first evaluation this long after the run (re)started or was last saved.
     pub every: Duration,
+    /// A deadline (`pbcs exp run --stop-after`): at the first evaluation at or past it the run
+    /// is saved and stops, unfinished ([`train_vanilla_resumable`] returns `None`).
+    pub stop_at: Option<Instant>,
 }
 
 /// What a checkpoint file holds.
@@ -90,12 +93,14 @@ struct Envelope {
 }
 
 impl Checkpoint {
-    /// The checkpoint at `path` of the run of `job`, saved every [`EVERY`].
+    /// The checkpoint at `path` of the run of `job`, saved every [`EVERY`], without a
+    /// deadline.
     pub fn new(path: impl Into<PathBuf>, job: impl Into<String>) -> Self {
         Checkpoint {
             path: path.into(),
             job: job.into(),
             every: EVERY,
+            stop_at: None,
         }
     }
 
@@ -183,6 +188,11 @@ fn checksum(learner: &[u8], progress: &[u8]) -> String {
 /// error and the run goes on, the older file kept: the checkpoint only saves time. The
 /// checkpoint is left in place (delete it, [`Checkpoint::remove`], once the results are
 /// written).
+///
+/// With a deadline ([`Checkpoint::stop_at`]), the run stops at its first evaluation at or past
+/// it, saved there, and `None` is returned: run it again to go on. A save that fails there is
+/// an error (stopping unsaved would lose the work since the last save). A run whose last
+/// evaluation comes at the deadline finishes.
 pub fn train_vanilla_resumable<E: Env>(
     env: &E,
     learner: &LearnerConfig,
@@ -191,23 +201,39 @@ pub fn train_vanilla_resumable<E: Env>(
     kernel: Kernel,
     checkpoint: &Checkpoint,
     mut progress: impl FnMut(u64, f32),
-) -> Result<TrainOutcome> {
+) -> Result<Option<TrainOutcome>> {
     let mut run = match checkpoint.resume(env, learner, train, seeds, kernel)? {
         Some(run) => run,
         None => VanillaRun::new(env, learner, train, seeds, kernel)?,
     };
     let clock = Instant::now();
     let mut saved = Instant::now();
-    run.train_until(u64::MAX, |run, steps, success| {
-        progress(steps, success);
-        if !run.done() && saved.elapsed() >= checkpoint.every {
-            let seconds = run.earlier_seconds + clock.elapsed().as_secs_f64();
-            if let Err(e) = checkpoint.save(run, seconds) {
-                eprintln!("warning: the run goes on unsaved at {steps} steps: {e}");
+    let past_deadline = || checkpoint.stop_at.is_some_and(|t| Instant::now() >= t);
+    let mut stopped = false;
+    while !run.done() && !stopped {
+        // To the next evaluation (`train_until` stops right after it).
+        let next = (run.steps() / train.eval_every + 1) * train.eval_every;
+        run.train_until(next, |run, steps, success| {
+            progress(steps, success);
+            if run.done() {
+                return Ok(());
             }
-            saved = Instant::now();
-        }
-        Ok(())
-    })?;
-    run.finish()
+            let seconds = run.earlier_seconds + clock.elapsed().as_secs_f64();
+            if past_deadline() {
+                stopped = true;
+                return checkpoint.save(run, seconds);
+            }
+            if saved.elapsed() >= checkpoint.every {
+                if let Err(e) = checkpoint.save(run, seconds) {
+                    eprintln!("warning: the run goes on unsaved at {steps} steps: {e}");
+                }
+                saved = Instant::now();
+            }
+            Ok(())
+        })?;
+    }
+    if stopped {
+        return Ok(None);
+    }
+    run.finish().map(Some)
 }

@@ -176,3 +176,39 @@ fn a_sweep_refuses_a_bad_checkpoint_naming_it_and_keeps_it() {
         "{e}"
     );
 }
+
+/// `--stop-after`: a deadline already past begins no run; the exit status is 75 (EX_TEMPFAIL)
+/// with what to do, and nothing is written. A duration that is not one is refused by name.
+/// Run again without it, the sweep runs.
+#[test]
+fn a_sweep_past_its_deadline_begins_nothing_and_exits_75() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "exp",
+        "run",
+        "experiments/table.toml",
+        "--profile",
+        "smoke",
+        "--cell",
+        "td3-maze2",
+        "--results",
+        path(dir.path()),
+    ];
+    let o = pbcs(&[&args[..], &["--stop-after", "0s"]].concat());
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(75), "{e}");
+    assert!(
+        e.contains("stopped at the deadline") && e.contains("run the same command again"),
+        "{e}"
+    );
+    let cell = dir.path().join("raw/table/td3-maze2");
+    assert!(!cell.join("s0.csv").exists() && !cell.join("s0.resume").exists());
+    let o = pbcs(&[&args[..], &["--stop-after", "soon"]].concat());
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--stop-after"), "{e}");
+    args.extend(["--stop-after", "1h"]);
+    let o = pbcs(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(cell.join("s0.csv").exists() && !cell.join("s0.resume").exists());
+}

@@ -17,7 +17,9 @@ pub fn resumes_to_the_same_rows(exp: &Experiment) -> usize {
             continue;
         };
         let (dir_a, dir_b) = (exp.cell_dir(a.path(), cell), exp.cell_dir(b.path(), cell));
-        let whole = run_cell_seed(exp, cell, 0, &dir_a, kernel, |_, _| {}).unwrap();
+        let whole = run_cell_seed(exp, cell, 0, &dir_a, kernel, None, |_, _| {})
+            .unwrap()
+            .unwrap();
         let saved = checkpoint(cell, 0, &dir_b);
         let seeds = pbcs::rng::Seeds::new(0);
         pbcs::with_env!(job.env_spec().build().unwrap(), |env| {
@@ -28,7 +30,9 @@ pub fn resumes_to_the_same_rows(exp: &Experiment) -> usize {
                 .unwrap();
             saved.save(&run, 1000.0).unwrap();
         });
-        let resumed = run_cell_seed(exp, cell, 0, &dir_b, kernel, |_, _| {}).unwrap();
+        let resumed = run_cell_seed(exp, cell, 0, &dir_b, kernel, None, |_, _| {})
+            .unwrap()
+            .unwrap();
         assert_eq!(whole, resumed, "{}", cell.id);
         let optional = [".picture.csv", ".evaluation.csv"];
         for suffix in [".csv", ".evals.csv", ".toml"].iter().chain(&optional) {

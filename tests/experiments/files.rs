@@ -488,6 +488,18 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
         );
         assert_eq!(launch.args(p), String::from_utf8_lossy(&o.stdout).trim());
     }
+    // PBCS_STOP_AFTER becomes every run's deadline (`--stop-after`).
+    let o = std::process::Command::new("bash")
+        .arg(&path)
+        .env("PBCS", "echo")
+        .env("SLURM_ARRAY_TASK_ID", "0")
+        .env("PBCS_STOP_AFTER", "3h 50m")
+        .output()
+        .unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        format!("{} --stop-after 3h 50m", launch.args(&runs[0]))
+    );
     // The makefile: one rule per run, its target the run's raw row.
     let mk = launch.makefile(results);
     for p in &runs {

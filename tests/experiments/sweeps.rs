@@ -305,3 +305,73 @@ fn a_cut_vanilla_run_resumes_from_its_checkpoint_to_the_same_row() {
         "a vanilla cell"
     );
 }
+
+/// A deadline (`pbcs exp run --stop-after`): a vanilla run in progress stops at its first
+/// evaluation past it, saved, with no row; run again it ends with the row of a run never
+/// stopped. A sweep past its deadline begins nothing and counts the runs unfinished.
+#[test]
+fn a_vanilla_run_stopped_at_its_deadline_goes_on_to_the_same_row() {
+    use pbcs::experiment::{run_cell_seed, sweep_until};
+    use std::time::Instant;
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let cell = exp.cell_at("td3-maze2".parse().unwrap()).unwrap();
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (dir_a, dir_b) = (exp.cell_dir(a.path(), cell), exp.cell_dir(b.path(), cell));
+    let whole = run_cell_seed(&exp, cell, 0, &dir_a, kernel, None, |_, _| {})
+        .unwrap()
+        .unwrap();
+    let mut seen = Vec::new();
+    let stopped = run_cell_seed(
+        &exp,
+        cell,
+        0,
+        &dir_b,
+        kernel,
+        Some(Instant::now()),
+        |s, _| seen.push(s),
+    )
+    .unwrap();
+    assert!(stopped.is_none(), "the run did not stop");
+    assert_eq!(seen.len(), 1, "it stopped at its first evaluation");
+    assert!(dir_b.join("s0.resume").exists() && !dir_b.join("s0.csv").exists());
+    let mut rest = Vec::new();
+    let resumed = run_cell_seed(&exp, cell, 0, &dir_b, kernel, None, |s, _| rest.push(s))
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        rest.first().copied(),
+        Some(2 * seen[0]),
+        "work repeated or skipped"
+    );
+    assert_eq!(whole, resumed);
+    for suffix in [".csv", ".evals.csv", ".toml"] {
+        let read = |dir: &Path| std::fs::read(dir.join(format!("s0{suffix}"))).unwrap();
+        assert_eq!(read(&dir_a), read(&dir_b), "s0{suffix}");
+    }
+    assert!(!dir_b.join("s0.resume").exists());
+    // A sweep past its deadline: the finished run read back, the others not begun.
+    let runs = plan(&exp, None, None).unwrap();
+    assert!(runs.len() > 1);
+    let events = Mutex::new(Vec::new());
+    let swept = sweep_until(
+        &exp,
+        &runs,
+        a.path(),
+        2,
+        kernel,
+        Some(Instant::now()),
+        |p, e| {
+            events
+                .lock()
+                .unwrap()
+                .push((p.cell.id, p.seed, e.is_final()))
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        (swept.rows, swept.unfinished),
+        (vec![whole], runs.len() - 1)
+    );
+    assert_eq!(events.into_inner().unwrap(), vec![(cell.id, 0, true)]);
+}

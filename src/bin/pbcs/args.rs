@@ -344,6 +344,13 @@ pub enum ExpCommand {
         /// refused (`make results`).
         #[arg(long)]
         skip_unavailable: bool,
+        /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins after it, and a vanilla
+        /// run in progress stops at its first evaluation after it, saved to its checkpoint
+        /// (a PBCS run in progress runs to its row). With runs unfinished the exit status is
+        /// 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same bytes. For
+        /// a cluster's time limit: leave an evaluation's time (and a PBCS run's) to spare.
+        #[arg(long, value_parser = humantime::parse_duration)]
+        stop_after: Option<std::time::Duration>,
     },
     /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
     /// `# done` after finished ones.

@@ -9,7 +9,7 @@ use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, Located, PbcsJob, Preset, TrainJob};
-use pbcs::experiment::{Experiment, Pending, RawRow};
+use pbcs::experiment::{Experiment, Pending, Swept};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
 use pbcs::validate::Valid;
@@ -34,12 +34,41 @@ fn main() -> ExitCode {
     }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        // Not a failure: the work so far is saved, and the same command goes on (sysexits.h's
+        // EX_TEMPFAIL, "try again later", for a cluster script to requeue on).
+        Err(e) if e.is::<Unfinished>() => {
+            eprintln!("{e}");
+            ExitCode::from(Unfinished::EXIT)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
 }
+
+/// `pbcs exp run --stop-after`: the sweep stopped at its deadline with runs unfinished.
+#[derive(Debug)]
+struct Unfinished(usize);
+
+impl Unfinished {
+    /// The exit status: 75, EX_TEMPFAIL.
+    const EXIT: u8 = 75;
+}
+
+impl std::fmt::Display for Unfinished {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "stopped at the deadline (--stop-after) with {} runs unfinished, the vanilla runs in \
+             progress saved; run the same command again to go on (exit status {})",
+            self.0,
+            Self::EXIT
+        )
+    }
+}
+
+impl std::error::Error for Unfinished {}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     // The layer kernel of every run (PBCS_KERNEL, else the best this CPU runs), read once: a
@@ -106,7 +135,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 seed,
                 jobs,
                 skip_unavailable,
-            } => exp_run(&args, (cell, seed), jobs, skip_unavailable, kernel),
+                stop_after,
+            } => {
+                // The deadline counts from the start of the command.
+                let stop_at = stop_after.map(|d| std::time::Instant::now() + d);
+                exp_run(&args, (cell, seed), jobs, skip_unavailable, stop_at, kernel)
+            }
             ExpCommand::List {
                 exp: args,
                 make,
@@ -157,7 +191,8 @@ fn table(
     let name = runs::method_name(config, preset);
     let exp = Experiment::of_job(&name, &job, sizes, seeds)?;
     let plan = pbcs::experiment::plan(&exp, None, None)?;
-    let (rows, ran) = sweep(&exp, &plan, out, jobs, kernel)?;
+    let (swept, ran) = sweep(&exp, &plan, out, jobs, None, kernel)?;
+    let rows = swept.rows;
     let stats = pbcs::tables::cell_stats(&exp, &rows);
     let table = pbcs::tables::table_path(out, exp.name);
     pbcs::tables::write_table(&table, &stats)?;
@@ -197,6 +232,7 @@ fn exp_run(
     (cell, seed): (Option<pbcs::experiment::CellKey>, Option<u64>),
     jobs: usize,
     skip_unavailable: bool,
+    stop_at: Option<std::time::Instant>,
     kernel: Kernel,
 ) -> anyhow::Result<()> {
     let (exp, results) = args.load()?;
@@ -206,7 +242,11 @@ fn exp_run(
         return Ok(());
     }
     let plan = pbcs::experiment::plan(&exp, cell, seed)?;
-    let (rows, ran) = sweep(&exp, &plan, &results, jobs, kernel)?;
+    let (swept, ran) = sweep(&exp, &plan, &results, jobs, stop_at, kernel)?;
+    if swept.unfinished > 0 {
+        return Err(Unfinished(swept.unfinished).into());
+    }
+    let rows = swept.rows;
     println!(
         "{} ({}): {} runs, {ran} ran now, {} were finished; raw rows in {}",
         exp.name,
@@ -263,16 +303,18 @@ fn run_bar(total: u64) -> ProgressBar {
     bar
 }
 
-/// Runs `runs` with [`pbcs::experiment::sweep`] behind a progress bar (finished runs are read
-/// back): one line per run as it finishes, environment steps per second in the bar. Returns
-/// the rows and how many runs ran now.
+/// Runs `runs` with [`pbcs::experiment::sweep_until`] behind a progress bar (finished runs are
+/// read back): one line per run as it finishes or stops at the deadline `stop_at`,
+/// environment steps per second in the bar. Returns what the sweep did and how many runs ran
+/// now.
 fn sweep(
     exp: &Experiment,
     runs: &[Pending],
     results: &Path,
     jobs: usize,
+    stop_at: Option<std::time::Instant>,
     kernel: Kernel,
-) -> anyhow::Result<(Vec<RawRow>, usize)> {
+) -> anyhow::Result<(Swept, usize)> {
     use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
     use std::time::Instant;
     let bar = run_bar(runs.len() as u64);
@@ -305,7 +347,7 @@ fn sweep(
     // a hidden bar last logged an evaluation (at most one line a minute).
     let first_seen = std::sync::Mutex::new(std::collections::HashMap::new());
     let logged = std::sync::Mutex::new(None::<Instant>);
-    let rows = pbcs::experiment::sweep(exp, runs, results, jobs, kernel, |p, event| {
+    let on_event = |p: &Pending, event: &pbcs::experiment::Event| {
         use pbcs::experiment::Event;
         match event {
             Event::Evaluated { steps, success } => {
@@ -342,11 +384,20 @@ fn sweep(
                 let rate = total as f64 / clock.elapsed().as_secs_f64().max(1e-9);
                 bar.set_message(format!("{rate:.0} env steps/s"));
             }
+            Event::Saved { steps } => {
+                bar.inc(1);
+                say(format!(
+                    "{} seed {}: stopped at the deadline after {steps} env steps, saved to its \
+                     checkpoint",
+                    p.cell.id, p.seed
+                ));
+            }
             Event::Skipped(_) => bar.inc(1),
         }
-    })?;
+    };
+    let swept = pbcs::experiment::sweep_until(exp, runs, results, jobs, kernel, stop_at, on_event)?;
     bar.finish_and_clear();
-    Ok((rows, ran.into_inner()))
+    Ok((swept, ran.into_inner()))
 }
 
 fn exp_check(
