@@ -73,17 +73,24 @@ impl<'a> Launch<'a> {
     }
 
     /// One `pbcs exp run` command per (cell, seed), with `  # done` after those whose raw row
-    /// is in `results` (`pbcs exp list`).
+    /// is in `results`, and `  # saved at N env steps` after vanilla runs in progress whose
+    /// checkpoint is there (`# its checkpoint would be refused` where it is another job's or
+    /// format's) (`pbcs exp list`).
     pub fn commands(&self, results: &Path) -> crate::Result<String> {
         let mut out = String::new();
         for p in self.runs() {
             let dir = self.exp.cell_dir(results, p.cell);
             let done = crate::experiment::read_finished(self.exp, p.cell, p.seed, &dir)?.is_some();
-            out.push_str(&format!(
-                "pbcs {}{}\n",
-                self.args(&p),
-                if done { "  # done" } else { "" }
-            ));
+            let note = if done {
+                "  # done".to_string()
+            } else {
+                match crate::experiment::checkpoint(p.cell, p.seed, &dir).peek() {
+                    Ok(None) => String::new(),
+                    Ok(Some(saved)) => format!("  # saved at {} env steps", saved.steps),
+                    Err(_) => "  # its checkpoint would be refused".to_string(),
+                }
+            };
+            out.push_str(&format!("pbcs {}{note}\n", self.args(&p)));
         }
         Ok(out)
     }

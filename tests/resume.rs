@@ -315,3 +315,38 @@ fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
         .unwrap();
     assert_eq!(last.steps(), 1_000);
 }
+
+/// `Checkpoint::peek` reads how far a saved run got from the file's head alone (what `pbcs exp
+/// list` and a resuming sweep print): the steps and seconds saved; no file is `None`; a file of
+/// another job, not a checkpoint, or cut within its head is an error naming the file.
+#[test]
+fn a_checkpoints_head_says_how_far_its_run_got() {
+    use pbcs::vanilla::resume::Saved;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s3.resume");
+    let maze = maze();
+    let l = learner("algo = \"td3\"\nhidden = [8]\nreplay_size = 1000");
+    let (train, seeds) = (schedule(false), Seeds::new(3));
+    let checkpoint = Checkpoint::new(&path, "job A");
+    assert_eq!(checkpoint.peek().unwrap(), None);
+    let mut run = VanillaRun::new(&maze, &l, &train, &seeds, Kernel::detect()).unwrap();
+    run.train_until(700, |_, _, _| Ok(())).unwrap();
+    checkpoint.save(&run, 12.5).unwrap();
+    let saved = Saved {
+        steps: 700,
+        seconds: 12.5,
+    };
+    assert_eq!(checkpoint.peek().unwrap(), Some(saved));
+    let good = std::fs::read(&path).unwrap();
+    let refused = |bytes: &[u8], checkpoint: &Checkpoint| {
+        std::fs::write(&path, bytes).unwrap();
+        let err = checkpoint.peek().unwrap_err().to_string();
+        assert!(
+            err.contains("s3.resume") && err.contains("refused"),
+            "{err}"
+        );
+    };
+    refused(&good, &Checkpoint::new(&path, "job B"));
+    refused(b"not a checkpoint", &checkpoint);
+    refused(&good[..20], &checkpoint);
+}

@@ -92,6 +92,24 @@ struct Envelope {
     progress: Vec<u8>,
 }
 
+/// The head of a checkpoint file: [`Envelope`]'s first fields, which postcard writes first.
+#[derive(Deserialize)]
+struct Head {
+    format: String,
+    job: String,
+    seconds: f64,
+    steps: u64,
+}
+
+/// How far a saved run got ([`Checkpoint::peek`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Saved {
+    /// Environment steps taken.
+    pub steps: u64,
+    /// Wall-clock seconds of the run up to the save.
+    pub seconds: f64,
+}
+
 impl Checkpoint {
     /// The checkpoint at `path` of the run of `job`, saved every [`EVERY`], without a
     /// deadline.
@@ -161,6 +179,34 @@ impl Checkpoint {
             .map_err(|e| self.refused(format!("does not fit this run: {e}; {afresh}")))?;
         run.earlier_seconds = envelope.seconds;
         Ok(Some(run))
+    }
+
+    /// How far the run saved at [`Checkpoint::path`] got, read from the file's head without
+    /// the states: `None` where there is no file; an error where the head does not decode or
+    /// belongs to another format, version or job (the file would be refused,
+    /// [`Checkpoint::resume`] says why). Its states are not checked.
+    pub fn peek(&self) -> Result<Option<Saved>> {
+        let file = match std::fs::File::open(&self.path) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::io(&self.path, e)),
+        };
+        // Room for the format and the job's TOML (a few hundred bytes), read in place.
+        let mut scratch = vec![0u8; 1 << 20];
+        let head: Option<(Saved, String, String)> =
+            postcard::from_io((std::io::BufReader::new(file), &mut scratch))
+                .ok()
+                .map(|(h, _): (Head, _)| {
+                    let saved = Saved {
+                        steps: h.steps,
+                        seconds: h.seconds,
+                    };
+                    (saved, h.format, h.job)
+                });
+        match head {
+            Some((saved, format, job)) if format == FORMAT && job == self.job => Ok(Some(saved)),
+            _ => Err(self.refused("would be refused (run it to see why)")),
+        }
     }
 
     /// Deletes the file (once the run's results are written); no file is not an error.

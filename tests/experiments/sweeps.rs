@@ -335,6 +335,16 @@ fn a_vanilla_run_stopped_at_its_deadline_goes_on_to_the_same_row() {
     assert!(stopped.is_none(), "the run did not stop");
     assert_eq!(seen.len(), 1, "it stopped at its first evaluation");
     assert!(dir_b.join("s0.resume").exists() && !dir_b.join("s0.csv").exists());
+    // `pbcs exp list` says how far it got.
+    let file = Path::new("experiments/table.toml");
+    let listed = pbcs::launch::Launch::new(&exp, file, Some("smoke"), None)
+        .commands(b.path())
+        .unwrap();
+    let line = format!(
+        "--cell {} --seed 0 --jobs 1  # saved at {} env steps\n",
+        cell.id, seen[0]
+    );
+    assert!(listed.contains(&line), "{listed}");
     let mut rest = Vec::new();
     let resumed = run_cell_seed(&exp, cell, 0, &dir_b, kernel, None, |s, _| rest.push(s))
         .unwrap()

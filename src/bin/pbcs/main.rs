@@ -333,8 +333,13 @@ fn sweep(
         let saved = pbcs::experiment::checkpoint(p.cell, p.seed, &dir);
         let finished = pbcs::experiment::run_file(&dir, p.seed, ".csv").is_file();
         if saved.path.is_file() && !finished {
+            // How far it got, where the file's head says (a bad file is refused by the run).
+            let at = match saved.peek() {
+                Ok(Some(s)) => format!(" ({} env steps saved)", s.steps),
+                _ => String::new(),
+            };
             say(format!(
-                "{} seed {}: resumes from {}",
+                "{} seed {}: resumes from {}{at}",
                 p.cell.id,
                 p.seed,
                 saved.path.display()
