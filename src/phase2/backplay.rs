@@ -59,6 +59,11 @@ pub struct Walk {
     /// test or training round (ours; `None`: the paper, whose walk goes on to K = 0 however
     /// dead it is). The caller may then move the hand-over (`phase2.retargets`).
     pub dead_walk: Option<usize>,
+    /// Return the saved (K, π) once this many Ks in a row have been trained without a save
+    /// after the last one (ours; `None`: the paper, which walks on until a test after training
+    /// reads 0 %). Where a policy passes partly far beyond its last saved K, the paper's walk
+    /// spends most of a skill's steps there for nothing it keeps.
+    pub patience: Option<usize>,
 }
 
 impl Walk {
@@ -72,6 +77,7 @@ impl Walk {
             stop_at_failure: false,
             give_up_when_dead: false,
             dead_walk: None,
+            patience: None,
         }
     }
 }
@@ -149,6 +155,8 @@ pub fn backplay_candidates<B: Backplayer>(
     let mut k = t - 1;
     // Whether any test or training round of this walk has reached the goal once.
     let mut any_success = false;
+    // Ks trained since the last save without one (`walk.patience`).
+    let mut unsaved = 0;
     loop {
         let first = b.test(k);
         any_success |= first > 0.0;
@@ -176,11 +184,17 @@ pub fn backplay_candidates<B: Backplayer>(
         }
         if solved {
             kept.push((k, b.policy()));
+            unsaved = 0;
             if adaptive {
                 step = (step * 2).min(MAX_ADAPTIVE_STEP);
             }
+        } else {
+            unsaved += 1;
         }
         if dead && (!kept.is_empty() || walk.give_up_when_dead) {
+            return kept;
+        }
+        if !kept.is_empty() && walk.patience.is_some_and(|p| unsaved >= p) {
             return kept;
         }
         if k == 0 {

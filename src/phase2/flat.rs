@@ -63,6 +63,9 @@ pub struct FlatPhase2 {
     pub dead_walk: usize,
     /// [`super::DeadWalk::retargets`] (needs `dead_walk`).
     pub retargets: usize,
+    /// [`super::Ideas::patience`] (0: none, the default, not written).
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub patience: usize,
     /// [`super::Ideas::fast_tests`].
     pub fast_tests: bool,
     /// [`super::Ideas::verify_skills`] (0: none).
@@ -99,6 +102,12 @@ impl Default for FlatPhase2 {
 /// An unset λ (`phase2.velocity_scale`), left out of written files.
 fn is_zero(x: &f32) -> bool {
     *x == 0.0
+}
+
+/// An unset `phase2.patience`, left out of written files (those written before it existed
+/// keep their bytes).
+fn is_zero_usize(n: &usize) -> bool {
+    *n == 0
 }
 
 /// `0` as "off" in the flat form.
@@ -208,6 +217,7 @@ impl TryFrom<FlatPhase2> for Phase2Config {
                     after,
                     retargets: f.retargets,
                 }),
+                patience: nonzero(f.patience),
                 fast_tests: f.fast_tests,
                 verify_skills: nonzero(f.verify_episodes),
                 episode_limit,
@@ -249,6 +259,7 @@ impl From<Phase2Config> for FlatPhase2 {
             restarts: i.restarts,
             dead_walk: i.dead_walk.map_or(0, |d| d.after),
             retargets: i.dead_walk.map_or(0, |d| d.retargets),
+            patience: i.patience.unwrap_or(0),
             fast_tests: i.fast_tests,
             verify_episodes: i.verify_skills.unwrap_or(0),
             warm_start: c.warm_start(),

@@ -126,6 +126,9 @@ pub struct Ideas {
     pub restarts: usize,
     /// A bound on a walk without any success, and what follows it.
     pub dead_walk: Option<DeadWalk>,
+    /// Once a K is saved, a walk ends after this many Ks in a row trained without another
+    /// save ([`Walk::patience`]; the paper walks on until a test after training reads 0 %).
+    pub patience: Option<usize>,
     /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
     /// deterministic policy and a pure step it never will), and stop the whole test once it
     /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
@@ -156,6 +159,7 @@ impl Ideas {
         stop_at_failure: false,
         restarts: 0,
         dead_walk: None,
+        patience: None,
         fast_tests: false,
         verify_skills: None,
         episode_limit: None,
@@ -295,6 +299,7 @@ impl Check for Phase2Config {
             ("phase2.eval_max_steps", self.eval_max_steps),
             ("phase2.max_rounds", i.stopping.max_rounds.unwrap_or(1)),
             ("phase2.dead_walk", i.dead_walk.map_or(1, |d| d.after)),
+            ("phase2.patience", i.patience.unwrap_or(1)),
             ("phase2.verify_episodes", i.verify_skills.unwrap_or(1)),
             (
                 "phase2.chain_verify_episodes",
@@ -495,6 +500,7 @@ impl Phase2Config {
             stop_at_failure: i.stop_at_failure,
             give_up_when_dead: restarts_left,
             dead_walk: i.dead_walk.map(|d| d.after),
+            patience: i.patience,
         }
     }
 

@@ -11,6 +11,7 @@ use std::collections::HashMap;
 
 mod backplay;
 mod capabilities;
+mod patience;
 use backplay::{walk, Scripted};
 
 /// An open plane: no walls, actions clipped to ±0.1, reward 1 when x ≥ 3.
