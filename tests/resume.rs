@@ -350,3 +350,51 @@ fn a_checkpoints_head_says_how_far_its_run_got() {
     refused(b"not a checkpoint", &checkpoint);
     refused(&good[..20], &checkpoint);
 }
+
+/// A deadline already past: a run whose deadline evaluation is its last finishes (here
+/// `train.steps` = one evaluation interval); a run that cannot save there stops with an error
+/// naming the file, since stopping unsaved would lose its work.
+#[test]
+fn a_run_at_its_deadline_finishes_if_done_and_fails_loudly_if_it_cannot_save() {
+    use pbcs::vanilla::resume::train_vanilla_resumable;
+    let dir = tempfile::tempdir().unwrap();
+    let maze = maze();
+    let l = learner("algo = \"td3\"\nhidden = [8]\nreplay_size = 1000");
+    let (seeds, kernel) = (Seeds::new(4), Kernel::detect());
+    let now = Some(std::time::Instant::now());
+    let short = TrainConfig {
+        steps: 500,
+        ..schedule(false)
+    };
+    let checkpoint = Checkpoint {
+        stop_at: now,
+        ..Checkpoint::new(dir.path().join("s4.resume"), "job")
+    };
+    let done = train_vanilla_resumable(&maze, &l, &short, &seeds, kernel, &checkpoint, |_, _| {});
+    let whole = train_vanilla(&maze, &l, &short, &seeds, kernel, |_, _| {}).unwrap();
+    assert_same(
+        &whole,
+        &done.unwrap().expect("finished"),
+        "done at the deadline",
+    );
+    assert!(!checkpoint.path.exists(), "a finished run saved");
+    // Its folder is a file: the save at the deadline fails.
+    let blocked = dir.path().join("not a folder");
+    std::fs::write(&blocked, b"").unwrap();
+    let unsaveable = Checkpoint {
+        stop_at: now,
+        ..Checkpoint::new(blocked.join("s4.resume"), "job")
+    };
+    let err = train_vanilla_resumable(
+        &maze,
+        &l,
+        &schedule(false),
+        &seeds,
+        kernel,
+        &unsaveable,
+        |_, _| {},
+    )
+    .expect_err("stopped unsaved without an error")
+    .to_string();
+    assert!(err.contains("not a folder"), "{err}");
+}

@@ -191,7 +191,8 @@ impl Checkpoint {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(Error::io(&self.path, e)),
         };
-        // Room for the format and the job's TOML (a few hundred bytes), read in place.
+        // Room for the format and the job's TOML (a vanilla job's is under a kilobyte), read in
+        // place.
         let mut scratch = vec![0u8; 1 << 20];
         let head: Option<(Saved, String, String)> =
             postcard::from_io((std::io::BufReader::new(file), &mut scratch))
@@ -237,8 +238,8 @@ fn checksum(learner: &[u8], progress: &[u8]) -> String {
 ///
 /// With a deadline ([`Checkpoint::stop_at`]), the run stops at its first evaluation at or past
 /// it, saved there, and `None` is returned: run it again to go on. A save that fails there is
-/// an error (stopping unsaved would lose the work since the last save). A run whose last
-/// evaluation comes at the deadline finishes.
+/// an error (stopping unsaved would lose the work since the last save), the older file kept.
+/// A run that ends at that evaluation (its last steps, or `stop_at_successes`) finishes.
 pub fn train_vanilla_resumable<E: Env>(
     env: &E,
     learner: &LearnerConfig,

@@ -178,8 +178,9 @@ fn a_sweep_refuses_a_bad_checkpoint_naming_it_and_keeps_it() {
 }
 
 /// `--stop-after`: a deadline already past begins no run; the exit status is 75 (EX_TEMPFAIL)
-/// with what to do, and nothing is written. A duration that is not one is refused by name.
-/// Run again without it, the sweep runs.
+/// with what to do, and nothing is written. A duration that is not one, or one past what the
+/// clock holds, is refused by name.
+/// Run again with a deadline an hour ahead, the sweep runs.
 #[test]
 fn a_sweep_past_its_deadline_begins_nothing_and_exits_75() {
     let dir = tempfile::tempdir().unwrap();
@@ -207,6 +208,11 @@ fn a_sweep_past_its_deadline_begins_nothing_and_exits_75() {
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("--stop-after"), "{e}");
+    // A deadline past what the clock can hold is refused, not a panic.
+    let o = pbcs(&[&args[..], &["--stop-after", "500000000000y"]].concat());
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("too far ahead"), "{e}");
     args.extend(["--stop-after", "1h"]);
     let o = pbcs(&args);
     assert!(o.status.success(), "{}", stderr(&o));

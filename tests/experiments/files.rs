@@ -488,17 +488,23 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
         );
         assert_eq!(launch.args(p), String::from_utf8_lossy(&o.stdout).trim());
     }
-    // PBCS_STOP_AFTER becomes every run's deadline (`--stop-after`).
+    // PBCS_STOP_AFTER becomes every run's deadline (`--stop-after`), one argument however it
+    // is spelt (a program printing each argument in brackets shows the split).
+    let args = dir.path().join("args.sh");
+    std::fs::write(&args, "#!/bin/sh\nprintf '[%s]' \"$@\"\n").unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&args, std::fs::Permissions::from_mode(0o755)).unwrap();
     let o = std::process::Command::new("bash")
         .arg(&path)
-        .env("PBCS", "echo")
+        .env("PBCS", &args)
         .env("SLURM_ARRAY_TASK_ID", "0")
         .env("PBCS_STOP_AFTER", "3h 50m")
         .output()
         .unwrap();
-    assert_eq!(
-        String::from_utf8_lossy(&o.stdout).trim(),
-        format!("{} --stop-after 3h 50m", launch.args(&runs[0]))
+    assert!(
+        String::from_utf8_lossy(&o.stdout).ends_with("[--jobs][1][--stop-after][3h 50m]"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
     );
     // The makefile: one rule per run, its target the run's raw row.
     let mk = launch.makefile(results);

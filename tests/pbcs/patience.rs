@@ -42,3 +42,27 @@ fn a_patient_walk_ends_after_its_patience_of_unsaved_ks() {
     backplay_candidates(&mut b, 10, &three);
     assert_eq!(b.calls, paper.calls);
 }
+
+/// Patience counts only after a save: a walk that has saved nothing yet goes on past P unsaved
+/// Ks (here 2) and saves at K = 6, then ends 2 trained Ks later.
+#[test]
+fn patience_waits_for_a_first_save() {
+    let mut b = Scripted {
+        tests: HashMap::from([
+            (9, vec![0.5]),
+            (8, vec![0.5]),
+            (7, vec![0.5]),
+            (6, vec![0.5, 1.0]),
+            (5, vec![0.5]),
+            (4, vec![0.5]),
+        ]),
+        train: vec![0.5; 20],
+        ..Default::default()
+    };
+    let patient = Walk {
+        patience: Some(2),
+        ..walk(1, 1, false)
+    };
+    assert_eq!(backplay_candidates(&mut b, 10, &patient), [(6, 8)]);
+    assert_eq!(b.calls.last().unwrap(), "test 4 = 0.5");
+}

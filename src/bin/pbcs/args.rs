@@ -344,16 +344,18 @@ pub enum ExpCommand {
         /// refused (`make results`).
         #[arg(long)]
         skip_unavailable: bool,
-        /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins after it, and a vanilla
-        /// run in progress stops at its first evaluation after it, saved to its checkpoint
-        /// (a PBCS run in progress runs to its row). With runs unfinished the exit status is
-        /// 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same bytes. For
-        /// a cluster's time limit: leave an evaluation's time (and a PBCS run's) to spare.
+        /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins at or past it, and a
+        /// vanilla run in progress stops at its first evaluation at or past it, saved to its
+        /// checkpoint (a PBCS run in progress runs to its row). With runs unfinished the exit
+        /// status is 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same
+        /// bytes. Under a cluster's time limit, leave the time of an evaluation interval's
+        /// training, the evaluation and the save (and a PBCS run's) to spare.
         #[arg(long, value_parser = humantime::parse_duration)]
         stop_after: Option<std::time::Duration>,
     },
     /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
-    /// `# done` after finished ones.
+    /// `# done` after finished ones, `# saved at N env steps` after vanilla runs in progress
+    /// with a checkpoint (`# its checkpoint would be refused` where it is another job's).
     List {
         #[command(flatten)]
         exp: ExpArgs,

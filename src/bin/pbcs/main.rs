@@ -60,9 +60,12 @@ impl std::fmt::Display for Unfinished {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "stopped at the deadline (--stop-after) with {} runs unfinished, the vanilla runs in \
+            "stopped at the deadline (--stop-after) with {} unfinished, the vanilla runs in \
              progress saved; run the same command again to go on (exit status {})",
-            self.0,
+            match self.0 {
+                1 => "1 run".to_string(),
+                n => format!("{n} runs"),
+            },
             Self::EXIT
         )
     }
@@ -138,7 +141,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 stop_after,
             } => {
                 // The deadline counts from the start of the command.
-                let stop_at = stop_after.map(|d| std::time::Instant::now() + d);
+                let stop_at = match stop_after {
+                    Some(d) => Some(std::time::Instant::now().checked_add(d).ok_or_else(|| {
+                        anyhow::anyhow!(
+                            "--stop-after {}: too far ahead",
+                            humantime::format_duration(d)
+                        )
+                    })?),
+                    None => None,
+                };
                 exp_run(&args, (cell, seed), jobs, skip_unavailable, stop_at, kernel)
             }
             ExpCommand::List {
