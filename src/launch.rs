@@ -73,7 +73,7 @@ impl<'a> Launch<'a> {
     }
 
     /// One `pbcs exp run` command per (cell, seed), with `  # done` after those whose raw row
-    /// is in `results`, and `  # saved at N env steps` after vanilla runs in progress whose
+    /// is in `results`, and `  # saved at N env steps` after runs in progress whose
     /// checkpoint is there (`# its checkpoint would be refused` where it is another job's or
     /// format's) (`pbcs exp list`).
     pub fn commands(&self, results: &Path) -> crate::Result<String> {

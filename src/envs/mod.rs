@@ -170,12 +170,12 @@ macro_rules! with_env {
             $crate::envs::Built::ThreeRooms($env) => $body,
             // Without MuJoCo this arm has no values (and its body is unreachable code).
             $crate::envs::Built::PointMaze($env) => {
-                #[allow(unreachable_code)]
+                #[allow(unreachable_code, unused_variables)]
                 let out = $body;
                 out
             }
             $crate::envs::Built::AntMaze($env) => {
-                #[allow(unreachable_code)]
+                #[allow(unreachable_code, unused_variables)]
                 let out = $body;
                 out
             }

@@ -4,7 +4,7 @@
 use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
-use crate::runs::run_outcome;
+use crate::runs::run_outcome_resumable;
 use crate::validate::Check;
 use crate::vanilla::resume::Checkpoint;
 use std::path::Path;
@@ -15,15 +15,17 @@ use std::time::Instant;
 /// the raw files the tables and figures need are written: `s<seed>.timing.toml`,
 /// `s<seed>.evals.csv` (vanilla), `s<seed>.evaluation.csv` (PBCS, and vanilla runs judged by
 /// PBCS's protocol), `s<seed>.picture.csv` (picture seeds), `s<seed>.toml` (the
-/// job) and `s<seed>.csv` (the row). The learners run on `kernel`. A vanilla run saves itself
-/// to `s<seed>.resume` every ten minutes and goes on from there when run again after a cut
-/// ([`crate::vanilla::resume`]: the same bytes as an uncut run); the file goes once the row is
-/// written (a failure to delete it is only reported: the row stands). A vanilla run calls
-/// `progress(steps, success)` after each of its evaluations.
+/// job) and `s<seed>.csv` (the row). The learners run on `kernel`. A run saves itself to
+/// `s<seed>.resume` every ten minutes (a vanilla run at an evaluation, a PBCS run between two
+/// of phase 2's learning problems) and goes on from there when run again after a cut
+/// ([`crate::vanilla::resume`], [`crate::runs::pbcs_resume`]: the same bytes as an uncut
+/// run); the file goes once the row is written (a failure to delete it is only reported: the
+/// row stands). A vanilla run calls `progress(steps, success)` after each of its evaluations.
 ///
-/// With a deadline `stop_at`, a vanilla run stops at its first evaluation at or past it,
-/// saved to its checkpoint, and `None` is returned (nothing else is written: run it again to
-/// go on). A PBCS run has no checkpoint: it runs to its row whatever the deadline.
+/// With a deadline `stop_at`, a vanilla run stops at its first evaluation at or past it, a
+/// PBCS run at the end of its first learning problem at or past it (phase 2's verification
+/// and repairs and the chain's evaluation run to the row), saved to its checkpoint, and
+/// `None` is returned (nothing else is written: run it again to go on).
 pub fn run_cell_seed(
     exp: &Experiment,
     cell: &Cell,
@@ -55,7 +57,10 @@ pub fn run_cell_seed(
             (row, run.seconds, run.picture)
         }
         Job::Pbcs(j) => {
-            let run = run_outcome(&j.clone().valid()?, kernel, |_, _| {})?;
+            let valid = j.clone().valid()?;
+            let Some(run) = run_outcome_resumable(&valid, kernel, &checkpoint, |_, _| {})? else {
+                return Ok(None);
+            };
             crate::record::write_records(&run_file(dir, seed, ".evaluation.csv"), &run.evaluation)?;
             let row = RawRow::pbcs(exp, cell, j, run.record);
             (row, run.seconds, run.picture)
@@ -168,8 +173,9 @@ pub fn sweep(
 }
 
 /// [`sweep`] with a deadline `stop_at` (a cluster job's time limit): no run begins at or past
-/// it, and a vanilla run in progress stops at its first evaluation past it, saved to its
-/// checkpoint ([`run_cell_seed`], [`Event::Saved`]); a PBCS run in progress runs to its row.
+/// it, and a run in progress stops at its first evaluation (vanilla) or the end of its first
+/// learning problem (PBCS) at or past it, saved to its checkpoint ([`run_cell_seed`],
+/// [`Event::Saved`]).
 /// Running the sweep again goes on where it stopped, to the same bytes as a sweep never
 /// stopped.
 pub fn sweep_until(
@@ -235,7 +241,12 @@ pub fn sweep_until(
             })?;
         match &row {
             Some(row) => on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64())),
-            None => on_event(p, &Event::Saved { steps: last_steps }),
+            None => {
+                // A PBCS run reports no evaluations: its checkpoint's head says how far it got.
+                let saved = checkpoint(p.cell, p.seed, &dir).peek().ok().flatten();
+                let steps = saved.map_or(last_steps, |s| s.steps);
+                on_event(p, &Event::Saved { steps })
+            }
         }
         Ok(row)
     })?;

@@ -208,3 +208,66 @@ pub fn backplay_candidates<B: Backplayer>(
         k = k.saturating_sub(step);
     }
 }
+
+/// Most balls a moved hand-over tries ([`handover`]).
+pub const MAX_HANDOVER_TRIES: usize = 4;
+
+/// A new start for the skill found last, whose start is τ_t and whose goal is `b`'s (τ_{t_last}):
+/// the indices t + 1 … t + `span` before t_last, those whose ball is clear of obstacles first,
+/// nearest first; at most [`MAX_HANDOVER_TRIES`] of them are tried, the first from which
+/// `policy` reaches its goal in every one of `episodes` greedy episodes is returned.
+pub fn handover<B: Backplayer>(
+    b: &mut B,
+    t: usize,
+    t_last: usize,
+    policy: &B::Policy,
+    episodes: usize,
+    span: usize,
+) -> Option<usize> {
+    let mut ks: Vec<usize> = (t + 1..t_last.min(t + span + 1)).collect();
+    // Clear balls first (a stable sort keeps them nearest first).
+    ks.sort_by_key(|&k| !b.ball_is_clear(k));
+    for k in ks.into_iter().take(MAX_HANDOVER_TRIES) {
+        if b.verify_handover(k, policy, episodes) >= 1.0 {
+            return Some(k);
+        }
+        if b.exhausted() {
+            break;
+        }
+    }
+    None
+}
+
+/// Most saved (K, π) of one Backplay that a failed verification falls back through.
+pub const MAX_VERIFIED_CANDIDATES: usize = 4;
+
+/// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
+/// Without verification (`episodes` = `None`) the last one, as in the paper. With it, the last
+/// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
+/// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
+/// verified success (the farthest-reaching among ties).
+pub fn verified<B: Backplayer>(
+    b: &mut B,
+    mut candidates: Vec<(usize, B::Policy)>,
+    episodes: Option<usize>,
+) -> Option<(usize, B::Policy)> {
+    let Some(episodes) = episodes else {
+        return candidates.pop();
+    };
+    let mut best: Option<(f32, usize)> = None;
+    let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
+    for i in (first..candidates.len()).rev() {
+        let (k, policy) = &candidates[i];
+        let p = b.verify(*k, policy, episodes);
+        if p >= 1.0 {
+            return Some(candidates.swap_remove(i));
+        }
+        if best.is_none_or(|(bp, _)| p > bp) {
+            best = Some((p, i));
+        }
+        if b.exhausted() {
+            break;
+        }
+    }
+    best.map(|(_, i)| candidates.swap_remove(i))
+}

@@ -9,7 +9,8 @@
 //! starts at τ_{K_i} now being the states where the chain really entered its ball, and the
 //! result (one skill, or several when Backplay cannot cover the section at once) replaces it.
 
-use super::backplay;
+use super::backplay::{self, handover, verified};
+use super::resume::{Between, Chained};
 use super::task::{SkillTask, StepCounts};
 use super::{
     Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Ready, Skill, SkillChain,
@@ -19,6 +20,7 @@ use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
+use crate::policy::Policy;
 use crate::rng::{Rng, Seeds, Stream};
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
@@ -64,9 +66,7 @@ pub fn chain_skills_with_starts<E: Env>(
     kernel: Kernel,
     mut progress: impl FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
-    let config = ready.settings();
-    let starts = super::starts::archive_starts(config, starts)?;
-    let chainer = Chainer::new(
+    let outcome = super::resume::chain_skills_resumable(
         env,
         tau,
         starts,
@@ -76,50 +76,44 @@ pub fn chain_skills_with_starts<E: Env>(
         spent,
         kernel,
         &mut progress,
-    );
-    let (skills, mut failure) = chainer.section(0, tau.len() - 1, &[])?;
-    let mut chain = SkillChain { skills, kernel };
-    if let (None, Some(check)) = (failure, config.ideas.chain_check) {
-        failure = repair_chain(&chainer, &mut chain, check)?;
-    }
-    Ok(Phase2Outcome {
-        chain,
-        failure,
-        steps: chainer.steps.get(),
-        trace: chainer.trace.into_inner(),
-    })
+        None,
+        |_| Ok(false),
+    )?;
+    Ok(outcome.expect("a pause that never asks to stop"))
 }
 
 /// The state of one phase 2: τ, the settings, the step count and the trace, shared by the
 /// learning problems it makes.
 pub(crate) struct Chainer<'a, E: Env, P: FnMut(usize, Progress)> {
-    env: &'a E,
-    tau: &'a [E::State],
+    pub(super) env: &'a E,
+    pub(super) tau: &'a [E::State],
     /// Backplay's starts where they are not the environment's ball ([`super::StartMode::Archive`]).
-    starts: Option<&'a dyn SampleBall<E::State>>,
-    obs: Vec<Vec<f32>>,
-    learner: &'a LearnerConfig,
-    config: &'a Phase2Config,
+    pub(super) starts: Option<&'a dyn SampleBall<E::State>>,
+    pub(super) obs: Vec<Vec<f32>>,
+    pub(super) learner: &'a LearnerConfig,
+    pub(super) config: &'a Phase2Config,
     /// `config`, checked against `env`, for each learning problem ([`SkillTask::new`]).
-    ready: Ready<'a, E>,
-    seeds: &'a Seeds,
+    pub(super) ready: Ready<'a, E>,
+    pub(super) seeds: &'a Seeds,
     /// The layer kernel of every learner and of the chain.
-    kernel: Kernel,
+    pub(super) kernel: Kernel,
     /// Environment steps of the whole run so far (phase 1 included).
-    spent: Cell<u64>,
+    pub(super) spent: Cell<u64>,
     /// Learning problems made so far (skills, restarts, repairs).
-    made: Cell<usize>,
+    pub(super) made: Cell<usize>,
     /// The last learning problem's learner and its target's index on τ (warm start).
-    last: RefCell<Option<(usize, Box<dyn Learner>)>>,
-    steps: Cell<StepCounts>,
-    trace: RefCell<Vec<TraceRow>>,
-    clock: Instant,
-    progress: RefCell<&'a mut P>,
+    pub(super) last: RefCell<Option<(usize, Box<dyn Learner>)>>,
+    pub(super) steps: Cell<StepCounts>,
+    pub(super) trace: RefCell<Vec<TraceRow>>,
+    pub(super) clock: Instant,
+    /// Wall-clock seconds of the run before this process resumed it (trace rows count on).
+    pub(super) earlier_seconds: Cell<f64>,
+    pub(super) progress: RefCell<&'a mut P>,
 }
 
 impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
     #[allow(clippy::too_many_arguments)]
-    fn new(
+    pub(super) fn new(
         env: &'a E,
         tau: &'a [E::State],
         starts: Option<&'a dyn SampleBall<E::State>>,
@@ -153,6 +147,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
             steps: Cell::new(StepCounts::default()),
             trace: RefCell::new(Vec::new()),
             clock: Instant::now(),
+            earlier_seconds: Cell::new(0.0),
             progress: RefCell::new(progress),
         }
     }
@@ -166,9 +161,25 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         hi: usize,
         entries: &[E::State],
     ) -> Result<(Vec<Skill>, Option<Failure>)> {
+        match self.section_from(lo, hi, entries, Between::start(hi - lo), |_| Ok(false))? {
+            Chained::Done(found, failure) => Ok((self.skills(lo, found), failure)),
+            Chained::Paused(_) => unreachable!("a pause that never asks to stop"),
+        }
+    }
+
+    /// [`Chainer::section`] from `from`, asking `pause` after each learning problem
+    /// ([`skill_chaining_from`]); the skills found, with indices on the section.
+    pub(super) fn section_from(
+        &self,
+        lo: usize,
+        hi: usize,
+        entries: &[E::State],
+        from: Between<Box<dyn Policy>>,
+        pause: impl FnMut(&Between<Box<dyn Policy>>) -> Result<bool>,
+    ) -> Result<Chained<Box<dyn Policy>>> {
         let states = &self.tau[lo..=hi];
-        let (found, failure) = skill_chaining(
-            hi - lo,
+        skill_chaining_from(
+            from,
             self.config,
             |_, t| self.task(states, lo, t, entries),
             |task| {
@@ -182,8 +193,17 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                     *self.last.borrow_mut() = Some((lo + task.target(), task.learner));
                 }
             },
-        )?;
-        let skills = found
+            pause,
+        )
+    }
+
+    /// The skills of `found` (execution order, indices on the section from τ_lo).
+    pub(super) fn skills(
+        &self,
+        lo: usize,
+        found: Vec<(usize, usize, Box<dyn Policy>)>,
+    ) -> Vec<Skill> {
+        found
             .into_iter()
             .map(|(k, t, policy)| {
                 let goal = self.config.goal(self.env, &self.obs, lo + t);
@@ -200,8 +220,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                     inputs: self.config.inputs(self.env, &goal),
                 }
             })
-            .collect();
-        Ok((skills, failure))
+            .collect()
     }
 
     /// The next fresh learning problem: reach the goal of τ_{lo+t} along `states` = τ_lo ….
@@ -259,7 +278,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
     }
 
     fn record(&self, mut row: TraceRow) {
-        row.seconds = self.clock.elapsed().as_secs_f64();
+        row.seconds = self.earlier_seconds.get() + self.clock.elapsed().as_secs_f64();
         self.trace.borrow_mut().push(row);
     }
 
@@ -415,7 +434,22 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
 }
 
 /// Algorithm 1 on any [`backplay::Backplayer`]: skills are found backwards from T = N and
-/// returned in execution order as `(K_i, T_i, π_i)`.
+/// returned in execution order as `(K_i, T_i, π_i)` ([`skill_chaining_from`] from the start,
+/// never paused).
+#[allow(clippy::type_complexity)]
+pub fn skill_chaining<B: backplay::Backplayer>(
+    n: usize,
+    config: &Phase2Config,
+    next: impl FnMut(usize, usize) -> Result<B>,
+    finished: impl FnMut(B),
+) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
+    match skill_chaining_from(Between::start(n), config, next, finished, |_| Ok(false))? {
+        Chained::Done(skills, failure) => Ok((skills, failure)),
+        Chained::Paused(_) => unreachable!("a pause that never asks to stop"),
+    }
+}
+
+/// Algorithm 1 from `from` (the start, [`Between::start`], or where a cut run stood):
 ///
 /// ```text
 /// T = N
@@ -431,30 +465,29 @@ pub(crate) fn repair_chain<E: Env, P: FnMut(usize, Progress)>(
 /// `finished(b)` receives it back after its Backplay (to collect step counts). A problem whose
 /// [`backplay::Backplayer::exhausted`] is true after Backplay ends the run with
 /// [`Failure::Budget`]. Without chaining, a first skill that does not start at τ_0 ends the run
-/// with [`Failure::NoChaining`].
+/// with [`Failure::NoChaining`]. After each learning problem that leaves work to do,
+/// `pause(&between)` is asked whether to stop there: `true` returns [`Chained::Paused`] with
+/// it, from which the same calls go on to the same result.
 #[allow(clippy::type_complexity)]
-pub fn skill_chaining<B: backplay::Backplayer>(
-    n: usize,
+pub fn skill_chaining_from<B: backplay::Backplayer>(
+    from: Between<B::Policy>,
     config: &Phase2Config,
     mut next: impl FnMut(usize, usize) -> Result<B>,
     mut finished: impl FnMut(B),
-) -> Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
-    let mut skills: Vec<(usize, usize, B::Policy)> = Vec::new();
-    let mut t = n;
+    mut pause: impl FnMut(&Between<B::Policy>) -> Result<bool>,
+) -> Result<Chained<B::Policy>> {
+    let mut at = from;
     let mut failure = None;
-    // Learning problems made so far (skills, restarts, hand-over tries), restarts of the
-    // current skill and moves of its hand-over.
-    let (mut made, mut restarts, mut moves) = (0, 0, 0);
     // Hand-over moves follow a dead walk (`phase2.dead_walk`, `phase2.retargets`).
     let (dead_walk, retargets) = config
         .ideas
         .dead_walk
         .map_or((0, 0), |d| (d.after, d.retargets));
-    while t > 0 {
-        let mut b = next(made, t)?;
-        made += 1;
-        let walk = config.walk(restarts < config.ideas.restarts);
-        let candidates = backplay::backplay_candidates(&mut b, t, &walk);
+    while at.t > 0 {
+        let mut b = next(at.made, at.t)?;
+        at.made += 1;
+        let walk = config.walk(at.restarts < config.ideas.restarts);
+        let candidates = backplay::backplay_candidates(&mut b, at.t, &walk);
         let found = verified(&mut b, candidates, config.ideas.verify_skills);
         let exhausted = b.exhausted();
         finished(b);
@@ -463,15 +496,15 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                 failure = Some(Failure::Budget);
                 break;
             }
-            None if restarts < config.ideas.restarts => restarts += 1,
-            None if moves < retargets && !skills.is_empty() => {
+            None if at.restarts < config.ideas.restarts => at.restarts += 1,
+            None if at.moves < retargets && !at.found.is_empty() => {
                 // No attempt found any K towards τ_T: move the hand-over of the skill found
                 // last (start T, target T′) to a later index of τ, if it passes from there.
-                let (_, t_last, policy) = skills.last().expect("not empty");
-                let mut b = next(made, *t_last)?;
-                made += 1;
+                let (_, t_last, policy) = at.found.last().expect("not empty");
+                let mut b = next(at.made, *t_last)?;
+                at.made += 1;
                 let episodes = config.handover_episodes();
-                let moved = handover(&mut b, t, *t_last, policy, episodes, dead_walk);
+                let moved = handover(&mut b, at.t, *t_last, policy, episodes, dead_walk);
                 let exhausted = b.exhausted();
                 finished(b);
                 match moved {
@@ -480,9 +513,9 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                         break;
                     }
                     Some(k) => {
-                        skills.last_mut().expect("not empty").0 = k;
-                        t = k;
-                        (restarts, moves) = (0, moves + 1);
+                        at.found.last_mut().expect("not empty").0 = k;
+                        at.t = k;
+                        (at.restarts, at.moves) = (0, at.moves + 1);
                     }
                     None => {
                         failure = Some(Failure::BackplayFailed);
@@ -495,22 +528,23 @@ pub fn skill_chaining<B: backplay::Backplayer>(
                 break;
             }
             Some((k, policy)) => {
-                (restarts, moves) = (0, 0);
-                skills.push((k, t, policy));
+                (at.restarts, at.moves) = (0, 0);
+                at.found.push((k, at.t, policy));
                 if k > 0 && !config.chaining {
                     failure = Some(Failure::NoChaining);
                     break;
                 }
-                t = k;
+                at.t = k;
             }
         }
+        if at.t > 0 && pause(&at)? {
+            return Ok(Chained::Paused(at));
+        }
     }
+    let mut skills = at.found;
     skills.reverse();
-    Ok((skills, failure))
+    Ok(Chained::Done(skills, failure))
 }
-
-/// Most balls a moved hand-over tries ([`handover`]).
-pub const MAX_HANDOVER_TRIES: usize = 4;
 
 /// The learner of a new problem whose target is τ_`target`: with `warm_start`, a problem whose
 /// target lies before the `last` one's (the next skill of the chain) takes over the last
@@ -526,66 +560,6 @@ fn warm_or_fresh(
         Some((last_t, learner)) if warm_start && last_t > target => Ok(learner),
         _ => fresh(),
     }
-}
-
-/// A new start for the skill found last, whose start is τ_t and whose goal is `b`'s (τ_{t_last}):
-/// the indices t + 1 … t + `span` before t_last, those whose ball is clear of obstacles first,
-/// nearest first; at most [`MAX_HANDOVER_TRIES`] of them are tried, the first from which
-/// `policy` reaches its goal in every one of `episodes` greedy episodes is returned.
-pub fn handover<B: backplay::Backplayer>(
-    b: &mut B,
-    t: usize,
-    t_last: usize,
-    policy: &B::Policy,
-    episodes: usize,
-    span: usize,
-) -> Option<usize> {
-    let mut ks: Vec<usize> = (t + 1..t_last.min(t + span + 1)).collect();
-    // Clear balls first (a stable sort keeps them nearest first).
-    ks.sort_by_key(|&k| !b.ball_is_clear(k));
-    for k in ks.into_iter().take(MAX_HANDOVER_TRIES) {
-        if b.verify_handover(k, policy, episodes) >= 1.0 {
-            return Some(k);
-        }
-        if b.exhausted() {
-            break;
-        }
-    }
-    None
-}
-
-/// Most saved (K, π) of one Backplay that a failed verification falls back through.
-pub const MAX_VERIFIED_CANDIDATES: usize = 4;
-
-/// The skill kept from Backplay's saved `candidates` (in the order saved, decreasing K).
-/// Without verification (`episodes` = `None`) the last one, as in the paper. With it, the last
-/// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
-/// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
-/// verified success (the farthest-reaching among ties).
-pub fn verified<B: backplay::Backplayer>(
-    b: &mut B,
-    mut candidates: Vec<(usize, B::Policy)>,
-    episodes: Option<usize>,
-) -> Option<(usize, B::Policy)> {
-    let Some(episodes) = episodes else {
-        return candidates.pop();
-    };
-    let mut best: Option<(f32, usize)> = None;
-    let first = candidates.len().saturating_sub(MAX_VERIFIED_CANDIDATES);
-    for i in (first..candidates.len()).rev() {
-        let (k, policy) = &candidates[i];
-        let p = b.verify(*k, policy, episodes);
-        if p >= 1.0 {
-            return Some(candidates.swap_remove(i));
-        }
-        if best.is_none_or(|(bp, _)| p > bp) {
-            best = Some((p, i));
-        }
-        if b.exhausted() {
-            break;
-        }
-    }
-    best.map(|(_, i)| candidates.swap_remove(i))
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@ pub mod flat;
 pub mod goal;
 mod manifest;
 pub mod procedure;
+pub mod resume;
 pub mod skill_chain;
 pub mod starts;
 pub mod task;
@@ -36,9 +37,9 @@ pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;
 use crate::error::Result;
-pub use chaining::{
-    chain_skills, chain_skills_with_starts, skill_chaining, verified, MAX_VERIFIED_CANDIDATES,
-};
+pub use backplay::{handover, verified, MAX_HANDOVER_TRIES, MAX_VERIFIED_CANDIDATES};
+pub use chaining::{chain_skills, chain_skills_with_starts, skill_chaining, skill_chaining_from};
+pub use resume::{chain_skills_resumable, Between, Chained, Pause, Phase2State};
 use serde::{Deserialize, Serialize};
 pub use starts::ArchiveStarts;
 use task::StepCounts;

@@ -228,7 +228,7 @@ pub struct DeadWalk {
     /// Moves of a hand-over (0: none): when no attempt at a skill finds any K, the skill found
     /// before it (target T′, start K = T) is verified greedily from the balls of the indices
     /// after T (clear ones first, nearest first, at most
-    /// [`super::chaining::MAX_HANDOVER_TRIES`] of the next `after`), and the first from which
+    /// [`super::MAX_HANDOVER_TRIES`] of the next `after`), and the first from which
     /// it passes every episode (`verify_skills`, or β) becomes its start and the new skill's
     /// target, with fresh learners. At most `retargets` moves between two skills found; a
     /// `retarget` trace row records each try. Needs [`crate::env::Env::clear_balls`] and

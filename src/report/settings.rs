@@ -87,7 +87,7 @@ pub fn toml_values(text: &str) -> std::result::Result<Vec<(String, String)>, tom
 /// ([`crate::claims::EXACT_TEST_LEVEL`]), `thresholds:<i>_percent` (the i-th of
 /// [`crate::criteria::THRESHOLDS`], from 1), `max_adaptive_step`
 /// ([`crate::phase2::backplay::MAX_ADAPTIVE_STEP`]), `max_handover_tries`
-/// ([`crate::phase2::chaining::MAX_HANDOVER_TRIES`]) and `max_verified_candidates`
+/// ([`crate::phase2::MAX_HANDOVER_TRIES`]) and `max_verified_candidates`
 /// ([`crate::phase2::MAX_VERIFIED_CANDIDATES`]).
 pub fn code_tex() -> String {
     use statrs::distribution::{ContinuousCDF, Normal};
@@ -115,10 +115,7 @@ pub fn code_tex() -> String {
             "max_adaptive_step",
             crate::phase2::backplay::MAX_ADAPTIVE_STEP,
         ),
-        (
-            "max_handover_tries",
-            crate::phase2::chaining::MAX_HANDOVER_TRIES,
-        ),
+        ("max_handover_tries", crate::phase2::MAX_HANDOVER_TRIES),
         (
             "max_verified_candidates",
             crate::phase2::MAX_VERIFIED_CANDIDATES,

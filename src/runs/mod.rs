@@ -13,6 +13,7 @@
 mod eval;
 mod explore;
 mod pbcs;
+pub mod pbcs_resume;
 mod train;
 
 pub use eval::{
@@ -22,7 +23,10 @@ use explore::write_trajectory_csv;
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
 use pbcs::ball_circles;
 pub use pbcs::DRAWN_ROLLOUTS;
-pub use pbcs::{run_outcome, run_pbcs, PbcsRun, RunOutcome, RunRecord};
+pub use pbcs::{
+    run_outcome, run_outcome_resumable, run_pbcs, run_pbcs_until, PbcsRun, RunOutcome, RunRecord,
+    RUN_CHECKPOINT,
+};
 pub use train::{run_train, train_outcome, TrainRun, TrainSummary};
 
 use crate::config::{PbcsJob, Preset, TrainJob};

@@ -1,5 +1,6 @@
 //! `pbcs run`: PBCS — phase 1, phase 2, the chain's evaluation — and its record.
 
+use super::pbcs_resume;
 use super::{claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB};
 use crate::config::{Located, PbcsJob};
 use crate::env::{Planar, SampleBall};
@@ -8,13 +9,14 @@ use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase1::{explore, Exploration};
 use crate::phase2::{
-    chain_skills_with_starts, ArchiveStarts, Failure, Phase2Outcome, Progress, Ready, SkillChain,
+    chain_skills_resumable, ArchiveStarts, Failure, Phase2Outcome, Progress, Ready, SkillChain,
     StartMode, Variant,
 };
 use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::{Seeds, Stream};
 use crate::validate::Valid;
+use crate::vanilla::resume::Checkpoint;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -117,17 +119,37 @@ impl<E: Planar> PbcsRun<E> {
         progress: impl FnMut(usize, Progress),
     ) -> Result<PbcsRun<E>> {
         let ready = Self::require_hooks(&env, job)?;
-        Self::compute_ready(env, job, ready, kernel, progress)
+        let run = Self::compute_ready(env, job, ready, kernel, None, progress)?;
+        Ok(run.expect("a run without a checkpoint does not stop"))
     }
 
-    /// [`PbcsRun::compute`] with the hooks checked ([`PbcsRun::require_hooks`]).
+    /// [`PbcsRun::compute`], saved to `checkpoint` between phase 2's learning problems and
+    /// resumed from it where it holds a run of this job ([`super::pbcs_resume`]): the same
+    /// bytes as an uncut run, the wall clock counting the earlier processes' too. `None`
+    /// when the run stopped at the checkpoint's deadline ([`Checkpoint::stop_at`]), saved: run
+    /// it again to go on. The checkpoint is left in place (delete it,
+    /// [`Checkpoint::remove`], once the results are written).
+    pub fn compute_resumable(
+        env: E,
+        job: &Valid<PbcsJob>,
+        kernel: Kernel,
+        checkpoint: &Checkpoint,
+        progress: impl FnMut(usize, Progress),
+    ) -> Result<Option<PbcsRun<E>>> {
+        let ready = Self::require_hooks(&env, job)?;
+        Self::compute_ready(env, job, ready, kernel, Some(checkpoint), progress)
+    }
+
+    /// [`PbcsRun::compute_resumable`] with the hooks checked ([`PbcsRun::require_hooks`]),
+    /// and without a checkpoint where `checkpoint` is `None`.
     fn compute_ready(
         env: E,
         job: &Valid<PbcsJob>,
         ready: Ready<'_, E>,
         kernel: Kernel,
+        checkpoint: Option<&Checkpoint>,
         progress: impl FnMut(usize, Progress),
-    ) -> Result<PbcsRun<E>> {
+    ) -> Result<Option<PbcsRun<E>>> {
         let seeds = Seeds::new(job.seed);
         let clock = Instant::now();
         let mut rng = seeds.stream(Stream::Explore);
@@ -136,7 +158,21 @@ impl<E: Planar> PbcsRun<E> {
         // Backplay's starts from the archive, where `phase2.start = "archive"` asks.
         let archived = (job.phase2.start == StartMode::Archive)
             .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
-        let phase2 = chain_skills_with_starts(
+        let (from, mut saver) = match checkpoint {
+            None => (None, None),
+            Some(c) => {
+                let hash = pbcs_resume::tau_sha256(&observations(&env, &tau));
+                let (from, earlier) = match pbcs_resume::load(c, &hash, kernel)? {
+                    Some((state, seconds)) => (Some(state), seconds),
+                    None => (None, 0.0),
+                };
+                (
+                    from,
+                    Some(pbcs_resume::Saver::new(c, hash, kernel, earlier)),
+                )
+            }
+        };
+        let phase2 = chain_skills_resumable(
             &env,
             &tau,
             archived.as_ref().map(|a| a as &dyn SampleBall<E::State>),
@@ -146,7 +182,12 @@ impl<E: Planar> PbcsRun<E> {
             found.env_steps,
             kernel,
             progress,
+            from,
+            |p| saver.as_mut().map_or(Ok(false), |s| s.pause(p)),
         )?;
+        let Some(phase2) = phase2 else {
+            return Ok(None);
+        };
         // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
         let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
         {
@@ -154,7 +195,7 @@ impl<E: Planar> PbcsRun<E> {
         } else {
             (Vec::new(), Vec::new())
         };
-        let seconds = clock.elapsed().as_secs_f64();
+        let seconds = saver.map_or(clock.elapsed().as_secs_f64(), |s| s.seconds());
         let wins = evaluation.iter().filter(|e| e.success).count();
         let success_rate = wins as f32 / job.phase2.eval_episodes as f32;
         let record = RunRecord::new(job, &found, &phase2, tau.len(), success_rate);
@@ -165,7 +206,7 @@ impl<E: Planar> PbcsRun<E> {
             circles: ball_circles(&env, &phase2.chain),
             ..PictureData::default()
         };
-        Ok(PbcsRun {
+        Ok(Some(PbcsRun {
             env,
             record,
             found,
@@ -175,7 +216,7 @@ impl<E: Planar> PbcsRun<E> {
             picture,
             kernel,
             seconds,
-        })
+        }))
     }
 
     /// Writes into `out`: `record.csv`, `skills.csv` (one row per skill: K, T, ball),
@@ -284,9 +325,51 @@ pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32,
 
 /// Runs PBCS for `job` into `out` on the environment it names ([`crate::envs`]): refuses a
 /// setting the environment lacks a hook for ([`PbcsRun::require_hooks`]), claims the folder
-/// (writing `config.toml`) before any work, then [`PbcsRun::compute`] and
+/// (writing `config.toml`) before any work, then [`PbcsRun::compute_resumable`] and
 /// [`PbcsRun::write`] with the drawing step `draw` ([`crate::plot::draw_run`], or
 /// [`crate::picture::no_pictures`]). `progress(skill, report)` is called during phase 2.
+///
+/// The run saves itself to `out/run.resume` ([`RUN_CHECKPOINT`], [`super::pbcs_resume`])
+/// every ten minutes, between two of phase 2's learning problems, and the same call into the
+/// same folder goes on from there (the bytes of a run never cut); the file goes once the run's
+/// files are written. With a deadline `stop_at` it stops, saved, at the end of its first
+/// learning problem at or past it and returns `None`.
+pub fn run_pbcs_until(
+    job: &Valid<PbcsJob>,
+    kernel: Kernel,
+    out: &Path,
+    draw: Draw,
+    stop_at: Option<Instant>,
+    progress: impl FnMut(usize, Progress),
+) -> Result<Option<(RunRecord, f64)>> {
+    crate::with_env!(job.env_spec().build()?, |env| {
+        let ready = PbcsRun::require_hooks(&env, job)?;
+        claim(job, out)?;
+        let config = crate::validate::to_toml(&**job, &out.join("config.toml"))?;
+        let checkpoint = Checkpoint {
+            stop_at,
+            ..Checkpoint::new(out.join(RUN_CHECKPOINT), config)
+        };
+        let computed =
+            PbcsRun::compute_ready(env, job, ready, kernel, Some(&checkpoint), progress)?;
+        match computed {
+            None => Ok(None),
+            Some(run) => {
+                run.write(job, out, draw)?;
+                if let Err(e) = checkpoint.remove() {
+                    eprintln!("warning: a finished run's checkpoint stays: {e}");
+                }
+                Ok(Some((run.record, run.seconds)))
+            }
+        }
+    })
+}
+
+/// The file of `out` a run of [`run_pbcs_until`] saves itself to.
+pub const RUN_CHECKPOINT: &str = "run.resume";
+
+/// [`run_pbcs_until`] without a deadline: runs PBCS for `job` into `out` (resuming from
+/// `out/run.resume` where an earlier call of the same job was cut).
 pub fn run_pbcs(
     job: &Valid<PbcsJob>,
     kernel: Kernel,
@@ -294,13 +377,8 @@ pub fn run_pbcs(
     draw: Draw,
     progress: impl FnMut(usize, Progress),
 ) -> Result<(RunRecord, f64)> {
-    crate::with_env!(job.env_spec().build()?, |env| {
-        let ready = PbcsRun::require_hooks(&env, job)?;
-        claim(job, out)?;
-        let run = PbcsRun::compute_ready(env, job, ready, kernel, progress)?;
-        run.write(job, out, draw)?;
-        Ok((run.record, run.seconds))
-    })
+    let done = run_pbcs_until(job, kernel, out, draw, None, progress)?;
+    Ok(done.expect("a run without a deadline does not stop"))
 }
 
 /// What a sweep keeps of a run ([`run_outcome`]), whatever its environment.
@@ -337,6 +415,32 @@ pub fn run_outcome(
     crate::with_env!(job.env_spec().build()?, |env| {
         PbcsRun::compute(env, job, kernel, progress).map(RunOutcome::from)
     })
+}
+
+/// [`run_outcome`] saved to and resumed from `checkpoint` ([`PbcsRun::compute_resumable`]):
+/// `None` when it stopped at the checkpoint's deadline, saved.
+pub fn run_outcome_resumable(
+    job: &Valid<PbcsJob>,
+    kernel: Kernel,
+    checkpoint: &Checkpoint,
+    progress: impl FnMut(usize, Progress),
+) -> Result<Option<RunOutcome>> {
+    crate::with_env!(job.env_spec().build()?, |env| {
+        let run = PbcsRun::compute_resumable(env, job, kernel, checkpoint, progress)?;
+        Ok(run.map(RunOutcome::from))
+    })
+}
+
+/// The observations of `states`, as the networks see them.
+fn observations<E: Planar>(env: &E, states: &[E::State]) -> Vec<Vec<f32>> {
+    states
+        .iter()
+        .map(|s| {
+            let mut o = vec![0.0; env.obs_dim()];
+            env.observe(s, &mut o);
+            o
+        })
+        .collect()
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target

@@ -63,6 +63,11 @@ pub const EVERY: Duration = Duration::from_secs(600);
 /// Bump the version with any change to what a vanilla run computes or to its state's layout.
 pub const FORMAT: &str = "pbcs vanilla run checkpoint, version 1";
 
+/// The first field of a PBCS run's checkpoint (`crate::runs::pbcs_resume`, whose files begin
+/// with this file's head: [`Checkpoint::peek`] reads both). Bump the version with any change to
+/// what a PBCS run computes or to its saved state's layout.
+pub const PBCS_FORMAT: &str = "pbcs PBCS run checkpoint, version 1";
+
 /// Where a run saves its state, for which job, and how often.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Checkpoint {
@@ -181,8 +186,9 @@ impl Checkpoint {
         Ok(Some(run))
     }
 
-    /// How far the run saved at [`Checkpoint::path`] got, read from the file's head without
-    /// the states: `None` where there is no file; an error where the head does not decode or
+    /// How far the run saved at [`Checkpoint::path`] got (a vanilla run's or a PBCS run's,
+    /// [`crate::runs::pbcs_resume`]), read from the file's head without the states: `None`
+    /// where there is no file; an error where the head does not decode or
     /// belongs to another format, version or job (the file would be refused,
     /// [`Checkpoint::resume`] says why). Its states are not checked.
     pub fn peek(&self) -> Result<Option<Saved>> {
@@ -205,7 +211,11 @@ impl Checkpoint {
                     (saved, h.format, h.job)
                 });
         match head {
-            Some((saved, format, job)) if format == FORMAT && job == self.job => Ok(Some(saved)),
+            Some((saved, format, job))
+                if (format == FORMAT || format == PBCS_FORMAT) && job == self.job =>
+            {
+                Ok(Some(saved))
+            }
             _ => Err(self.refused("would be refused (run it to see why)")),
         }
     }

@@ -218,3 +218,46 @@ fn a_sweep_past_its_deadline_begins_nothing_and_exits_75() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(cell.join("s0.csv").exists() && !cell.join("s0.resume").exists());
 }
+
+/// `pbcs run --stop-after`: a deadline already past stops the run at the end of its first
+/// learning problem, saved to <OUT>/run.resume, with exit status 75 and no record; the same
+/// command without it goes on and writes the record, trace, skills and chain of a run never
+/// stopped, byte for byte, and the checkpoint goes.
+#[test]
+fn pbcs_run_stopped_at_its_deadline_goes_on_to_the_same_files() {
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let args = |out: &Path| {
+        let out = path(out).to_string();
+        let run = ["run", "--maze", "3", "--seed", "1", "--quiet", "--out"];
+        run.iter()
+            .map(|s| s.to_string())
+            .chain([out])
+            .collect::<Vec<_>>()
+    };
+    let strs = |v: &[String]| v.iter().map(String::as_str).collect::<Vec<_>>().join(" ");
+    let call = |v: Vec<String>| {
+        let v: Vec<&str> = v.iter().map(String::as_str).collect();
+        pbcs(&v)
+    };
+    let o = call(args(a.path()));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut stopped = args(b.path());
+    stopped.extend(["--stop-after".into(), "0s".into()]);
+    let o = call(stopped.clone());
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(75), "{}: {e}", strs(&stopped));
+    assert!(e.contains("run the same command again"), "{e}");
+    assert!(b.path().join("run.resume").exists() && !b.path().join("record.csv").exists());
+    let o = call(args(b.path()));
+    assert!(o.status.success(), "{}", stderr(&o));
+    for file in [
+        "record.csv",
+        "trace.csv",
+        "skills.csv",
+        "chain/manifest.toml",
+    ] {
+        let read = |dir: &Path| std::fs::read(dir.join(file)).unwrap();
+        assert_eq!(read(a.path()), read(b.path()), "{file}");
+    }
+    assert!(!b.path().join("run.resume").exists());
+}

@@ -385,3 +385,40 @@ fn a_vanilla_run_stopped_at_its_deadline_goes_on_to_the_same_row() {
     );
     assert_eq!(events.into_inner().unwrap(), vec![(cell.id, 0, true)]);
 }
+
+/// A deadline stops a PBCS run too, at the end of its first learning problem at or past it,
+/// saved to `s<seed>.resume` with no row; run again (here once per learning problem) it ends
+/// with the row, evaluation and job files of a run never stopped, and its checkpoint goes.
+#[test]
+fn a_pbcs_run_stopped_at_its_deadline_goes_on_to_the_same_row() {
+    use pbcs::experiment::run_cell_seed;
+    use std::time::Instant;
+    let mut job = pbcs::config::Preset::Fast.job().unwrap();
+    job.phase2.eval_episodes = 20;
+    let exp = Experiment::of_job("small", &job, &[3], 1).unwrap();
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let cell = &exp.cells[0];
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (dir_a, dir_b) = (exp.cell_dir(a.path(), cell), exp.cell_dir(b.path(), cell));
+    std::fs::create_dir_all(&dir_b).unwrap();
+    let whole = run_cell_seed(&exp, cell, 0, &dir_a, kernel, None, |_, _| {})
+        .unwrap()
+        .unwrap();
+    let mut stops = 0;
+    let resumed = loop {
+        let now = Some(Instant::now());
+        if let Some(row) = run_cell_seed(&exp, cell, 0, &dir_b, kernel, now, |_, _| {}).unwrap() {
+            break row;
+        }
+        stops += 1;
+        assert!(dir_b.join("s0.resume").exists() && !dir_b.join("s0.csv").exists());
+        assert!(stops < 100, "no end");
+    };
+    assert!(stops >= 2, "{stops} stops");
+    assert_eq!(whole, resumed);
+    for suffix in [".csv", ".evaluation.csv", ".toml"] {
+        let read = |dir: &Path| std::fs::read(dir.join(format!("s0{suffix}"))).unwrap();
+        assert_eq!(read(&dir_a), read(&dir_b), "s0{suffix}");
+    }
+    assert!(!dir_b.join("s0.resume").exists());
+}

@@ -573,8 +573,5 @@ fn a_dead_walk_moves_the_hand_over_to_a_later_clear_ball() {
     )
     .unwrap();
     assert_eq!(failure, Some(Failure::BackplayFailed));
-    assert_eq!(
-        calls.borrow().len(),
-        pbcs::phase2::chaining::MAX_HANDOVER_TRIES
-    );
+    assert_eq!(calls.borrow().len(), pbcs::phase2::MAX_HANDOVER_TRIES);
 }

@@ -277,4 +277,5 @@ mod switches;
 mod manifest;
 
 /// A run folder is written completely or marked incomplete.
+mod resume;
 mod run_folder;

@@ -223,6 +223,13 @@ pub enum Command {
         /// Start Backplay's episodes exactly at τ_K instead of in B_ε(τ_K).
         #[arg(long)]
         exact_starts: bool,
+        /// A deadline from now (`90s`, `45m`, `3h 50m`): the run stops at the end of its first
+        /// learning problem of phase 2 at or past it, saved to <OUT>/run.resume, and exits with
+        /// status 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same
+        /// bytes. Without it the run still saves itself every ten minutes and goes on from
+        /// there when run again after a cut.
+        #[arg(long, value_parser = humantime::parse_duration)]
+        stop_after: Option<std::time::Duration>,
     },
     /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
     /// `pbcs exp run` (resumable: finished runs are read back, not re-run), then solved counts

@@ -60,7 +60,7 @@ impl std::fmt::Display for Unfinished {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "stopped at the deadline (--stop-after) with {} unfinished, the vanilla runs in \
+            "stopped at the deadline (--stop-after) with {} unfinished, the runs in \
              progress saved; run the same command again to go on (exit status {})",
             match self.0 {
                 1 => "1 run".to_string(),
@@ -90,7 +90,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             learner,
             no_chaining,
             exact_starts,
+            stop_after,
         } => {
+            let stop_at = deadline(stop_after)?;
             let preset = preset.unwrap_or(Preset::Fast);
             let mut job = run.load(|| preset.job())?;
             learner.apply(&mut job.learner)?;
@@ -105,7 +107,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             // The default folder names the procedure, so runs of two presets or configs never
             // meet in one folder.
             let label = runs::method_name(run.config.as_deref(), preset);
-            pbcs_run(&run, job.valid()?, &label, kernel)
+            pbcs_run(&run, job.valid()?, &label, stop_at, kernel)
         }
         Command::Eval {
             chain,
@@ -140,16 +142,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 skip_unavailable,
                 stop_after,
             } => {
-                // The deadline counts from the start of the command.
-                let stop_at = match stop_after {
-                    Some(d) => Some(std::time::Instant::now().checked_add(d).ok_or_else(|| {
-                        anyhow::anyhow!(
-                            "--stop-after {}: too far ahead",
-                            humantime::format_duration(d)
-                        )
-                    })?),
-                    None => None,
-                };
+                let stop_at = deadline(stop_after)?;
                 exp_run(&args, (cell, seed), jobs, skip_unavailable, stop_at, kernel)
             }
             ExpCommand::List {
@@ -436,7 +429,27 @@ fn exp_check(
     Ok(())
 }
 
-fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> anyhow::Result<()> {
+/// The instant of `--stop-after` (counted from the start of the command).
+fn deadline(stop_after: Option<std::time::Duration>) -> anyhow::Result<Option<std::time::Instant>> {
+    let Some(d) = stop_after else {
+        return Ok(None);
+    };
+    let at = std::time::Instant::now().checked_add(d).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--stop-after {}: too far ahead",
+            humantime::format_duration(d)
+        )
+    })?;
+    Ok(Some(at))
+}
+
+fn pbcs_run(
+    run: &RunArgs,
+    job: Valid<PbcsJob>,
+    label: &str,
+    stop_at: Option<std::time::Instant>,
+    kernel: Kernel,
+) -> anyhow::Result<()> {
     let out = run.out_dir(&format!("run/{label}"), &*job, &runs::pbcs_suffix(&job));
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
     let clock = std::time::Instant::now();
@@ -447,8 +460,13 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
     const LOG_EVERY: f64 = 30.0;
     let lines = !run.quiet && !std::io::stderr().is_terminal();
     let mut logged = 0.0;
-    let (record, seconds) =
-        runs::run_pbcs(&job, kernel, &out, &pbcs::plot::draw_run, |skill, p| {
+    let done = runs::run_pbcs_until(
+        &job,
+        kernel,
+        &out,
+        &pbcs::plot::draw_run,
+        stop_at,
+        |skill, p| {
             let secs = clock.elapsed().as_secs_f64();
             if skill != current_skill {
                 (finished, current_skill) = (finished + current, skill);
@@ -469,9 +487,13 @@ fn pbcs_run(run: &RunArgs, job: Valid<PbcsJob>, label: &str, kernel: Kernel) -> 
             }
             bar.set_message(status);
             bar.tick();
-        })
-        .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
+        },
+    )
+    .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
     bar.finish_and_clear();
+    let Some((record, seconds)) = done else {
+        return Err(Unfinished(1).into());
+    };
     println!("{}", record.summary(job.phase2.eval_episodes, seconds));
     let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";
     println!("wrote {}/{wrote}", out.display());

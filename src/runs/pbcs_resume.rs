@@ -1,0 +1,315 @@
+//! Checkpoints of a PBCS run: phase 2 saved between two learning problems
+//! ([`crate::phase2::resume`]), so that a run of hours (AntMaze) cut by a session's end or a
+//! cluster job's limit goes on from its last save and ends with the bytes of a run never cut.
+//!
+//! The file is the vanilla run's [`Checkpoint`] (`s<seed>.resume` in an experiment: same
+//! place, same head of format, job, wall clock and env steps, which `pbcs exp list` reads),
+//! with another [`FORMAT`] and body: Algorithm 1's loop, the skills found so far (each its
+//! policy's kind, sizes, bounds and the chain's own safetensors bytes), the step counts, the
+//! trace, the learner the next skill takes over, and the SHA-256 of τ's observations. A
+//! resumed run does phase 1 again (deterministic, and cheap beside phase 2) and refuses a
+//! checkpoint whose τ is not the τ it found. Saved at the end of a learning problem ten
+//! minutes or more after the last save or the (re)start, and at the first one at or past
+//! the deadline ([`Checkpoint::stop_at`]), where the run stops.
+
+use crate::error::{Error, Result};
+use crate::learner::load_policy;
+use crate::nn::kernel::Kernel;
+use crate::phase2::task::StepCounts;
+use crate::phase2::{Between, Pause, Phase2State, TraceRow};
+use crate::policy::Policy;
+use crate::vanilla::resume::Checkpoint;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The first field of a PBCS run's checkpoint: a file of another format or version is refused
+/// by it.
+pub use crate::vanilla::resume::PBCS_FORMAT as FORMAT;
+
+/// What the file holds: [`Checkpoint`]'s head, then the state and its SHA-256.
+#[derive(Serialize, Deserialize)]
+struct Envelope {
+    format: String,
+    job: String,
+    /// Wall-clock seconds of the run so far.
+    seconds: f64,
+    /// Environment steps so far (phase 1 included).
+    steps: u64,
+    /// SHA-256 of `state`.
+    sha256: String,
+    state: Vec<u8>,
+}
+
+/// One skill found so far.
+#[derive(Serialize, Deserialize)]
+struct SavedSkill {
+    k: usize,
+    t: usize,
+    kind: String,
+    sizes: Vec<usize>,
+    bounds: Vec<f32>,
+    /// The policy as a chain saves it (safetensors).
+    weights: Vec<u8>,
+}
+
+/// [`Phase2State`] as saved.
+#[derive(Serialize, Deserialize)]
+struct Saved {
+    /// SHA-256 of τ's observations (f32, little-endian): a resumed run must have found it.
+    tau_sha256: String,
+    /// The layer kernel the run computed on ([`Kernel::name`]): a resumed run must compute the
+    /// same bytes ([`Kernel::same_bytes`]).
+    kernel: String,
+    found: Vec<SavedSkill>,
+    t: usize,
+    made: usize,
+    restarts: usize,
+    moves: usize,
+    spent: u64,
+    train: u64,
+    test: u64,
+    trace: Vec<TraceRow>,
+    /// Each trace row's wall clock (not in `trace`'s encoding).
+    trace_seconds: Vec<f64>,
+    warm: Option<(usize, Vec<u8>)>,
+}
+
+/// The SHA-256 of τ's observations: what a checkpoint is checked against.
+pub fn tau_sha256(observations: &[Vec<f32>]) -> String {
+    let bytes: Vec<u8> = observations
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    crate::record::sha256_hex(&bytes)
+}
+
+/// A policy's safetensors bytes, as [`Policy::save`] writes its file.
+fn policy_bytes(policy: &dyn Policy) -> Result<Vec<u8>> {
+    let dir = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
+    let path = dir.path().join("policy.safetensors");
+    policy.save(&path)?;
+    std::fs::read(&path).map_err(|e| Error::io(&path, e))
+}
+
+/// The policy [`policy_bytes`] gave, read back by its kind.
+fn policy_from(skill: &SavedSkill) -> Result<Box<dyn Policy>> {
+    let dir = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
+    let path = dir.path().join("policy.safetensors");
+    std::fs::write(&path, &skill.weights).map_err(|e| Error::io(&path, e))?;
+    load_policy(&skill.kind, &skill.sizes, &skill.bounds, &path)
+}
+
+/// Saves `state` (τ's hash `tau`, `seconds` of wall clock so far) to `checkpoint`'s file,
+/// replacing it at once and whole.
+pub fn save(
+    checkpoint: &Checkpoint,
+    state: &Phase2State,
+    tau: &str,
+    kernel: Kernel,
+    seconds: f64,
+) -> Result<()> {
+    let b = &state.between;
+    let found = b
+        .found
+        .iter()
+        .map(|(k, t, p)| {
+            Ok(SavedSkill {
+                k: *k,
+                t: *t,
+                kind: p.kind().into(),
+                sizes: p.sizes().to_vec(),
+                bounds: p.action_bounds().to_vec(),
+                weights: policy_bytes(p.as_ref())?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let saved = Saved {
+        tau_sha256: tau.into(),
+        kernel: kernel.name().into(),
+        found,
+        t: b.t,
+        made: b.made,
+        restarts: b.restarts,
+        moves: b.moves,
+        spent: state.spent,
+        train: state.steps.train,
+        test: state.steps.test,
+        trace: state.trace.clone(),
+        trace_seconds: state.trace.iter().map(|r| r.seconds).collect(),
+        warm: state.warm.clone(),
+    };
+    let body =
+        postcard::to_stdvec(&saved).map_err(|e| Error::invalid("phase 2 state", e.to_string()))?;
+    let envelope = Envelope {
+        format: FORMAT.into(),
+        job: checkpoint.job.clone(),
+        seconds,
+        steps: state.spent,
+        sha256: crate::record::sha256_hex(&body),
+        state: body,
+    };
+    crate::record::write_atomic(&checkpoint.path, |w| {
+        postcard::to_io(&envelope, w)
+            .map(|_| ())
+            .map_err(std::io::Error::other)
+    })
+}
+
+/// The PBCS run saved at `checkpoint`'s file, with its wall-clock seconds, or `None` where
+/// there is no file. A file that does not decode, is damaged, is another job's, was saved on
+/// another τ than `tau` or computed on a kernel whose bytes `kernel`'s are not is refused,
+/// naming it; it is left as it is.
+pub fn load(
+    checkpoint: &Checkpoint,
+    tau: &str,
+    kernel: Kernel,
+) -> Result<Option<(Phase2State, f64)>> {
+    let path = &checkpoint.path;
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let refused = |m: String| {
+        Error::parse(
+            path,
+            format!("this checkpoint {m}; delete it to start the run afresh"),
+        )
+    };
+    let envelope = postcard::from_bytes::<Envelope>(&bytes)
+        .ok()
+        .filter(|e| e.format == FORMAT)
+        .ok_or_else(|| {
+            refused(format!(
+                "is not a {FORMAT} (another version, another file, or cut short)"
+            ))
+        })?;
+    if envelope.sha256 != crate::record::sha256_hex(&envelope.state) {
+        return Err(refused("is damaged: its checksum does not match".into()));
+    }
+    if envelope.job != checkpoint.job {
+        return Err(refused(format!(
+            "was saved by another job, not this one (its job:\n{}\n)",
+            envelope.job
+        )));
+    }
+    let saved: Saved = postcard::from_bytes(&envelope.state)
+        .map_err(|e| refused(format!("does not decode ({e})")))?;
+    if saved.tau_sha256 != tau {
+        return Err(refused(
+            "was saved on another τ than phase 1 found now (another build or machine?)".into(),
+        ));
+    }
+    if !Kernel::same_bytes(&saved.kernel, kernel.name()) {
+        return Err(Error::parse(
+            path,
+            format!(
+                "this checkpoint was computed on the `{}` kernel, whose bytes the `{}` kernel \
+                 does not compute: go on with PBCS_KERNEL={}, or delete it to start the run \
+                 afresh",
+                saved.kernel,
+                kernel.name(),
+                saved.kernel
+            ),
+        ));
+    }
+    if saved.trace_seconds.len() != saved.trace.len() {
+        return Err(refused(
+            "holds a trace whose wall clock does not match it".into(),
+        ));
+    }
+    let found = saved
+        .found
+        .iter()
+        .map(|s| Ok((s.k, s.t, policy_from(s)?)))
+        .collect::<Result<Vec<_>>>()
+        .map_err(|e| refused(format!("holds a skill that does not load ({e})")))?;
+    let trace = saved
+        .trace
+        .into_iter()
+        .zip(saved.trace_seconds)
+        .map(|(r, seconds)| TraceRow { seconds, ..r })
+        .collect();
+    let state = Phase2State {
+        between: Between {
+            found,
+            t: saved.t,
+            made: saved.made,
+            restarts: saved.restarts,
+            moves: saved.moves,
+        },
+        spent: saved.spent,
+        steps: StepCounts {
+            train: saved.train,
+            test: saved.test,
+        },
+        trace,
+        warm: saved.warm,
+    };
+    Ok(Some((state, envelope.seconds)))
+}
+
+/// The `pause` of a PBCS run saving to `checkpoint` ([`crate::phase2::chain_skills_resumable`]):
+/// saves at the end of a learning problem [`Checkpoint::every`] or more after the last save
+/// (or the start), and at the first one at or past the deadline, where it asks the run to
+/// stop. A save that fails is reported on standard error and the run goes on, the older file
+/// kept; at the deadline it is an error (stopping unsaved would lose the work).
+pub struct Saver<'c> {
+    checkpoint: &'c Checkpoint,
+    tau: String,
+    kernel: Kernel,
+    earlier_seconds: f64,
+    clock: Instant,
+    last_save: Instant,
+}
+
+impl<'c> Saver<'c> {
+    /// Saving to `checkpoint` a run on τ of hash `tau`, computing on `kernel`, that had run
+    /// `earlier_seconds` before this process.
+    pub fn new(
+        checkpoint: &'c Checkpoint,
+        tau: String,
+        kernel: Kernel,
+        earlier_seconds: f64,
+    ) -> Self {
+        let now = Instant::now();
+        Saver {
+            checkpoint,
+            tau,
+            kernel,
+            earlier_seconds,
+            clock: now,
+            last_save: now,
+        }
+    }
+
+    /// Wall-clock seconds of the run so far, earlier processes included.
+    pub fn seconds(&self) -> f64 {
+        self.earlier_seconds + self.clock.elapsed().as_secs_f64()
+    }
+
+    /// Whether the run stops here (saved).
+    pub fn pause(&mut self, p: Pause<'_>) -> Result<bool> {
+        let now = Instant::now();
+        let stop = self.checkpoint.stop_at.is_some_and(|t| now >= t);
+        if !stop && now.duration_since(self.last_save) < self.checkpoint.every {
+            return Ok(false);
+        }
+        let saved = p.state().and_then(|state| {
+            save(
+                self.checkpoint,
+                &state,
+                &self.tau,
+                self.kernel,
+                self.seconds(),
+            )
+        });
+        match saved {
+            Ok(()) => self.last_save = now,
+            Err(e) if stop => return Err(e),
+            Err(e) => eprintln!("warning: the run goes on unsaved: {e}"),
+        }
+        Ok(stop)
+    }
+}
