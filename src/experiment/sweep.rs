@@ -83,9 +83,10 @@ pub fn run_cell_seed(
     Ok(Some(row))
 }
 
-/// The checkpoint of the vanilla run (cell, seed) whose raw files are in `dir`:
-/// `s<seed>.resume`, of the job's TOML (its learner state also names its kernel, which must
-/// compute the bytes of the kernel a resumed run is on: [`Kernel::same_bytes`]).
+/// The checkpoint of the run (cell, seed) whose raw files are in `dir`: `s<seed>.resume`, of
+/// the job's TOML (a vanilla run's learner state, and a PBCS run's saved state, also name the
+/// kernel, which must compute the bytes of the kernel a resumed run is on:
+/// [`Kernel::same_bytes`]).
 pub fn checkpoint(cell: &Cell, seed: u64, dir: &Path) -> Checkpoint {
     Checkpoint::new(
         run_file(dir, seed, ".resume"),

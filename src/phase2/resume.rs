@@ -85,6 +85,11 @@ pub struct Pause<'s> {
 }
 
 impl Pause<'_> {
+    /// The kernel of the learner the next skill takes over, if one is handed over.
+    pub fn warm_kernel(&self) -> Option<Kernel> {
+        self.last.borrow().as_ref().map(|(_, l)| l.kernel())
+    }
+
     /// The state a resumed run goes on from.
     pub fn state(&self) -> Result<Phase2State> {
         let warm = match &*self.last.borrow() {
@@ -175,14 +180,19 @@ fn restore<E: Env, P: FnMut(usize, Progress)>(
     let n = chainer.tau.len() - 1;
     let b = &state.between;
     let past = b.t > n || b.found.iter().any(|&(k, t, _)| k > t || t > n);
-    let wrong_obs = b
+    let (obs_dim, action_dim) = (chainer.env.obs_dim(), chainer.env.action_dim());
+    let wrong_sizes = b
         .found
         .iter()
-        .any(|(_, _, p)| p.obs_dim() != chainer.env.obs_dim());
-    if past || wrong_obs || state.spent < chainer.spent.get() {
+        .any(|(_, _, p)| p.obs_dim() != obs_dim || p.action_dim() != action_dim);
+    if past || wrong_sizes || state.spent < chainer.spent.get() {
         return Err(Error::invalid(
             "phase 2 state",
-            format!("it does not fit this run (τ of {} states)", n + 1),
+            format!(
+                "it does not fit this run (τ of {} states, observations of {obs_dim}, actions \
+                 of {action_dim}): it is another run's",
+                n + 1
+            ),
         ));
     }
     if let Some((t, bytes)) = &state.warm {
@@ -194,6 +204,9 @@ fn restore<E: Env, P: FnMut(usize, Progress)>(
             chainer.kernel,
         )?;
         learner.restore_state(bytes)?;
+        // The saved state names the kernel it was computed on; this run computes on its own
+        // (one of the same bytes, `Kernel::same_bytes`, which the checkpoint checked).
+        learner.set_kernel(chainer.kernel);
         *chainer.last.borrow_mut() = Some((*t, learner));
     }
     chainer.spent.set(state.spent);

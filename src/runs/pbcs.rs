@@ -125,7 +125,7 @@ impl<E: Planar> PbcsRun<E> {
 
     /// [`PbcsRun::compute`], saved to `checkpoint` between phase 2's learning problems and
     /// resumed from it where it holds a run of this job ([`super::pbcs_resume`]): the same
-    /// bytes as an uncut run, the wall clock counting the earlier processes' too. `None`
+    /// bytes as an uncut run, the wall clock counting the earlier processes' up to their last save. `None`
     /// when the run stopped at the checkpoint's deadline ([`Checkpoint::stop_at`]), saved: run
     /// it again to go on. The checkpoint is left in place (delete it,
     /// [`Checkpoint::remove`], once the results are written).
@@ -168,7 +168,7 @@ impl<E: Planar> PbcsRun<E> {
                 };
                 (
                     from,
-                    Some(pbcs_resume::Saver::new(c, hash, kernel, earlier)),
+                    Some(pbcs_resume::Saver::new(c, hash, kernel, earlier, clock)),
                 )
             }
         };

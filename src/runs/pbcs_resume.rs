@@ -266,25 +266,27 @@ pub struct Saver<'c> {
 
 impl<'c> Saver<'c> {
     /// Saving to `checkpoint` a run on τ of hash `tau`, computing on `kernel`, that had run
-    /// `earlier_seconds` before this process.
+    /// `earlier_seconds` up to its last save before this process, which began at `clock`.
     pub fn new(
         checkpoint: &'c Checkpoint,
         tau: String,
         kernel: Kernel,
         earlier_seconds: f64,
+        clock: Instant,
     ) -> Self {
-        let now = Instant::now();
         Saver {
             checkpoint,
             tau,
             kernel,
             earlier_seconds,
-            clock: now,
-            last_save: now,
+            clock,
+            last_save: Instant::now(),
         }
     }
 
-    /// Wall-clock seconds of the run so far, earlier processes included.
+    /// Wall-clock seconds of the run so far: this process's since it began (its phase 1
+    /// included) and the earlier processes' up to their last save (what a cut process ran
+    /// after its last save is lost, as its work is).
     pub fn seconds(&self) -> f64 {
         self.earlier_seconds + self.clock.elapsed().as_secs_f64()
     }

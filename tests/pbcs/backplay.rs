@@ -450,11 +450,11 @@ fn a_dead_walk_gives_up_at_its_bound_unless_something_succeeded() {
 /// Skill chaining where no walk towards τ_`dead` finds anything, and the skill found last (its
 /// target `t`) reaches its goal from any ball at or after `from`. Balls of odd indices touch a
 /// wall.
-struct DeadTarget {
-    t: usize,
-    dead: usize,
-    from: usize,
-    calls: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
+pub(crate) struct DeadTarget {
+    pub t: usize,
+    pub dead: usize,
+    pub from: usize,
+    pub calls: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
 }
 
 impl Backplayer for DeadTarget {

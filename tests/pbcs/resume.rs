@@ -2,10 +2,12 @@
 //! (`runs::pbcs_resume`) to the bytes of the run never cut; a checkpoint that cannot be this
 //! run's is refused and left as it is.
 
+use super::backplay::DeadTarget;
 use pbcs::config::PbcsJob;
 use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::phase2::TraceRow;
+use pbcs::phase2::{skill_chaining, DeadWalk, Ideas, Phase2Config};
 use pbcs::runs::PbcsRun;
 use pbcs::validate::{Check, Valid};
 use pbcs::vanilla::resume::Checkpoint;
@@ -62,22 +64,31 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s1.resume");
     let checkpoint = cutting(&path, "maze 3, seed 1");
-    let (mut cuts, mut last_steps) = (0, 0);
+    let (mut cuts, mut last) = (0, None::<pbcs::vanilla::resume::Saved>);
     let resumed = loop {
         if let Some(run) = compute(&job, Some(&checkpoint)) {
             break run;
         }
         cuts += 1;
         let saved = checkpoint.peek().unwrap().expect("a stopped run is saved");
-        assert!(saved.steps > last_steps, "cut {cuts} did not move on");
-        last_steps = saved.steps;
+        assert!(
+            last.is_none_or(|l| saved.steps > l.steps && saved.seconds >= l.seconds),
+            "cut {cuts} did not move on"
+        );
+        last = Some(saved);
         assert!(cuts < 100, "no end");
     };
-    let problems = whole.phase2.trace.iter().map(|r| r.skill).max().unwrap() + 1;
-    assert!(
-        cuts >= 2,
-        "{cuts} cuts of a run of {problems} learning problems"
-    );
+    // One cut after each learning problem of the main section but its last (the problems
+    // before the chain's verification; none of them a hand-over try).
+    let main: Vec<&TraceRow> = whole
+        .phase2
+        .trace
+        .iter()
+        .take_while(|r| r.event != pbcs::phase2::EventKind::ChainVerify)
+        .collect();
+    let problems = main.last().unwrap().skill + 1;
+    assert!(problems >= 5, "{problems} learning problems");
+    assert_eq!(cuts, problems - 1);
     assert_eq!(resumed.record, whole.record);
     assert_eq!(resumed.phase2.chain, whole.phase2.chain);
     assert_eq!(resumed.phase2.failure, whole.phase2.failure);
@@ -88,7 +99,9 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
     );
     assert_eq!(resumed.evaluation, whole.evaluation);
     assert_eq!(resumed.picture, whole.picture);
-    // The trace's wall clock goes on from the earlier processes' and never runs back.
+    // The wall clock counts the earlier processes' (up to their saves): the run's is at least
+    // the last save's, and the trace's goes on from theirs, never running back.
+    assert!(resumed.seconds >= last.unwrap().seconds);
     let seconds: Vec<f64> = resumed.phase2.trace.iter().map(|r| r.seconds).collect();
     assert!(seconds.windows(2).all(|w| w[0] <= w[1]), "{seconds:?}");
     // Once the results are written the caller deletes the checkpoint: left in place until then.
@@ -144,4 +157,153 @@ fn a_pbcs_checkpoint_that_is_not_this_runs_is_refused_and_kept() {
     std::fs::write(&path, &saved[..saved.len() / 2]).unwrap();
     let e = refusal(&job, here, &checkpoint);
     assert!(e.contains("cut short"), "{e}");
+}
+
+/// A run saved on AVX-512 goes on on AVX2, which computes the same bytes: the learner the next
+/// skill takes over is put on the resuming run's kernel (it would otherwise still run AVX-512
+/// code). Where this CPU lacks either kernel there is nothing to check.
+#[test]
+fn a_pbcs_run_saved_on_avx512_goes_on_on_avx2_to_the_same_run() {
+    if !(Kernel::Avx512.available() && Kernel::Avx2.available()) {
+        eprintln!("this CPU does not run both AVX-512 and AVX2: nothing to check");
+        return;
+    }
+    let job = job();
+    let maze = || Maze::new(&job.maze).unwrap();
+    let whole = PbcsRun::compute(maze(), &job, Kernel::Avx512, |_, _| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let checkpoint = cutting(&dir.path().join("s1.resume"), "maze 3, seed 1");
+    let cut = PbcsRun::compute_resumable(maze(), &job, Kernel::Avx512, &checkpoint, |_, _| {});
+    assert!(cut.unwrap().is_none(), "it stopped");
+    let state = pbcs::runs::pbcs_resume::load(&checkpoint, &tau_hash(&job), Kernel::Avx2)
+        .unwrap()
+        .unwrap()
+        .0;
+    let go_on = Checkpoint {
+        stop_at: None,
+        ..checkpoint
+    };
+    let resumed = PbcsRun::compute_resumable(maze(), &job, Kernel::Avx2, &go_on, |_, _| {})
+        .unwrap()
+        .unwrap();
+    // The learner handed over at the resumed run's first pause is on AVX2.
+    let seeds = pbcs::rng::Seeds::new(job.seed);
+    let env = maze();
+    let found = pbcs::phase1::explore(
+        &env,
+        &job.explore,
+        &mut seeds.stream(pbcs::rng::Stream::Explore),
+        |_, _| {},
+    )
+    .unwrap();
+    let mut kernels = Vec::new();
+    let ready = job.phase2.ready(&env).unwrap();
+    let tau = &pbcs::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2)
+        .unwrap()
+        .states;
+    pbcs::phase2::chain_skills_resumable(
+        &env,
+        tau,
+        None,
+        &job.learner,
+        ready,
+        &seeds,
+        found.env_steps,
+        Kernel::Avx2,
+        |_, _| {},
+        Some(state),
+        |p| {
+            kernels.push(p.warm_kernel());
+            Ok(true)
+        },
+    )
+    .unwrap();
+    assert_eq!(kernels, [Some(Kernel::Avx2)]);
+    assert_eq!(resumed.record, whole.record);
+    assert_eq!(resumed.phase2.chain.skills, whole.phase2.chain.skills);
+    assert_eq!(resumed.evaluation, whole.evaluation);
+}
+
+/// The SHA-256 of the τ `job`'s phase 1 finds (what its checkpoint is checked against).
+fn tau_hash(job: &Valid<PbcsJob>) -> String {
+    let env = Maze::new(&job.maze).unwrap();
+    let seeds = pbcs::rng::Seeds::new(job.seed);
+    let found = pbcs::phase1::explore(
+        &env,
+        &job.explore,
+        &mut seeds.stream(pbcs::rng::Stream::Explore),
+        |_, _| {},
+    )
+    .unwrap();
+    let tau = pbcs::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2).unwrap();
+    let obs: Vec<Vec<f32>> = tau
+        .states
+        .iter()
+        .map(|s| {
+            let mut o = vec![0.0; pbcs::env::Env::obs_dim(&env)];
+            pbcs::env::Env::observe(&env, s, &mut o);
+            o
+        })
+        .collect();
+    pbcs::runs::pbcs_resume::tau_sha256(&obs)
+}
+
+/// Algorithm 1 stopped after every learning problem and resumed from where it stood
+/// (`skill_chaining_from`, [`pbcs::phase2::Between`]): the same problems in the same order and
+/// the same skills as a run never stopped, through a restart and a moved hand-over.
+#[test]
+fn skill_chaining_stopped_after_every_problem_resumes_to_the_same_skills() {
+    use pbcs::phase2::{skill_chaining_from, Between, Chained};
+    let config = Phase2Config {
+        alpha: 2,
+        ideas: Ideas {
+            restarts: 1,
+            dead_walk: Some(DeadWalk {
+                after: 5,
+                retargets: 1,
+            }),
+            verify_skills: Some(100),
+            ..Ideas::NONE
+        },
+        ..Phase2Config::default()
+    };
+    let calls = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let problem = |made: &mut Vec<(usize, usize)>, n: usize, t: usize| {
+        made.push((n, t));
+        Ok(DeadTarget {
+            t,
+            dead: 25,
+            from: 29,
+            calls: calls.clone(),
+        })
+    };
+    let mut whole_made = Vec::new();
+    let whole = skill_chaining(35, &config, |n, t| problem(&mut whole_made, n, t), |_| {}).unwrap();
+    let mut made = Vec::new();
+    let (mut at, mut stops, mut seen) = (Between::start(35), 0, Vec::new());
+    let resumed = loop {
+        let stopped = skill_chaining_from(
+            at,
+            &config,
+            |n, t| problem(&mut made, n, t),
+            |_| {},
+            |b| {
+                seen.push((b.made, b.t, b.restarts, b.moves));
+                Ok(true)
+            },
+        )
+        .unwrap();
+        match stopped {
+            Chained::Done(skills, failure) => break (skills, failure),
+            Chained::Paused(b) => (at, stops) = (b, stops + 1),
+        }
+    };
+    assert_eq!(resumed, whole);
+    assert_eq!(made, whole_made);
+    // A stop after each problem but the last (the hand-over try is made in the same step as
+    // the dead walk before it), one of them mid-restart, one after the move.
+    assert_eq!(whole_made.len(), 7, "{whole_made:?}");
+    assert_eq!(stops, whole_made.len() - 2);
+    assert!(seen.contains(&(2, 25, 1, 0)), "{seen:?}");
+    assert!(seen.contains(&(4, 30, 0, 1)), "{seen:?}");
 }

@@ -224,9 +224,11 @@ pub enum Command {
         #[arg(long)]
         exact_starts: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): the run stops at the end of its first
-        /// learning problem of phase 2 at or past it, saved to <OUT>/run.resume, and exits with
-        /// status 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same
-        /// bytes. Without it the run still saves itself every ten minutes and goes on from
+        /// learning problem of phase 2 at or past it that leaves another to make, saved to
+        /// <OUT>/run.resume, and exits with status 75 (EX_TEMPFAIL); the same command goes on
+        /// where it stopped, to the same bytes (phase 1, the last learning problem, the chain's
+        /// verification and repairs and its evaluation are not cut: past them the run
+        /// finishes). Without it the run still saves itself every ten minutes and goes on from
         /// there when run again after a cut.
         #[arg(long, value_parser = humantime::parse_duration)]
         stop_after: Option<std::time::Duration>,
