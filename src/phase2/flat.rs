@@ -6,8 +6,8 @@
 
 use super::goal::BallMetric;
 use super::{
-    ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, LastGoal, Phase2Config, SkillInit,
-    StartMode, Stopping,
+    ChainCheck, DeadWalk, EpisodeLimit, FastTests, Ideas, InputMode, KWalk, LastGoal, Phase2Config,
+    SkillInit, StartMode, Stopping,
 };
 use crate::error::{Error, Result};
 use crate::validate::Check;
@@ -68,6 +68,10 @@ pub struct FlatPhase2 {
     pub patience: usize,
     /// [`super::Ideas::fast_tests`].
     pub fast_tests: bool,
+    /// [`super::FastTests::lanes`] (0: all β at once, the default, not written; needs
+    /// `fast_tests`).
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub test_lanes: usize,
     /// [`super::Ideas::verify_skills`] (0: none).
     pub verify_episodes: usize,
     /// [`super::SkillInit::Warm`] (needs `inputs = "goal_relative"`).
@@ -104,8 +108,8 @@ fn is_zero(x: &f32) -> bool {
     *x == 0.0
 }
 
-/// An unset `phase2.patience`, left out of written files (those written before it existed
-/// keep their bytes).
+/// An unset `phase2.patience` or `phase2.test_lanes`, left out of written files (those written
+/// before it existed keep their bytes).
 fn is_zero_usize(n: &usize) -> bool {
     *n == 0
 }
@@ -218,7 +222,17 @@ impl TryFrom<FlatPhase2> for Phase2Config {
                     retargets: f.retargets,
                 }),
                 patience: nonzero(f.patience),
-                fast_tests: f.fast_tests,
+                fast_tests: match (f.fast_tests, nonzero(f.test_lanes)) {
+                    (false, Some(_)) => {
+                        return Err(Error::invalid(
+                            "phase2.test_lanes",
+                            "groups the episodes of fast tests, while phase2.fast_tests is \
+                             false: turn fast_tests on, or leave test_lanes out (0)",
+                        ))
+                    }
+                    (false, None) => None,
+                    (true, lanes) => Some(FastTests { lanes }),
+                },
                 verify_skills: nonzero(f.verify_episodes),
                 episode_limit,
                 chain_check: nonzero(f.chain_verify_episodes).map(|episodes| ChainCheck {
@@ -260,7 +274,8 @@ impl From<Phase2Config> for FlatPhase2 {
             dead_walk: i.dead_walk.map_or(0, |d| d.after),
             retargets: i.dead_walk.map_or(0, |d| d.retargets),
             patience: i.patience.unwrap_or(0),
-            fast_tests: i.fast_tests,
+            fast_tests: i.fast_tests.is_some(),
+            test_lanes: i.fast_tests.and_then(|f| f.lanes).unwrap_or(0),
             verify_episodes: i.verify_skills.unwrap_or(0),
             warm_start: c.warm_start(),
             path_limit,

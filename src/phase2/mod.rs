@@ -30,8 +30,8 @@ pub mod task;
 
 pub use manifest::CHAIN_JOB;
 pub use procedure::{
-    ChainCheck, DeadWalk, EpisodeLimit, Ideas, InputMode, KWalk, Phase2Config, Ready, SkillInit,
-    Stopping,
+    ChainCheck, DeadWalk, EpisodeLimit, FastTests, Ideas, InputMode, KWalk, Phase2Config, Ready,
+    SkillInit, Stopping,
 };
 pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 

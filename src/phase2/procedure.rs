@@ -108,6 +108,22 @@ pub enum SkillInit {
     Warm,
 }
 
+/// Fast greedy tests ([`Ideas::fast_tests`]): how many of a test's β episodes run side by side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FastTests {
+    /// Episodes run side by side (in lockstep, one batch through the networks), the test
+    /// stopping between two groups once it has a success and a failure; `None`: all β at
+    /// once, so that a failure by the step limit ends the test only when every episode has
+    /// run to it (`phase2.test_lanes`, ours; 0 in the flat form). The starts are drawn as
+    /// before: a test's verdict (100 %, 0 % or between) does not depend on it.
+    pub lanes: Option<usize>,
+}
+
+impl FastTests {
+    /// All of a test's episodes side by side (the `fast` preset's).
+    pub const ALL: FastTests = FastTests { lanes: None };
+}
+
 /// Our ideas, each an `Option` or an enum whose first variant is the paper's procedure.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ideas {
@@ -133,8 +149,8 @@ pub struct Ideas {
     /// deterministic policy and a pure step it never will), and stop the whole test once it
     /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
     /// fraction reported for such a test is then a lower bound). The paper counts every step
-    /// of every test.
-    pub fast_tests: bool,
+    /// of every test. `None`: off.
+    pub fast_tests: Option<FastTests>,
     /// Verification of each finished skill: its policy must reach its goal in all of these
     /// greedy episodes from its activation ball, else Backplay's previous saved (K, π) — a
     /// shorter reach — is verified in its place. A skill that passes n of n episodes fails at
@@ -160,7 +176,7 @@ impl Ideas {
         restarts: 0,
         dead_walk: None,
         patience: None,
-        fast_tests: false,
+        fast_tests: None,
         verify_skills: None,
         episode_limit: None,
         chain_check: None,

@@ -244,7 +244,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
         } else {
             self.test_limits[k]
         };
-        let fast = !learn && self.config.ideas.fast_tests;
+        let fast = self.config.ideas.fast_tests.filter(|_| !learn);
         let env = self.env;
         let ws = crate::nn::Workspace::with_kernel(self.learner.kernel());
         let mut agent = Episodes {
@@ -252,15 +252,29 @@ impl<'a, E: Env> SkillTask<'a, E> {
             policy,
             ws,
             learn,
-            fast,
+            fast: fast.is_some(),
             view: Vec::new(),
             actions: Vec::new(),
             next_view: vec![0.0; env.obs_dim()],
         };
-        // Neither 0 % nor 100 % is all Backplay needs to know of a fast test.
-        let tally = lockstep(env, &mut agent, starts, limit, |t: Tally| {
-            fast && t.successes > 0 && t.failures > 0
-        });
+        // Neither 0 % nor 100 % is all Backplay needs to know of a fast test: it stops there,
+        // within a group of episodes run side by side or between two.
+        let mixed = |t: Tally| fast.is_some() && t.successes > 0 && t.failures > 0;
+        let lanes = fast.and_then(|f| f.lanes).unwrap_or(n).max(1);
+        let (mut starts, mut tally) = (starts, Tally::default());
+        while !starts.is_empty() && !mixed(tally) {
+            let rest = starts.split_off(lanes.min(starts.len()));
+            let before = tally;
+            let group = lockstep(env, &mut agent, starts, limit, |t: Tally| {
+                mixed(Tally {
+                    successes: before.successes + t.successes,
+                    failures: before.failures + t.failures,
+                })
+            });
+            tally.successes += group.successes;
+            tally.failures += group.failures;
+            starts = rest;
+        }
         tally.successes as f32 / n as f32
     }
 

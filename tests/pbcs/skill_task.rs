@@ -7,7 +7,7 @@ use pbcs::envs::maze::Maze;
 use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::phase2::backplay::Backplayer;
 use pbcs::phase2::task::SkillTask;
-use pbcs::phase2::{EpisodeLimit, Ideas, StartMode};
+use pbcs::phase2::{EpisodeLimit, FastTests, Ideas, StartMode};
 
 fn setup() -> (Maze, Vec<Point<f32>>, Vec<Vec<f32>>) {
     let maze = Maze::new(&MazeConfig {
@@ -96,7 +96,7 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
     let run = |fast: bool| {
         let config = Phase2Config {
             ideas: Ideas {
-                fast_tests: fast,
+                fast_tests: fast.then_some(FastTests::ALL),
                 ..Ideas::NONE
             },
             ..Phase2Config::default()
@@ -113,6 +113,47 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
         fast.1 < slow.1 / 4,
         "stuck episodes end early: {} steps",
         fast.1
+    );
+}
+
+/// `phase2.test_lanes`: a fast test run in groups of 5 episodes side by side stops after the
+/// group where it first has a success and a failure, instead of when every one of its β
+/// episodes has had its chance: the same verdict (here between 0 and 100 %) in fewer steps.
+/// On a test that all episodes pass, or none, the groups run every episode as before, with
+/// the same steps. Without fast tests the setting is refused, naming both.
+#[test]
+fn fast_tests_in_groups_give_the_same_verdict_for_fewer_steps() {
+    let (maze, states, obs) = setup();
+    let run = |lanes: Option<usize>, dir: [f32; 2], t: usize| {
+        let config = Phase2Config {
+            ideas: Ideas {
+                fast_tests: Some(FastTests { lanes }),
+                ..Ideas::NONE
+            },
+            ..Phase2Config::default()
+        };
+        let mut task = task_with(&maze, &config, &states, &obs, unit_policy(dir), t, 1 << 20);
+        (task.test(0), task.steps.test)
+    };
+    // Moving along +y from B_ε(τ_0): only the starts that pass by τ_1 reach its ball.
+    let (all, grouped) = (run(None, [0.0, 1.0], 1), run(Some(5), [0.0, 1.0], 1));
+    assert!(all.0 > 0.0 && all.0 < 1.0, "not a mixed test: {all:?}");
+    assert!(
+        grouped.0 > 0.0 && grouped.0 < 1.0,
+        "the verdict changed: {grouped:?}"
+    );
+    assert!(grouped.1 < all.1, "{grouped:?} against {all:?}");
+    // Every episode passes (along +x to τ_5), or none does (along −x): the same steps.
+    for (dir, p) in [([1.0, 0.0], 1.0), ([-1.0, 0.0], 0.0)] {
+        let (all, grouped) = (run(None, dir, 5), run(Some(5), dir, 5));
+        assert_eq!((all.0, grouped), (p, all), "{dir:?}");
+    }
+    let refused: Result<PbcsJob, _> =
+        toml::from_str("[phase2]\nfast_tests = false\ntest_lanes = 5\n");
+    let msg = refused.unwrap_err().to_string();
+    assert!(
+        msg.contains("phase2.test_lanes") && msg.contains("phase2.fast_tests"),
+        "{msg}"
     );
 }
 
