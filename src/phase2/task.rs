@@ -264,15 +264,21 @@ impl<'a, E: Env> SkillTask<'a, E> {
         let (mut starts, mut tally) = (starts, Tally::default());
         while !starts.is_empty() && !mixed(tally) {
             let rest = starts.split_off(lanes.min(starts.len()));
-            let before = tally;
-            let group = lockstep(env, &mut agent, starts, limit, |t: Tally| {
-                mixed(Tally {
-                    successes: before.successes + t.successes,
-                    failures: before.failures + t.failures,
-                })
-            });
-            tally.successes += group.successes;
-            tally.failures += group.failures;
+            let (before, len) = (tally, starts.len());
+            let with = |t: Tally| Tally {
+                successes: before.successes + t.successes,
+                failures: before.failures + t.failures,
+            };
+            let group = lockstep(env, &mut agent, starts, limit, |t: Tally| mixed(with(t)));
+            // A group that ran to its end: an episode still running at the step limit failed
+            // too (lockstep counts it neither way).
+            tally = match mixed(with(group)) {
+                true => with(group),
+                false => with(Tally {
+                    successes: group.successes,
+                    failures: len - group.successes,
+                }),
+            };
             starts = rest;
         }
         tally.successes as f32 / n as f32

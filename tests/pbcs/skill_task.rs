@@ -124,8 +124,9 @@ fn fast_tests_give_the_same_verdict_for_fewer_steps() {
 #[test]
 fn fast_tests_in_groups_give_the_same_verdict_for_fewer_steps() {
     let (maze, states, obs) = setup();
-    let run = |lanes: Option<usize>, dir: [f32; 2], t: usize| {
+    let run_for = |max_steps: usize, lanes: Option<usize>, dir: [f32; 2], t: usize| {
         let config = Phase2Config {
+            max_steps,
             ideas: Ideas {
                 fast_tests: Some(FastTests { lanes }),
                 ..Ideas::NONE
@@ -135,14 +136,25 @@ fn fast_tests_in_groups_give_the_same_verdict_for_fewer_steps() {
         let mut task = task_with(&maze, &config, &states, &obs, unit_policy(dir), t, 1 << 20);
         (task.test(0), task.steps.test)
     };
-    // Moving along +y from B_ε(τ_0): only the starts that pass by τ_1 reach its ball.
-    let (all, grouped) = (run(None, [0.0, 1.0], 1), run(Some(5), [0.0, 1.0], 1));
-    assert!(all.0 > 0.0 && all.0 < 1.0, "not a mixed test: {all:?}");
-    assert!(
-        grouped.0 > 0.0 && grouped.0 < 1.0,
-        "the verdict changed: {grouped:?}"
-    );
-    assert!(grouped.1 < all.1, "{grouped:?} against {all:?}");
+    let run = |lanes, dir, t| run_for(Phase2Config::default().max_steps, lanes, dir, t);
+    // Moving along +y from B_ε(τ_0): only the starts that pass by τ_1 reach its ball; the
+    // others end stuck at the wall (failures), or, with 3 steps an episode, run out of steps
+    // (failures too, which a group counts once it has run).
+    for max_steps in [Phase2Config::default().max_steps, 3] {
+        let (all, grouped) = (
+            run_for(max_steps, None, [0.0, 1.0], 1),
+            run_for(max_steps, Some(5), [0.0, 1.0], 1),
+        );
+        assert!(all.0 > 0.0 && all.0 < 1.0, "not a mixed test: {all:?}");
+        assert!(
+            grouped.0 > 0.0 && grouped.0 < 1.0,
+            "the verdict changed: {grouped:?}"
+        );
+        assert!(
+            grouped.1 < all.1,
+            "{max_steps} steps: {grouped:?} against {all:?}"
+        );
+    }
     // Every episode passes (along +x to τ_5), or none does (along −x): the same steps.
     for (dir, p) in [([1.0, 0.0], 1.0), ([-1.0, 0.0], 0.0)] {
         let (all, grouped) = (run(None, dir, 5), run(Some(5), dir, 5));
