@@ -175,7 +175,7 @@ fn a_pbcs_run_saved_on_avx512_goes_on_on_avx2_to_the_same_run() {
     let checkpoint = cutting(&dir.path().join("s1.resume"), "maze 3, seed 1");
     let cut = PbcsRun::compute_resumable(maze(), &job, Kernel::Avx512, &checkpoint, |_, _| {});
     assert!(cut.unwrap().is_none(), "it stopped");
-    let state = pbcs::runs::pbcs_resume::load(&checkpoint, &tau_hash(&job), Kernel::Avx2)
+    let state = pbcs::runs::pbcs_resume::load(&checkpoint, &phase1(&job).4, Kernel::Avx2)
         .unwrap()
         .unwrap()
         .0;
@@ -187,28 +187,17 @@ fn a_pbcs_run_saved_on_avx512_goes_on_on_avx2_to_the_same_run() {
         .unwrap()
         .unwrap();
     // The learner handed over at the resumed run's first pause is on AVX2.
-    let seeds = pbcs::rng::Seeds::new(job.seed);
-    let env = maze();
-    let found = pbcs::phase1::explore(
-        &env,
-        &job.explore,
-        &mut seeds.stream(pbcs::rng::Stream::Explore),
-        |_, _| {},
-    )
-    .unwrap();
+    let (env, seeds, phase1_steps, tau, _) = phase1(&job);
     let mut kernels = Vec::new();
     let ready = job.phase2.ready(&env).unwrap();
-    let tau = &pbcs::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2)
-        .unwrap()
-        .states;
     pbcs::phase2::chain_skills_resumable(
         &env,
-        tau,
+        &tau,
         None,
         &job.learner,
         ready,
         &seeds,
-        found.env_steps,
+        phase1_steps,
         Kernel::Avx2,
         |_, _| {},
         Some(state),
@@ -224,28 +213,34 @@ fn a_pbcs_run_saved_on_avx512_goes_on_on_avx2_to_the_same_run() {
     assert_eq!(resumed.evaluation, whole.evaluation);
 }
 
-/// The SHA-256 of the τ `job`'s phase 1 finds (what its checkpoint is checked against).
-fn tau_hash(job: &Valid<PbcsJob>) -> String {
+/// Phase 1 of `job`: the maze, the run's seeds, phase 1's env steps, τ and the SHA-256 of τ's
+/// observations (what a checkpoint is checked against).
+fn phase1(
+    job: &Valid<PbcsJob>,
+) -> (
+    Maze,
+    pbcs::rng::Seeds,
+    u64,
+    Vec<parry2d::math::Point<f32>>,
+    String,
+) {
+    use pbcs::env::Env;
     let env = Maze::new(&job.maze).unwrap();
     let seeds = pbcs::rng::Seeds::new(job.seed);
-    let found = pbcs::phase1::explore(
-        &env,
-        &job.explore,
-        &mut seeds.stream(pbcs::rng::Stream::Explore),
-        |_, _| {},
-    )
-    .unwrap();
+    let mut rng = seeds.stream(pbcs::rng::Stream::Explore);
+    let found = pbcs::phase1::explore(&env, &job.explore, &mut rng, |_, _| {}).unwrap();
     let tau = pbcs::phase2::phase2_trajectory(&env, &found.trajectory, &job.phase2).unwrap();
     let obs: Vec<Vec<f32>> = tau
         .states
         .iter()
         .map(|s| {
-            let mut o = vec![0.0; pbcs::env::Env::obs_dim(&env)];
-            pbcs::env::Env::observe(&env, s, &mut o);
+            let mut o = vec![0.0; env.obs_dim()];
+            env.observe(s, &mut o);
             o
         })
         .collect();
-    pbcs::runs::pbcs_resume::tau_sha256(&obs)
+    let hash = pbcs::runs::pbcs_resume::tau_sha256(&obs);
+    (env, seeds, found.env_steps, tau.states, hash)
 }
 
 /// Algorithm 1 stopped after every learning problem and resumed from where it stood
