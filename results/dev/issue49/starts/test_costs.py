@@ -5,6 +5,7 @@ import csv
 RUNS = [
     "results/dev/issue49/starts/runs/ball15-s0",
     "results/dev/issue49/starts/runs/ball15-s2",
+    "results/dev/issue49/starts/runs/ball15_l5-s0",
     "results/dev/issue49/patience/runs/base15-s0",
     "results/dev/issue49/phase2/long",
 ]
