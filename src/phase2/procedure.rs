@@ -108,14 +108,19 @@ pub enum SkillInit {
     Warm,
 }
 
-/// Fast greedy tests ([`Ideas::fast_tests`]): how many of a test's β episodes run side by side.
+/// Fast greedy tests ([`Ideas::fast_tests`]): how many of a Backplay test's β episodes run side
+/// by side.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FastTests {
-    /// Episodes run side by side (in lockstep, one batch through the networks), the test
-    /// stopping between two groups once it has a success and a failure; `None`: all β at
-    /// once, so that a failure by the step limit ends the test only when every episode has
-    /// run to it (`phase2.test_lanes`, ours; 0 in the flat form). The starts are drawn as
-    /// before: a test's verdict (100 %, 0 % or between) does not depend on it.
+    /// Episodes of Backplay's tests of π run side by side (in lockstep, one batch through the
+    /// networks) in groups of this many, the test stopping within a group or between two once
+    /// it has a success and a failure, a group that ran to its end counting an episode still
+    /// running at the step limit as a failure; `None`: all β at once, where a failure by the
+    /// step limit shows only when every episode has run to it (`phase2.test_lanes`, ours; 0 in
+    /// the flat form). The starts are drawn as before: a test's verdict (100 %, 0 % or
+    /// between) does not depend on it, its reported fraction (a lower bound) does. The
+    /// verification of a saved skill and a hand-over's tries, whose fractions
+    /// [`crate::phase2::verified`] compares, run all their episodes at once.
     pub lanes: Option<usize>,
 }
 
@@ -316,6 +321,10 @@ impl Check for Phase2Config {
             ("phase2.max_rounds", i.stopping.max_rounds.unwrap_or(1)),
             ("phase2.dead_walk", i.dead_walk.map_or(1, |d| d.after)),
             ("phase2.patience", i.patience.unwrap_or(1)),
+            (
+                "phase2.test_lanes",
+                i.fast_tests.and_then(|f| f.lanes).unwrap_or(1),
+            ),
             ("phase2.verify_episodes", i.verify_skills.unwrap_or(1)),
             (
                 "phase2.chain_verify_episodes",

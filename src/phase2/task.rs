@@ -223,7 +223,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// batched forward pass. With `learn`, noise is added, transitions are stored with the
     /// shaped reward and every step makes one learner update (Algorithm 3); without, the
     /// policy is greedy (a test). Returns the fraction of episodes that reached the goal (a
-    /// lower bound for a test cut short by [`Phase2Config::fast_tests`]).
+    /// lower bound for a test cut short by [`crate::phase2::Ideas::fast_tests`]).
     fn episodes(&mut self, k: usize, n: usize, learn: bool) -> f32 {
         self.episodes_of(k, n, learn, None)
     }
@@ -260,7 +260,10 @@ impl<'a, E: Env> SkillTask<'a, E> {
         // Neither 0 % nor 100 % is all Backplay needs to know of a fast test: it stops there,
         // within a group of episodes run side by side or between two.
         let mixed = |t: Tally| fast.is_some() && t.successes > 0 && t.failures > 0;
-        let lanes = fast.and_then(|f| f.lanes).unwrap_or(n).max(1);
+        // Groups for Backplay's tests of π only: a saved policy's verification keeps its
+        // fraction whole (`verified` compares them).
+        let grouped = fast.and_then(|f| f.lanes).filter(|_| policy.is_none());
+        let lanes = grouped.unwrap_or(n).max(1);
         let (mut starts, mut tally) = (starts, Tally::default());
         while !starts.is_empty() && !mixed(tally) {
             let rest = starts.split_off(lanes.min(starts.len()));

@@ -134,16 +134,24 @@ fn fast_tests_in_groups_give_the_same_verdict_for_fewer_steps() {
             ..Phase2Config::default()
         };
         let mut task = task_with(&maze, &config, &states, &obs, unit_policy(dir), t, 1 << 20);
-        (task.test(0), task.steps.test)
+        let test = (task.test(0), task.steps.test);
+        // A saved policy's verification runs every episode at once, whatever the lanes.
+        let policy: Box<dyn pbcs::policy::Policy> = Box::new(unit_policy(dir));
+        let verified = task.verify(0, &policy, 50);
+        (test, (verified, task.steps.test - test.1))
     };
-    let run = |lanes, dir, t| run_for(Phase2Config::default().max_steps, lanes, dir, t);
+    let run = |lanes, dir, t| run_for(Phase2Config::default().max_steps, lanes, dir, t).0;
     // Moving along +y from B_ε(τ_0): only the starts that pass by τ_1 reach its ball; the
     // others end stuck at the wall (failures), or, with 3 steps an episode, run out of steps
     // (failures too, which a group counts once it has run).
     for max_steps in [Phase2Config::default().max_steps, 3] {
-        let (all, grouped) = (
+        let ((all, all_verified), (grouped, grouped_verified)) = (
             run_for(max_steps, None, [0.0, 1.0], 1),
             run_for(max_steps, Some(5), [0.0, 1.0], 1),
+        );
+        assert_eq!(
+            grouped_verified, all_verified,
+            "{max_steps} steps: a verification"
         );
         assert!(all.0 > 0.0 && all.0 < 1.0, "not a mixed test: {all:?}");
         assert!(
@@ -162,6 +170,16 @@ fn fast_tests_in_groups_give_the_same_verdict_for_fewer_steps() {
     }
     let refused: Result<PbcsJob, _> =
         toml::from_str("[phase2]\nfast_tests = false\ntest_lanes = 5\n");
+    // Groups of no episode cannot be written in the typed form either.
+    let zero = Phase2Config {
+        ideas: Ideas {
+            fast_tests: Some(FastTests { lanes: Some(0) }),
+            ..Ideas::NONE
+        },
+        ..Phase2Config::default()
+    };
+    let e = pbcs::validate::Check::check(&zero).unwrap_err().to_string();
+    assert!(e.contains("phase2.test_lanes"), "{e}");
     let msg = refused.unwrap_err().to_string();
     assert!(
         msg.contains("phase2.test_lanes") && msg.contains("phase2.fast_tests"),
