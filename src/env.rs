@@ -93,6 +93,18 @@ pub trait Env {
         None
     }
 
+    /// Goals drawn as the environment's own reset draws them ([`DrawGoals`]): `Some(self)`
+    /// from an environment that implements it. Needed by `phase2.last_goal = "drawn"`.
+    fn drawn_goals(&self) -> Option<&dyn DrawGoals<Self::State>> {
+        None
+    }
+
+    /// Starts drawn as the environment's own reset draws them ([`DrawStarts`]): `Some(self)`
+    /// from an environment that implements it. Needed by `phase2.first_starts = "drawn"`.
+    fn drawn_starts(&self) -> Option<&dyn DrawStarts<Self::State>> {
+        None
+    }
+
     /// Writes the observation of `state` into `out` (length [`Env::obs_dim`]).
     fn observe(&self, state: &Self::State, out: &mut [f32]);
 
@@ -202,6 +214,27 @@ pub trait Goals<S> {
     fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32;
 }
 
+/// A capability: an episode's goal drawn the way the environment's own reset draws it
+/// (gymnasium-robotics' mazes: the goal cell's centre plus a uniform draw in a square), put in a
+/// state whose task is otherwise unchanged. PBCS's `phase2.last_goal = "drawn"` trains the last
+/// skill toward goals drawn so, from states of τ, so that a chain reaches the goal its judge's
+/// reset draws rather than the one τ reached. An environment offers it through
+/// [`Env::drawn_goals`]; it needs [`Goals`], whose [`Goals::desired_goal`] reads the goal back.
+pub trait DrawGoals<S>: Goals<S> {
+    /// `state` with its episode's goal replaced by one drawn from the reset's law.
+    fn with_drawn_goal(&self, state: &S, rng: &mut crate::rng::Rng) -> S;
+}
+
+/// A capability: a start drawn the way the environment's own reset draws it (gymnasium-robotics'
+/// mazes: at rest at the start cell's centre plus a uniform draw in a square). PBCS's
+/// `phase2.first_starts = "drawn"` makes these the first skill's starts at K = 0 and the chain's
+/// verification and evaluation starts, so that the chain covers the starts its judge's reset
+/// draws rather than B_ε(s_0) alone. An environment offers it through [`Env::drawn_starts`].
+pub trait DrawStarts<S> {
+    /// A start drawn from the reset's law, with the task (an episode's goal) of `like`.
+    fn drawn_start(&self, like: &S, rng: &mut crate::rng::Rng) -> S;
+}
+
 /// A capability: a short sequence of actions that takes `from` to (within rounding of) `to`
 /// while staying at least `clearance` away from anything that blocks, when the environment
 /// knows one (a straight line in the maze); `None` for a pair it cannot join. Used only to
@@ -229,6 +262,10 @@ pub enum Capability {
     StepReach,
     /// [`Env::goals`] ([`Goals`]).
     Goals,
+    /// [`Env::drawn_goals`] ([`DrawGoals`]).
+    DrawGoals,
+    /// [`Env::drawn_starts`] ([`DrawStarts`]).
+    DrawStarts,
 }
 
 impl Capability {
@@ -242,6 +279,8 @@ impl Capability {
             Capability::SuccessRegion => "Env::success_region",
             Capability::StepReach => "Env::step_reach",
             Capability::Goals => "Env::goals (Goals)",
+            Capability::DrawGoals => "Env::drawn_goals (DrawGoals)",
+            Capability::DrawStarts => "Env::drawn_starts (DrawStarts)",
         }
     }
 
@@ -255,6 +294,8 @@ impl Capability {
             Capability::SuccessRegion => env.success_region().is_some(),
             Capability::StepReach => env.step_reach().is_some(),
             Capability::Goals => env.goals().is_some(),
+            Capability::DrawGoals => env.drawn_goals().is_some(),
+            Capability::DrawStarts => env.drawn_starts().is_some(),
         }
     }
 

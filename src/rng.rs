@@ -47,6 +47,9 @@ pub enum Stream {
     Update = 8,
     /// Starts of the chain's verification episodes (`phase2.chain_verify_episodes`).
     ChainVerify = 9,
+    /// Goals of evaluation episodes drawn as the environment's reset draws them, for a chain
+    /// whose last skill aims at each episode's own (`phase2.last_goal = "drawn"`).
+    EvalGoal = 10,
 }
 
 /// A run seed, from which every stream of the run is derived.

@@ -157,6 +157,28 @@ fn resets_draw_the_squares_and_success_is_the_goals() {
     let step = env.step(&near, &[0.0; 8]);
     assert!(step.terminal && step.reward == 1.0);
     assert!(env.point(&near) == env.scene().target.0);
+    // `phase2.last_goal = "drawn"`: a goal drawn into any state, fixed task or not, is the
+    // reset's (the reset draws the goal first, from the same stream), the rest of the state
+    // kept.
+    let mut a = Seeds::new(4).stream(Stream::Start);
+    let mut b = Seeds::new(4).stream(Stream::Start);
+    for task in [&env, &fixed] {
+        let drawn = task.drawn_goals().unwrap();
+        for _ in 0..50 {
+            let reset = env.sample_start(&mut a);
+            let moved = drawn.with_drawn_goal(&near, &mut b);
+            assert_eq!(moved.goal, reset.goal);
+            assert_eq!(
+                AntState {
+                    goal: near.goal,
+                    ..moved
+                },
+                near
+            );
+            // Keep the streams in step: the reset drew the start too.
+            let _ = drawn.with_drawn_goal(&near, &mut b);
+        }
+    }
 }
 
 /// Walls hold: thrown at 6 m/s at the wall below the start cell, the torso stays in the maze.

@@ -452,6 +452,30 @@ fn goal_resets_draw_start_and_goal_per_episode() {
     assert_eq!(g, moved.map(|v| v as f32));
     // The fixed task still starts where it did, for every draw.
     assert_eq!(fixed.sample_start(&mut rng), fixed.start());
+    // `phase2.last_goal = "drawn"`: a goal drawn into any state, fixed task or not, is the
+    // reset's (the reset draws the goal first, from the same stream), the rest kept.
+    let (mut a, mut b) = (
+        Seeds::new(6).stream(Stream::Start),
+        Seeds::new(6).stream(Stream::Start),
+    );
+    for task in [&env, &fixed] {
+        let drawn = task.drawn_goals().unwrap();
+        for _ in 0..50 {
+            let reset = env.sample_start(&mut a);
+            let moved = drawn.with_drawn_goal(&near, &mut b);
+            assert_eq!(
+                (
+                    moved.goal,
+                    PointState {
+                        goal: near.goal,
+                        ..moved
+                    }
+                ),
+                (reset.goal, near)
+            );
+            let _ = drawn.with_drawn_goal(&near, &mut b);
+        }
+    }
     assert!(PointMaze::named(MapName::UMaze)
         .unwrap()
         .with_gym_resets()

@@ -8,8 +8,10 @@ own, built with ``--features mujoco``) acts in gymnasium-robotics' own ``AntMaze
 task's cells (start and goal each drawn within ±1 m of its cell's centre, the ant at rest) and
 runs within the env's time limit; success is the env's ``info["success"]`` on the episode's last
 step. The chain sees what it learned on, the torso's (x, y) (``achieved_goal``) followed by the
-env's 27-number ``observation``; it learned one fixed goal, the goal cell's centre, and is not
-shown the goal the reset drew (which may lie up to 1.4 m from that centre).
+env's 27-number ``observation``. A chain built with ``phase2.last_goal = "drawn"`` learned its
+last skill toward goals drawn as the reset draws them and is shown the goal the reset drew
+(``desired_goal``); any other learned one fixed goal, the goal cell's centre, and is not (the
+drawn goal may lie up to 1.4 m from that centre).
 
 Needs ``gymnasium-robotics`` (and ``mujoco``) beside this package; nothing else here does.
 """

@@ -72,10 +72,18 @@ class Chain:
         """Starts a new episode: π_0 acts next."""
         self._core.reset()
 
-    def act(self, obs):
+    def act(self, obs, goal=None):
         """The action (float32, the environment's units) at observation ``obs`` (the
-        environment's whole observation: (x, y) in the maze, (x, y, vx, vy) in PointMaze)."""
-        return self._core.act(obs)
+        environment's whole observation: (x, y) in the maze, (x, y, vx, vy) in PointMaze);
+        ``goal``, the episode's goal (a goal-conditioned env's ``desired_goal``), needed by a
+        chain whose last skill aims at each episode's own (:attr:`needs_goal`)."""
+        return self._core.act(obs, goal)
+
+    @property
+    def needs_goal(self):
+        """Whether :meth:`act` needs the episode's goal: a chain built with
+        ``phase2.last_goal = "drawn"``, whose last skill aims at the goal each reset draws."""
+        return self._core.needs_goal
 
     def make_env(self, **kwargs):
         """The chain's environment as a ``gymnasium.Env`` (``kwargs`` go to its constructor):
@@ -93,7 +101,8 @@ class Chain:
         maze's; default: the env's own reset, seeded with ``seed``), at most ``max_steps``
         steps (default: the job's evaluation length): a dict with the observations visited
         (``states``, start included), ``success`` and ``steps``. A dict observation (a
-        goal-conditioned env, gymnasium-robotics') is acted on through its ``observation``;
+        goal-conditioned env, gymnasium-robotics') is acted on through its ``observation`` (and
+        its ``desired_goal`` for a chain that :attr:`needs_goal`);
         success is the env's ``info["success"]`` where it says one, else a positive reward at
         the end of the episode."""
         env = env or self.make_env()
@@ -102,9 +111,10 @@ class Chain:
         obs, info = env.reset(seed=seed, options=options)
         self.reset()
         see = (lambda o: o["observation"]) if isinstance(obs, dict) else (lambda o: o)
+        goal = (lambda o: o["desired_goal"]) if self.needs_goal else (lambda o: None)
         states, success = [see(obs)], False
         for _ in range(limit):
-            obs, reward, terminated, truncated, info = env.step(self.act(see(obs)))
+            obs, reward, terminated, truncated, info = env.step(self.act(see(obs), goal(obs)))
             states.append(see(obs))
             if terminated or truncated:
                 success = bool(info["success"]) if "success" in info else terminated and reward > 0

@@ -160,19 +160,46 @@ impl ChainCore {
     }
 
     /// The action at observation `obs` (switching to a later skill first if `obs` lies in
-    /// its activation ball), in the environment's units.
+    /// its activation ball), in the environment's units; `goal`, the episode's goal (a
+    /// goal-conditioned env's `desired_goal`), for a chain whose last skill aims at each
+    /// episode's own (`phase2.last_goal = "drawn"`), which then needs it.
+    #[pyo3(signature = (obs, goal = None))]
     fn act<'py>(
         &mut self,
         py: Python<'py>,
         obs: &Bound<'py, PyAny>,
+        goal: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let (n, m) = self.dims;
         let raw = finite_floats(obs, "obs", n, "the environment's observation")?;
+        let goal = match (goal, self.chain.needs_goal()) {
+            (Some(g), true) => Some(finite_floats(g, "goal", 2, "the episode's goal (x, y)")?),
+            (None, true) => {
+                return Err(PyValueError::new_err(
+                    "this chain's last skill aims at each episode's own goal \
+                     (phase2.last_goal = \"drawn\"): pass goal=, the env's desired_goal",
+                ))
+            }
+            (_, false) => None,
+        };
         self.active = self.chain.active_skill(self.active, &raw);
         let (mut o, mut a) = (vec![0.0f32; n], vec![0.0f32; m]);
-        self.chain
-            .act(self.active, &raw, &mut o, &mut a, &mut self.ws);
+        self.chain.act_toward(
+            self.active,
+            &raw,
+            goal.as_deref(),
+            &mut o,
+            &mut a,
+            &mut self.ws,
+        );
         Ok(PyArray1::from_slice(py, &a))
+    }
+
+    /// Whether acting needs the episode's goal (`act(obs, goal=...)`): a chain whose last
+    /// skill aims at each episode's own (`phase2.last_goal = "drawn"`).
+    #[getter]
+    fn needs_goal(&self) -> bool {
+        self.chain.needs_goal()
     }
 
     /// The skill that chose the last action.

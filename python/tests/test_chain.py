@@ -115,3 +115,42 @@ def test_a_chain_of_sac_skills_runs_and_loads_like_any_other(tmp_path):
     core = chain.evaluate_in_core(episodes=20, seed=3)
     assert ours["success"].tolist() == core["success"].tolist()
     assert ours["steps"].tolist() == core["steps"].tolist()
+
+
+def test_a_chain_aiming_at_each_episodes_goal_needs_the_goal_to_act(chain_dir, tmp_path):
+    """A chain whose last skill aims at each episode's own goal (``phase2.last_goal =
+    "drawn"``; here the saved chain with its last skill marked so in the manifest) needs the
+    goal to act: without it, an error naming ``desired_goal``; given the task's own goal (the
+    skill's origin), the actions of the chain as saved; given another, other actions."""
+    import shutil
+    import tomllib
+
+    plain = pbcs.load_chain(chain_dir / "chain")
+    assert not plain.needs_goal
+    copy = tmp_path / "chain"
+    shutil.copytree(chain_dir / "chain", copy)
+    manifest = (copy / "manifest.toml").read_text()
+    # The last [[skills]] table ends the file.
+    (copy / "manifest.toml").write_text(manifest.rstrip("\n") + "\nepisode_goal = true\n")
+    drawn = pbcs.load_chain(copy)
+    assert drawn.needs_goal
+    origin = tomllib.loads(manifest)["skills"][-1]["origin"][:2]
+    obs = plain.eval_starts(episodes=5, seed=3)
+    with pytest.raises(ValueError, match="desired_goal"):
+        drawn.act(obs[0])
+    for o in obs:
+        plain.reset()
+        drawn.reset()
+        assert drawn.act(o, np.array(origin)).tolist() == plain.act(o).tolist()
+    # Only the last skill sees the goal: from a state where it acts, another goal moves it.
+    last = len(plain.balls) - 1
+    centre = np.array(plain.balls[last][:2], dtype=np.float32)
+    plain.reset()
+    drawn.reset()
+    assert plain.act(centre).tolist() == drawn.act(centre, np.array(origin)).tolist()
+    assert drawn.active_skill == last
+    # Seen from the goal reflected through the ball's centre, the skill stands where the goal
+    # was: its policy heads the other way.
+    moved = 2 * centre - np.array(origin, dtype=np.float32)
+    drawn.reset()
+    assert drawn.act(centre, moved).tolist() != plain.act(centre).tolist()

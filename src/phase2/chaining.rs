@@ -297,7 +297,9 @@ struct ChainTrial<S> {
     entries: Vec<Vec<S>>,
 }
 
-/// Runs `chain` greedily from `episodes` starts uniform in B_ε(s_0), each skill allowed
+/// Runs `chain` greedily from `episodes` starts uniform in B_ε(s_0) (with
+/// `phase2.first_starts = "drawn"`, where the environment's reset draws them; each given a
+/// drawn goal where the chain aims at each episode's own), each skill allowed
 /// `max_steps` actions to hand over ([`SkillChain::run_limited`]); the steps are charged as
 /// test steps.
 fn check_chain<E: Env, P: FnMut(usize, Progress)>(
@@ -314,8 +316,14 @@ fn check_chain<E: Env, P: FnMut(usize, Progress)>(
         entries: vec![Vec::new(); n],
     };
     let mut spent = 0;
+    // `ready` checked the hook.
+    let first = c.config.first_starts(c.env).ok().flatten();
     for _ in 0..episodes {
-        let start = ball.sample_ball(&c.tau[0], c.config.epsilon, rng);
+        let start = match first {
+            Some(d) => d.drawn_start(&c.tau[0], rng),
+            None => ball.sample_ball(&c.tau[0], c.config.epsilon, rng),
+        };
+        let start = chain.episode_start(c.env, start, rng);
         let r = chain.run_limited(
             c.env,
             start,

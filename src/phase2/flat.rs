@@ -6,8 +6,8 @@
 
 use super::goal::BallMetric;
 use super::{
-    ChainCheck, DeadWalk, EpisodeLimit, FastTests, Ideas, InputMode, KWalk, LastGoal, Phase2Config,
-    SkillInit, StartMode, Stopping,
+    ChainCheck, DeadWalk, EpisodeLimit, FastTests, FirstStarts, Ideas, InputMode, KWalk, LastGoal,
+    Phase2Config, SkillInit, StartMode, Stopping,
 };
 use crate::error::{Error, Result};
 use crate::validate::Check;
@@ -86,6 +86,9 @@ pub struct FlatPhase2 {
     pub chain_repairs: usize,
     /// [`Phase2Config::last_goal`].
     pub last_goal: LastGoal,
+    /// [`Phase2Config::first_starts`] (`ball`, the default, not written).
+    #[serde(skip_serializing_if = "is_ball")]
+    pub first_starts: FirstStarts,
     /// [`Phase2Config::inputs`].
     pub inputs: FlatInputs,
     /// [`Phase2Config::max_env_steps`].
@@ -112,6 +115,12 @@ fn is_zero(x: &f32) -> bool {
 /// before it existed keep their bytes).
 fn is_zero_usize(n: &usize) -> bool {
     *n == 0
+}
+
+/// Unset `phase2.first_starts`, left out of written files (those written before it existed keep
+/// their bytes).
+fn is_ball(f: &FirstStarts) -> bool {
+    *f == FirstStarts::Ball
 }
 
 /// `0` as "off" in the flat form.
@@ -192,6 +201,7 @@ impl TryFrom<FlatPhase2> for Phase2Config {
             start: f.start,
             ball,
             last_goal: f.last_goal,
+            first_starts: f.first_starts,
             inputs: match (f.inputs, f.warm_start) {
                 (FlatInputs::Raw, _) => InputMode::Raw,
                 (FlatInputs::GoalRelative, warm) => InputMode::GoalRelative {
@@ -283,6 +293,7 @@ impl From<Phase2Config> for FlatPhase2 {
             chain_verify_episodes: i.chain_check.map_or(0, |v| v.episodes),
             chain_repairs: i.chain_check.map_or(0, |v| v.repairs),
             last_goal: c.last_goal,
+            first_starts: c.first_starts,
             inputs: match c.inputs {
                 InputMode::GoalRelative { .. } => FlatInputs::GoalRelative,
                 InputMode::Raw => FlatInputs::Raw,

@@ -147,6 +147,10 @@ pub enum GoalKind {
     /// The environment's own success (a positive reward on a terminal step): the last skill.
     /// `centre` and `radius` describe the success region for the potential.
     EnvSuccess,
+    /// The environment's own success at the goal each episode draws
+    /// (`phase2.last_goal = "drawn"`, [`crate::env::DrawGoals`]): the last skill. `centre` is
+    /// the task's goal; an episode measures its potential to its own goal ([`Goal::toward`]).
+    Drawn,
 }
 
 /// One skill's goal: the region that decides reached, terminal, reward and potential together.
@@ -200,6 +204,25 @@ impl Goal {
         }
     }
 
+    /// The last skill's goal when each episode draws its own ([`GoalKind::Drawn`]):
+    /// [`Goal::last`]'s region, reached by the environment's success at the drawn goal.
+    pub fn drawn<E: Env>(env: &E, tau_n: &[f32], epsilon: f32) -> Self {
+        Goal {
+            kind: GoalKind::Drawn,
+            ..Goal::last(env, tau_n, epsilon)
+        }
+    }
+
+    /// This goal moved to an episode's own goal `goal` (its first `goal.len()` coordinates, the
+    /// position, replaced): what a [`GoalKind::Drawn`] episode measures its potential to.
+    pub fn toward(&self, goal: &[f32]) -> Goal {
+        let mut moved = self.clone();
+        for (c, g) in moved.center.iter_mut().zip(goal) {
+            *c = *g;
+        }
+        moved
+    }
+
     /// The goal of the skill whose target is τ_t on a trajectory with observations `obs`
     /// (τ_0 … τ_N): [`Goal::last`] when t = N, else B_ε(τ_t) measured by `metric`.
     pub fn for_target<E: Env>(
@@ -223,7 +246,7 @@ impl Goal {
         let env_success = terminal && reward > 0.0;
         match self.kind {
             GoalKind::Ball => env_success || self.distance(next_obs) <= self.radius,
-            GoalKind::EnvSuccess => env_success,
+            GoalKind::EnvSuccess | GoalKind::Drawn => env_success,
         }
     }
 
@@ -267,6 +290,11 @@ pub struct Inputs {
     pub origin: Vec<f32>,
     /// Multiplies each action component in [−1, 1]: the environment's bound b_i.
     pub action_scale: Vec<f32>,
+    /// Whether the position is seen relative to the episode's own goal instead of `origin`'s
+    /// (the last skill of `phase2.last_goal = "drawn"`, [`GoalKind::Drawn`]): the skill is
+    /// told the goal through where it stands from it. Absent in a manifest: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub episode_goal: bool,
 }
 
 impl Inputs {
@@ -275,7 +303,20 @@ impl Inputs {
         Inputs {
             origin,
             action_scale,
+            episode_goal: false,
         }
+    }
+
+    /// These inputs for an episode whose goal is `goal` (its position): with
+    /// [`Inputs::episode_goal`], the origin's position moved there; otherwise unchanged.
+    pub fn toward(&self, goal: &[f32]) -> Inputs {
+        let mut moved = self.clone();
+        if self.episode_goal {
+            for (o, g) in moved.origin.iter_mut().zip(goal) {
+                *o = *g;
+            }
+        }
+        moved
     }
 
     /// The inputs of a skill aiming at `goal` in `env`: observations relative to the goal's
@@ -285,10 +326,13 @@ impl Inputs {
         let mut origin = goal.center.clone();
         origin.truncate(env.position_dims());
         origin.resize(env.obs_dim(), 0.0);
-        Inputs::new(
-            origin,
-            (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
-        )
+        Inputs {
+            episode_goal: goal.kind == GoalKind::Drawn,
+            ..Inputs::new(
+                origin,
+                (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
+            )
+        }
     }
 
     /// Writes the network's view of the environment observation `raw` into `out`:
@@ -297,6 +341,19 @@ impl Inputs {
     pub fn observation(&self, raw: &[f32], out: &mut [f32]) {
         for ((o, r), c) in out.iter_mut().zip(raw).zip(&self.origin) {
             *o = r - c;
+        }
+    }
+
+    /// [`Inputs::observation`] in an episode whose goal is `goal`: with
+    /// [`Inputs::episode_goal`] and a goal, the position relative to it; otherwise (no goal
+    /// given: the task's own, `origin`) the same.
+    #[inline]
+    pub fn observation_toward(&self, raw: &[f32], goal: Option<&[f32]>, out: &mut [f32]) {
+        self.observation(raw, out);
+        if let (true, Some(goal)) = (self.episode_goal, goal) {
+            for ((o, r), g) in out.iter_mut().zip(raw).zip(goal) {
+                *o = r - g;
+            }
         }
     }
 

@@ -56,6 +56,9 @@ pub(crate) struct ManifestSkill {
     origin: Vec<f32>,
     /// [`Inputs::action_scale`]: multiplies the policy's actions.
     action_scale: Vec<f32>,
+    /// [`Inputs::episode_goal`] (absent: `false`, as in every manifest before it).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    episode_goal: bool,
 }
 
 fn mlp_kind() -> String {
@@ -102,6 +105,7 @@ impl SkillChain {
                 action_bounds: skill.policy.action_bounds().to_vec(),
                 origin: skill.inputs.origin.clone(),
                 action_scale: skill.inputs.action_scale.clone(),
+                episode_goal: skill.inputs.episode_goal,
             });
         }
         let text = crate::validate::to_toml(&manifest, &dir.join("manifest.toml"))?;
@@ -171,7 +175,10 @@ impl SkillChain {
                 },
                 start_index: m.start_index,
                 target_index: m.target_index,
-                inputs: Inputs::new(m.origin, m.action_scale),
+                inputs: Inputs {
+                    episode_goal: m.episode_goal,
+                    ..Inputs::new(m.origin, m.action_scale)
+                },
             });
         }
         Ok(SkillChain { skills, kernel })

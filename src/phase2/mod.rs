@@ -60,6 +60,20 @@ pub enum StartMode {
     Archive,
 }
 
+/// Where the first skill's starts lie at K = 0, the chain's start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FirstStarts {
+    /// In B_ε(τ_0), as at every other K (the paper).
+    #[default]
+    Ball,
+    /// Ours, for a judge whose reset draws starts beyond B_ε(s_0) (gymnasium-robotics'
+    /// AntMaze: ±1 m around the start cell's centre): drawn as the environment's reset draws
+    /// them ([`crate::env::DrawStarts`]); the chain's verification and evaluation start there
+    /// too.
+    Drawn,
+}
+
 /// The last skill's goal (the skill whose target is τ_N).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -69,9 +83,30 @@ pub enum LastGoal {
     SuccessRegion,
     /// The paper as written: B_ε(τ_N), like every other skill.
     Ball,
+    /// Ours, for a judge whose reset draws each episode's goal (gymnasium-robotics' AntMaze,
+    /// ±1 m around the goal cell's centre): the environment's success at a goal drawn as its
+    /// reset draws it ([`crate::env::DrawGoals`]), one per episode of the last skill, whose
+    /// networks see the position relative to that goal ([`goal::GoalKind::Drawn`]). Needs
+    /// goal-relative inputs.
+    Drawn,
 }
 
 impl Phase2Config {
+    /// Who draws the first skill's starts at K = 0 and the chain's verification and
+    /// evaluation starts: `None` for B_ε(τ_0) ([`FirstStarts::Ball`]), else `env`'s
+    /// [`crate::env::DrawStarts`] (an environment without it is refused).
+    pub fn first_starts<'e, E: Env>(
+        &self,
+        env: &'e E,
+    ) -> Result<Option<&'e dyn crate::env::DrawStarts<E::State>>> {
+        match self.first_starts {
+            FirstStarts::Ball => Ok(None),
+            FirstStarts::Drawn => env.drawn_starts().map(Some).ok_or_else(|| {
+                crate::env::Capability::DrawStarts.missing("phase2.first_starts = \"drawn\"")
+            }),
+        }
+    }
+
     /// The PBCS variant these settings run: [`Variant::Pbcs`] with chaining, else
     /// [`Variant::PbcsNoChaining`] (the one rule; records, cells and messages use it).
     pub fn variant(&self) -> Variant {

@@ -32,7 +32,7 @@
 use super::backplay::Walk;
 use super::flat::FlatPhase2;
 use super::goal::{BallMetric, Goal, Inputs};
-use super::{LastGoal, StartMode};
+use super::{FirstStarts, LastGoal, StartMode};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::validate::Check;
@@ -63,6 +63,9 @@ pub struct Phase2Config {
     /// The last skill's goal: the environment's success region (our correction, the default)
     /// or B_ε(τ_N) (the paper as written).
     pub last_goal: LastGoal,
+    /// Where the first skill's starts lie at K = 0: B_ε(τ_0) (the paper, the default) or
+    /// where the environment's reset draws them (ours).
+    pub first_starts: FirstStarts,
     /// What the networks see, and, with goal-relative inputs, how a skill's learner starts.
     pub inputs: InputMode,
     /// Budget of environment steps for the whole run (phase 1 included); the run fails when
@@ -296,6 +299,7 @@ impl Default for Phase2Config {
             start: StartMode::Ball,
             ball: BallMetric::Position,
             last_goal: LastGoal::SuccessRegion,
+            first_starts: FirstStarts::Ball,
             inputs: InputMode::GoalRelative {
                 init: SkillInit::Fresh,
             },
@@ -369,6 +373,13 @@ impl Check for Phase2Config {
             return Err(Error::invalid(
                 "phase2.retargets",
                 "moves the hand-over between two skills, which needs phase2.chaining = true",
+            ));
+        }
+        if self.last_goal == LastGoal::Drawn && self.inputs == InputMode::Raw {
+            return Err(Error::invalid(
+                "phase2.last_goal",
+                "\"drawn\" tells the last skill each episode's goal through its position \
+                 relative to it, which needs phase2.inputs = \"goal_relative\"",
             ));
         }
         if !self.chaining && i.chain_check.is_some_and(|v| v.repairs > 0) {
@@ -464,8 +475,17 @@ impl Phase2Config {
             };
             Capability::StepReach.require(env, setting)?;
         }
-        if self.last_goal == LastGoal::SuccessRegion {
-            Capability::SuccessRegion.require(env, "phase2.last_goal = \"success_region\"")?;
+        match self.last_goal {
+            LastGoal::SuccessRegion => {
+                Capability::SuccessRegion.require(env, "phase2.last_goal = \"success_region\"")?
+            }
+            LastGoal::Drawn => {
+                Capability::DrawGoals.require(env, "phase2.last_goal = \"drawn\"")?
+            }
+            LastGoal::Ball => {}
+        }
+        if self.first_starts == FirstStarts::Drawn {
+            Capability::DrawStarts.require(env, "phase2.first_starts = \"drawn\"")?;
         }
         Ok(())
     }
@@ -485,6 +505,8 @@ impl Phase2Config {
         match self.last_goal {
             LastGoal::SuccessRegion => Goal::for_target(env, obs, t, self.epsilon, self.ball),
             LastGoal::Ball => Goal::ball_in(env, &obs[t], self.epsilon, self.ball),
+            LastGoal::Drawn if t + 1 == obs.len() => Goal::drawn(env, &obs[t], self.epsilon),
+            LastGoal::Drawn => Goal::ball_in(env, &obs[t], self.epsilon, self.ball),
         }
     }
 

@@ -117,8 +117,18 @@ impl SkillChain {
         max_steps: usize,
         per_skill: Option<usize>,
     ) -> Rollout<E::State> {
+        // The episode's goal, for a skill that sees where it stands from it.
+        let goal = match (self.needs_goal(), env.goals()) {
+            (true, Some(goals)) => {
+                let mut g = vec![0.0; goals.goal_dim()];
+                goals.desired_goal(&start, &mut g);
+                Some(g)
+            }
+            _ => None,
+        };
         let mut run = Execution {
             chain: self,
+            goal,
             skill: 0,
             acted: 0,
             per_skill,
@@ -177,10 +187,47 @@ impl SkillChain {
         action: &mut [f32],
         ws: &mut crate::nn::Workspace,
     ) {
+        self.act_toward(i, raw, None, obs, action, ws);
+    }
+
+    /// [`SkillChain::act`] in an episode whose goal is `goal` (its
+    /// [`crate::env::Goals::desired_goal`]), which a skill trained with
+    /// `phase2.last_goal = "drawn"` sees its position relative to
+    /// ([`Inputs::observation_toward`]; without a goal, relative to the task's own).
+    pub fn act_toward(
+        &self,
+        i: usize,
+        raw: &[f32],
+        goal: Option<&[f32]>,
+        obs: &mut [f32],
+        action: &mut [f32],
+        ws: &mut crate::nn::Workspace,
+    ) {
         let skill = &self.skills[i];
-        skill.inputs.observation(raw, obs);
+        skill.inputs.observation_toward(raw, goal, obs);
         let a = skill.policy.act(obs, 1, ws);
         skill.inputs.env_action(a, action);
+    }
+
+    /// `start` for one of this chain's episodes in `env`: given a goal drawn as the
+    /// environment's reset draws it ([`crate::env::DrawGoals`]) when a skill aims at each
+    /// episode's own ([`SkillChain::needs_goal`]); otherwise as it is, `rng` untouched.
+    pub fn episode_start<E: Env>(
+        &self,
+        env: &E,
+        start: E::State,
+        rng: &mut crate::rng::Rng,
+    ) -> E::State {
+        match (self.needs_goal(), env.drawn_goals()) {
+            (true, Some(d)) => d.with_drawn_goal(&start, rng),
+            _ => start,
+        }
+    }
+
+    /// Whether a skill sees its position relative to the episode's goal
+    /// ([`Inputs::episode_goal`]): acting needs the goal ([`SkillChain::act_toward`]).
+    pub fn needs_goal(&self) -> bool {
+        self.skills.iter().any(|s| s.inputs.episode_goal)
     }
 
     /// Checks that the chain fits `env` (its manifest at `path`, named in errors): every
@@ -188,6 +235,13 @@ impl SkillChain {
     /// largest action (its bound times the skill's action scale) stays within the
     /// environment's bound (what training wrote: scale b with bound 1, or scale 1 with bound b).
     pub fn check_env<E: Env>(&self, env: &E, path: &Path) -> Result<()> {
+        if let (true, None) = (self.needs_goal(), env.goals()) {
+            return Err(Error::parse(
+                path,
+                "a skill sees its position relative to each episode's goal (episode_goal), \
+                 and the environment has no goals (Env::goals)",
+            ));
+        }
         for (i, s) in self.skills.iter().enumerate() {
             let sizes = s.policy.sizes();
             let (input, output) = (s.policy.obs_dim(), s.policy.action_dim());
@@ -245,6 +299,8 @@ impl SkillChain {
 /// step are recorded.
 struct Execution<'c, S> {
     chain: &'c SkillChain,
+    /// The episode's goal, when a skill needs it ([`SkillChain::needs_goal`]).
+    goal: Option<Vec<f32>>,
     /// The skill acting, and how many times it has acted since it took over.
     skill: usize,
     acted: usize,
@@ -263,8 +319,9 @@ impl<E: Env> Agent<E> for Execution<'_, E::State> {
             self.acted = 0;
         }
         self.acted += 1;
+        let goal = self.goal.as_deref();
         self.chain
-            .act(self.skill, raw, &mut self.obs, action, &mut self.ws);
+            .act_toward(self.skill, raw, goal, &mut self.obs, action, &mut self.ws);
     }
 
     fn after(

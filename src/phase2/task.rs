@@ -4,9 +4,9 @@
 //! [`Inputs`]: observations relative to the goal's centre, actions in [−1, 1]ᵈ.
 
 use super::backplay::Backplayer;
-use super::goal::{dist, BallMetric, Goal, Inputs};
+use super::goal::{dist, BallMetric, Goal, GoalKind, Inputs};
 use super::{EventKind, Phase2Config, StartMode};
-use crate::env::{Env, SampleBall, VelocityBalls};
+use crate::env::{DrawGoals, DrawStarts, Env, SampleBall, VelocityBalls};
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
 use crate::policy::Policy;
@@ -75,6 +75,12 @@ pub struct SkillTask<'a, E: Env> {
     /// With balls in position and velocity ([`crate::phase2::goal::BallMetric`]) and
     /// [`StartMode::Ball`], the environment's [`VelocityBalls`], which then draw the starts.
     velocity: Option<&'a dyn VelocityBalls<E::State>>,
+    /// With a goal each episode draws ([`GoalKind::Drawn`]), the environment's [`DrawGoals`],
+    /// which gives every start its goal.
+    drawn: Option<&'a dyn DrawGoals<E::State>>,
+    /// With `phase2.first_starts = "drawn"`, the environment's [`DrawStarts`], which draws
+    /// the starts at K = 0.
+    first: Option<&'a dyn DrawStarts<E::State>>,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
     states: &'a [E::State],
@@ -139,6 +145,12 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 (StartMode::Ball, BallMetric::PositionVelocity { .. }) => env.velocity_balls(),
                 _ => None,
             },
+            drawn: match goal.kind {
+                GoalKind::Drawn => env.drawn_goals(),
+                GoalKind::Ball | GoalKind::EnvSuccess => None,
+            },
+            // `ready` checked the hook.
+            first: config.first_starts(env).ok().flatten(),
             config,
             states,
             t,
@@ -190,18 +202,23 @@ impl<'a, E: Env> SkillTask<'a, E> {
         self.steps.train + self.steps.test >= self.budget
     }
 
-    /// `n` start states around τ_k: uniform in B_ε(τ_k) (made by the environment, in position
+    /// `n` start states around τ_k (at K = 0 with `phase2.first_starts = "drawn"`, where the
+    /// environment's reset draws them): uniform in B_ε(τ_k) (made by the environment, in position
     /// or in position and velocity, or drawn from phase 1's archive: [`StartMode::Archive`]),
-    /// or τ_k itself ([`StartMode::Exact`]).
+    /// or τ_k itself ([`StartMode::Exact`]); with a drawn goal ([`GoalKind::Drawn`]), each
+    /// then given a goal drawn as the environment's reset draws it.
     fn starts(&mut self, k: usize, n: usize) -> Vec<E::State> {
         use rand::Rng as _;
-        (0..n)
-            .map(|_| match self.config.start {
+        // At K = 0 with `first_starts = "drawn"`, the environment's reset draws them.
+        let first = self.first.filter(|_| k == 0);
+        let starts: Vec<E::State> = (0..n)
+            .map(|_| match first {
                 _ if k == 0 && !self.entries.is_empty() && self.rng_start.random::<bool>() => {
                     let i = self.rng_start.random_range(0..self.entries.len());
                     self.entries[i].clone()
                 }
-                _ => match (self.velocity, self.ball) {
+                Some(d) => d.drawn_start(&self.states[0], &mut self.rng_start),
+                None => match (self.velocity, self.ball) {
                     (Some(v), _) => v.sample_velocity_ball(
                         &self.states[k],
                         self.config.epsilon,
@@ -214,7 +231,14 @@ impl<'a, E: Env> SkillTask<'a, E> {
                     (None, None) => self.states[k].clone(),
                 },
             })
-            .collect()
+            .collect();
+        match self.drawn {
+            Some(d) => starts
+                .iter()
+                .map(|s| d.with_drawn_goal(s, &mut self.rng_start))
+                .collect(),
+            None => starts,
+        }
     }
 
     /// `n` episodes in lockstep ([`crate::rollout::lockstep`]) from starts around τ_k, at
@@ -256,6 +280,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
             view: Vec::new(),
             actions: Vec::new(),
             next_view: vec![0.0; env.obs_dim()],
+            toward: Vec::new(),
         };
         // Neither 0 % nor 100 % is all Backplay needs to know of a fast test: it stops there,
         // within a group of episodes run side by side or between two.
@@ -272,6 +297,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
                 successes: before.successes + t.successes,
                 failures: before.failures + t.failures,
             };
+            agent.aim(&starts);
             let group = lockstep(env, &mut agent, starts, limit, |t: Tally| mixed(with(t)));
             // A group that ran to its end: an episode still running at the step limit failed
             // too (lockstep counts it neither way).
@@ -389,6 +415,26 @@ struct Episodes<'t, 'a, 'p, E: Env> {
     view: Vec<f32>,
     actions: Vec<f32>,
     next_view: Vec<f32>,
+    /// With a drawn goal, each lane's goal and inputs moved to the goal its start drew
+    /// ([`Goal::toward`], [`Inputs::toward`]); empty otherwise (the task's own).
+    toward: Vec<(Goal, Inputs)>,
+}
+
+impl<E: Env> Episodes<'_, '_, '_, E> {
+    /// Aims each lane of the episodes from `starts` at its start's own goal, with a drawn goal.
+    fn aim(&mut self, starts: &[E::State]) {
+        self.toward.clear();
+        let Some(drawn) = self.task.drawn else {
+            return;
+        };
+        let mut goal = vec![0.0; drawn.goal_dim()];
+        for s in starts {
+            drawn.desired_goal(s, &mut goal);
+            let t = &*self.task;
+            self.toward
+                .push((t.goal.toward(&goal), t.inputs.toward(&goal)));
+        }
+    }
 }
 
 impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
@@ -396,11 +442,13 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
         let t = &mut *self.task;
         let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
         self.view.resize(obs.len(), 0.0);
-        for (r, o) in obs
+        for ((r, o), lane) in obs
             .chunks_exact(obs_dim)
             .zip(self.view.chunks_exact_mut(obs_dim))
+            .zip(lanes)
         {
-            t.inputs.observation(r, o);
+            let inputs = self.toward.get(*lane).map_or(&t.inputs, |(_, i)| i);
+            inputs.observation(r, o);
         }
         self.actions.clear();
         let actions = match (self.policy, self.learn) {
@@ -420,22 +468,26 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
     fn after(
         &mut self,
         j: usize,
-        _lane: usize,
+        lane: usize,
         state: &E::State,
         obs: &[f32],
         step: &crate::env::Step<E::State>,
         next_obs: &[f32],
     ) -> Verdict {
         let t = &mut *self.task;
-        let reached = t.goal.reached(next_obs, step.terminal, step.reward);
+        let (goal, inputs) = match self.toward.get(lane) {
+            Some((g, i)) => (g, i),
+            None => (&t.goal, &t.inputs),
+        };
+        let reached = goal.reached(next_obs, step.terminal, step.reward);
         if self.learn {
             t.steps.train += 1;
             let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
-            let r = t.goal.reward(obs, next_obs, reached);
-            t.inputs.observation(next_obs, &mut self.next_view);
+            let r = goal.reward(obs, next_obs, reached);
+            inputs.observation(next_obs, &mut self.next_view);
             let o = &self.view[j * obs_dim..(j + 1) * obs_dim];
             let a = &self.actions[j * act_dim..(j + 1) * act_dim];
-            let done = t.goal.terminal(reached, step.terminal);
+            let done = goal.terminal(reached, step.terminal);
             t.replay.push(o, a, r, &self.next_view, done);
             let batch_size = t.learner.batch_size();
             if t.replay.len() >= batch_size {

@@ -21,8 +21,10 @@ pub use crate::env::EvalEpisode;
 pub type ChainEpisodes<S> = (Vec<EvalEpisode>, Vec<Vec<S>>);
 
 /// The evaluation of a chain built for `job`: `episodes` episodes from starts uniform in
-/// B_ε(s_0) drawn from the `Eval` stream of `seed`, each at most `phase2.eval_max_steps`
-/// steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
+/// B_ε(s_0) (with `phase2.first_starts = "drawn"`, where the environment's reset draws them)
+/// drawn from the `Eval` stream of `seed` (for a chain aiming at each episode's own
+/// goal, [`SkillChain::needs_goal`], with goals drawn from its `EvalGoal` stream), each at most
+/// `phase2.eval_max_steps` steps; the episodes and the first [`DRAWN_ROLLOUTS`] rollouts.
 pub fn evaluate_chain<E: Env>(
     env: &E,
     chain: &SkillChain,
@@ -32,8 +34,21 @@ pub fn evaluate_chain<E: Env>(
 ) -> Result<ChainEpisodes<E::State>> {
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    let starts = evaluation_starts(env, job.phase2.epsilon, episodes, &Seeds::new(seed))?;
+    let starts = match job.phase2.first_starts(env)? {
+        // `phase2.first_starts = "drawn"`: where the environment's reset draws them.
+        Some(d) => {
+            let mut rng = Seeds::new(seed).stream(crate::rng::Stream::Eval);
+            let like = env.start();
+            (0..episodes)
+                .map(|_| d.drawn_start(&like, &mut rng))
+                .collect()
+        }
+        None => evaluation_starts(env, job.phase2.epsilon, episodes, &Seeds::new(seed))?,
+    };
+    // A chain aiming at each episode's own goal is judged on goals its environment draws.
+    let mut goals = Seeds::new(seed).stream(crate::rng::Stream::EvalGoal);
     for start in starts {
+        let start = chain.episode_start(env, start, &mut goals);
         let r = chain.run(env, start, job.phase2.eval_max_steps);
         rows.push(EvalEpisode {
             success: r.success,

@@ -11,6 +11,7 @@ use std::collections::HashMap;
 
 mod backplay;
 mod capabilities;
+mod drawn;
 mod patience;
 use backplay::{walk, Scripted};
 

@@ -2,7 +2,7 @@
 //! (v5) step, observation, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{self, POSITION_NOISE, SCALE};
-use crate::env::{BallIsClear, Env, Goals, Planar, SampleBall, Scene, Step};
+use crate::env::{BallIsClear, DrawGoals, DrawStarts, Env, Goals, Planar, SampleBall, Scene, Step};
 use crate::envs::pointmaze::{MapName, PointMap, Resets, SUCCESS_DISTANCE};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
@@ -243,15 +243,11 @@ impl Env for AntMaze {
     /// uniform draw in [−0.25, 0.25) times [`SCALE`], x then y (the same law; our stream, not
     /// numpy's); the ant at rest there.
     fn sample_start(&self, rng: &mut crate::rng::Rng) -> AntState {
-        use rand::Rng as _;
         match self.resets {
             Resets::Fixed => self.start(),
             Resets::Gym => {
-                let mut noisy = |c: [f64; 2]| {
-                    c.map(|c| c + rng.random_range(-POSITION_NOISE..POSITION_NOISE) * SCALE)
-                };
-                let goal = noisy(self.goal);
-                self.at_rest(noisy(self.start), goal)
+                let goal = noisy(self.goal, rng);
+                self.at_rest(noisy(self.start, rng), goal)
             }
         }
     }
@@ -292,6 +288,14 @@ impl Env for AntMaze {
     }
 
     fn goals(&self) -> Option<&dyn Goals<AntState>> {
+        Some(self)
+    }
+
+    fn drawn_goals(&self) -> Option<&dyn DrawGoals<AntState>> {
+        Some(self)
+    }
+
+    fn drawn_starts(&self) -> Option<&dyn DrawStarts<AntState>> {
         Some(self)
     }
 
@@ -369,6 +373,32 @@ impl Goals<AntState> for AntMaze {
             1.0
         } else {
             0.0
+        }
+    }
+}
+
+/// `c` moved as `add_xy_position_noise` moves a cell's centre: each coordinate plus a uniform
+/// draw in [−0.25, 0.25) times [`SCALE`], x then y (the same law; our stream, not numpy's).
+fn noisy(c: [f64; 2], rng: &mut crate::rng::Rng) -> [f64; 2] {
+    use rand::Rng as _;
+    c.map(|c| c + rng.random_range(-POSITION_NOISE..POSITION_NOISE) * SCALE)
+}
+
+/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
+/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
+/// At rest at the start cell's centre moved as the env's reset moves it ([`noisy`]), whatever
+/// this environment's own [`Resets`]: `phase2.first_starts = "drawn"` on the fixed task.
+impl DrawStarts<AntState> for AntMaze {
+    fn drawn_start(&self, like: &AntState, rng: &mut crate::rng::Rng) -> AntState {
+        self.at_rest(noisy(self.start, rng), like.goal)
+    }
+}
+
+impl DrawGoals<AntState> for AntMaze {
+    fn with_drawn_goal(&self, s: &AntState, rng: &mut crate::rng::Rng) -> AntState {
+        AntState {
+            goal: noisy(self.goal, rng),
+            ..*s
         }
     }
 }

@@ -2,7 +2,9 @@
 //! `PointMazeEnv` step, reward and success, as a pure [`Env::step`] over the whole state.
 
 use super::model::{sure_radius, MapName, PointMap, GOAL_NOISE, SUCCESS_DISTANCE};
-use crate::env::{BallIsClear, Env, Goals, Planar, SampleBall, Scene, Step, VelocityBalls};
+use crate::env::{
+    BallIsClear, DrawGoals, DrawStarts, Env, Goals, Planar, SampleBall, Scene, Step, VelocityBalls,
+};
 use crate::error::{Error, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Mutex;
@@ -288,14 +290,11 @@ impl Env for PointMaze {
     /// moves them: each coordinate plus a uniform draw in [−[`GOAL_NOISE`], [`GOAL_NOISE`]),
     /// x then y (the same law; our stream, not numpy's).
     fn sample_start(&self, rng: &mut crate::rng::Rng) -> PointState {
-        use rand::Rng as _;
         match self.resets {
             Resets::Fixed => self.start(),
             Resets::Gym => {
-                let mut noisy =
-                    |c: [f64; 2]| c.map(|c| c + rng.random_range(-GOAL_NOISE..GOAL_NOISE));
-                let goal = noisy(self.goal);
-                PointState::at_rest(noisy(self.start), goal)
+                let goal = noisy(self.goal, rng);
+                PointState::at_rest(noisy(self.start, rng), goal)
             }
         }
     }
@@ -351,6 +350,14 @@ impl Env for PointMaze {
     }
 
     fn goals(&self) -> Option<&dyn Goals<PointState>> {
+        Some(self)
+    }
+
+    fn drawn_goals(&self) -> Option<&dyn DrawGoals<PointState>> {
+        Some(self)
+    }
+
+    fn drawn_starts(&self) -> Option<&dyn DrawStarts<PointState>> {
         Some(self)
     }
 
@@ -464,6 +471,32 @@ impl Planar for PointMaze {
 /// Goals: positions (x, y); the episode's is its state's goal; the reward 1 where [`PointMaze::success`]
 /// would say so of a point at `achieved` (its `f64` test on the observation's `f32` position: at
 /// the very edge of the disc the two can differ by the rounding of a position to `f32`).
+/// `c` moved as `add_xy_position_noise` moves a cell's centre: each coordinate plus a uniform
+/// draw in [−0.25, 0.25), x then y (the same law; our stream, not numpy's).
+fn noisy(c: [f64; 2], rng: &mut crate::rng::Rng) -> [f64; 2] {
+    use rand::Rng as _;
+    c.map(|c| c + rng.random_range(-GOAL_NOISE..GOAL_NOISE))
+}
+
+/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
+/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
+/// At rest at the start cell's centre moved as the env's reset moves it ([`noisy`]), whatever
+/// this environment's own [`Resets`]: `phase2.first_starts = "drawn"` on the fixed task.
+impl DrawStarts<PointState> for PointMaze {
+    fn drawn_start(&self, like: &PointState, rng: &mut crate::rng::Rng) -> PointState {
+        PointState::at_rest(noisy(self.start, rng), like.goal)
+    }
+}
+
+impl DrawGoals<PointState> for PointMaze {
+    fn with_drawn_goal(&self, s: &PointState, rng: &mut crate::rng::Rng) -> PointState {
+        PointState {
+            goal: noisy(self.goal, rng),
+            ..*s
+        }
+    }
+}
+
 impl Goals<PointState> for PointMaze {
     fn goal_dim(&self) -> usize {
         2
