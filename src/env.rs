@@ -350,6 +350,18 @@ pub trait Planar: Env {
     fn ball_point(&self, center: &[f32]) -> (f32, f32);
 }
 
+/// The observation of each of `states` ([`Env::observe`]), as the networks see them.
+pub fn observations<E: Env + ?Sized>(env: &E, states: &[E::State]) -> Vec<Vec<f32>> {
+    states
+        .iter()
+        .map(|s| {
+            let mut o = vec![0.0; env.obs_dim()];
+            env.observe(s, &mut o);
+            o
+        })
+        .collect()
+}
+
 /// Fills `out` with an action drawn uniformly from the action box of `env`.
 pub fn random_action<E: Env + ?Sized>(env: &E, rng: &mut impl Rng, out: &mut [f32]) {
     for (i, a) in out.iter_mut().enumerate() {

@@ -111,6 +111,11 @@ class Chain:
         obs, info = env.reset(seed=seed, options=options)
         self.reset()
         see = (lambda o: o["observation"]) if isinstance(obs, dict) else (lambda o: o)
+        if self.needs_goal and not isinstance(obs, dict):
+            raise ValueError(
+                "this chain's last skill aims at each episode's own goal (phase2.last_goal = "
+                "\"drawn\"): its env must give dict observations with a desired_goal"
+            )
         goal = (lambda o: o["desired_goal"]) if self.needs_goal else (lambda o: None)
         states, success = [see(obs)], False
         for _ in range(limit):
@@ -123,8 +128,8 @@ class Chain:
 
     def eval_starts(self, episodes=100, seed=None):
         """The start states of ``pbcs eval --episodes episodes --seed seed`` (default seed:
-        the run's), uniform in B_ε(s_0), as observations: shape (episodes, observation
-        length)."""
+        the run's), uniform in B_ε(s_0) (with ``phase2.first_starts = "drawn"``, drawn as the
+        env's reset draws them), as observations: shape (episodes, observation length)."""
         return self._core.eval_starts(episodes, seed)
 
     def evaluate(self, episodes=100, seed=None):

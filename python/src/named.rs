@@ -367,16 +367,8 @@ impl<E: Planar + Send + Sync + 'static> ChainEnv for E {
         episodes: usize,
         seed: u64,
     ) -> pbcs::Result<Vec<Vec<f32>>> {
-        let starts =
-            pbcs::env::evaluation_starts(self, job.phase2.epsilon, episodes, &Seeds::new(seed))?;
-        Ok(starts
-            .iter()
-            .map(|s| {
-                let mut o = vec![0.0; self.obs_dim()];
-                self.observe(s, &mut o);
-                o
-            })
-            .collect())
+        let starts = pbcs::runs::chain_eval_starts(self, job, episodes, seed)?;
+        Ok(pbcs::env::observations(self, &starts))
     }
 
     fn rollout(&self, chain: &SkillChain, max_steps: usize) -> (Vec<(f32, f32)>, bool, Vec<usize>) {

@@ -128,14 +128,7 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
             env,
             tau,
             starts,
-            obs: tau
-                .iter()
-                .map(|s| {
-                    let mut o = vec![0.0; env.obs_dim()];
-                    env.observe(s, &mut o);
-                    o
-                })
-                .collect(),
+            obs: crate::env::observations(env, tau),
             learner,
             config: ready.settings(),
             ready,
@@ -253,7 +246,8 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let goal = config.goal(env, &self.obs, lo + t);
         let mut task = SkillTask::new(env, self.ready, states, goal, t, learner, rngs, budget)
             .with_entries(entries.to_vec())
-            .with_starts(self.starts);
+            .with_starts(self.starts)
+            .at_offset(lo);
         let before = self.spent.get();
         task.on_event = Some(Box::new(move |p: Progress| {
             self.record(TraceRow {

@@ -205,7 +205,8 @@ impl Goal {
     }
 
     /// The last skill's goal when each episode draws its own ([`GoalKind::Drawn`]):
-    /// [`Goal::last`]'s region, reached by the environment's success at the drawn goal.
+    /// [`Goal::last`]'s region (the success region; for an environment without one, τ_N and
+    /// ε, which then bound Φ by 1/ε), reached by the environment's success at the drawn goal.
     pub fn drawn<E: Env>(env: &E, tau_n: &[f32], epsilon: f32) -> Self {
         Goal {
             kind: GoalKind::Drawn,

@@ -25,14 +25,7 @@ pub struct StepCounts {
 /// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in position,
 /// [`Env::position`]).
 fn lengths_to_goal<E: Env>(env: &E, states: &[E::State]) -> Vec<f32> {
-    let obs: Vec<Vec<f32>> = states
-        .iter()
-        .map(|s| {
-            let mut o = vec![0.0; env.obs_dim()];
-            env.observe(s, &mut o);
-            o
-        })
-        .collect();
+    let obs = crate::env::observations(env, states);
     let mut lengths = vec![0.0; obs.len()];
     for k in (0..obs.len().saturating_sub(1)).rev() {
         lengths[k] = lengths[k + 1] + dist(env.position(&obs[k]), env.position(&obs[k + 1]));
@@ -79,7 +72,7 @@ pub struct SkillTask<'a, E: Env> {
     /// which gives every start its goal.
     drawn: Option<&'a dyn DrawGoals<E::State>>,
     /// With `phase2.first_starts = "drawn"`, the environment's [`DrawStarts`], which draws
-    /// the starts at K = 0.
+    /// the starts at K = 0 (on a section from τ_0: [`SkillTask::at_offset`]).
     first: Option<&'a dyn DrawStarts<E::State>>,
     config: &'a Phase2Config,
     /// τ_0 … τ_T (states) and their observations.
@@ -179,6 +172,15 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// this section) instead of uniformly in B_ε(τ_0): chain repair.
     pub fn with_entries(mut self, entries: Vec<E::State>) -> Self {
         self.entries = entries;
+        self
+    }
+
+    /// For a section τ_lo … τ_T of τ (a chain repair's, `lo` > 0): its K = 0 is τ_lo, not the
+    /// chain's start, so `phase2.first_starts = "drawn"` does not draw its starts there.
+    pub fn at_offset(mut self, lo: usize) -> Self {
+        if lo > 0 {
+            self.first = None;
+        }
         self
     }
 

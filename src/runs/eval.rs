@@ -34,17 +34,7 @@ pub fn evaluate_chain<E: Env>(
 ) -> Result<ChainEpisodes<E::State>> {
     let mut rows = Vec::with_capacity(episodes);
     let mut rollouts = Vec::new();
-    let starts = match job.phase2.first_starts(env)? {
-        // `phase2.first_starts = "drawn"`: where the environment's reset draws them.
-        Some(d) => {
-            let mut rng = Seeds::new(seed).stream(crate::rng::Stream::Eval);
-            let like = env.start();
-            (0..episodes)
-                .map(|_| d.drawn_start(&like, &mut rng))
-                .collect()
-        }
-        None => evaluation_starts(env, job.phase2.epsilon, episodes, &Seeds::new(seed))?,
-    };
+    let starts = chain_eval_starts(env, job, episodes, seed)?;
     // A chain aiming at each episode's own goal is judged on goals its environment draws.
     let mut goals = Seeds::new(seed).stream(crate::rng::Stream::EvalGoal);
     for start in starts {
@@ -59,6 +49,27 @@ pub fn evaluate_chain<E: Env>(
         }
     }
     Ok((rows, rollouts))
+}
+
+/// The starts of a chain's evaluation ([`evaluate_chain`]): `episodes` states uniform in
+/// B_ε(s_0) ([`evaluation_starts`]), or with `phase2.first_starts = "drawn"` drawn as the
+/// environment's reset draws them, from the `Eval` stream of `seed`.
+pub fn chain_eval_starts<E: Env>(
+    env: &E,
+    job: &PbcsJob,
+    episodes: usize,
+    seed: u64,
+) -> Result<Vec<E::State>> {
+    match job.phase2.first_starts(env)? {
+        Some(d) => {
+            let mut rng = Seeds::new(seed).stream(crate::rng::Stream::Eval);
+            let like = env.start();
+            Ok((0..episodes)
+                .map(|_| d.drawn_start(&like, &mut rng))
+                .collect())
+        }
+        None => evaluation_starts(env, job.phase2.epsilon, episodes, &Seeds::new(seed)),
+    }
 }
 
 pub use crate::phase2::CHAIN_JOB;

@@ -17,7 +17,8 @@ pub mod pbcs_resume;
 mod train;
 
 pub use eval::{
-    eval_chain, evaluate_chain, load_saved_chain, load_saved_job, ChainEval, EvalEpisode, CHAIN_JOB,
+    chain_eval_starts, eval_chain, evaluate_chain, load_saved_chain, load_saved_job, ChainEval,
+    EvalEpisode, CHAIN_JOB,
 };
 use explore::write_trajectory_csv;
 pub use explore::{run_explore, ExploreRun, ExploreSummary};

@@ -161,7 +161,7 @@ impl<E: Planar> PbcsRun<E> {
         let (from, mut saver) = match checkpoint {
             None => (None, None),
             Some(c) => {
-                let hash = pbcs_resume::tau_sha256(&observations(&env, &tau));
+                let hash = pbcs_resume::tau_sha256(&crate::env::observations(&env, &tau));
                 let (from, earlier) = match pbcs_resume::load(c, &hash, kernel)? {
                     Some((state, seconds)) => (Some(state), seconds),
                     None => (None, 0.0),
@@ -429,18 +429,6 @@ pub fn run_outcome_resumable(
         let run = PbcsRun::compute_resumable(env, job, kernel, checkpoint, progress)?;
         Ok(run.map(RunOutcome::from))
     })
-}
-
-/// The observations of `states`, as the networks see them.
-fn observations<E: Planar>(env: &E, states: &[E::State]) -> Vec<Vec<f32>> {
-    states
-        .iter()
-        .map(|s| {
-            let mut o = vec![0.0; env.obs_dim()];
-            env.observe(s, &mut o);
-            o
-        })
-        .collect()
 }
 
 /// `skills.csv`: one row per skill in execution order: index, K (start index on τ), T (target

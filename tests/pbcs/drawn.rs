@@ -386,3 +386,44 @@ fn phase2_with_drawn_starts_covers_the_starts_the_reset_draws() {
     eprintln!("from drawn starts to drawn goals: {successes} of 100");
     assert!(successes >= 90, "{successes}");
 }
+
+/// A chain repair learns a section τ_lo … τ_T again: its K = 0 is τ_lo, where
+/// `first_starts = "drawn"` draws nothing (`SkillTask::at_offset`); a section from τ_0 draws
+/// every start of its K = 0 tests.
+#[test]
+fn drawn_starts_are_the_chains_start_only() {
+    use pbcs::phase2::backplay::Backplayer;
+    use pbcs::phase2::task::SkillTask;
+    let tau = tau();
+    let mut c = fast();
+    c.first_starts = FirstStarts::Drawn;
+    let obs: Vec<Vec<f32>> = tau.iter().map(|s| s[..2].to_vec()).collect();
+    for lo in [0, 3] {
+        let env = GoalPlane::default();
+        let seeds = Seeds::new(0);
+        let learner = LearnerConfig::ddpg()
+            .build(2, &c.learner_bounds(&env), &seeds, Kernel::detect())
+            .unwrap();
+        let rngs = [0, 1, 2].map(|i| seeds.substream(Stream::Start, i));
+        let goal = c.goal(&env, &obs, 6);
+        let mut task = SkillTask::new(
+            &env,
+            c.ready(&env).unwrap(),
+            &tau[lo..=6],
+            goal,
+            6 - lo,
+            learner,
+            rngs,
+            1_000_000,
+        )
+        .at_offset(lo);
+        task.test(0);
+        let drawn = env.starts_drawn.get();
+        match lo {
+            0 => assert_eq!(drawn, c.beta),
+            _ => assert_eq!(drawn, 0),
+        }
+        task.test(1);
+        assert_eq!(env.starts_drawn.get(), drawn, "K = 1 is a ball");
+    }
+}

@@ -384,8 +384,6 @@ fn noisy(c: [f64; 2], rng: &mut crate::rng::Rng) -> [f64; 2] {
     c.map(|c| c + rng.random_range(-POSITION_NOISE..POSITION_NOISE) * SCALE)
 }
 
-/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
-/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
 /// At rest at the start cell's centre moved as the env's reset moves it ([`noisy`]), whatever
 /// this environment's own [`Resets`]: `phase2.first_starts = "drawn"` on the fixed task.
 impl DrawStarts<AntState> for AntMaze {
@@ -394,6 +392,8 @@ impl DrawStarts<AntState> for AntMaze {
     }
 }
 
+/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
+/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
 impl DrawGoals<AntState> for AntMaze {
     fn with_drawn_goal(&self, s: &AntState, rng: &mut crate::rng::Rng) -> AntState {
         AntState {

@@ -468,9 +468,6 @@ impl Planar for PointMaze {
     }
 }
 
-/// Goals: positions (x, y); the episode's is its state's goal; the reward 1 where [`PointMaze::success`]
-/// would say so of a point at `achieved` (its `f64` test on the observation's `f32` position: at
-/// the very edge of the disc the two can differ by the rounding of a position to `f32`).
 /// `c` moved as `add_xy_position_noise` moves a cell's centre: each coordinate plus a uniform
 /// draw in [−0.25, 0.25), x then y (the same law; our stream, not numpy's).
 fn noisy(c: [f64; 2], rng: &mut crate::rng::Rng) -> [f64; 2] {
@@ -478,8 +475,6 @@ fn noisy(c: [f64; 2], rng: &mut crate::rng::Rng) -> [f64; 2] {
     c.map(|c| c + rng.random_range(-GOAL_NOISE..GOAL_NOISE))
 }
 
-/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
-/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
 /// At rest at the start cell's centre moved as the env's reset moves it ([`noisy`]), whatever
 /// this environment's own [`Resets`]: `phase2.first_starts = "drawn"` on the fixed task.
 impl DrawStarts<PointState> for PointMaze {
@@ -488,6 +483,8 @@ impl DrawStarts<PointState> for PointMaze {
     }
 }
 
+/// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this
+/// environment's own [`Resets`]: `phase2.last_goal = "drawn"` on the fixed task.
 impl DrawGoals<PointState> for PointMaze {
     fn with_drawn_goal(&self, s: &PointState, rng: &mut crate::rng::Rng) -> PointState {
         PointState {
@@ -497,6 +494,9 @@ impl DrawGoals<PointState> for PointMaze {
     }
 }
 
+/// Goals: positions (x, y); the episode's is its state's goal; the reward 1 where [`PointMaze::success`]
+/// would say so of a point at `achieved` (its `f64` test on the observation's `f32` position: at
+/// the very edge of the disc the two can differ by the rounding of a position to `f32`).
 impl Goals<PointState> for PointMaze {
     fn goal_dim(&self) -> usize {
         2
