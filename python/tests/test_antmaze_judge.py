@@ -84,3 +84,40 @@ def test_the_judge_plays_episodes_to_the_time_limit_or_success(chain):
     assert all((s and n <= 700) or (not s and n == 700) for s, n in zip(r["success"], r["steps"]))
     again = am.evaluate(chain, episodes=3, seed=1_000_002)
     assert np.array_equal(r["steps"], again["steps"])
+
+
+def test_a_chain_aiming_at_each_episodes_goal_is_told_the_goal_the_judge_drew(chain, tmp_path):
+    """A chain built with ``phase2.last_goal = "drawn"`` (here the committed chain with its last
+    skill marked so in a copy of its manifest) is told each episode's ``desired_goal`` by the
+    judge's rollout: its last skill acts on the torso's position from that goal, which for the
+    task's own goal is what the chain as saved does."""
+    import shutil
+    import tomllib
+
+    import pbcs.antmaze as am
+
+    copy = tmp_path / "chain"
+    shutil.copytree(CHAIN, copy)
+    manifest = (copy / "manifest.toml").read_text()
+    (copy / "manifest.toml").write_text(manifest.rstrip("\n") + "\nepisode_goal = true\n")
+    drawn = pbcs.load_chain(copy)
+    assert drawn.needs_goal and not chain.needs_goal
+    origin = np.array(tomllib.loads(manifest)["skills"][-1]["origin"][:2])
+    env = am.make_env(drawn)
+    obs, _ = env.reset(seed=5)
+    last = len(chain.balls) - 1
+    # In the last skill's ball: the same action for the task's own goal, another for the drawn.
+    o = obs["observation"].copy()
+    o[:2] = chain.balls[last][:2]
+    chain.reset()
+    drawn.reset()
+    assert drawn.act(o, origin).tolist() == chain.act(o).tolist()
+    assert drawn.active_skill == last
+    drawn.reset()
+    assert drawn.act(o, obs["desired_goal"]).tolist() != chain.act(o).tolist()
+    # The judge's rollout passes the goal (a chain that needs it cannot act without).
+    with pytest.raises(ValueError, match="desired_goal"):
+        drawn.act(o)
+    r = am.evaluate(drawn, episodes=1, seed=1_000_002, env=env)
+    assert r["episodes"] == 1
+    env.close()
