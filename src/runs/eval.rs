@@ -1,5 +1,6 @@
-//! The chain's evaluation from B_ε(s_0), the one used by `pbcs run`, the sweeps and
-//! `pbcs eval` (a saved chain re-run).
+//! The chain's evaluation from B_ε(s_0) (or from the starts the environment's reset draws,
+//! `phase2.first_starts = "drawn"`), the one used by `pbcs run`, the sweeps and `pbcs eval` (a
+//! saved chain re-run).
 
 use super::{ball_circles, DRAWN_ROLLOUTS};
 use crate::config::{Located, PbcsJob};

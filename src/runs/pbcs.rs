@@ -188,7 +188,8 @@ impl<E: Planar> PbcsRun<E> {
         let Some(phase2) = phase2 else {
             return Ok(None);
         };
-        // Evaluation: episodes from starts uniform in B_ε(s_0), stream Eval.
+        // Evaluation: episodes from starts uniform in B_ε(s_0) (or drawn: `first_starts`),
+        // stream Eval.
         let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
         {
             evaluate_chain(&env, &phase2.chain, job, job.phase2.eval_episodes, job.seed)?

@@ -195,7 +195,8 @@ pub enum Command {
         /// The chain folder (`<run folder>/chain`).
         #[arg(long)]
         chain: PathBuf,
-        /// Episodes, each from a start uniform in B_ε(s_0).
+        /// Episodes, each from a start uniform in B_ε(s_0) (with phase2.first_starts = "drawn",
+        /// where the environment's reset draws them).
         #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
         episodes: u64,
         /// Seed of the start states [default: the run's seed, which reproduces its evaluation].
