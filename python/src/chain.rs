@@ -173,7 +173,16 @@ impl ChainCore {
         let (n, m) = self.dims;
         let raw = finite_floats(obs, "obs", n, "the environment's observation")?;
         let goal = match (goal, self.chain.needs_goal()) {
-            (Some(g), true) => Some(finite_floats(g, "goal", 2, "the episode's goal (x, y)")?),
+            (Some(g), true) => {
+                // The environment's goal length; (x, y) where it cannot be built here.
+                let m = self
+                    .env
+                    .as_ref()
+                    .ok()
+                    .and_then(|e| e.goal_dim())
+                    .unwrap_or(2);
+                Some(finite_floats(g, "goal", m, "the episode's goal")?)
+            }
             (None, true) => {
                 return Err(PyValueError::new_err(
                     "this chain's last skill aims at each episode's own goal \

@@ -358,6 +358,8 @@ pub(crate) trait ChainEnv: Send + Sync {
     fn picture(&self, chain: &SkillChain) -> ChainPicture;
     /// The number of observation components.
     fn obs_dim(&self) -> usize;
+    /// The length of a goal ([`pbcs::env::Goals::goal_dim`]), for an environment with goals.
+    fn goal_dim(&self) -> Option<usize>;
 }
 
 impl<E: Planar + Send + Sync + 'static> ChainEnv for E {
@@ -388,6 +390,10 @@ impl<E: Planar + Send + Sync + 'static> ChainEnv for E {
 
     fn obs_dim(&self) -> usize {
         Env::obs_dim(self)
+    }
+
+    fn goal_dim(&self) -> Option<usize> {
+        self.goals().map(|g| g.goal_dim())
     }
 }
 
