@@ -175,13 +175,13 @@ impl ChainCore {
         let goal = match (goal, self.chain.needs_goal()) {
             (Some(g), true) => {
                 // The environment's goal length; (x, y) where it cannot be built here.
-                let m = self
+                let goal_len = self
                     .env
                     .as_ref()
                     .ok()
                     .and_then(|e| e.goal_dim())
                     .unwrap_or(2);
-                Some(finite_floats(g, "goal", m, "the episode's goal")?)
+                Some(finite_floats(g, "goal", goal_len, "the episode's goal")?)
             }
             (None, true) => {
                 return Err(PyValueError::new_err(
@@ -323,7 +323,8 @@ impl ChainCore {
     }
 
     /// The start states of `pbcs eval`'s episodes for `seed` (default: the run's seed), in
-    /// order, as observations: shape (episodes, observation length), (x, y) in the maze.
+    /// order, as observations: shape (episodes, observation length): (x, y) in the maze; uniform
+    /// in B_ε(s_0), or drawn as the env's reset draws them with `phase2.first_starts = "drawn"`.
     #[pyo3(signature = (episodes = 100, seed = None))]
     fn eval_starts<'py>(
         &self,

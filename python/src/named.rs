@@ -349,7 +349,7 @@ pub(crate) type ChainPicture = (pbcs::env::Scene, Vec<((f32, f32), f32)>);
 
 /// A saved chain's environment, its type erased: what `pbcs.Chain` runs on it.
 pub(crate) trait ChainEnv: Send + Sync {
-    /// The observations of `episodes` evaluation starts in B_ε(s_0) of `seed`.
+    /// The observations of `episodes` evaluation starts of `seed` (`pbcs::runs::chain_eval_starts`).
     fn eval_starts(&self, job: &PbcsJob, episodes: usize, seed: u64)
         -> pbcs::Result<Vec<Vec<f32>>>;
     /// One execution of `chain` from s_0: drawn points, success, skill of each step.

@@ -115,9 +115,33 @@ def test_a_chain_aiming_at_each_episodes_goal_is_told_the_goal_the_judge_drew(ch
     assert drawn.active_skill == last
     drawn.reset()
     assert drawn.act(o, obs["desired_goal"]).tolist() != chain.act(o).tolist()
-    # The judge's rollout passes the goal (a chain that needs it cannot act without).
+    # A chain that needs the goal cannot act without it.
     with pytest.raises(ValueError, match="desired_goal"):
         drawn.act(o)
-    r = am.evaluate(drawn, episodes=1, seed=1_000_002, env=env)
-    assert r["episodes"] == 1
+    env.close()
+    # The judge's rollout passes the goal it drew: with the first skill marked too (it acts
+    # from the start, where the last one never comes), an episode replayed by hand with each
+    # step's desired_goal visits the states of the rollout the judge counts, and another goal
+    # would act otherwise.
+    first = tmp_path / "first"
+    shutil.copytree(copy, first)
+    text = (first / "manifest.toml").read_text()
+    head = text.index("[[skills]]\n") + len("[[skills]]\n")
+    (first / "manifest.toml").write_text(text[:head] + "episode_goal = true\n" + text[head:])
+    told = pbcs.load_chain(first)
+    env = am.make_env(told)
+    obs, _ = env.reset(seed=1_000_002)
+    told.reset()
+    assert (told.act(obs["observation"], obs["desired_goal"]).tolist()
+            != told.act(obs["observation"], obs["achieved_goal"]).tolist())
+    told.reset()
+    states = [obs["observation"]]
+    for _ in range(100):
+        obs, _, terminated, truncated, _ = env.step(
+            told.act(obs["observation"], obs["desired_goal"]))
+        states.append(obs["observation"])
+        if terminated or truncated:
+            break
+    r = told.rollout(env=am.make_env(told), max_steps=100, seed=1_000_002)
+    assert np.array_equal(r["states"], np.stack(states))
     env.close()

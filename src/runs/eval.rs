@@ -75,7 +75,8 @@ pub fn chain_eval_starts<E: Env>(
 
 pub use crate::phase2::CHAIN_JOB;
 
-/// What `pbcs eval` measured: a saved chain re-run from starts uniform in B_ε(s_0).
+/// What `pbcs eval` measured: a saved chain re-run from its evaluation's starts
+/// ([`chain_eval_starts`]: uniform in B_ε(s_0), or drawn with `phase2.first_starts = "drawn"`).
 #[derive(Debug, Clone)]
 pub struct ChainEval {
     /// The job that built the chain (from the chain folder).
@@ -153,7 +154,8 @@ pub fn load_saved_job(chain_dir: &Path, kernel: Kernel) -> Result<(PbcsJob, Skil
 }
 
 /// Re-runs the chain saved in `chain_dir` on the environment its job names: `episodes` episodes
-/// from starts uniform in B_ε(s_0), drawn from the `Eval` stream of `seed` (default: the run's
+/// from the evaluation's starts ([`chain_eval_starts`]: uniform in B_ε(s_0), or drawn with
+/// `phase2.first_starts = "drawn"`), drawn from the `Eval` stream of `seed` (default: the run's
 /// own seed, which reproduces the run's evaluation exactly), each at most
 /// `phase2.eval_max_steps` steps, the policies on `kernel`. Writes nothing
 /// ([`ChainEval::write`] does). A folder without the chain's job (`run.toml`, or
