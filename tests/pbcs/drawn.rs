@@ -290,6 +290,27 @@ fn fast() -> Phase2Config {
     c
 }
 
+/// Phase 2 of seed 0 on `tau` with DDPG and settings `c`.
+fn phase2(
+    env: &GoalPlane,
+    tau: &[[f32; 4]],
+    c: &Phase2Config,
+    kernel: Kernel,
+) -> pbcs::phase2::Phase2Outcome {
+    let learner = LearnerConfig::ddpg();
+    chain_skills(
+        env,
+        tau,
+        &learner,
+        c.ready(env).unwrap(),
+        &Seeds::new(0),
+        0,
+        kernel,
+        |_, _| {},
+    )
+    .unwrap()
+}
+
 /// Phase 2 on τ with DDPG: with `last_goal = "drawn"` the chain reaches the goals the env
 /// draws; with the success region, only those its path to the task's goal passes (about a
 /// fifth of the square by area). On each kernel this CPU runs, since their bytes differ.
@@ -300,17 +321,7 @@ fn phase2_with_drawn_goals_learns_to_reach_the_goal_each_episode_draws() {
     let run = |last_goal: LastGoal, kernel: Kernel| {
         let mut c = fast();
         c.last_goal = last_goal;
-        let out = chain_skills(
-            &env,
-            &tau,
-            &LearnerConfig::ddpg(),
-            c.ready(&env).unwrap(),
-            &Seeds::new(0),
-            0,
-            kernel,
-            |_, _| {},
-        )
-        .unwrap();
+        let out = phase2(&env, &tau, &c, kernel);
         assert_eq!(out.failure, None, "{last_goal:?} {kernel:?}");
         let mut rng = Seeds::new(0).stream(Stream::EvalGoal);
         let successes = (0..100)
@@ -346,17 +357,7 @@ fn phase2_with_drawn_starts_covers_the_starts_the_reset_draws() {
         let env = GoalPlane::default();
         let mut c = fast();
         (c.first_starts, c.last_goal) = (first_starts, LastGoal::Drawn);
-        let out = chain_skills(
-            &env,
-            &tau,
-            &LearnerConfig::ddpg(),
-            c.ready(&env).unwrap(),
-            &Seeds::new(0),
-            0,
-            Kernel::detect(),
-            |_, _| {},
-        )
-        .unwrap();
+        let out = phase2(&env, &tau, &c, Kernel::detect());
         assert_eq!(out.failure, None, "{first_starts:?}");
         (out.chain, env.starts_drawn.get(), c)
     };
