@@ -212,6 +212,13 @@ pub trait Goals<S> {
     fn desired_goal(&self, state: &S, out: &mut [f32]);
     /// The reward for having achieved `achieved` when the goal is `desired`.
     fn goal_reward(&self, achieved: &[f32], desired: &[f32]) -> f32;
+    /// For an environment with a body, a function that rewrites a network's input (an
+    /// observation followed by the goal, as HER's networks see them) in place so that the goal
+    /// is seen from the body (`[train.her] goal_frame = "body"`); `None` (the default) for an
+    /// environment without one.
+    fn body_frame(&self) -> Option<fn(&mut [f32])> {
+        None
+    }
 }
 
 /// A capability: an episode's goal drawn the way the environment's own reset draws it

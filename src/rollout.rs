@@ -147,6 +147,9 @@ pub struct Greedy<'a> {
     bounds: Vec<f32>,
     /// A goal appended to every observation (a learner trained with HER), empty otherwise.
     pub goal: Vec<f32>,
+    /// With a goal, the rewrite of each input into the body's frame
+    /// ([`crate::env::Goals::body_frame`]), when the learner was trained so.
+    pub frame: Option<fn(&mut [f32])>,
     input: Vec<f32>,
     /// Sum of the rewards met.
     pub reward: f32,
@@ -161,6 +164,7 @@ impl<'a> Greedy<'a> {
             learner,
             bounds: (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
             goal: Vec::new(),
+            frame: None,
             input: Vec::new(),
             reward: 0.0,
             steps: 0,
@@ -181,6 +185,10 @@ impl<E: Env + ?Sized> Agent<E> for Greedy<'_> {
             self.input.clear();
             for row in obs.chunks(obs.len() / lanes.len()) {
                 self.input.extend(row.iter().chain(&self.goal));
+            }
+            if let Some(frame) = self.frame {
+                let width = self.input.len() / lanes.len();
+                self.input.chunks_mut(width).for_each(frame);
             }
             &self.input
         };

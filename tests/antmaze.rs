@@ -338,3 +338,36 @@ fn antmaze_runs_a_map_of_ones_own() {
     let err = named.check().unwrap_err().to_string();
     assert!(err.contains("\"antmaze\""), "{err}");
 }
+
+/// `[train.her] goal_frame = "body"` on AntMaze: training and its evaluations see the goal
+/// from the ant (the run differs from one in the world's frame, and is deterministic).
+#[test]
+fn a_her_run_can_see_the_goal_from_the_ant() {
+    use pbcs::learner::LearnerConfig;
+    use pbcs::nn::kernel::Kernel;
+    use pbcs::vanilla::{train_vanilla, TrainConfig};
+    let env = AntMaze::named(MapName::UMaze).unwrap();
+    let learner: LearnerConfig =
+        toml::from_str("algo = \"td3\"\nhidden = [16, 16]\nbatch_size = 16").unwrap();
+    let run = |frame: &str| {
+        let train: TrainConfig = toml::from_str(&format!(
+            "steps = 600\nmax_episode_steps = 100\nlearning_starts = 200\neval_every = 300\n\
+             eval_episodes = 2\n[her]\ngoal_frame = \"{frame}\""
+        ))
+        .unwrap();
+        let out = train_vanilla(
+            &env,
+            &learner,
+            &train,
+            &Seeds::new(1),
+            Kernel::detect(),
+            |_, _| {},
+        )
+        .unwrap();
+        (out.evals, out.learner.policy())
+    };
+    let (body, again, world) = (run("body"), run("body"), run("world"));
+    assert_eq!(body.0, again.0);
+    assert!(body.1.same(&*again.1));
+    assert!(!body.1.same(&*world.1));
+}

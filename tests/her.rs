@@ -191,6 +191,7 @@ fn final_and_episode_strategies() {
         let config = HerConfig {
             n_sampled_goal: 1,
             goal_selection_strategy: strategy,
+            ..HerConfig::default()
         };
         let mut her = HerReplay::new(100, 1, 1, 1, config.clone());
         episode(&mut her, 0.0, 10, 100.0);
@@ -296,6 +297,67 @@ fn training_with_her_is_deterministic_and_refused_where_it_cannot_run() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("learner.replay_size"), "{err}");
+    // A frame given to the evaluations rewrites every input the policy acts on: one call per
+    // step taken ([`pbcs::env::Goals::body_frame`]'s place in `evaluate` and
+    // `greedy_episodes`).
+    let mut trained = train_vanilla(
+        &maze,
+        &LearnerConfig::td3(),
+        &train,
+        &Seeds::new(4),
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap();
+    thread_local!(static CALLS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) });
+    fn count(input: &mut [f32]) {
+        assert_eq!(input.len(), 4);
+        CALLS.with(|c| c.set(c.get() + 1));
+    }
+    let goals = maze.goals();
+    let (_, _, length) = pbcs::vanilla::evaluate(
+        &maze,
+        trained.learner.as_mut(),
+        goals,
+        Some(count),
+        3,
+        40,
+        &Seeds::new(0),
+        0,
+    );
+    assert_eq!(CALLS.with(|c| c.take()), (length * 3.0).round() as usize);
+    let mut rng = Seeds::new(1).stream(Stream::Eval);
+    let starts = (0..3).map(|_| maze.sample_start(&mut rng)).collect();
+    let episodes = pbcs::vanilla::greedy_episodes(
+        &maze,
+        trained.learner.as_mut(),
+        goals,
+        Some(count),
+        starts,
+        40,
+    );
+    let steps: usize = episodes.iter().map(|e| e.steps).sum();
+    assert!(steps > 0);
+    assert_eq!(CALLS.with(|c| c.take()), steps);
+    // The goal seen from a body, on an environment without one.
+    let body: TrainConfig = toml::from_str("[her]\ngoal_frame = \"body\"").unwrap();
+    let err = train_vanilla(
+        &maze,
+        &LearnerConfig::td3(),
+        &TrainConfig {
+            her: body.her,
+            ..train.clone()
+        },
+        &Seeds::new(0),
+        Kernel::detect(),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("train.her.goal_frame"), "{err}");
+    // Stable-Baselines3's frame, the default, is not written: written jobs keep their bytes.
+    let written = toml::to_string(&HerConfig::default()).unwrap();
+    assert!(!written.contains("goal_frame"), "{written}");
     let bad: Result<TrainConfig, _> = toml::from_str("[her]\nn_sampled_goal = 0");
     let err = pbcs::config::Check::check(&bad.unwrap()).unwrap_err();
     assert!(
@@ -306,4 +368,32 @@ fn training_with_her_is_deterministic_and_refused_where_it_cannot_run() {
 
 fn small_sac() -> LearnerConfig {
     toml::from_str("algo = \"sac\"\nhidden = [32, 32]\nbatch_size = 64").unwrap()
+}
+
+/// A vanilla run's checkpoint (postcard: fields in order, no names) saves the buffer's
+/// relabelling settings in the layout `HerConfig` had before `goal_frame`, so that runs saved
+/// before it resume.
+#[test]
+fn a_her_checkpoint_keeps_the_layout_of_runs_saved_before_goal_frame() {
+    #[derive(serde::Serialize)]
+    struct Before {
+        n_sampled_goal: usize,
+        goal_selection_strategy: GoalSelection,
+    }
+    let config = HerConfig {
+        n_sampled_goal: 3,
+        goal_selection_strategy: GoalSelection::Final,
+        goal_frame: pbcs::learner::her::GoalFrame::Body,
+    };
+    let saved = postcard::to_stdvec(&HerReplay::new(10, 1, 1, 1, config)).unwrap();
+    let before = postcard::to_stdvec(&Before {
+        n_sampled_goal: 3,
+        goal_selection_strategy: GoalSelection::Final,
+    })
+    .unwrap();
+    // Those settings, then the capacity (10, one varint byte): nothing between them.
+    assert_eq!(&saved[..before.len()], &before[..]);
+    assert_eq!(saved[before.len()], 10);
+    let back: HerReplay = postcard::from_bytes(&saved).unwrap();
+    assert_eq!(postcard::to_stdvec(&back).unwrap(), saved);
 }

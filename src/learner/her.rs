@@ -63,6 +63,30 @@ pub struct HerConfig {
     pub n_sampled_goal: usize,
     /// Where the new goals come from.
     pub goal_selection_strategy: GoalSelection,
+    /// The frame in which the networks see the goal (ours; absent from a written job when
+    /// `world`, Stable-Baselines3's).
+    #[serde(skip_serializing_if = "GoalFrame::is_world")]
+    pub goal_frame: GoalFrame,
+}
+
+/// How the networks of a goal-conditioned run see the goal (`[train.her] goal_frame`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalFrame {
+    /// The observation followed by the goal, as the environment gives them (Stable-Baselines3).
+    #[default]
+    World,
+    /// Seen from the body: the environment rewrites each input (observation then goal) by
+    /// [`crate::env::Goals::body_frame`], for an environment with a body (AntMaze: the goal
+    /// from the torso, turned by its heading, and from its position).
+    Body,
+}
+
+impl GoalFrame {
+    /// Whether this is Stable-Baselines3's frame (the default).
+    pub fn is_world(&self) -> bool {
+        *self == GoalFrame::World
+    }
 }
 
 impl Default for HerConfig {
@@ -70,6 +94,7 @@ impl Default for HerConfig {
         HerConfig {
             n_sampled_goal: 4,
             goal_selection_strategy: GoalSelection::Future,
+            goal_frame: GoalFrame::World,
         }
     }
 }
@@ -90,15 +115,40 @@ impl HerConfig {
     /// How many of a batch of `n` are relabelled: ⌊n·(1 − 1/(k + 1))⌋, as SB3's
     /// `int(her_ratio * batch_size)`.
     pub fn virtual_count(&self, n: usize) -> usize {
+        self.relabelling().virtual_count(n)
+    }
+
+    fn relabelling(&self) -> Relabelling {
+        Relabelling {
+            n_sampled_goal: self.n_sampled_goal,
+            goal_selection_strategy: self.goal_selection_strategy,
+        }
+    }
+}
+
+impl Relabelling {
+    /// [`HerConfig::virtual_count`].
+    fn virtual_count(&self, n: usize) -> usize {
         let ratio = 1.0 - 1.0 / (self.n_sampled_goal as f64 + 1.0);
         (ratio * n as f64) as usize
     }
 }
 
+/// What a [`HerReplay`] keeps of its [`HerConfig`]: the settings that relabel. A vanilla run's
+/// checkpoint (postcard, fields in order, no names) saves it, in the layout `HerConfig` had
+/// before `goal_frame` (the networks' business, not the buffer's), so that checkpoints saved
+/// before it still resume.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Relabelling {
+    n_sampled_goal: usize,
+    goal_selection_strategy: GoalSelection,
+}
+
 /// Whole episodes of transitions with their goals, sampled with relabelled goals.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HerReplay {
-    config: HerConfig,
+    /// The settings that relabel (checkpoints keep this layout: [`Relabelling`]).
+    config: Relabelling,
     capacity: usize,
     obs_dim: usize,
     act_dim: usize,
@@ -133,7 +183,7 @@ impl HerReplay {
         config: HerConfig,
     ) -> Self {
         HerReplay {
-            config,
+            config: config.relabelling(),
             capacity,
             obs_dim,
             act_dim,

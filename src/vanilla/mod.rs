@@ -203,11 +203,13 @@ pub struct TrainOutcome {
 /// reached a positive terminal reward, and the mean return and length per episode.
 ///
 /// With `goals` (a learner trained with HER), the policy sees each observation followed by
-/// the episode's goal.
+/// the episode's goal, rewritten by `frame` when given ([`crate::env::Goals::body_frame`]).
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
     goals: Option<&dyn Goals<E::State>>,
+    frame: Option<fn(&mut [f32])>,
     episodes: usize,
     max_steps: usize,
     seeds: &Seeds,
@@ -215,6 +217,7 @@ pub fn evaluate<E: Env>(
 ) -> (f32, f32, f32) {
     let mut rng = seeds.substream(Stream::Eval, round);
     let mut greedy = Greedy::new(env, learner);
+    greedy.frame = frame;
     let mut wins = 0usize;
     for _ in 0..episodes {
         let start = env.sample_start(&mut rng);
@@ -226,15 +229,18 @@ pub fn evaluate<E: Env>(
 }
 
 /// The greedy policy of `learner` from each of `starts`, each episode at most `max_steps`
-/// steps: whether it reached a positive terminal reward, and in how many steps.
+/// steps: whether it reached a positive terminal reward, and in how many steps. `goals` and
+/// `frame` as for [`evaluate`].
 pub fn greedy_episodes<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
     goals: Option<&dyn Goals<E::State>>,
+    frame: Option<fn(&mut [f32])>,
     starts: Vec<E::State>,
     max_steps: usize,
 ) -> Vec<EvalEpisode> {
     let mut greedy = Greedy::new(env, learner);
+    greedy.frame = frame;
     starts
         .into_iter()
         .map(|start| {

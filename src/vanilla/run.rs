@@ -5,7 +5,7 @@
 use super::{evaluate, greedy_episodes, EvalRow, TrainConfig, TrainOutcome, Updates};
 use crate::env::{evaluation_starts, random_action, Capability, Env, Goals};
 use crate::error::{Error, Result};
-use crate::learner::her::HerReplay;
+use crate::learner::her::{GoalFrame, HerReplay};
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
@@ -92,6 +92,9 @@ pub struct VanillaRun<'a, E: Env> {
     seeds: &'a Seeds,
     /// The environment's goals, when training with HER.
     goals: Option<&'a dyn Goals<E::State>>,
+    /// The rewrite of the networks' inputs into the body's frame (`[train.her] goal_frame =
+    /// "body"`).
+    frame: Option<fn(&mut [f32])>,
     learner: Box<dyn Learner>,
     p: Progress<E::State>,
     /// Wall-clock seconds of the run before it was resumed (0 for a fresh run).
@@ -134,6 +137,18 @@ impl<'a, E: Env> VanillaRun<'a, E> {
                 0,
             ),
         };
+        let frame = match (goals, &train.her) {
+            (Some(goals), Some(her)) if her.goal_frame == GoalFrame::Body => {
+                Some(goals.body_frame().ok_or_else(|| {
+                    Error::invalid(
+                        "train.her.goal_frame",
+                        "is \"body\", but this environment has no body to see the goal from \
+                         (leave it out: \"world\")",
+                    )
+                })?)
+            }
+            _ => None,
+        };
         let learner = lc.build(obs_dim + goal_dim, &vec![1.0; act_dim], seeds, kernel)?;
         let mut rng_start = seeds.stream(Stream::Start);
         let state = env.sample_start(&mut rng_start);
@@ -142,6 +157,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
             train,
             seeds,
             goals,
+            frame,
             learner,
             p: Progress {
                 replay,
@@ -290,6 +306,9 @@ impl<'a, E: Env> VanillaRun<'a, E> {
                 Store::Her(..) => {
                     p.input.clear();
                     p.input.extend(p.obs.iter().chain(&p.desired));
+                    if let Some(frame) = self.frame {
+                        frame(&mut p.input);
+                    }
                     &p.input
                 }
             };
@@ -314,6 +333,11 @@ impl<'a, E: Env> VanillaRun<'a, E> {
             (Store::Her(her), Some(goals)) => {
                 let reward = |a: &[f32], d: &[f32]| goals.goal_reward(a, d);
                 if her.sample(batch_size, &mut p.rng_replay, &reward, &mut p.batch) {
+                    if let Some(frame) = self.frame {
+                        let width = p.batch.obs.len() / p.batch.len;
+                        p.batch.obs.chunks_mut(width).for_each(frame);
+                        p.batch.next_obs.chunks_mut(width).for_each(frame);
+                    }
                     self.learner.update(&p.batch);
                 }
             }
@@ -394,6 +418,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
             self.env,
             self.learner.as_mut(),
             self.goals,
+            self.frame,
             self.train.eval_episodes,
             self.train.max_episode_steps,
             self.seeds,
@@ -426,6 +451,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
                 self.env,
                 self.learner.as_mut(),
                 self.goals,
+                self.frame,
                 starts,
                 t.final_eval_max_steps,
             )

@@ -107,6 +107,44 @@ pub fn drawn(map: &PointMap, [x, y]: [f64; 2]) -> (f32, f32) {
     ((x + w / 2.0) as f32, (y + h / 2.0) as f32)
 }
 
+/// The goal seen from the ant ([`crate::env::Goals::body_frame`]), in a network input of the observation
+/// (29 numbers: the torso's x, y, then z, its orientation quaternion w, x, y, z, …) followed by
+/// the goal (x, y): the torso's (x, y) is replaced by the goal's offset d = goal − (x, y) turned
+/// by minus the torso's heading (its yaw: the offset in the frame that turns with the ant, x
+/// ahead), and the goal by d itself. Nothing absolute is left of the position: the input is the
+/// same wherever the ant and its goal stand together. The rest (the torso's orientation, its
+/// velocities) stays in the world's frame.
+///
+/// ```
+/// use pbcs::envs::antmaze::model::body_frame;
+/// let mut input = [0.0_f32; 31];
+/// input[..2].copy_from_slice(&[1.0, 2.0]); // the torso at (1, 2)
+/// // Turned a quarter left (yaw π/2: quaternion cos π/4, 0, 0, sin π/4).
+/// let h = std::f32::consts::FRAC_1_SQRT_2;
+/// input[3..7].copy_from_slice(&[h, 0.0, 0.0, h]);
+/// input[29..].copy_from_slice(&[1.0, 5.0]); // the goal 3 m north of it
+/// body_frame(&mut input);
+/// // Ahead of the ant (which faces north), 3 m; and 3 m north.
+/// assert!((input[0] - 3.0).abs() < 1e-6 && input[1].abs() < 1e-6);
+/// assert_eq!(&input[29..], &[0.0, 3.0]);
+/// ```
+pub fn body_frame(input: &mut [f32]) {
+    debug_assert_eq!(
+        input.len(),
+        31,
+        "the ant's 29 observed numbers, then the goal's 2"
+    );
+    let g = input.len() - 2;
+    let (dx, dy) = (input[g] - input[0], input[g + 1] - input[1]);
+    let [w, x, y, z] = [input[3], input[4], input[5], input[6]];
+    let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    let (sin, cos) = yaw.sin_cos();
+    input[0] = cos * dx + sin * dy;
+    input[1] = -sin * dx + cos * dy;
+    input[g] = dx;
+    input[g + 1] = dy;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,6 +164,45 @@ mod tests {
         assert_eq!(geoms, [32, 34, 52, 76]);
         let limits: Vec<usize> = MapName::iter().map(time_limit).collect();
         assert_eq!(limits, [700, 700, 1000, 1000]);
+    }
+
+    /// The input of an ant at `xy` heading `yaw` (level) toward `goal`, the rest of the
+    /// observation `rest`, after [`body_frame`].
+    fn framed(xy: [f32; 2], yaw: f32, goal: [f32; 2], rest: f32) -> Vec<f32> {
+        let mut input = vec![rest; 31];
+        input[..2].copy_from_slice(&xy);
+        let (s, c) = (yaw / 2.0).sin_cos();
+        input[3..7].copy_from_slice(&[c, 0.0, 0.0, s]);
+        input[29..].copy_from_slice(&goal);
+        body_frame(&mut input);
+        input
+    }
+
+    proptest::proptest! {
+        /// The goal seen from the body (the first two numbers): the same wherever the ant and
+        /// its goal stand together, the same when the ant's heading and the goal's bearing turn
+        /// alike, at the goal's distance; the rest of the observation untouched.
+        #[test]
+        fn the_body_frame_sees_only_the_goal_from_the_ant(
+            x in -20.0f32..20.0, y in -20.0f32..20.0, yaw in -3.1f32..3.1,
+            r in 0.0f32..4.0, bearing in -3.1f32..3.1, shift in -10.0f32..10.0,
+            turn in -3.1f32..3.1, rest in -5.0f32..5.0,
+        ) {
+            let goal = |x: f32, y: f32, b: f32| [x + r * b.cos(), y + r * b.sin()];
+            let a = framed([x, y], yaw, goal(x, y, bearing), rest);
+            let moved = framed([x + shift, y - shift], yaw, goal(x + shift, y - shift, bearing), rest);
+            let turned = framed([x, y], yaw + turn, goal(x, y, bearing + turn), rest);
+            for (p, q) in a[..2].iter().zip(&moved[..2]).chain(a[..2].iter().zip(&turned[..2])) {
+                proptest::prop_assert!((p - q).abs() < 1e-3, "{a:?} {moved:?} {turned:?}");
+            }
+            proptest::prop_assert!((a[0].hypot(a[1]) - r).abs() < 1e-3);
+            proptest::prop_assert!((a[29].hypot(a[30]) - r).abs() < 1e-3);
+            // Bearing relative to the heading: ahead is +x, a quarter left is +y.
+            let rel = (bearing - yaw).sin_cos();
+            proptest::prop_assert!(r < 1e-2 || (a[1] / r - rel.0).abs() < 1e-2);
+            proptest::prop_assert!(r < 1e-2 || (a[0] / r - rel.1).abs() < 1e-2);
+            proptest::prop_assert!(a[2] == rest && a[7..29].iter().all(|&v| v == rest));
+        }
     }
 
     #[test]

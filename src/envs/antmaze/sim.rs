@@ -375,6 +375,9 @@ impl Goals<AntState> for AntMaze {
             0.0
         }
     }
+    fn body_frame(&self) -> Option<fn(&mut [f32])> {
+        Some(model::body_frame)
+    }
 }
 
 /// `c` moved as `add_xy_position_noise` moves a cell's centre: each coordinate plus a uniform
