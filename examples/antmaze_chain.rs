@@ -1,0 +1,268 @@
+//! Whether an AntMaze chain's skills carry the ant when run in turn: a diagnosis for issue 49
+//! (`results/dev/issue49/handover/`).
+//!
+//! ```text
+//! cargo run --release --features mujoco --example antmaze_chain -- handover RUN_DIR [EPISODES] [BALL]
+//! cargo run --release --features mujoco --example antmaze_chain -- prefix JOB.toml SEED N [EPISODES] [BALL]
+//! ```
+//!
+//! `handover` reads a `pbcs run` folder (its `chain/` and the job in it) and makes τ again by
+//! phase 1 from the job's seed, as the run made it. `prefix` runs phase 2 of JOB on τ_0 … τ_N
+//! alone (the first N + 1 states of the job's τ, each state's goal moved to τ_N's torso, the
+//! last skill aiming at B_ε(τ_N): `phase2.last_goal = "ball"`), with the job's chain
+//! verification and repairs, and then reads the chain it made.
+//!
+//! Both then run the chain EPISODES (20) times from starts in B_ε(τ_0) drawn as training drew
+//! its balls, each skill taking over as the chain's execution hands over, and print which
+//! skills each episode reached. For each skill some episode entered, the skill alone runs to its
+//! target (the next skill's ball, or for the last, the episode's success) within its test's
+//! step limit (`phase2.max_steps`): from each state where the chain handed it over
+//! (`from_entries`), and from BALL (50) starts of each kind: B_ε(τ_K) as its training drew them
+//! (`from_ball`), the same with the ant at rest (`from_ball_at_rest`: velocities and warm start
+//! zero), and the same with no action at all (`coasting`: zero torques, τ_K's momentum alone).
+//! `joint_gap` and `velocity_gap` are the mean distances of the entries' hinge angles (rad) and
+//! hinge velocities (rad/s) from τ_K's; `flipped` counts entries with the torso upside down.
+use anyhow::{bail, Context};
+use pbcs::config::{Located, PbcsJob};
+use pbcs::env::Env;
+use pbcs::env::SampleBall;
+use pbcs::envs::antmaze::{AntMaze, AntState};
+use pbcs::envs::Built;
+use pbcs::phase1::{explore, Exploration};
+use pbcs::phase2::{
+    chain_skills_with_starts, phase2_trajectory, ArchiveStarts, LastGoal, SkillChain, StartMode,
+};
+use pbcs::rng::{Seeds, Stream};
+
+/// Observation slots of the ant's hinge angles and their velocities (x, y, then qpos[2..], qvel).
+const JOINTS: std::ops::Range<usize> = 7..15;
+const JOINT_VELOCITIES: std::ops::Range<usize> = 21..29;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let number = |i: usize, default: usize, what: &str| -> anyhow::Result<usize> {
+        args.get(i)
+            .map_or(Ok(default), |s| s.parse())
+            .with_context(|| what.to_string())
+    };
+    let kernel = pbcs::nn::kernel::Kernel::from_env()?;
+    match args.first().map(String::as_str) {
+        Some("handover") => {
+            let run = std::path::Path::new(args.get(1).context("RUN_DIR")?);
+            let (job, chain) = pbcs::runs::load_saved_job(&run.join("chain"), kernel)?;
+            let env = ant(&job)?;
+            let (found, tau) = trajectory(&env, &job)?;
+            println!("phase 1: {} env steps, |τ| = {}", found.env_steps, tau.len());
+            read_chain(&env, &job, &tau, &chain, number(2, 20, "EPISODES")?, number(3, 50, "BALL")?);
+        }
+        Some("prefix") => {
+            let path = std::path::Path::new(args.get(1).context("JOB.toml")?);
+            let mut job: PbcsJob = pbcs::config::load(path)?;
+            job.seed = number(2, 0, "SEED")? as u64;
+            let n = number(3, 0, "N")?;
+            job.phase2.last_goal = LastGoal::Ball;
+            let env = ant(&job)?;
+            let (found, mut tau) = trajectory(&env, &job)?;
+            let steps = found.env_steps;
+            if n == 0 || n >= tau.len() {
+                bail!("N must lie in 1..{} (τ has {} states)", tau.len() - 1, tau.len());
+            }
+            tau.truncate(n + 1);
+            let goal = tau[n].xy();
+            for s in &mut tau {
+                s.goal = goal;
+            }
+            println!("phase 1: {steps} env steps; τ_0 … τ_{n}, τ_{n} at ({:.3}, {:.3})", goal[0], goal[1]);
+            let clock = std::time::Instant::now();
+            // Backplay's starts from phase 1's archive where the job asks (their goals are the
+            // task's: phase 2 pays for its own balls, and no start reaches the task's goal).
+            let archived = (job.phase2.start == StartMode::Archive)
+                .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
+            let out = chain_skills_with_starts(
+                &env,
+                &tau,
+                archived.as_ref().map(|a| a as &dyn SampleBall<AntState>),
+                &job.learner,
+                job.phase2.ready(&env)?,
+                &Seeds::new(job.seed),
+                steps,
+                kernel,
+                |n, p| {
+                    let s = clock.elapsed().as_secs_f64();
+                    eprintln!(
+                        "[{s:.0} s] problem {n} K {} T {} {:?} {:.2} ({} train, {} test)",
+                        p.k, p.t, p.kind, p.success, p.steps.train, p.steps.test
+                    );
+                },
+            )?;
+            println!(
+                "phase 2: {:?}, {} skills, {} training and {} test env steps, {:.0} s",
+                out.failure,
+                out.chain.skills.len(),
+                out.steps.train,
+                out.steps.test,
+                clock.elapsed().as_secs_f64()
+            );
+            for row in out.trace.iter().filter(|r| r.event.name() == "chain_verify") {
+                println!("chain verification: skill {} blamed, success {:.2}", row.skill, row.success);
+            }
+            if !out.chain.skills.is_empty() {
+                read_chain(&env, &job, &tau, &out.chain, number(4, 20, "EPISODES")?, number(5, 50, "BALL")?);
+            }
+        }
+        _ => bail!("usage: antmaze_chain handover RUN_DIR [EPISODES] [BALL] | prefix JOB.toml SEED N [EPISODES] [BALL]"),
+    }
+    Ok(())
+}
+
+fn ant(job: &PbcsJob) -> anyhow::Result<AntMaze> {
+    match job.env_spec().build()? {
+        Built::AntMaze(env) => Ok(env),
+        _ => bail!("an AntMaze job, not {}", job.env.name()),
+    }
+}
+
+/// τ as the job's run made it: phase 1 from the job's seed, then phase 2's trajectory.
+fn trajectory(
+    env: &AntMaze,
+    job: &PbcsJob,
+) -> anyhow::Result<(Exploration<AntState>, Vec<AntState>)> {
+    let seeds = Seeds::new(job.seed);
+    let found = explore(
+        env,
+        &job.explore,
+        &mut seeds.stream(Stream::Explore),
+        |_, _| {},
+    )?;
+    let tau = phase2_trajectory(env, &found.trajectory, &job.phase2)?.states;
+    Ok((found, tau))
+}
+
+fn dist(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f32>()
+        .sqrt()
+}
+
+/// The chain from B_ε(τ_0), and each entered skill alone (the module's doc).
+fn read_chain(
+    env: &AntMaze,
+    job: &PbcsJob,
+    tau: &[AntState],
+    chain: &SkillChain,
+    episodes: usize,
+    ball_n: usize,
+) {
+    let obs = |s: &AntState| {
+        let mut o = vec![0.0; env.obs_dim()];
+        env.observe(s, &mut o);
+        o
+    };
+    let eps = job.phase2.epsilon;
+    let ball = env.ball_starts().expect("AntMaze samples balls");
+    let mut rng = Seeds::new(job.seed).stream(Stream::ChainVerify);
+    let n = chain.skills.len();
+    let mut entries: Vec<Vec<AntState>> = vec![Vec::new(); n];
+    let mut stalled = vec![0usize; n];
+    let mut successes = 0;
+    for e in 0..episodes {
+        let start = ball.sample_ball(&tau[0], eps, &mut rng);
+        let r = chain.run(env, start, job.phase2.eval_max_steps);
+        let mut seq = Vec::new();
+        let mut cur = None;
+        for (j, &i) in r.skill_used.iter().enumerate() {
+            if cur != Some(i) {
+                entries[i].push(r.states[j]);
+                seq.push(format!("{i}@{j}"));
+                cur = Some(i);
+            }
+        }
+        match (r.success, cur) {
+            (true, _) => successes += 1,
+            (false, Some(i)) => stalled[i] += 1,
+            (false, None) => {}
+        }
+        let o = obs(r.states.last().expect("the start"));
+        println!(
+            "episode {e}: {} in {} steps, ends at ({:.2}, {:.2}) up {:.2}; skills {}",
+            if r.success { "success" } else { "failure" },
+            r.skill_used.len(),
+            o[0],
+            o[1],
+            r.states.last().expect("the start").up(),
+            seq.join(" ")
+        );
+    }
+    println!("chain from B_eps(tau_0): {successes} of {episodes} episodes reach the target");
+    let limit = job.phase2.max_steps;
+    println!(
+        "skill,K,T,entered,stalled,flipped,from_entries,from_ball,from_ball_at_rest,coasting,\
+         joint_gap,velocity_gap"
+    );
+    for i in (0..n).filter(|&i| !entries[i].is_empty()) {
+        // Skill i alone (with the next skill's ball as its target) reaches its target.
+        let alone = SkillChain {
+            skills: chain.skills[i..(i + 2).min(n)].to_vec(),
+            kernel: chain.kernel,
+        };
+        let reaches = |start: AntState| -> bool {
+            let r = alone.run_limited(env, start, limit + 1, Some(limit));
+            if i + 1 < n {
+                r.skill_used.contains(&1)
+            } else {
+                r.success
+            }
+        };
+        let arrived = |o: &[f32], reward: f32| match chain.skills.get(i + 1) {
+            Some(next) => next.activation.contains(o),
+            None => reward > 0.0,
+        };
+        let k = chain.skills[i].start_index;
+        let centre = obs(&tau[k]);
+        let share = |count: usize, of: usize| count as f32 / of as f32;
+        let from_entries = entries[i].iter().filter(|s| reaches(**s)).count();
+        let from_ball = (0..ball_n)
+            .filter(|_| reaches(ball.sample_ball(&tau[k], eps, &mut rng)))
+            .count();
+        let at_rest = (0..ball_n)
+            .filter(|_| {
+                let mut s = ball.sample_ball(&tau[k], eps, &mut rng);
+                s.qvel = [0.0; 14];
+                s.warmstart = [0.0; 14];
+                reaches(s)
+            })
+            .count();
+        let coasting = (0..ball_n)
+            .filter(|_| {
+                let mut s = ball.sample_ball(&tau[k], eps, &mut rng);
+                (0..limit).any(|_| {
+                    let step = env.step(&s, &[0.0; 8]);
+                    s = step.state;
+                    arrived(&obs(&s), step.reward)
+                })
+            })
+            .count();
+        let flipped = entries[i].iter().filter(|s| s.up() < 0.0).count();
+        let gap = |r: std::ops::Range<usize>| {
+            entries[i]
+                .iter()
+                .map(|s| dist(&obs(s)[r.clone()], &centre[r.clone()]))
+                .sum::<f32>()
+                / entries[i].len() as f32
+        };
+        println!(
+            "{i},{k},{},{},{},{flipped},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            chain.skills[i].target_index,
+            entries[i].len(),
+            stalled[i],
+            share(from_entries, entries[i].len()),
+            share(from_ball, ball_n),
+            share(at_rest, ball_n),
+            share(coasting, ball_n),
+            gap(JOINTS),
+            gap(JOINT_VELOCITIES)
+        );
+    }
+}
