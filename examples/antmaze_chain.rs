@@ -3,14 +3,17 @@
 //!
 //! ```text
 //! cargo run --release --features mujoco --example antmaze_chain -- handover RUN_DIR [EPISODES] [BALL]
-//! cargo run --release --features mujoco --example antmaze_chain -- prefix JOB.toml SEED N [EPISODES] [BALL]
+//! cargo run --release --features mujoco --example antmaze_chain -- prefix JOB.toml SEED N [EPISODES] [BALL] [ANGLE SPEED]
 //! ```
 //!
 //! `handover` reads a `pbcs run` folder (its `chain/` and the job in it) and makes τ again by
 //! phase 1 from the job's seed, as the run made it. `prefix` runs phase 2 of JOB on τ_0 … τ_N
 //! alone (the first N + 1 states of the job's τ, each state's goal moved to τ_N's torso, the
 //! last skill aiming at B_ε(τ_N): `phase2.last_goal = "ball"`), with the job's chain
-//! verification and repairs, and then reads the chain it made.
+//! verification and repairs, and then reads the chain it made. With ANGLE and SPEED,
+//! Backplay's starts are jittered balls ([`Jittered`]: τ_K's whole state, the torso moved up to
+//! ε, each hinge angle moved up to ANGLE rad and each hinge velocity up to SPEED rad/s,
+//! uniformly) in place of the job's.
 //!
 //! Both then run the chain EPISODES (20) times from starts in B_ε(τ_0) drawn as training drew
 //! its balls, each skill taking over as the chain's execution hands over, and print which
@@ -78,10 +81,28 @@ fn main() -> anyhow::Result<()> {
             // task's: phase 2 pays for its own balls, and no start reaches the task's goal).
             let archived = (job.phase2.start == StartMode::Archive)
                 .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
+            let jittered = match (args.get(6), args.get(7)) {
+                (Some(a), Some(v)) => Some(Jittered {
+                    env: &env,
+                    angle: a.parse().context("ANGLE")?,
+                    speed: v.parse().context("SPEED")?,
+                }),
+                _ => None,
+            };
+            let starts: Option<&dyn SampleBall<AntState>> = match (&jittered, &archived) {
+                (Some(j), _) => {
+                    // The starts slot is the archive's: the job's start mode must ask for it.
+                    job.phase2.start = StartMode::Archive;
+                    println!("Backplay's starts: jittered, ±{} rad, ±{} rad/s", j.angle, j.speed);
+                    Some(j)
+                }
+                (None, Some(a)) => Some(a),
+                (None, None) => None,
+            };
             let out = chain_skills_with_starts(
                 &env,
                 &tau,
-                archived.as_ref().map(|a| a as &dyn SampleBall<AntState>),
+                starts,
                 &job.learner,
                 job.phase2.ready(&env)?,
                 &Seeds::new(job.seed),
@@ -110,9 +131,33 @@ fn main() -> anyhow::Result<()> {
                 read_chain(&env, &job, &tau, &out.chain, number(4, 20, "EPISODES")?, number(5, 50, "BALL")?);
             }
         }
-        _ => bail!("usage: antmaze_chain handover RUN_DIR [EPISODES] [BALL] | prefix JOB.toml SEED N [EPISODES] [BALL]"),
+        _ => bail!("usage: antmaze_chain handover RUN_DIR [EPISODES] [BALL] | prefix JOB.toml SEED N [EPISODES] [BALL] [ANGLE SPEED]"),
     }
     Ok(())
+}
+
+/// Ball starts with the legs moved too: [`AntMaze`]'s own ball (τ_K's whole state, the torso
+/// moved), then each hinge angle (qpos 7..15) plus U(−angle, angle) rad and each hinge velocity
+/// (qvel 6..14) plus U(−speed, speed) rad/s. Torso height, orientation and velocity stay τ_K's.
+struct Jittered<'e> {
+    env: &'e AntMaze,
+    angle: f64,
+    speed: f64,
+}
+
+impl SampleBall<AntState> for Jittered<'_> {
+    fn sample_ball(&self, center: &AntState, radius: f32, rng: &mut pbcs::rng::Rng) -> AntState {
+        use rand::Rng as _;
+        let ball = self.env.ball_starts().expect("AntMaze samples balls");
+        let mut s = ball.sample_ball(center, radius, rng);
+        for q in &mut s.qpos[7..15] {
+            *q += rng.random_range(-self.angle..=self.angle);
+        }
+        for v in &mut s.qvel[6..14] {
+            *v += rng.random_range(-self.speed..=self.speed);
+        }
+        s
+    }
 }
 
 fn ant(job: &PbcsJob) -> anyhow::Result<AntMaze> {
