@@ -8,9 +8,12 @@
 //!
 //! `handover` reads a `pbcs run` folder (its `chain/` and the job in it) and makes τ again by
 //! phase 1 from the job's seed, as the run made it. `prefix` runs phase 2 of JOB on τ_0 … τ_N
-//! alone (the first N + 1 states of the job's τ, each state's goal moved to τ_N's torso, the
-//! last skill aiming at B_ε(τ_N): `phase2.last_goal = "ball"`), with the job's chain
-//! verification and repairs, and then reads the chain it made. With ANGLE and SPEED,
+//! alone (the first N + 1 states of the job's τ; the last skill aims at B_ε(τ_N),
+//! `phase2.last_goal = "ball"`, and every state keeps the task's goal, which no state near τ_N
+//! reaches, so the environment's success never ends an episode), with the job's chain
+//! verification and repairs, and then reads the chain it made; there, an episode succeeds when
+//! the torso enters B_ε(τ_N), and the chain runs as its verification runs it (an episode also
+//! ends when one skill has acted `phase2.max_steps` times without handing over). With ANGLE and SPEED,
 //! Backplay's starts are jittered balls ([`Jittered`]: τ_K's whole state, the torso moved up to
 //! ε, each hinge angle moved up to ANGLE rad and each hinge velocity up to SPEED rad/s,
 //! uniformly) in place of the job's.
@@ -33,7 +36,8 @@ use pbcs::envs::antmaze::{AntMaze, AntState};
 use pbcs::envs::Built;
 use pbcs::phase1::{explore, Exploration};
 use pbcs::phase2::{
-    chain_skills_with_starts, phase2_trajectory, ArchiveStarts, LastGoal, SkillChain, StartMode,
+    chain_skills_with_starts, phase2_trajectory, ArchiveStarts, Ball, LastGoal, SkillChain,
+    StartMode,
 };
 use pbcs::rng::{Seeds, Stream};
 
@@ -56,7 +60,8 @@ fn main() -> anyhow::Result<()> {
             let env = ant(&job)?;
             let (found, tau) = trajectory(&env, &job)?;
             println!("phase 1: {} env steps, |τ| = {}", found.env_steps, tau.len());
-            read_chain(&env, &job, &tau, &chain, number(2, 20, "EPISODES")?, number(3, 50, "BALL")?);
+            let (episodes, ball_n) = (number(2, 20, "EPISODES")?, number(3, 50, "BALL")?);
+            read_chain(&env, &job, &tau, &chain, None, episodes, ball_n);
         }
         Some("prefix") => {
             let path = std::path::Path::new(args.get(1).context("JOB.toml")?);
@@ -71,14 +76,10 @@ fn main() -> anyhow::Result<()> {
                 bail!("N must lie in 1..{} (τ has {} states)", tau.len() - 1, tau.len());
             }
             tau.truncate(n + 1);
-            let goal = tau[n].xy();
-            for s in &mut tau {
-                s.goal = goal;
-            }
-            println!("phase 1: {steps} env steps; τ_0 … τ_{n}, τ_{n} at ({:.3}, {:.3})", goal[0], goal[1]);
+            let end = tau[n].xy();
+            println!("phase 1: {steps} env steps; τ_0 … τ_{n}, τ_{n} at ({:.3}, {:.3})", end[0], end[1]);
             let clock = std::time::Instant::now();
-            // Backplay's starts from phase 1's archive where the job asks (their goals are the
-            // task's: phase 2 pays for its own balls, and no start reaches the task's goal).
+            // Backplay's starts from phase 1's archive where the job asks.
             let archived = (job.phase2.start == StartMode::Archive)
                 .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
             let jittered = match (args.get(6), args.get(7)) {
@@ -128,7 +129,9 @@ fn main() -> anyhow::Result<()> {
                 println!("chain verification: skill {} blamed, success {:.2}", row.skill, row.success);
             }
             if !out.chain.skills.is_empty() {
-                read_chain(&env, &job, &tau, &out.chain, number(4, 20, "EPISODES")?, number(5, 50, "BALL")?);
+                let end = Ball::new(end.map(|x| x as f32).to_vec(), job.phase2.epsilon);
+                let (episodes, ball_n) = (number(4, 20, "EPISODES")?, number(5, 50, "BALL")?);
+                read_chain(&env, &job, &tau, &out.chain, Some(&end), episodes, ball_n);
             }
         }
         _ => bail!("usage: antmaze_chain handover RUN_DIR [EPISODES] [BALL] | prefix JOB.toml SEED N [EPISODES] [BALL] [ANGLE SPEED]"),
@@ -192,11 +195,14 @@ fn dist(a: &[f32], b: &[f32]) -> f32 {
 }
 
 /// The chain from B_ε(τ_0), and each entered skill alone (the module's doc).
+///
+/// `end`: a prefix's target, B_ε(τ_N) (`None`: the environment's success, as `pbcs eval`).
 fn read_chain(
     env: &AntMaze,
     job: &PbcsJob,
     tau: &[AntState],
     chain: &SkillChain,
+    end: Option<&Ball>,
     episodes: usize,
     ball_n: usize,
 ) {
@@ -211,37 +217,56 @@ fn read_chain(
     let n = chain.skills.len();
     let mut entries: Vec<Vec<AntState>> = vec![Vec::new(); n];
     let mut stalled = vec![0usize; n];
-    let mut successes = 0;
+    let limit = job.phase2.max_steps;
+    // The step where a rollout first reaches the target: the environment's success (its last
+    // state), or entering `end`.
+    let reached = |states: &[AntState], success: bool| -> Option<usize> {
+        match end {
+            Some(b) => states.iter().position(|s| b.contains(&obs(s))),
+            None => success.then(|| states.len() - 1),
+        }
+    };
+    let (mut successes, mut upright) = (0, 0);
     for e in 0..episodes {
         let start = ball.sample_ball(&tau[0], eps, &mut rng);
-        let r = chain.run(env, start, job.phase2.eval_max_steps);
+        let r = match end {
+            None => chain.run(env, start, job.phase2.eval_max_steps),
+            Some(_) => chain.run_limited(env, start, job.phase2.eval_max_steps, Some(limit)),
+        };
+        let done = reached(&r.states, r.success);
+        let acted = done.unwrap_or(r.skill_used.len());
         let mut seq = Vec::new();
         let mut cur = None;
-        for (j, &i) in r.skill_used.iter().enumerate() {
+        for (j, &i) in r.skill_used[..acted].iter().enumerate() {
             if cur != Some(i) {
                 entries[i].push(r.states[j]);
                 seq.push(format!("{i}@{j}"));
                 cur = Some(i);
             }
         }
-        match (r.success, cur) {
-            (true, _) => successes += 1,
-            (false, Some(i)) => stalled[i] += 1,
-            (false, None) => {}
+        let last = &r.states[acted];
+        match (done, cur) {
+            (Some(_), _) => {
+                successes += 1;
+                upright += usize::from(last.up() >= 0.0);
+            }
+            (None, Some(i)) => stalled[i] += 1,
+            (None, None) => {}
         }
-        let o = obs(r.states.last().expect("the start"));
+        let o = obs(last);
         println!(
-            "episode {e}: {} in {} steps, ends at ({:.2}, {:.2}) up {:.2}; skills {}",
-            if r.success { "success" } else { "failure" },
-            r.skill_used.len(),
+            "episode {e}: {} in {acted} steps, ends at ({:.2}, {:.2}) up {:.2}; skills {}",
+            if done.is_some() { "success" } else { "failure" },
             o[0],
             o[1],
-            r.states.last().expect("the start").up(),
+            last.up(),
             seq.join(" ")
         );
     }
-    println!("chain from B_eps(tau_0): {successes} of {episodes} episodes reach the target");
-    let limit = job.phase2.max_steps;
+    println!(
+        "chain from B_eps(tau_0): {successes} of {episodes} episodes reach the target \
+         ({upright} of them upright there)"
+    );
     println!(
         "skill,K,T,entered,stalled,flipped,from_entries,from_ball,from_ball_at_rest,coasting,\
          joint_gap,velocity_gap"
@@ -252,17 +277,18 @@ fn read_chain(
             skills: chain.skills[i..(i + 2).min(n)].to_vec(),
             kernel: chain.kernel,
         };
+        // Reached: the next skill's ball, or the chain's own target on the way.
         let reaches = |start: AntState| -> bool {
             let r = alone.run_limited(env, start, limit + 1, Some(limit));
-            if i + 1 < n {
-                r.skill_used.contains(&1)
-            } else {
-                r.success
-            }
+            reached(&r.states, r.success).is_some() || (i + 1 < n && r.skill_used.contains(&1))
         };
-        let arrived = |o: &[f32], reward: f32| match chain.skills.get(i + 1) {
-            Some(next) => next.activation.contains(o),
-            None => reward > 0.0,
+        let arrived = |o: &[f32], reward: f32| {
+            reward > 0.0
+                || end.is_some_and(|b| b.contains(o))
+                || chain
+                    .skills
+                    .get(i + 1)
+                    .is_some_and(|next| next.activation.contains(o))
         };
         let k = chain.skills[i].start_index;
         let centre = obs(&tau[k]);
