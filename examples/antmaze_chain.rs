@@ -35,6 +35,7 @@ use pbcs::env::SampleBall;
 use pbcs::envs::antmaze::{AntMaze, AntState};
 use pbcs::envs::Built;
 use pbcs::phase1::{explore, Exploration};
+use pbcs::phase2::goal::dist;
 use pbcs::phase2::{
     chain_skills_with_starts, phase2_trajectory, ArchiveStarts, Ball, LastGoal, SkillChain,
     StartMode,
@@ -184,14 +185,6 @@ fn trajectory(
     )?;
     let tau = phase2_trajectory(env, &found.trajectory, &job.phase2)?.states;
     Ok((found, tau))
-}
-
-fn dist(a: &[f32], b: &[f32]) -> f32 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f32>()
-        .sqrt()
 }
 
 /// The chain from B_ε(τ_0), and each entered skill alone (the module's doc).
