@@ -66,6 +66,9 @@ pub struct FlatPhase2 {
     /// [`super::Ideas::patience`] (0: none, the default, not written).
     #[serde(skip_serializing_if = "is_zero_usize")]
     pub patience: usize,
+    /// [`super::Ideas::lookahead`] (0: none, the default, not written).
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub lookahead: usize,
     /// [`super::Ideas::fast_tests`].
     pub fast_tests: bool,
     /// [`super::FastTests::lanes`] (0: all β at once, the default, not written; needs
@@ -111,7 +114,7 @@ fn is_zero(x: &f32) -> bool {
     *x == 0.0
 }
 
-/// An unset `phase2.patience` or `phase2.test_lanes`, left out of written files (those written
+/// An unset `phase2.patience`, `phase2.lookahead` or `phase2.test_lanes`, left out of written files (those written
 /// before it existed keep their bytes).
 fn is_zero_usize(n: &usize) -> bool {
     *n == 0
@@ -232,6 +235,7 @@ impl TryFrom<FlatPhase2> for Phase2Config {
                     retargets: f.retargets,
                 }),
                 patience: nonzero(f.patience),
+                lookahead: nonzero(f.lookahead),
                 fast_tests: match (f.fast_tests, nonzero(f.test_lanes)) {
                     (false, Some(_)) => {
                         return Err(Error::invalid(
@@ -284,6 +288,7 @@ impl From<Phase2Config> for FlatPhase2 {
             dead_walk: i.dead_walk.map_or(0, |d| d.after),
             retargets: i.dead_walk.map_or(0, |d| d.retargets),
             patience: i.patience.unwrap_or(0),
+            lookahead: i.lookahead.unwrap_or(0),
             fast_tests: i.fast_tests.is_some(),
             test_lanes: i.fast_tests.and_then(|f| f.lanes).unwrap_or(0),
             verify_episodes: i.verify_skills.unwrap_or(0),

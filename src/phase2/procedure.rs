@@ -153,6 +153,17 @@ pub struct Ideas {
     /// Once a K is saved, a walk ends after this many Ks in a row trained without another
     /// save ([`Walk::patience`]; the paper walks on until a test after training reads 0 %).
     pub patience: Option<usize>,
+    /// Hand-over lookahead (ours; `None`: the paper): a skill's goal B_ε(τ_T) counts as
+    /// reached only where the next `n` skills already found, run greedily from the state that
+    /// entered it (each allowed `max_steps` actions to hand over, as the chain's verification
+    /// allows), carry it to the n-th one's target; an entry from which they do not ends the
+    /// episode as a failure, paid the shaped reward without [`super::goal::REACHED_REWARD`].
+    /// In training, tests and verification alike; the lookahead's steps are counted with the
+    /// episode's. Skills verified from their own balls need not work from where the chain
+    /// hands them over (a jointed body's legs: [issue 49](../../docs/antmaze.md)); the paper's
+    /// Backplay never looks past its own goal. The skills looked ahead to are those of the same
+    /// section (a chain repair's section sees only its own).
+    pub lookahead: Option<usize>,
     /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
     /// deterministic policy and a pure step it never will), and stop the whole test once it
     /// has both a success and a failure (Backplay only asks "100 %, 0 % or between"; the
@@ -184,6 +195,7 @@ impl Ideas {
         restarts: 0,
         dead_walk: None,
         patience: None,
+        lookahead: None,
         fast_tests: None,
         verify_skills: None,
         episode_limit: None,
@@ -325,6 +337,7 @@ impl Check for Phase2Config {
             ("phase2.max_rounds", i.stopping.max_rounds.unwrap_or(1)),
             ("phase2.dead_walk", i.dead_walk.map_or(1, |d| d.after)),
             ("phase2.patience", i.patience.unwrap_or(1)),
+            ("phase2.lookahead", i.lookahead.unwrap_or(1)),
             (
                 "phase2.test_lanes",
                 i.fast_tests.and_then(|f| f.lanes).unwrap_or(1),

@@ -2,8 +2,8 @@
 //! A_i = B_ε(τ_{K_i}) — its execution (π_0 until the state enters A_1, then π_1, ...) and its
 //! persistence (`manifest.toml` and one safetensors file per policy).
 
-use super::goal::Inputs;
 use super::goal::{weighted_dist, BallMetric};
+use super::goal::{Goal, Inputs};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
@@ -117,6 +117,21 @@ impl SkillChain {
         max_steps: usize,
         per_skill: Option<usize>,
     ) -> Rollout<E::State> {
+        self.run_until(env, start, max_steps, per_skill, None)
+    }
+
+    /// [`SkillChain::run_limited`] with the episode's success decided by `target` (reached as
+    /// [`Goal::reached`] decides) instead of the environment's reward, when one is given; a
+    /// terminal step that does not reach it is then a failure. A hand-over lookahead
+    /// ([`super::Ideas::lookahead`]) runs the skills found after a learning problem this way.
+    pub fn run_until<E: Env>(
+        &self,
+        env: &E,
+        start: E::State,
+        max_steps: usize,
+        per_skill: Option<usize>,
+        target: Option<&Goal>,
+    ) -> Rollout<E::State> {
         // The episode's goal, for a skill that sees where it stands from it.
         let goal = match (self.needs_goal(), env.goals()) {
             (true, Some(goals)) => {
@@ -129,6 +144,7 @@ impl SkillChain {
         let mut run = Execution {
             chain: self,
             goal,
+            target,
             skill: 0,
             acted: 0,
             per_skill,
@@ -299,6 +315,9 @@ impl SkillChain {
 /// step are recorded.
 struct Execution<'c, S> {
     chain: &'c SkillChain,
+    /// What the episode must reach ([`SkillChain::run_until`]); `None`: the environment's
+    /// success.
+    target: Option<&'c Goal>,
     /// The episode's goal, when a skill needs it ([`SkillChain::needs_goal`]).
     goal: Option<Vec<f32>>,
     /// The skill acting, and how many times it has acted since it took over.
@@ -335,8 +354,11 @@ impl<E: Env> Agent<E> for Execution<'_, E::State> {
     ) -> Verdict {
         self.rollout.skill_used.push(self.skill);
         self.rollout.states.push(step.state.clone());
-        if step.reward > 0.0 && step.terminal {
-            return Verdict::Success;
+        match self.target {
+            None if step.reward > 0.0 && step.terminal => return Verdict::Success,
+            Some(t) if t.reached(next_raw, step.terminal, step.reward) => return Verdict::Success,
+            Some(_) if step.terminal => return Verdict::Failure,
+            _ => {}
         }
         let Some(m) = self.per_skill else {
             return Verdict::Running;

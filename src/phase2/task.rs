@@ -102,8 +102,35 @@ pub struct SkillTask<'a, E: Env> {
     /// with [`Phase2Config::test_path_limit`]).
     limits: Vec<usize>,
     test_limits: Vec<usize>,
+    /// The skills found after this one, looked ahead to at its goal (`phase2.lookahead`).
+    lookahead: Option<Lookahead>,
     /// Called after each test and training round.
     pub on_event: Option<Box<dyn FnMut(super::Progress) + 'a>>,
+}
+
+/// A hand-over lookahead ([`super::Ideas::lookahead`]): the next skills already found, in
+/// execution order (the first one's ball is the task's goal), and the target they must carry
+/// an entry to.
+#[derive(Debug, Clone)]
+pub struct Lookahead {
+    /// The next skills, the first one's activation ball B_ε(τ_T).
+    pub chain: super::SkillChain,
+    /// The last of them's goal.
+    pub target: Goal,
+    /// Actions each of them may take to hand over (`max_steps`).
+    pub per_skill: usize,
+}
+
+impl Lookahead {
+    /// Whether the next skills, run greedily from `entry`, carry it to the target; and the
+    /// environment steps they took.
+    pub fn carries<E: Env>(&self, env: &E, entry: E::State) -> (bool, u64) {
+        let limit = self.per_skill * self.chain.skills.len();
+        let r = self
+            .chain
+            .run_until(env, entry, limit, Some(self.per_skill), Some(&self.target));
+        (r.success, r.skill_used.len() as u64)
+    }
 }
 
 impl<'a, E: Env> SkillTask<'a, E> {
@@ -164,6 +191,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
             entries: Vec::new(),
             limits: episode_limits(ready, train_limit, &lengths),
             test_limits: episode_limits(ready, greedy_limit, &lengths),
+            lookahead: None,
             on_event: None,
         }
     }
@@ -172,6 +200,14 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// this section) instead of uniformly in B_ε(τ_0): chain repair.
     pub fn with_entries(mut self, entries: Vec<E::State>) -> Self {
         self.entries = entries;
+        self
+    }
+
+    /// Looks ahead at the goal ([`super::Ideas::lookahead`]): its ball is reached only where
+    /// `lookahead`'s skills carry the entry to their target. `None` (no skill found after this
+    /// one yet) changes nothing.
+    pub fn with_lookahead(mut self, lookahead: Option<Lookahead>) -> Self {
+        self.lookahead = lookahead;
         self
     }
 
@@ -481,7 +517,18 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
             Some((g, i)) => (g, i),
             None => (&t.goal, &t.inputs),
         };
-        let reached = goal.reached(next_obs, step.terminal, step.reward);
+        let mut reached = goal.reached(next_obs, step.terminal, step.reward);
+        // With a lookahead, an entry into the goal ball (not the environment's own success)
+        // counts only if the next skills carry it on; either way the episode ends there.
+        let mut handed = false;
+        if let Some(l) = t.lookahead.as_ref().filter(|_| reached && !step.terminal) {
+            let (carried, steps) = l.carries(t.env, step.state.clone());
+            (reached, handed) = (carried, true);
+            match self.learn {
+                true => t.steps.train += steps,
+                false => t.steps.test += steps,
+            }
+        }
         if self.learn {
             t.steps.train += 1;
             let (obs_dim, act_dim) = (t.env.obs_dim(), t.env.action_dim());
@@ -489,7 +536,7 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
             inputs.observation(next_obs, &mut self.next_view);
             let o = &self.view[j * obs_dim..(j + 1) * obs_dim];
             let a = &self.actions[j * act_dim..(j + 1) * act_dim];
-            let done = goal.terminal(reached, step.terminal);
+            let done = goal.terminal(reached, step.terminal) || handed;
             t.replay.push(o, a, r, &self.next_view, done);
             let batch_size = t.learner.batch_size();
             if t.replay.len() >= batch_size {
@@ -502,7 +549,7 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
         let stuck = self.fast && step.state == *state;
         if reached {
             Verdict::Success
-        } else if step.terminal || stuck {
+        } else if step.terminal || stuck || handed {
             Verdict::Failure
         } else {
             Verdict::Running

@@ -271,3 +271,52 @@ fn a_spent_budget_stops_every_test_and_round() {
     assert_eq!(t.steps, spent, "no step after the budget");
     let _ = maze.start();
 }
+
+/// `phase2.lookahead` (ours): the goal ball B_ε(τ_5) counts as reached only where the skill
+/// found after this one carries the entry on to its own target, B_ε(τ_10). A next skill that
+/// walks on along +x does, and the test still passes, its steps counted with the test's; one
+/// that walks back never does, and the same policy that reaches B_ε(τ_5) in every episode now
+/// passes none.
+#[test]
+fn a_lookahead_counts_a_goal_only_where_the_next_skill_carries_it_on() {
+    use pbcs::phase2::task::Lookahead;
+    use pbcs::phase2::{goal::BallMetric, Ball, Skill, SkillChain};
+    let (maze, states, obs) = setup();
+    let config = Phase2Config::default();
+    let next = |dir: [f32; 2]| {
+        // τ_10 is τ's last state, whose goal would be the maze's own: a ball instead.
+        let goal = pbcs::phase2::goal::Goal::ball(obs[10].clone(), config.epsilon);
+        Lookahead {
+            chain: SkillChain {
+                skills: vec![Skill {
+                    policy: Box::new(unit_policy(dir)),
+                    activation: Ball::around(&maze, &obs[5], config.epsilon, BallMetric::Position),
+                    start_index: 5,
+                    target_index: 10,
+                    inputs: config.inputs(&maze, &goal),
+                }],
+                ..Default::default()
+            },
+            target: goal,
+            per_skill: config.max_steps,
+        }
+    };
+    let mut alone = task(&maze, &config, &states, &obs, 1_000_000);
+    assert_eq!(alone.test(0), 1.0);
+    let mut on =
+        task(&maze, &config, &states, &obs, 1_000_000).with_lookahead(Some(next([1.0, 0.0])));
+    assert_eq!(on.test(0), 1.0);
+    // Each of the 50 episodes then walked about 5 more steps (τ_5 to B_ε(τ_10)).
+    let more = on.steps.test - alone.steps.test;
+    assert!((50 * 3..=50 * 7).contains(&more), "{more}");
+    let mut back =
+        task(&maze, &config, &states, &obs, 1_000_000).with_lookahead(Some(next([-1.0, 0.0])));
+    assert_eq!(back.test(0), 0.0);
+    // Its steps count too: from each entry it walks back to the wall at x = 0 (at least 4
+    // steps of 0.1 from B_ε(τ_5)), where a stuck greedy chain ends.
+    let more = back.steps.test - alone.steps.test;
+    assert!((50 * 4..50 * 20).contains(&more), "{more}");
+    // No lookahead is no change.
+    let mut none = task(&maze, &config, &states, &obs, 1_000_000).with_lookahead(None);
+    assert_eq!((none.test(0), none.steps), (1.0, alone.steps));
+}
