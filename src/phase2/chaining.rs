@@ -11,7 +11,7 @@
 
 use super::backplay::{self, handover, verified};
 use super::resume::{Between, Chained};
-use super::task::{Lookahead, SkillTask, StepCounts};
+use super::task::{SkillTask, StepCounts};
 use super::{
     Ball, EventKind, Failure, Phase2Config, Phase2Outcome, Progress, Ready, Skill, SkillChain,
     TraceRow,
@@ -176,7 +176,10 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         mut pause: impl FnMut(&Between<Box<dyn Policy>>) -> Result<bool>,
     ) -> Result<Chained<Box<dyn Policy>>> {
         let states = &self.tau[lo..=hi];
-        *self.found.borrow_mut() = from.found.clone();
+        let looks = self.config.ideas.lookahead.is_some();
+        if looks {
+            *self.found.borrow_mut() = from.found.clone();
+        }
         skill_chaining_from(
             from,
             self.config,
@@ -193,28 +196,12 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
                 }
             },
             |at| {
-                *self.found.borrow_mut() = at.found.clone();
+                if looks {
+                    *self.found.borrow_mut() = at.found.clone();
+                }
                 pause(at)
             },
         )
-    }
-
-    /// The next `n` skills after the learning problem about to be made on the section from
-    /// τ_lo (the last `n` found, in execution order) and their target (`phase2.lookahead`);
-    /// `None` before any is found.
-    fn lookahead(&self, lo: usize, n: usize) -> Option<Lookahead> {
-        let next: Vec<_> = self.found.borrow().iter().rev().take(n).cloned().collect();
-        let target = self.config.goal(self.env, &self.obs, lo + next.last()?.1);
-        let chain = SkillChain {
-            skills: self.skills(lo, next),
-            kernel: self.kernel,
-        };
-        let per_skill = self.config.max_steps;
-        Some(Lookahead {
-            chain,
-            target,
-            per_skill,
-        })
     }
 
     /// The skills of `found` (execution order, indices on the section from τ_lo).
@@ -274,7 +261,12 @@ impl<'a, E: Env, P: FnMut(usize, Progress)> Chainer<'a, E, P> {
         let mut task = SkillTask::new(env, self.ready, states, goal, t, learner, rngs, budget)
             .with_entries(entries.to_vec())
             .with_starts(self.starts)
-            .with_lookahead(config.ideas.lookahead.and_then(|n| self.lookahead(lo, n)))
+            .with_lookahead(
+                config
+                    .ideas
+                    .lookahead
+                    .and_then(|n| self.lookahead(lo, t, n)),
+            )
             .at_offset(lo);
         let before = self.spent.get();
         task.on_event = Some(Box::new(move |p: Progress| {

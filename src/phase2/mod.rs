@@ -21,6 +21,7 @@ pub mod backplay;
 pub mod chaining;
 pub mod flat;
 pub mod goal;
+pub mod lookahead;
 mod manifest;
 pub mod procedure;
 pub mod resume;

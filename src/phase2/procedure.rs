@@ -153,16 +153,9 @@ pub struct Ideas {
     /// Once a K is saved, a walk ends after this many Ks in a row trained without another
     /// save ([`Walk::patience`]; the paper walks on until a test after training reads 0 %).
     pub patience: Option<usize>,
-    /// Hand-over lookahead (ours; `None`: the paper): a skill's goal B_ε(τ_T) counts as
-    /// reached only where the next `n` skills already found, run greedily from the state that
-    /// entered it (each allowed `max_steps` actions to hand over, as the chain's verification
-    /// allows), carry it to the n-th one's target; an entry from which they do not ends the
-    /// episode as a failure, paid the shaped reward without [`super::goal::REACHED_REWARD`].
-    /// In training, tests and verification alike; the lookahead's steps are counted with the
-    /// episode's. Skills verified from their own balls need not work from where the chain
-    /// hands them over (a jointed body's legs: [issue 49](../../docs/antmaze.md)); the paper's
-    /// Backplay never looks past its own goal. The skills looked ahead to are those of the same
-    /// section (a chain repair's section sees only its own).
+    /// Hand-over lookahead (ours; `None`: the paper): a skill's goal ball counts as reached
+    /// only where the next `n` skills already found carry the entry on to the n-th one's
+    /// target ([`super::lookahead`]); the paper's Backplay never looks past its own goal.
     pub lookahead: Option<usize>,
     /// Greedy tests stop an episode as soon as it is stuck (a step that did not move: with a
     /// deterministic policy and a pure step it never will), and stop the whole test once it

@@ -92,7 +92,8 @@ pub struct Rollout<S> {
     pub states: Vec<S>,
     /// Index of the skill that chose each action (one per step).
     pub skill_used: Vec<usize>,
-    /// Whether the environment's reward was reached.
+    /// Whether the environment's reward was reached (with [`SkillChain::run_until`]'s target,
+    /// whether that was).
     pub success: bool,
 }
 

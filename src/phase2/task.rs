@@ -103,34 +103,9 @@ pub struct SkillTask<'a, E: Env> {
     limits: Vec<usize>,
     test_limits: Vec<usize>,
     /// The skills found after this one, looked ahead to at its goal (`phase2.lookahead`).
-    lookahead: Option<Lookahead>,
+    lookahead: Option<super::lookahead::Lookahead>,
     /// Called after each test and training round.
     pub on_event: Option<Box<dyn FnMut(super::Progress) + 'a>>,
-}
-
-/// A hand-over lookahead ([`super::Ideas::lookahead`]): the next skills already found, in
-/// execution order (the first one's ball is the task's goal), and the target they must carry
-/// an entry to.
-#[derive(Debug, Clone)]
-pub struct Lookahead {
-    /// The next skills, the first one's activation ball B_ε(τ_T).
-    pub chain: super::SkillChain,
-    /// The last of them's goal.
-    pub target: Goal,
-    /// Actions each of them may take to hand over (`max_steps`).
-    pub per_skill: usize,
-}
-
-impl Lookahead {
-    /// Whether the next skills, run greedily from `entry`, carry it to the target; and the
-    /// environment steps they took.
-    pub fn carries<E: Env>(&self, env: &E, entry: E::State) -> (bool, u64) {
-        let limit = self.per_skill * self.chain.skills.len();
-        let r = self
-            .chain
-            .run_until(env, entry, limit, Some(self.per_skill), Some(&self.target));
-        (r.success, r.skill_used.len() as u64)
-    }
 }
 
 impl<'a, E: Env> SkillTask<'a, E> {
@@ -206,7 +181,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// Looks ahead at the goal ([`super::Ideas::lookahead`]): its ball is reached only where
     /// `lookahead`'s skills carry the entry to their target. `None` (no skill found after this
     /// one yet) changes nothing.
-    pub fn with_lookahead(mut self, lookahead: Option<Lookahead>) -> Self {
+    pub fn with_lookahead(mut self, lookahead: Option<super::lookahead::Lookahead>) -> Self {
         self.lookahead = lookahead;
         self
     }
@@ -521,8 +496,13 @@ impl<E: Env> Agent<E> for Episodes<'_, '_, '_, E> {
         // With a lookahead, an entry into the goal ball (not the environment's own success)
         // counts only if the next skills carry it on; either way the episode ends there.
         let mut handed = false;
-        if let Some(l) = t.lookahead.as_ref().filter(|_| reached && !step.terminal) {
-            let (carried, steps) = l.carries(t.env, step.state.clone());
+        let env_success = step.terminal && step.reward > 0.0;
+        if let Some(l) = t.lookahead.as_ref().filter(|_| reached && !env_success) {
+            // No skill takes over from a state the environment ended.
+            let (carried, steps) = match step.terminal {
+                true => (false, 0),
+                false => l.carries(t.env, step.state.clone()),
+            };
             (reached, handed) = (carried, true);
             match self.learn {
                 true => t.steps.train += steps,

@@ -279,7 +279,7 @@ fn a_spent_budget_stops_every_test_and_round() {
 /// passes none.
 #[test]
 fn a_lookahead_counts_a_goal_only_where_the_next_skill_carries_it_on() {
-    use pbcs::phase2::task::Lookahead;
+    use pbcs::phase2::lookahead::Lookahead;
     use pbcs::phase2::{goal::BallMetric, Ball, Skill, SkillChain};
     let (maze, states, obs) = setup();
     let config = Phase2Config::default();
