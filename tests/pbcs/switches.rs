@@ -5,6 +5,14 @@ use pbcs::phase2::goal::{Goal, GoalKind};
 use pbcs::phase2::{EventKind, InputMode, LastGoal};
 use pbcs::runs::PbcsRun;
 
+/// The whole PBCS run of `job` on its maze.
+fn run_maze(job: &PbcsJob) -> PbcsRun<Maze> {
+    let kernel = pbcs::nn::kernel::Kernel::detect();
+    let maze = Maze::new(&job.maze).unwrap();
+    let check = pbcs::validate::Check::valid(job.clone()).unwrap();
+    PbcsRun::compute(maze, &check, kernel, |_, _| {}).unwrap()
+}
+
 #[test]
 fn the_paper_as_written_aims_at_the_ball_with_raw_inputs() {
     let mut job = PbcsJob::default();
@@ -74,14 +82,7 @@ fn chain_repairs_need_a_chain_verification() {
 fn a_chain_verification_past_the_budget_is_a_budget_failure() {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
-    let kernel = pbcs::nn::kernel::Kernel::detect();
-    let complete = PbcsRun::compute(
-        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
-        &pbcs::validate::Check::valid(job.clone()).unwrap(),
-        kernel,
-        |_, _| {},
-    )
-    .unwrap();
+    let complete = run_maze(&job);
     assert_eq!(
         complete.record.failure, None,
         "the run without verification completes its chain"
@@ -92,13 +93,7 @@ fn a_chain_verification_past_the_budget_is_a_budget_failure() {
         episodes: 100,
         repairs: 0,
     });
-    let run = PbcsRun::compute(
-        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
-        &pbcs::validate::Check::valid(job.clone()).unwrap(),
-        kernel,
-        |_, _| {},
-    )
-    .unwrap();
+    let run = run_maze(&job);
     assert_eq!(run.record.failure, Some(pbcs::phase2::Failure::Budget));
     assert!(!run.record.solved && run.record.total_steps > budget);
     let last = run.phase2.trace.last().unwrap();
@@ -119,13 +114,7 @@ fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
         episodes: 100,
         repairs: 5,
     });
-    let run = PbcsRun::compute(
-        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
-        &pbcs::validate::Check::valid(job.clone()).unwrap(),
-        pbcs::nn::kernel::Kernel::detect(),
-        |_, _| {},
-    )
-    .unwrap();
+    let run = run_maze(&job);
     let checks: Vec<_> = run
         .phase2
         .trace
@@ -165,13 +154,7 @@ fn a_lookahead_mends_the_weak_junction_of_a_paper_chain_as_it_is_made() {
     job.maze.size = 2;
     job.phase2.max_env_steps = 642_000;
     job.phase2.ideas.lookahead = Some(1);
-    let run = PbcsRun::compute(
-        pbcs::envs::maze::Maze::new(&job.maze).unwrap(),
-        &pbcs::validate::Check::valid(job.clone()).unwrap(),
-        pbcs::nn::kernel::Kernel::detect(),
-        |_, _| {},
-    )
-    .unwrap();
+    let run = run_maze(&job);
     let r = &run.record;
     assert!(r.solved && r.success_rate == 1.0, "{r:?}");
     assert_eq!(r.skills, 2, "{r:?}");
