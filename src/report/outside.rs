@@ -197,7 +197,7 @@ pub fn outside_cost_numbers(ratios: &[crate::tables::outside::CostRatio]) -> Str
 }
 
 /// The numbers `\res{outside:pointmaze:<method>-<env>:<field>}` of PointMaze's learner
-/// baselines: `runs`, `ended`, `resumed`, `steps` (the most a run trained), `solved`, `solvedat`
+/// baselines: `runs`, `ended`, `resumed` (SB3's; `--` for ours), `steps` (the most a run trained), `solved`, `solvedat`
 /// (by SB3's protocol, the fewest steps to solve, `--` where none did), `solvedmedian` (their
 /// median), `reached`, `best` (by SB3's protocol: successes of 100; ours alone on PBCS's task:
 /// 0 or 1), `bestat` (`--` where no evaluation succeeded), `bestunsolved` (by the protocol,
@@ -217,7 +217,7 @@ pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseli
         for (f, v) in [
             ("runs", r.runs.to_string()),
             ("ended", r.ended.to_string()),
-            ("resumed", r.resumed.to_string()),
+            ("resumed", r.resumed.map_or("--".into(), |n| n.to_string())),
             ("steps", human_steps(r.steps_max as f64)),
             ("solved", r.solved.to_string()),
             (

@@ -7,7 +7,7 @@
 //! (`python/benches/sb3_pointmaze.py`: `<results>/pointmaze/sb3/sac_her-pointmaze_<map>/`,
 //! `s<seed>.evals.csv` as the run goes, `s<seed>.csv` once it ended). An SB3 run stopped before
 //! its end counts with the evaluations it made (one stopped before its first is left out), and
-//! the table says how many runs ended and how many were resumed from a checkpoint.
+//! the table says how many runs ended and how many of SB3's were resumed from a checkpoint.
 
 use super::{seed_files, seed_rows, seeds_text};
 use crate::envs::EnvName;
@@ -90,8 +90,10 @@ pub struct PointMazeBaseline {
     pub runs: u64,
     /// Of them, ended (their budget spent, or SB3's stopped at a solving evaluation).
     pub ended: u64,
-    /// Of them, resumed from a checkpoint at least once (SB3's `s<seed>.resumes.csv`).
-    pub resumed: u64,
+    /// SB3's: of them, resumed from a checkpoint at least once (its `s<seed>.resumes.csv`;
+    /// a resumed SB3 run is not the uninterrupted one). Empty for ours: a resumed run of ours
+    /// gives the bytes of the uncut run, and its row does not record whether it was cut.
+    pub resumed: Option<u64>,
     /// The most environment steps a run trained.
     pub steps_max: u64,
     /// Runs whose policy solves the map: ours alone on PBCS's task, a final greedy episode
@@ -257,7 +259,7 @@ fn vanilla_line(
         env: cell.site.env(),
         runs: runs.len() as u64,
         ended: runs.len() as u64,
-        resumed: 0,
+        resumed: None,
         steps_max: runs.iter().map(|r| r.env_steps).max().unwrap_or(0),
         solved: if protocol {
             solved_at.len() as u64
@@ -368,10 +370,11 @@ fn sb3_line(f: &Folder) -> Result<PointMazeBaseline> {
         env,
         runs: runs.len() as u64,
         ended: ended.len() as u64,
-        resumed: runs
-            .iter()
-            .filter(|r| run_file(dir, r.seed, ".resumes.csv").exists())
-            .count() as u64,
+        resumed: Some(
+            runs.iter()
+                .filter(|r| run_file(dir, r.seed, ".resumes.csv").exists())
+                .count() as u64,
+        ),
         steps_max: runs.iter().map(|r| r.steps).max().unwrap_or(0),
         solved: runs.iter().filter(|r| r.solved_at.is_some()).count() as u64,
         solved_at_min: runs.iter().filter_map(|r| r.solved_at).min(),
