@@ -199,9 +199,10 @@ pub fn outside_cost_numbers(ratios: &[crate::tables::outside::CostRatio]) -> Str
 /// The numbers `\res{outside:pointmaze:<method>-<env>:<field>}` of PointMaze's learner
 /// baselines: `runs`, `ended`, `resumed` (SB3's; `--` for ours), `steps` (the most a run
 /// trained), `solved`, `solvedat` (by SB3's protocol, the fewest steps to solve, `--` where
-/// none did), `solvedmedian` (their median), `reached`, `best` (by SB3's protocol: successes of 100; ours alone on PBCS's task:
-/// 0 or 1), `bestat` (`--` where no evaluation succeeded), `bestunsolved` (by the protocol,
-/// the best successes of 100 of the runs that did not solve, `--` where all did) and `seeds`.
+/// none did), `solvedmedian` (their median), `reached`, `best` (by SB3's protocol: successes of
+/// 100; ours alone on PBCS's task: 0 or 1), `bestat` (`--` where no evaluation succeeded),
+/// `bestunsolved` (by the protocol, the best successes of 100 of the runs that did not solve,
+/// `--` where all did) and `seeds`.
 pub fn outside_pointmaze_numbers(rows: &[crate::tables::outside::PointMazeBaseline]) -> String {
     let mut s = String::new();
     for r in rows {
