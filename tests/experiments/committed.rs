@@ -448,6 +448,42 @@ fn the_fits_and_cost_ratios_agree_with_their_tables() {
     );
 }
 
+/// The preset's comment gives the range of wall-clock hours an unsolved `pointmaze_her` run
+/// took ("took 0.7 to 5.4 hours"): it must be the shortest and longest of the timing files
+/// beside the unsolved rows, to a tenth of an hour, as more rows land.
+#[test]
+fn the_her_presets_hours_are_those_of_its_timing_files() {
+    let path = Path::new("experiments/pointmaze_her.toml");
+    let exp = Experiment::load(path, None).unwrap();
+    let results = Path::new("results");
+    let rows = read_raw(&exp, results).unwrap();
+    let hours: Vec<f64> = rows
+        .iter()
+        .filter(|r| !r.solved)
+        .map(|r| {
+            let cell = exp.cells.iter().find(|c| c.id == r.cell).unwrap();
+            pbcs::experiment::read_wall_seconds(&exp, results, cell, r.seed)
+                .unwrap_or_else(|| panic!("{} seed {}: no timing file", r.cell, r.seed))
+                / 3600.0
+        })
+        .collect();
+    assert!(!hours.is_empty(), "unsolved rows are read");
+    let low = hours.iter().cloned().fold(f64::INFINITY, f64::min);
+    let high = hours.iter().cloned().fold(0.0, f64::max);
+    let want = format!("took {low:.1} to {high:.1} hours");
+    let text = std::fs::read_to_string(path).unwrap();
+    let text = text
+        .lines()
+        .map(|l| l.trim_start_matches('#').trim())
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(
+        text.contains(&want),
+        "experiments/pointmaze_her.toml's comment should say \"{want}\" ({} unsolved rows)",
+        hours.len()
+    );
+}
+
 /// The report's section on the goal-conditioned baselines says in words which cells of
 /// `pointmaze_her` have no finished row yet (SAC+HER on Medium, both learners on Large): true
 /// only while it is (the sentence must change with the first such row).
