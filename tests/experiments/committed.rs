@@ -485,8 +485,8 @@ fn the_her_presets_hours_are_those_of_its_timing_files() {
 }
 
 /// The report's section on the goal-conditioned baselines says in words which cells of
-/// `pointmaze_her` have no finished row yet (SAC+HER on Medium, both learners on Large): true
-/// only while it is (the sentence must change with the first such row).
+/// `pointmaze_her` have no finished row yet, and on which maps the rows are "so far": true only
+/// while it is (the sentence must change with the first such row, or the last).
 #[test]
 fn the_her_section_says_which_cells_have_no_run_only_while_true() {
     // The words as LaTeX reads them, whatever the line breaks.
@@ -534,5 +534,27 @@ fn the_her_section_says_which_cells_have_no_run_only_while_true() {
         "Large rows: SAC+HER {}, TD3+HER {}: update paper/report.tex's sentence",
         on("sac_her", "large"),
         on("td3_her", "large")
+    );
+    // Once one learner has a Large row, the report names the one that has none, if any.
+    for (method, label) in [("sac_her", "SAC+HER"), ("td3_her", "TD3+HER")] {
+        let words = format!("no {label} run on Large has finished");
+        assert_eq!(
+            report.to_lowercase().contains(&words.to_lowercase()),
+            none > 0 && on(method, "large") == 0,
+            "Large rows: {label} {} of {none}: update paper/report.tex's \"{words}\"",
+            on(method, "large")
+        );
+    }
+    // And "so far" on Large while some run is missing, once there is one.
+    let whole = ["sac_her", "td3_her"]
+        .iter()
+        .all(|m| on(m, "large") as u64 == exp.seed_count);
+    assert_eq!(
+        report.contains("On Large so far"),
+        none > 0 && !whole,
+        "Large: SAC+HER {} and TD3+HER {} of {} runs: update paper/report.tex's \"On Large so far\"",
+        on("sac_her", "large"),
+        on("td3_her", "large"),
+        exp.seed_count
     );
 }
