@@ -513,13 +513,19 @@ fn the_her_section_says_which_cells_have_no_run_only_while_true() {
     );
     // "so far" on a map whose cells have every run, or its absence on one that has not, is
     // a sentence that stopped being true.
-    for (map, words) in [("umaze", "On UMaze so far"), ("medium", "On Medium so far")] {
+    // (On Large only once it has a row: until then, the sentence below says so.)
+    for (map, words) in [
+        ("umaze", "On UMaze so far"),
+        ("medium", "On Medium so far"),
+        ("large", "On Large so far"),
+    ] {
+        let some = on("sac_her", map) + on("td3_her", map) > 0;
         let whole = ["sac_her", "td3_her"]
             .iter()
             .all(|m| on(m, map) as u64 == exp.seed_count);
         assert_eq!(
             report.contains(words),
-            !whole,
+            some && !whole,
             "{map}: SAC+HER {} and TD3+HER {} of {} runs: update paper/report.tex's \"{words}\"",
             on("sac_her", map),
             on("td3_her", map),
@@ -545,16 +551,4 @@ fn the_her_section_says_which_cells_have_no_run_only_while_true() {
             on(method, "large")
         );
     }
-    // And "so far" on Large while some run is missing, once there is one.
-    let whole = ["sac_her", "td3_her"]
-        .iter()
-        .all(|m| on(m, "large") as u64 == exp.seed_count);
-    assert_eq!(
-        report.contains("On Large so far"),
-        none > 0 && !whole,
-        "Large: SAC+HER {} and TD3+HER {} of {} runs: update paper/report.tex's \"On Large so far\"",
-        on("sac_her", "large"),
-        on("td3_her", "large"),
-        exp.seed_count
-    );
 }
