@@ -212,6 +212,15 @@ fn the_cost_table_is_the_timing_tables_sums() {
     assert_block("docs/experiments.md", "costs", &generated);
 }
 
+/// docs/pointmaze.md's table of the learners by SB3's protocol is `outside.pointmaze.csv`'s.
+#[test]
+fn the_docs_quote_the_goal_conditioned_baselines_as_generated() {
+    let path = pbcs::tables::outside::outside_table(Path::new("results"), "pointmaze");
+    let lines = pbcs::record::read_records(&path).unwrap();
+    let generated = pbcs::tables::headline::goal_baselines_markdown(&lines);
+    assert_block("docs/pointmaze.md", "her", &generated);
+}
+
 /// The settings table is the generated one, byte for byte.
 #[test]
 fn the_docs_quote_the_generated_settings_table() {

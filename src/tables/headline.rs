@@ -1,6 +1,7 @@
 //! The README's headline table: the paper's maze and gymnasium-robotics' PointMaze, each
-//! number read from a committed table (`results/tables/`), never typed. `tests/docs.rs`
-//! holds the README's block equal to [`headline_markdown`].
+//! number read from a committed table (`results/tables/`), never typed; and docs/pointmaze.md's
+//! table of the goal-conditioned learners. `tests/docs.rs` holds the README's block equal to
+//! [`headline_markdown`] and the page's to [`goal_baselines_markdown`].
 
 use super::judged::{judged_path, JudgedCell};
 use super::outside::{Library, PointMazeBaseline};
@@ -156,4 +157,45 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         );
     }
     Ok(s)
+}
+
+/// The learners by SB3's protocol on gymnasium-robotics' own resets, from the lines of
+/// `outside.pointmaze.csv` in Markdown: per map, SB3's SAC+HER, then ours (`<name>_goals`), each
+/// with its runs, the most steps a run trained, the runs solved (an evaluation with 95 of 100),
+/// the fewest and the median steps of the solved ones and the best evaluation of the others
+/// (`–` where there is none). Our learners alone on PBCS's task are not in it.
+pub fn goal_baselines_markdown(lines: &[PointMazeBaseline]) -> String {
+    let mut by_protocol: Vec<&PointMazeBaseline> = lines
+        .iter()
+        .filter(|b| b.library == Library::Sb3 || b.env.goal_resets())
+        .collect();
+    by_protocol.sort_by_key(|b| (b.env.point_map(), b.library == Library::Ours));
+    let mut s = String::from(
+        "| map | learner | runs | steps at most | solved | fewest steps to solve | \
+         median steps to solve | best evaluation of the others |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    let steps = |at: Option<u64>| at.map_or("–".into(), |at| human_steps(at as f64));
+    for b in by_protocol {
+        let name: &str = b.env.into();
+        let map = b.env.point_map().map_or(name, <&str>::from);
+        let learner = b.method.as_str().to_uppercase().replace('_', "+");
+        let learner = match b.library {
+            Library::Sb3 => format!("SB3's {learner}"),
+            Library::Ours => learner,
+        };
+        let best = b
+            .best_unsolved
+            .map_or("–".into(), |f| format!("{:.0} %", 100.0 * f));
+        let _ = writeln!(
+            s,
+            "| {map} | {learner} | {} | {} | {} | {} | {} | {best} |",
+            b.runs,
+            human_steps(b.steps_max as f64),
+            b.solved,
+            steps(b.solved_at_min),
+            steps(b.solved_at_median),
+        );
+    }
+    s
 }
