@@ -20,7 +20,8 @@ TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
 .PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
-        commands paper check-paper smoke python experiments mujoco test-mujoco pointmaze
+        commands paper check-paper smoke python experiments mujoco test-mujoco pointmaze \
+        mujoco-experiments
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
@@ -42,8 +43,10 @@ help:
 	@echo "make mujoco    MuJoCo 3.17.0 from its PyPI wheel into .mujoco/lib (feature mujoco)"
 	@echo "make test-mujoco   our PointMaze's and AntMaze's tests, and the equality tests against"
 	@echo "               gymnasium-robotics' own (installed into \$$VENV)"
-	@echo "make pointmaze     the PointMaze grids (experiments/pointmaze*.toml) with MuJoCo, then"
-	@echo "               gymnasium-robotics' verdict on every chain (python/benches/pointmaze_gym.py)"
+	@echo "make pointmaze     every experiment with a PointMaze or AntMaze site (MUJOCO_EXPERIMENTS)"
+	@echo "               with MuJoCo, then gymnasium-robotics' verdict on every PointMaze chain"
+	@echo "               (python/benches/pointmaze_gym.py)"
+	@echo "make mujoco-experiments   list them"
 	@echo "make ci        what CI runs (.ci/run)"
 
 build:
@@ -78,26 +81,27 @@ test-mujoco: mujoco
 	  PBCS_ANTMAZE_STEP=$(abspath $(TARGET_DIR))/release/examples/antmaze_step \
 	  $(VENV)/bin/python -m pytest -q python/tests/test_pointmaze.py python/tests/test_antmaze.py
 
-# The PointMaze grids (the named maps', the held-out seeds', the velocity comparison, the learners
-# alone, a map of one's own: their runs need MuJoCo), then every chain judged
-# by gymnasium-robotics (each run re-made from its job file, its chain played in
-# PointMaze_<Map>-v3): the rows `make figures` then draws. The Python package first: its
-# build rebuilds `pbcs` without MuJoCo.
+# Every experiment with a PointMaze or AntMaze site (its `envs = [...]` line names one): the runs
+# need MuJoCo, so `make results` skips them in a build without it. Read from the files, as
+# EXPERIMENTS is; tests/experiments holds it to what the library says each grid needs.
+MUJOCO_EXPERIMENTS ?= $(patsubst experiments/%.toml,%,$(shell grep -lE '^envs *=.*"(pointmaze|antmaze)' \
+  $(patsubst %,experiments/%.toml,$(EXPERIMENTS))))
+
+# The MuJoCo grids (MUJOCO_EXPERIMENTS: PointMaze's named maps, held-out seeds, velocity balls,
+# learners alone and with HER, a map of one's own, PBCS with SAC skills), then every PBCS chain on
+# PointMaze judged by gymnasium-robotics (each run re-made from its job file, its chain played in
+# PointMaze_<Map>-v3; an experiment without such a chain has nothing to judge): the rows `make
+# figures` then draws. The Python package first: its build rebuilds `pbcs` without MuJoCo.
 pointmaze: mujoco python
 	$(CARGO) build --release --locked --features mujoco --bin pbcs
-	$(PBCS) exp run experiments/pointmaze.toml --jobs $(JOBS)
-	$(PBCS) exp run experiments/pointmaze_heldout.toml --jobs $(JOBS)
-	$(PBCS) exp run experiments/pointmaze_velocity.toml --jobs $(JOBS)
-	$(PBCS) exp run experiments/pointmaze_vanilla.toml --jobs $(JOBS)
-	$(PBCS) exp run experiments/pointmaze_own.toml --jobs $(JOBS)
+	for e in $(MUJOCO_EXPERIMENTS); do $(PBCS) exp run experiments/$$e.toml --jobs $(JOBS) || exit 1; done
 	$(VENV)/bin/pip install -q "mujoco==3.17.0" "gymnasium-robotics==1.4.2"
-	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS)
-	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
-	  --raw results/raw/pointmaze_heldout --summary results/pointmaze/gym_cells_heldout.csv
-	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
-	  --raw results/raw/pointmaze_velocity --summary results/pointmaze/gym_cells_velocity.csv
-	$(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
-	  --raw results/raw/pointmaze_own --summary results/pointmaze/gym_cells_own.csv
+	for e in $(MUJOCO_EXPERIMENTS); do s=gym_cells_$${e#pointmaze_}.csv; [ $$e = pointmaze ] && s=gym_cells.csv; \
+	  $(VENV)/bin/python python/benches/pointmaze_gym.py --pbcs $(PBCS) \
+	    --raw results/raw/$$e --summary results/pointmaze/$$s || exit 1; done
+
+mujoco-experiments:
+	@echo $(MUJOCO_EXPERIMENTS)
 
 # Aggregation with polars, then plotters; trains nothing (27 s measured after the build).
 figures:

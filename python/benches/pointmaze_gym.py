@@ -111,6 +111,11 @@ def main():
             summary.append(f"{cell.name},{wins},{len(rows)},{med},{q1},{q3}\n")
             print(f"{cell.name}: gymnasium-robotics solved {wins}/{len(rows)}, env steps median "
                   f"{med} [{q1}, {q3}]", flush=True)
+    if not summary:
+        # An experiment with no PBCS chain on PointMaze (the learners alone, with HER) has
+        # nothing to judge and gets no summary.
+        print(f"{args.raw}: no PBCS run on PointMaze to judge", flush=True)
+        return
     write_atomic(
         args.summary,
         "cell,gym_solved,seeds,env_steps_median,env_steps_q1,env_steps_q3\n" + "".join(summary),

@@ -250,8 +250,19 @@ impl EnvName {
     /// assert_eq!(EnvName::PointmazeLarge.missing_feature(), lacks);
     /// ```
     pub fn missing_feature(self) -> Option<&'static str> {
-        ((self.is_pointmaze() || self.is_antmaze()) && !cfg!(feature = "mujoco"))
-            .then_some("mujoco")
+        self.feature().filter(|_| !cfg!(feature = "mujoco"))
+    }
+
+    /// The cargo feature this environment needs in any build (`mujoco` for PointMaze and
+    /// AntMaze), or None for the environments every build has.
+    ///
+    /// ```
+    /// use pbcs::envs::EnvName;
+    /// assert_eq!(EnvName::AntmazeUmaze.feature(), Some("mujoco"));
+    /// assert_eq!(EnvName::Rooms.feature(), None);
+    /// ```
+    pub fn feature(self) -> Option<&'static str> {
+        (self.is_pointmaze() || self.is_antmaze()).then_some("mujoco")
     }
 
     /// Whether this is an AntMaze: a named map (either task) or a map of one's own.

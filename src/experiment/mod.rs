@@ -301,6 +301,11 @@ impl Registration {
     }
 }
 
+/// The make target that builds pbcs with MuJoCo and runs every experiment that needs it (the
+/// Makefile's `MUJOCO_EXPERIMENTS`, read from the experiment files; a test holds the two to
+/// [`Experiment::features`]).
+pub const MUJOCO_TARGET: &str = "pointmaze";
+
 impl Experiment {
     /// The run seeds, in order.
     pub fn seeds(&self) -> Vec<u64> {
@@ -328,6 +333,23 @@ impl Experiment {
             .collect()
     }
 
+    /// The cargo features some environment of the grid needs in any build
+    /// ([`crate::envs::EnvName::feature`]), each once: which make target runs the grid
+    /// ([`MUJOCO_TARGET`] for `mujoco`; `make results` skips it in a build without).
+    pub fn features(&self) -> Vec<&'static str> {
+        let mut features: Vec<&'static str> = self
+            .sites
+            .iter()
+            .filter_map(|s| match s {
+                Site::Env(e) => e.feature(),
+                Site::Maze(_) => None,
+            })
+            .collect();
+        features.sort_unstable();
+        features.dedup();
+        features
+    }
+
     /// None when this build runs every environment of the grid; else what it lacks and how
     /// to run the grid, in one line.
     pub fn unavailable(&self) -> Option<String> {
@@ -340,9 +362,12 @@ impl Experiment {
             self.name,
             names.join(", "),
             if *feature == "mujoco" {
-                " after `make mujoco` (`make pointmaze` does both and runs the PointMaze grids)"
+                format!(
+                    " after `make mujoco` (`make {MUJOCO_TARGET}` does both and runs every \
+                     experiment with a PointMaze or AntMaze site, this one among them)"
+                )
             } else {
-                ""
+                String::new()
             }
         ))
     }

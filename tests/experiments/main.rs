@@ -19,5 +19,6 @@ mod cut_run;
 mod files;
 mod judged;
 mod locks;
+mod make_targets;
 mod rows;
 mod sweeps;
