@@ -49,10 +49,18 @@ impl SuccessBars {
     }
 }
 
-/// Width in pixels of the legend beside a bar chart.
+/// The most width in pixels of the legend beside a bar chart.
 const BAR_LEGEND_WIDTH: u32 = 300;
 
 impl SuccessBars {
+    /// The legend's width: its longest label's (a swatch, a gap, 15-pixel sans-serif at about
+    /// 0.55 em a character, a margin), at most [`BAR_LEGEND_WIDTH`].
+    fn legend_width(&self) -> u32 {
+        let chars = self.series.iter().map(|(l, _)| l.chars().count()).max();
+        let needed = 34.0 + 0.55 * 15.0 * chars.unwrap_or(0) as f64 + 30.0;
+        (needed.ceil() as u32).min(BAR_LEGEND_WIDTH)
+    }
+
     /// The legend beside the chart: a colour swatch and a label per method.
     fn draw_legend<DB: DrawingBackend>(&self, side: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         for (j, (label, _)) in self.series.iter().enumerate() {
@@ -88,7 +96,7 @@ impl SuccessBars {
 impl Figure for SuccessBars {
     fn size(&self) -> (u32, u32) {
         (
-            (260 * self.mazes.len() as u32 + 200).max(700) + BAR_LEGEND_WIDTH,
+            (260 * self.mazes.len() as u32 + 200).max(700) + self.legend_width(),
             520,
         )
     }
@@ -97,7 +105,7 @@ impl Figure for SuccessBars {
         let groups = self.mazes.len() as f64;
         // The legend stands beside the chart, never over a bar or an interval.
         let (w, _) = root.dim_in_pixel();
-        let (root, side) = root.split_horizontally(w - BAR_LEGEND_WIDTH);
+        let (root, side) = root.split_horizontally(w - self.legend_width());
         self.draw_legend(&side)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 20))

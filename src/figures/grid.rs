@@ -21,8 +21,64 @@ pub struct ResultsGrid {
     cells: Vec<Vec<Option<GridCell>>>,
     rows: Vec<String>,
     columns: Vec<String>,
-    /// The legend's lines (see [`ResultsGrid::legend`]).
+    /// The legend's lines (see [`ResultsGrid::legend`]), wrapped where the grid is too narrow
+    /// for them ([`wrap_legend`]).
     legend: Vec<String>,
+    /// The legend's font size where its lines were wrapped; None: each line as large as its
+    /// width allows (at most 15).
+    legend_font: Option<f64>,
+}
+
+/// The smallest font a legend line is drawn in before it is wrapped instead.
+const LEGEND_FONT_MIN: f64 = 8.0;
+
+/// The font size of wrapped legend lines.
+const LEGEND_FONT_WRAPPED: f64 = 10.0;
+
+/// Where a legend line of `chars` characters starts at `x` in a grid `w` pixels wide: the font
+/// size that fits it (sans-serif is about 0.55 em a character).
+fn legend_font(w: u32, x: i32, chars: usize) -> f64 {
+    (w as f64 - x as f64 - 10.0) / (0.55 * chars.max(1) as f64)
+}
+
+/// The x of legend line `i`: the first follows two colour swatches.
+fn legend_x(i: usize) -> i32 {
+    GRID_LEFT as i32 + if i == 0 { 68 } else { 0 }
+}
+
+/// The legend's lines for a grid `w` pixels wide: as they are where each fits at
+/// [`LEGEND_FONT_MIN`] or more, else every line broken at spaces to fit at
+/// [`LEGEND_FONT_WRAPPED`] (a one-column grid), with that font size.
+fn wrap_legend(lines: Vec<String>, w: u32) -> (Vec<String>, Option<f64>) {
+    let fits = lines
+        .iter()
+        .enumerate()
+        .all(|(i, l)| legend_font(w, legend_x(i), l.chars().count()) >= LEGEND_FONT_MIN);
+    if fits {
+        return (lines, None);
+    }
+    let mut out: Vec<String> = Vec::new();
+    for line in lines {
+        let mut current = String::new();
+        for word in line.split(' ') {
+            let longer = if current.is_empty() {
+                word.to_string()
+            } else {
+                format!("{current} {word}")
+            };
+            let x = legend_x(out.len());
+            if !current.is_empty()
+                && legend_font(w, x, longer.chars().count()) < LEGEND_FONT_WRAPPED
+            {
+                out.push(std::mem::take(&mut current));
+                current = word.to_string();
+            } else {
+                current = longer;
+            }
+        }
+        out.push(current);
+    }
+    (out, Some(LEGEND_FONT_WRAPPED))
 }
 
 /// One drawn cell of the grid: its scene, its picture seed's run and its statistics.
@@ -55,12 +111,14 @@ impl ResultsGrid {
             }
             cells.push(row);
         }
-        let legend = ResultsGrid::legend(exp, &cells);
+        let width = GRID_LEFT + GRID_CELL * exp.methods.len() as u32;
+        let (legend, legend_font) = wrap_legend(ResultsGrid::legend(exp, &cells), width);
         Ok(ResultsGrid {
             cells,
             rows: exp.sites.iter().map(|n| n.axis()).collect(),
             columns: exp.methods.iter().map(|(_, l)| l.clone()).collect(),
             legend,
+            legend_font,
         })
     }
 
@@ -116,11 +174,13 @@ impl Figure for ResultsGrid {
                     x += 34;
                 }
             }
-            let size = (w as f64 - x as f64 - 10.0) / (0.55 * line.chars().count().max(1) as f64);
+            let size = self
+                .legend_font
+                .unwrap_or_else(|| legend_font(w, x, line.chars().count()));
             footer.draw(&Text::new(
                 line.clone(),
                 (x, y),
-                ("sans-serif", size.clamp(8.0, 15.0))
+                ("sans-serif", size.clamp(LEGEND_FONT_MIN, 15.0))
                     .into_font()
                     .color(&BLACK),
             ))?;
@@ -186,5 +246,40 @@ impl Figure for Panels {
             draw_scene(area.clone(), scene, &data.picture(title.clone()))?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lines() -> Vec<String> {
+        vec![
+            "more than half the seeds solved / half or fewer (grey: no runs yet)".to_string(),
+            "pictures: seed 0's run — blue dot: start · green disc: target · red: trajectory τ \
+             · green: chain rollouts · purple: activation balls"
+                .to_string(),
+        ]
+    }
+
+    #[test]
+    fn a_wide_grid_keeps_its_legend_lines_as_they_are() {
+        let w = GRID_LEFT + 4 * GRID_CELL;
+        assert_eq!(wrap_legend(lines(), w), (lines(), None));
+    }
+
+    #[test]
+    fn a_one_column_grid_wraps_its_legend_so_that_every_word_is_drawn() {
+        let w = GRID_LEFT + GRID_CELL;
+        let (wrapped, font) = wrap_legend(lines(), w);
+        assert_eq!(font, Some(LEGEND_FONT_WRAPPED));
+        assert!(wrapped.len() > lines().len());
+        for (i, l) in wrapped.iter().enumerate() {
+            let f = legend_font(w, legend_x(i), l.chars().count());
+            assert!(f >= LEGEND_FONT_WRAPPED, "line {i} `{l}` needs font {f}");
+        }
+        // Nothing lost: the same words in the same order.
+        let words = |v: &[String]| v.join(" ").split(' ').map(String::from).collect::<Vec<_>>();
+        assert_eq!(words(&wrapped), words(&lines()));
     }
 }
