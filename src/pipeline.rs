@@ -426,6 +426,7 @@ pub fn render_all(
         numbers.push_str(&report::extra_numbers_tex(exp, results)?);
     }
     numbers.push_str(&render_outside(results, tex_dir, &mut files)?);
+    numbers.push_str(&report::antmaze::render(results, tex_dir, &mut files)?);
     for (name, text) in [
         ("numbers.tex", numbers),
         ("claims.tex", report::claims_tex(claims)),

@@ -7,6 +7,7 @@ use crate::fmt::human_steps;
 use crate::tables::CellStats;
 use std::fmt::Write as _;
 
+pub mod antmaze;
 mod latex;
 pub mod outside;
 pub mod settings;
