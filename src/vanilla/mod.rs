@@ -51,7 +51,7 @@ pub struct TrainConfig {
     /// When the learner updates (after `learning_starts`).
     pub updates: Updates,
     /// Hindsight experience replay (`[train.her]`; absent: off). Needs an environment that
-    /// offers goals ([`crate::env::Env::goals`]: the maze, the rooms, PointMaze).
+    /// offers goals ([`crate::env::Env::goals`]: the maze, the rooms, PointMaze, AntMaze).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub her: Option<HerConfig>,
     /// Stop training after the first periodic evaluation with at least this many successful

@@ -355,11 +355,12 @@ pub enum ExpCommand {
         #[arg(long)]
         skip_unavailable: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins at or past it, and a
-        /// vanilla run in progress stops at its first evaluation at or past it, saved to its
-        /// checkpoint (a PBCS run in progress runs to its row). With runs unfinished the exit
-        /// status is 75 (EX_TEMPFAIL); the same command goes on where it stopped, to the same
-        /// bytes. Under a cluster's time limit, leave the time of an evaluation interval's
-        /// training, the evaluation and the save (and a PBCS run's) to spare.
+        /// vanilla run in progress stops at its first evaluation at or past it, and a PBCS run
+        /// in progress at the end of its first learning problem at or past it, each saved to
+        /// its checkpoint. With runs unfinished the exit status is 75 (EX_TEMPFAIL); the same
+        /// command goes on where it stopped, to the same bytes. Under a cluster's time limit,
+        /// leave the time of an evaluation interval's training, the evaluation and the save
+        /// (for a PBCS run, of a learning problem and the save) to spare.
         #[arg(long, value_parser = humantime::parse_duration)]
         stop_after: Option<std::time::Duration>,
     },
