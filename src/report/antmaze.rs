@@ -16,10 +16,12 @@
 //! - `reach/<arm>-s<seed>.csv`: the reach probe's evaluations (100 greedy episodes each).
 
 use super::{def_res, tex, GENERATED};
+use crate::envs::pointmaze::MapName;
 use crate::fmt::human_steps;
 use crate::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use strum::IntoEnumIterator as _;
 
 /// The development folder of PBCS on AntMaze, under a results folder.
 pub const DEV: &str = "dev/issue49";
@@ -50,19 +52,12 @@ const REACH: [(&str, &str); 5] = [
     ("td3_her64_6m-s0", "TD3+HER 64×64, 6M steps"),
 ];
 
-/// The four maps of phase 1's grid, as its rows name them (`Large` also lower case in the rows
-/// that hit the time limit), and their keys.
-const MAPS: [(&str, &str); 4] = [
-    ("UMaze", "umaze"),
-    ("Open", "open"),
-    ("Medium", "medium"),
-    ("Large", "large"),
-];
-
 /// One row of `phase1_dev.csv` (the columns the report reads; the others are allowed).
 #[derive(Debug, serde::Deserialize)]
 struct Phase1Row {
-    map: String,
+    /// As the rows write it (`UMaze`; `large` in the rows that hit the time limit).
+    #[serde(deserialize_with = "map_name")]
+    map: MapName,
     flipped: String,
     bin_side: f64,
     /// States archived, and of them upside down (empty in a row that hit the time limit).
@@ -72,6 +67,14 @@ struct Phase1Row {
     solved: String,
     /// Empty in a row that hit the time limit.
     env_steps: Option<u64>,
+}
+
+/// A map's name in any case (`UMaze`, `large`).
+fn map_name<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<MapName, D::Error> {
+    let name = <std::borrow::Cow<str> as serde::Deserialize>::deserialize(d)?;
+    MapName::iter()
+        .find(|m| <&str>::from(*m).eq_ignore_ascii_case(&name))
+        .ok_or_else(|| serde::de::Error::custom(format!("unknown map `{name}`")))
 }
 
 /// The columns of a PBCS run's `record.csv` the report reads.
@@ -259,46 +262,32 @@ pub fn render(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> Resul
 /// them: runs, and runs that hit the time limit).
 fn phase1_numbers(s: &mut String, path: &Path) -> Result<()> {
     let rows: Vec<Phase1Row> = crate::record::read_records(path)?;
-    let key = |m: &str| {
-        MAPS.iter()
-            .find(|(name, _)| name.eq_ignore_ascii_case(m))
-            .map(|(_, k)| *k)
-            .ok_or_else(|| Error::parse(path, format!("unknown map `{m}`")))
-    };
     let refuse: Vec<&Phase1Row> = rows.iter().filter(|r| r.flipped == "refuse").collect();
     let solved = refuse.iter().filter(|r| r.solved == "true").count();
     def_res(s, "antmaze", "phase1:runs", &refuse.len().to_string());
     def_res(s, "antmaze", "phase1:solved", &solved.to_string());
-    for (_, map) in MAPS {
+    for map in MapName::iter() {
         let mut steps = Vec::new();
         for r in &refuse {
-            if key(&r.map)? == map && r.bin_side == 0.5 && r.solved == "true" {
-                let n = r.env_steps.ok_or_else(|| {
-                    Error::parse(path, format!("a solved run on {map} without its env steps"))
-                })?;
-                steps.push(n as f64);
+            if r.map == map && r.bin_side == 0.5 && r.solved == "true" {
+                let why = format!("a solved run on {map:?} without its env steps");
+                steps.push(r.env_steps.ok_or_else(|| Error::parse(path, why))? as f64);
             }
         }
         if steps.is_empty() {
             return Err(Error::parse(
                 path,
-                format!("no solved run on {map} at 0.5 m"),
+                format!("no solved run on {map:?} at 0.5 m"),
             ));
         }
         let median = crate::stats::median(&mut steps);
-        def_res(
-            s,
-            "antmaze",
-            &format!("phase1:{map}:median"),
-            &human_steps(median),
-        );
+        let key = format!("phase1:{}:median", <&str>::from(map).to_lowercase());
+        def_res(s, "antmaze", &key, &human_steps(median));
     }
-    let mut large = Vec::new();
-    for r in rows.iter().filter(|r| r.flipped == "keep") {
-        if key(&r.map)? == "large" {
-            large.push(r);
-        }
-    }
+    let large: Vec<&Phase1Row> = rows
+        .iter()
+        .filter(|r| r.flipped == "keep" && r.map == MapName::Large)
+        .collect();
     let unfinished = large.iter().filter(|r| r.solved == "timeout").count();
     // The share of each finished archive that is upside down, keeping flipped states.
     let mut shares = Vec::new();
@@ -569,102 +558,5 @@ fn reach_table(s: &mut String, dev: &Path) -> Result<String> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const READING: &str = "phase 1: 38696 env steps; τ_0 … τ_40\n\
-        phase 2: None, 2 skills, 100 training and 50 test env steps, 8 s\n\
-        episode 0: failure in 5000 steps\n\
-        chain from B_eps(tau_0): 4 of 100 episodes reach the target (2 of them upright there)\n\
-        skill,K,T,entered,stalled,flipped,from_entries,from_ball,from_ball_at_rest,coasting,joint_gap,velocity_gap\n\
-        0,0,1,5,5,0,0.00,0.98,0.96,0.96,0.00,0.00\n\
-        1,1,3,18,1,0,0.78,1.00,1.00,0.96,0.81,16.54\n";
-
-    fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("r.txt");
-        std::fs::write(&path, text).unwrap();
-        (dir, path)
-    }
-
-    #[test]
-    fn a_reading_gives_its_steps_its_episodes_and_its_table() {
-        let (_d, path) = write(READING);
-        let r = read_chain_reading(&path).unwrap();
-        let p = r.phase2.unwrap();
-        assert_eq!((p.steps, p.skills, p.outcome), (150, 2, "chain"));
-        assert_eq!(r.prefix, Some(40));
-        assert_eq!(r.reached, Some((4, 100)));
-        assert_eq!(r.table.len(), 2);
-        assert_eq!((r.table[1].k, r.table[1].t, r.table[1].entered), (1, 3, 18));
-        assert_eq!(r.table[1].velocity_gap, 16.54);
-    }
-
-    #[test]
-    fn a_reading_without_a_chain_has_no_episodes_and_no_table() {
-        let text =
-            "phase 2: Some(BackplayFailed), 0 skills, 7 training and 3 test env steps, 1 s\n";
-        let (_d, path) = write(text);
-        let r = read_chain_reading(&path).unwrap();
-        let p = r.phase2.unwrap();
-        assert_eq!(
-            (p.steps, p.outcome, r.reached),
-            (10, "backplay failed", None)
-        );
-    }
-
-    #[test]
-    fn a_damaged_reading_is_refused_naming_its_file() {
-        for text in [
-            // A prefix without its phase-2 line.
-            &READING.replace("phase 2: ", "phase two: "),
-            // More successes than episodes.
-            &READING.replace("4 of 100", "140 of 100"),
-            // An unknown outcome.
-            &READING.replace("None,", "Some(Other),"),
-            // Episodes without their table.
-            &READING[..READING.find("skill,K").unwrap()],
-            // A cell that is not a number.
-            &READING.replace("16.54", "fast"),
-        ] {
-            let (_d, path) = write(text);
-            let err = read_chain_reading(&path).unwrap_err().to_string();
-            assert!(err.contains("r.txt"), "{err}");
-        }
-    }
-
-    #[test]
-    fn the_judged_line_is_read_and_checked() {
-        let (_d, path) = write("# a comment\nsuccesses = 3 of 100\n");
-        assert_eq!(read_judged(&path).unwrap(), (3, 100));
-        let (_d, path) = write("successes = 300 of 100\n");
-        assert!(read_judged(&path).is_err());
-    }
-
-    #[test]
-    fn the_committed_files_give_the_sections_numbers() {
-        let results = Path::new(env!("CARGO_MANIFEST_DIR")).join("results");
-        let tex = tempfile::tempdir().unwrap();
-        let mut files = Vec::new();
-        let numbers = render(&results, tex.path(), &mut files).unwrap();
-        assert_eq!(files.len(), 3);
-        // Known values of the committed files (their READMEs' tables).
-        for (key, value) in [
-            ("phase1:solved", "60"),
-            ("phase1:runs", "60"),
-            ("handover:reached", "0"),
-            ("handover:episodes", "20"),
-            ("ball30m:skills", "73"),
-            ("probe:verify-s0:reached", "4"),
-            ("probe:repair-s0:reached", "7"),
-            ("probe:best", "7"),
-            ("reach:td3_her256-s0:best", "83"),
-            ("long:judged", "0"),
-            ("prefix", "40"),
-            ("phase1:keep:flippedhi", "69"),
-        ] {
-            let def = format!("\\csname res:antmaze:{key}\\endcsname{{{value}}}");
-            assert!(numbers.contains(&def), "{key}: {numbers}");
-        }
-    }
-}
+#[path = "antmaze_tests.rs"]
+mod tests;
