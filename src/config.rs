@@ -18,7 +18,7 @@
 
 use crate::envs::pointmaze::PointMazeConfig;
 use crate::envs::{EnvName, EnvSpec};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::learner::td3::Td3Config;
 use crate::learner::LearnerConfig;
 use crate::phase2::Phase2Config;
@@ -135,7 +135,20 @@ impl Check for TrainJob {
             self.env.check_fixed_task("a run without [train.her]")?;
         }
         self.learner.check()?;
-        self.train.check()
+        self.train.check()?;
+        let batch = self.learner.batch_size() as u64;
+        if batch > self.train.steps {
+            // The learner updates once its replay holds a batch, which never happens.
+            return Err(Error::invalid(
+                "learner.batch_size",
+                format!(
+                    "{batch} is more than train.steps = {}: the replay never holds a batch, so \
+                     the learner would never update",
+                    self.train.steps
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 

@@ -111,6 +111,50 @@ pub fn unset_keys<T: Serialize>(path: &Path, job: &T) -> Vec<String> {
         .collect()
 }
 
+/// The upper bounds of the counts a job or a command line can set, each checked when it is
+/// read: far above what any committed run uses (at most 300 episodes of a test, 1 000 steps of
+/// an episode, a replay of 1M, layers of 256), low enough that an allocation or a loop sized by
+/// one ends on this machine. More is a typo, as for [`crate::experiment::MAX_SEEDS`].
+pub mod bounds {
+    /// Episodes of one evaluation, test or verification (β, `eval_episodes`, …).
+    pub const EPISODES: u64 = 100_000;
+    /// Steps of one episode.
+    pub const EPISODE_STEPS: u64 = 1_000_000;
+    /// Transitions a replay buffer holds.
+    pub const REPLAY: u64 = 100_000_000;
+    /// Units of one hidden layer.
+    pub const WIDTH: u64 = 16_384;
+    /// Hidden layers of a network.
+    pub const LAYERS: u64 = 16;
+    /// Actions the argmax actor samples per state.
+    pub const SAMPLES: u64 = 100_000;
+    /// Training rounds, patience and the like: counts of repetitions of a learning step.
+    pub const REPEATS: u64 = 1_000_000;
+}
+
+/// Ok if `value` is in 1 ..= `max`; otherwise an error naming `field` and both ends.
+///
+/// ```
+/// use pbcs::validate::count;
+/// assert!(count("phase2.beta", 50, 100_000).is_ok());
+/// let e = count("phase2.beta", 0, 100_000).unwrap_err().to_string();
+/// assert!(e.contains("phase2.beta") && e.contains("at least 1"), "{e}");
+/// let e = count("phase2.beta", u64::MAX, 100_000).unwrap_err().to_string();
+/// assert!(e.contains("at most 100000"), "{e}");
+/// ```
+pub fn count(field: &str, value: u64, max: u64) -> Result<()> {
+    if value == 0 {
+        return Err(Error::invalid(field, "must be at least 1"));
+    }
+    if value > max {
+        return Err(Error::invalid(
+            field,
+            format!("must be at most {max} (more is a typo), got {value}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Ok if `value` is finite and in (0, `max`]; otherwise an error naming `field`.
 pub fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
     if !(value.is_finite() && value > 0.0 && value <= max) {

@@ -233,3 +233,38 @@ pub(crate) fn check_report(path: &Path, report: &ReportSpec, cells: &[Cell]) -> 
     }
     Ok(())
 }
+
+/// A registered grid runs its registered preset: some method's base is that file, and every
+/// method of the same kind runs on it (a method of another kind, the baselines beside PBCS, may
+/// have its own base). Else the registration's hash would vouch for a file the grid does not
+/// run. `methods`: each method's (name, kind, base file as written).
+pub(crate) fn check_registered_base(
+    path: &Path,
+    registered: Option<&super::Registration>,
+    methods: &[(&str, super::Kind, &Path)],
+) -> Result<()> {
+    let Some(r) = registered else { return Ok(()) };
+    let preset = Path::new(&r.preset);
+    let Some(&(_, kind, _)) = methods.iter().find(|(_, _, base)| *base == preset) else {
+        return Err(Error::parse(
+            path,
+            format!(
+                "registered.preset: {} is the base of no method: the grid would not run the \
+                 preset its registration covers",
+                r.preset
+            ),
+        ));
+    };
+    if let Some((name, _, base)) = methods.iter().find(|(_, k, b)| *k == kind && *b != preset) {
+        return Err(Error::parse(
+            path,
+            format!(
+                "method `{name}`: runs on {}, but the grid is registered for {}, the base of \
+                 its other methods of that kind",
+                base.display(),
+                r.preset
+            ),
+        ));
+    }
+    Ok(())
+}

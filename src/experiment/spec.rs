@@ -471,8 +471,9 @@ impl Experiment {
             Some(p) => format!("profile.{p}.seeds"),
             None => "seeds".to_string(),
         };
-        let own_pictures = prof.picture_seeds.as_deref().unwrap_or(&[]);
-        check_seeds(&field, spec.first_seed, seed_count, own_pictures)?;
+        // The pictures the profile draws, its own or the file's it inherits: each among the
+        // profile's seeds, or it would never be drawn.
+        check_seeds(&field, spec.first_seed, seed_count, &picture_seeds)?;
         let mazes = prof.mazes.clone().unwrap_or(spec.mazes.clone());
         let envs = prof.envs.clone().unwrap_or(spec.envs.clone());
         let sites: Vec<Site> = (mazes.iter().map(|&n| Site::Maze(n)))
@@ -489,6 +490,10 @@ impl Experiment {
         let (methods, cells) = spec.cells(path, &prof, &all_methods, &sites)?;
         check_figures(path, &spec.figures, &methods)?;
         super::declared::check_paired(path, spec.registered.as_ref(), &methods)?;
+        let bases: Vec<(&str, Kind, &Path)> = (all_methods.iter())
+            .map(|m| (m.name.as_str(), m.kind, m.base.as_path()))
+            .collect();
+        super::declared::check_registered_base(path, spec.registered.as_ref(), &bases)?;
         check_report(path, &spec.report, &cells)?;
         Ok(Experiment {
             title: spec.title,

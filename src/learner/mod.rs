@@ -123,6 +123,8 @@ pub trait Family:
     fn gamma_mut(&mut self) -> &mut f32;
     /// Replay capacity (transitions).
     fn replay_size(&self) -> usize;
+    /// Transitions per update.
+    fn batch_size(&self) -> usize;
     /// A fresh learner for observations of `obs_dim` and actions in `[-bounds_i, bounds_i]`;
     /// all its randomness comes from `seeds`.
     fn build(
@@ -303,6 +305,7 @@ trait Settings: Check {
     fn gamma(&self) -> f32;
     fn gamma_mut(&mut self) -> &mut f32;
     fn replay_size(&self) -> usize;
+    fn batch_size(&self) -> usize;
     fn build(
         &self,
         obs_dim: usize,
@@ -327,6 +330,9 @@ impl<F: Family> Settings for F {
     }
     fn replay_size(&self) -> usize {
         Family::replay_size(self)
+    }
+    fn batch_size(&self) -> usize {
+        Family::batch_size(self)
     }
     fn build(
         &self,
@@ -421,6 +427,11 @@ impl LearnerConfig {
     /// Replay capacity (transitions).
     pub fn replay_size(&self) -> usize {
         self.get().replay_size()
+    }
+
+    /// Transitions per update.
+    pub fn batch_size(&self) -> usize {
+        self.get().batch_size()
     }
 
     /// The TD3 family's settings, if these are.
@@ -520,9 +531,9 @@ pub(crate) fn check_common(
             format!("must be in (0, 1], got {tau}"),
         ));
     }
-    if batch_size == 0 {
-        return Err(Error::invalid("learner.batch_size", "must be at least 1"));
-    }
+    use crate::validate::{bounds, count};
+    count("learner.replay_size", replay_size as u64, bounds::REPLAY)?;
+    count("learner.batch_size", batch_size as u64, bounds::REPLAY)?;
     if replay_size < batch_size {
         return Err(Error::invalid(
             "learner.replay_size",
@@ -534,6 +545,15 @@ pub(crate) fn check_common(
             "learner.hidden",
             "needs at least one layer, all widths positive",
         ));
+    }
+    count("learner.hidden", hidden.len() as u64, bounds::LAYERS).map_err(|_| {
+        Error::invalid(
+            "learner.hidden",
+            format!("at most {} layers", bounds::LAYERS),
+        )
+    })?;
+    for &w in hidden {
+        count("learner.hidden", w as u64, bounds::WIDTH)?;
     }
     Ok(())
 }

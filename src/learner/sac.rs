@@ -163,6 +163,9 @@ impl Family for SacConfig {
     fn replay_size(&self) -> usize {
         self.replay_size
     }
+    fn batch_size(&self) -> usize {
+        self.batch_size
+    }
     fn build(
         &self,
         obs_dim: usize,

@@ -209,15 +209,14 @@ impl Check for Td3Config {
                 return Err(Error::invalid(field, format!("must be ≥ 0, got {v}")));
             }
         }
-        if self.argmax_samples == 0 {
-            // Unused by the gradient actor, but a job that says 0 says something it cannot
-            // mean: refused whatever the actor, so switching the actor never makes it bad.
-            return Err(Error::invalid(
-                "learner.argmax_samples",
-                "must be at least 1 (the argmax actor's sampled actions)",
-            ));
-        }
-        Ok(())
+        // Unused by the gradient actor, but a job that says 0 (or a typo's count) says
+        // something it cannot mean: refused whatever the actor, so switching the actor never
+        // makes it bad.
+        crate::validate::count(
+            "learner.argmax_samples",
+            self.argmax_samples as u64,
+            crate::validate::bounds::SAMPLES,
+        )
     }
 }
 
@@ -477,6 +476,9 @@ impl Family for Td3Config {
     }
     fn replay_size(&self) -> usize {
         self.replay_size
+    }
+    fn batch_size(&self) -> usize {
+        self.batch_size
     }
     fn build(
         &self,

@@ -319,31 +319,33 @@ impl Default for Phase2Config {
 impl Check for Phase2Config {
     /// Every number in range, and the two parts that act between skills only with chaining.
     fn check(&self) -> Result<()> {
+        use crate::validate::bounds::{EPISODES as EP, EPISODE_STEPS as ST, REPEATS as RE};
         let i = &self.ideas;
-        for (field, v) in [
-            ("phase2.alpha", self.alpha),
-            ("phase2.beta", self.beta),
-            ("phase2.max_steps", self.max_steps),
-            ("phase2.k_step", i.k_walk.first_step()),
-            ("phase2.eval_episodes", self.eval_episodes),
-            ("phase2.eval_max_steps", self.eval_max_steps),
-            ("phase2.max_rounds", i.stopping.max_rounds.unwrap_or(1)),
-            ("phase2.dead_walk", i.dead_walk.map_or(1, |d| d.after)),
-            ("phase2.patience", i.patience.unwrap_or(1)),
-            ("phase2.lookahead", i.lookahead.unwrap_or(1)),
+        // Each count: its field, its value (1 where the switch is off) and its upper bound.
+        for (field, v, max) in [
+            ("alpha", self.alpha, RE),
+            ("beta", self.beta, EP),
+            ("max_steps", self.max_steps, ST),
+            ("k_step", i.k_walk.first_step(), RE),
+            ("eval_episodes", self.eval_episodes, EP),
+            ("eval_max_steps", self.eval_max_steps, ST),
+            ("max_rounds", i.stopping.max_rounds.unwrap_or(1), RE),
+            ("dead_walk", i.dead_walk.map_or(1, |d| d.after), RE),
+            ("patience", i.patience.unwrap_or(1), RE),
+            ("lookahead", i.lookahead.unwrap_or(1), EP),
             (
-                "phase2.test_lanes",
+                "test_lanes",
                 i.fast_tests.and_then(|f| f.lanes).unwrap_or(1),
+                EP,
             ),
-            ("phase2.verify_episodes", i.verify_skills.unwrap_or(1)),
+            ("verify_episodes", i.verify_skills.unwrap_or(1), EP),
             (
-                "phase2.chain_verify_episodes",
+                "chain_verify_episodes",
                 i.chain_check.map_or(1, |v| v.episodes),
+                EP,
             ),
         ] {
-            if v == 0 {
-                return Err(Error::invalid(field, "must be at least 1"));
-            }
+            crate::validate::count(&format!("phase2.{field}"), v as u64, max)?;
         }
         if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
             return Err(Error::invalid(

@@ -94,19 +94,39 @@ impl Default for TrainConfig {
 
 impl Check for TrainConfig {
     fn check(&self) -> Result<()> {
+        use crate::validate::{bounds, count};
         for (field, v) in [
             ("train.steps", self.steps),
-            ("train.max_episode_steps", self.max_episode_steps as u64),
             ("train.eval_every", self.eval_every),
-            ("train.eval_episodes", self.eval_episodes as u64),
-            (
-                "train.final_eval_max_steps",
-                self.final_eval_max_steps as u64,
-            ),
         ] {
             if v == 0 {
                 return Err(Error::invalid(field, "must be at least 1"));
             }
+        }
+        for (field, v, max) in [
+            (
+                "train.max_episode_steps",
+                self.max_episode_steps,
+                bounds::EPISODE_STEPS,
+            ),
+            ("train.eval_episodes", self.eval_episodes, bounds::EPISODES),
+            (
+                "train.final_eval_max_steps",
+                self.final_eval_max_steps,
+                bounds::EPISODE_STEPS,
+            ),
+        ] {
+            count(field, v as u64, max)?;
+        }
+        if self.final_eval_episodes as u64 > bounds::EPISODES {
+            return Err(Error::invalid(
+                "train.final_eval_episodes",
+                format!(
+                    "must be at most {} (more is a typo), got {}",
+                    bounds::EPISODES,
+                    self.final_eval_episodes
+                ),
+            ));
         }
         if !(self.visit_bin.is_finite() && self.visit_bin > 0.0) {
             return Err(Error::invalid("train.visit_bin", "must be positive"));

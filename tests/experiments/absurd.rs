@@ -2,6 +2,7 @@
 //! clear error naming its field — never a panic ("capacity overflow"), an abort (an 800 GB
 //! allocation) or a sweep of nothing that exits 0.
 
+use pbcs::config::{load, PbcsJob, TrainJob};
 use pbcs::experiment::Experiment;
 
 #[test]
@@ -88,4 +89,127 @@ fn absurd_values_are_refused_naming_their_field() {
         err.contains("invalid `profile.p.seeds`: 0: needs 1 to"),
         "{err}"
     );
+    // A registered preset that no method runs, or beside a method of its kind on another base.
+    std::fs::copy("experiments/pbcs_fast.toml", dir.path().join("other.toml")).unwrap();
+    let registered =
+        "[registered]\npreset = \"base.toml\"\nsha256 = \"00\"\ndate = \"2026-12-01\"\n";
+    let other = |name: &str| method(name, "").replace("base.toml", "other.toml");
+    for (text, needle) in [
+        (
+            format!("{head}{registered}{}", other("a")),
+            "registered.preset: base.toml is the base of no method",
+        ),
+        (
+            format!("{head}{registered}{}{}", method("a", ""), other("b")),
+            "method `b`: runs on other.toml, but the grid is registered for base.toml",
+        ),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let err = Experiment::load(&path, None).unwrap_err().to_string();
+        assert!(err.contains(needle), "`{err}` does not name `{needle}`");
+    }
+    // The pictures a profile inherits from the file are among the profile's seeds too: seed 1
+    // of a grid of 2, under a profile of one seed, would never be drawn.
+    std::fs::write(
+        &path,
+        format!(
+            "picture_seeds = [1]\n{head}{}[profile.p]\nseeds = 1\n",
+            method("a", "")
+        ),
+    )
+    .unwrap();
+    let err = Experiment::load(&path, Some("p")).unwrap_err().to_string();
+    assert!(
+        err.contains("invalid `picture_seeds`: 1 is not one of the grid's seeds 0..0"),
+        "{err}"
+    );
+    Experiment::load(&path, None).unwrap();
+}
+
+/// A job file with `text` in a fresh folder.
+fn write_job(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("job.toml");
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
+/// `pbcs ARGS`: its exit code and its standard error, which holds no panic.
+fn pbcs_cli(args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic on {args:?}: {stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+/// Every count a job can set has an upper bound, checked when the file is read: the values a
+/// probe found to panic, abort or run without end are each refused naming their field, before
+/// any work (none of them reaches an allocation or a loop).
+/// Whether error `e` names `table.key`: as the check names a field, or, for a value past
+/// TOML's integers (u64::MAX), as the parser does, with the file and the key's line.
+fn names(e: &str, table: &str, key: &str) -> bool {
+    e.contains(&format!("{table}.{key}")) || (e.contains("job.toml") && e.contains(key))
+}
+
+#[test]
+fn every_count_has_an_upper_bound_checked_at_load() {
+    let huge = ["1000000000000", "18446744073709551615", "100000000000"];
+    let pbcs_fields = [
+        ("learner", "replay_size"),
+        ("learner", "batch_size"),
+        ("learner", "argmax_samples"),
+        ("phase2", "alpha"),
+        ("phase2", "beta"),
+        ("phase2", "max_steps"),
+        ("phase2", "eval_episodes"),
+        ("phase2", "eval_max_steps"),
+        ("phase2", "verify_episodes"),
+        ("phase2", "chain_verify_episodes"),
+    ];
+    for (table, key) in pbcs_fields {
+        for v in huge {
+            let (_dir, path) = write_job(&format!("[{table}]\n{key} = {v}\n"));
+            let e = load::<PbcsJob>(&path).unwrap_err().to_string();
+            assert!(names(&e, table, key), "{table}.{key} = {v}: {e}");
+        }
+    }
+    for key in [
+        "max_episode_steps",
+        "eval_episodes",
+        "final_eval_episodes",
+        "final_eval_max_steps",
+    ] {
+        for v in huge {
+            let (_dir, path) = write_job(&format!("[train]\n{key} = {v}\n"));
+            let e = load::<TrainJob>(&path).unwrap_err().to_string();
+            assert!(names(&e, "train", key), "train.{key} = {v}: {e}");
+        }
+    }
+    for hidden in [
+        "[1000000000, 1000000000]",
+        "[64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64, 64]",
+    ] {
+        let (_dir, path) = write_job(&format!("[learner]\nhidden = {hidden}\n"));
+        let e = load::<PbcsJob>(&path).unwrap_err().to_string();
+        assert!(e.contains("learner.hidden"), "{hidden}: {e}");
+    }
+    // A batch larger than the whole run: the replay never holds one, the learner never updates.
+    let (_dir, path) = write_job("[train]\nsteps = 2000\nlearning_starts = 0\n[learner]\nbatch_size = 100000000\nreplay_size = 100000000\n");
+    let e = load::<TrainJob>(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("learner.batch_size") && e.contains("never update"),
+        "{e}"
+    );
+    // The defaults and the bounds themselves are accepted.
+    let (_dir, path) = write_job("[phase2]\nbeta = 100000\n[learner]\nhidden = [16384]\n");
+    load::<PbcsJob>(&path).unwrap();
+    // The command line's counts too: `pbcs eval --episodes` past its bound is refused by the
+    // parser, before the chain is read.
+    for v in ["18446744073709551615", "100000000000"] {
+        let (code, err) = pbcs_cli(&["eval", "--chain", "/nonexistent", "--episodes", v]);
+        assert!(code != 0 && err.contains("--episodes"), "{v}: {code} {err}");
+    }
 }

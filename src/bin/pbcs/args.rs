@@ -197,7 +197,8 @@ pub enum Command {
         chain: PathBuf,
         /// Episodes, each from a start uniform in B_ε(s_0) (with phase2.first_starts = "drawn",
         /// where the environment's reset draws them).
-        #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = 100,
+              value_parser = clap::value_parser!(u64).range(1..=pbcs::validate::bounds::EPISODES))]
         episodes: u64,
         /// Seed of the start states [default: the run's seed, which reproduces its evaluation].
         #[arg(long)]
@@ -248,7 +249,8 @@ pub enum Command {
         #[arg(long, value_delimiter = ',', default_value = "2,5,7,10,15")]
         sizes: Vec<usize>,
         /// Number of seeds: runs seeds 0..SEEDS (at least 1).
-        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = 10,
+              value_parser = clap::value_parser!(u64).range(1..=pbcs::experiment::MAX_SEEDS))]
         seeds: u64,
         /// Runs at a time (one thread each).
         #[arg(long, default_value_t = 2, value_parser = parse_jobs)]
