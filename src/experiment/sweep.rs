@@ -265,8 +265,10 @@ pub fn sweep_until(
 /// results in the items'
 /// order. Items start in their order (each free thread takes the next one), so an interrupted
 /// sweep has finished a prefix of its plan: with the table's plan, whole mazes, smallest first.
-/// After the first error no new item starts, and that error is returned. Every run is
-/// single-threaded and seeded by its own job, so `jobs` changes the wall clock, never a byte.
+/// One item's failure, an error or a panic, does not take the others with it: every item runs
+/// (and a run writes its own row), then the first failure in the items' order is returned,
+/// with how many failed. Every run is single-threaded and seeded by its own job, so `jobs`
+/// changes the wall clock, never a byte.
 pub fn run_parallel<T: Sync, R: Send>(
     items: &[T],
     jobs: usize,
@@ -278,16 +280,43 @@ pub fn run_parallel<T: Sync, R: Send>(
         .num_threads(jobs.clamp(1, items.len().max(1)))
         .build()
         .map_err(|e| Error::invalid("jobs", e.to_string()))?;
-    let mut done: Vec<(usize, R)> = pool.install(|| {
+    let mut done: Vec<(usize, Result<R>)> = pool.install(|| {
         items
             .iter()
             .enumerate()
             .par_bridge()
-            .map(|(i, item)| f(item).map(|r| (i, r)))
-            .collect::<Result<_>>()
-    })?;
+            .map(|(i, item)| (i, caught(|| f(item))))
+            .collect()
+    });
     done.sort_by_key(|(i, _)| *i);
-    Ok(done.into_iter().map(|(_, r)| r).collect())
+    let failed = done.iter().filter(|(_, r)| r.is_err()).count();
+    let mut out = Vec::with_capacity(done.len());
+    for (_, r) in done {
+        match r {
+            Ok(r) => out.push(r),
+            Err(e) if failed == 1 => return Err(e),
+            Err(e) => {
+                return Err(Error::invalid(
+                    "sweep",
+                    format!("{failed} of {} runs failed; the first: {e}", items.len()),
+                ))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `f()`, with a panic turned into an error that carries its message: a bug met by one run
+/// fails that run, not the process and the runs beside it.
+fn caught<R>(f: impl FnOnce() -> Result<R>) -> Result<R> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
+        let message = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic without a message".to_string());
+        Err(Error::invalid("run", format!("panicked: {message}")))
+    })
 }
 
 /// Every (cell, seed) of the experiment (each cell with the seeds of its maze), or of one

@@ -177,10 +177,10 @@ fn a_run_another_sweep_holds_is_refused() {
 }
 
 /// The sweep's pool starts items in their order (so an interrupted sweep has done a prefix of
-/// its plan: whole mazes, smallest first), returns results in the items' order, and starts
-/// nothing new after an error.
+/// its plan: whole mazes, smallest first), returns results in the items' order, and one
+/// item's error or panic does not stop the others: every item runs, the failure is returned.
 #[test]
-fn parallel_runs_start_in_order_and_stop_at_an_error() {
+fn parallel_runs_start_in_order_and_one_failure_stops_no_other() {
     use pbcs::experiment::run_parallel;
     let items: Vec<usize> = (0..24).collect();
     let started = Mutex::new(Vec::new());
@@ -207,7 +207,30 @@ fn parallel_runs_start_in_order_and_stop_at_an_error() {
     })
     .unwrap_err();
     assert!(err.to_string().contains("five"));
-    assert_eq!(*ran.lock().unwrap(), 6, "items after the error ran");
+    assert_eq!(*ran.lock().unwrap(), items.len(), "every item ran");
+    // A panic in one of two threads fails its item only; the other items all finish.
+    let finished = Mutex::new(Vec::new());
+    let err = run_parallel(&items, 2, |&i| {
+        if i == 3 || i == 7 {
+            panic!("item {i} met a bug");
+        }
+        finished.lock().unwrap().push(i);
+        Ok(i)
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("2 of 24 runs failed") && err.contains("item 3 met a bug"),
+        "{err}"
+    );
+    let mut finished = finished.into_inner().unwrap();
+    finished.sort_unstable();
+    let others: Vec<usize> = items
+        .iter()
+        .copied()
+        .filter(|&i| i != 3 && i != 7)
+        .collect();
+    assert_eq!(finished, others);
 }
 
 /// A lock file left behind by an interrupted run (whatever it says: a process that has ended,
