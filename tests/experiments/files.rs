@@ -507,7 +507,7 @@ fn the_slurm_script_runs_one_cell_seed_per_array_task() {
         String::from_utf8_lossy(&o.stdout)
     );
     // The makefile: one rule per run, its target the run's raw row.
-    let mk = launch.makefile(results);
+    let mk = launch.makefile(results).unwrap();
     for p in &runs {
         let target = exp
             .cell_dir(results, p.cell)

@@ -278,10 +278,14 @@ fn exp_list(args: &ExpArgs, make: bool, slurm: bool, skip_unavailable: bool) -> 
         );
         return Ok(());
     }
+    // The commands would be refused by the sweep they run: say so now, once.
+    if let Some(Err(e)) = exp.registered.as_ref().map(|r| r.check(exp.name)) {
+        eprintln!("warning: every run listed will be refused: {e}");
+    }
     let profile = args.profile.as_deref();
     let launch = pbcs::launch::Launch::new(&exp, &args.file, profile, args.results.as_deref());
     match (make, slurm) {
-        (true, _) => print!("{}", launch.makefile(&results)),
+        (true, _) => print!("{}", launch.makefile(&results)?),
         (_, true) => print!("{}", launch.slurm(&results)),
         _ => print!("{}", launch.commands(&results)?),
     }
