@@ -126,7 +126,8 @@ impl SkillChain {
     /// Loads a chain saved by [`SkillChain::save`], its policies to run on `kernel`. Every
     /// value of the manifest is checked before a weight is read: at least one skill; finite
     /// numbers; radius, action scales and action bounds positive; sizes, centre, origin and
-    /// scales of agreeing lengths; `start_index <= target_index`; a policy file inside the
+    /// scales of agreeing lengths; `start_index < target_index`, each skill starting where the one
+    /// before it ends; a policy file inside the
     /// folder holding at least the parameters its sizes say. Then what belongs to the chain
     /// (where the manifest says it, as every manifest since issue 48 does): as many skills as
     /// `skill_count`, each policy file and the job file with the SHA-256 recorded, so that a
@@ -264,8 +265,11 @@ impl Manifest {
     }
 
     /// Checks every value of the manifest read from `path` before a file it names is read:
-    /// at least one skill, and each skill's values ([`ManifestSkill::check`]). An error names
-    /// `path` and the field.
+    /// at least one skill, each skill's values ([`ManifestSkill::check`]), and the skills a
+    /// chain along τ: each from an index of τ to a later one, each starting where the one
+    /// before it ends (a manifest cut inside, reordered or with a skill repeated is refused; a
+    /// chain phase 2 left incomplete starts past τ_0, as it was saved). An error names `path`
+    /// and the field.
     fn check(&self, path: &Path) -> Result<()> {
         if self.skills.is_empty() {
             return Err(Error::parse(
@@ -277,6 +281,21 @@ impl Manifest {
             skill.check().map_err(|(field, why)| {
                 Error::parse(path, format!("skills[{i}].{field}: {why}"))
             })?;
+        }
+        for (i, pair) in self.skills.windows(2).enumerate() {
+            if pair[1].start_index != pair[0].target_index {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "skills[{}].start_index: {}, but skills[{i}] ends at τ_{}: the chain's \
+                         skills must follow each other along τ (a manifest cut, reordered or \
+                         with a skill repeated)",
+                        i + 1,
+                        pair[1].start_index,
+                        pair[0].target_index
+                    ),
+                ));
+            }
         }
         Ok(())
     }
@@ -383,11 +402,11 @@ impl ManifestSkill {
                 format!("must be positive and finite, got {}", self.radius),
             ));
         }
-        if self.start_index > self.target_index {
+        if self.start_index >= self.target_index {
             return Err((
                 "start_index",
                 format!(
-                    "{} lies after the skill's target_index {}",
+                    "{} is not before the skill's target_index {} (a skill goes forward along τ)",
                     self.start_index, self.target_index
                 ),
             ));

@@ -154,8 +154,11 @@ fn indices_bounds_files_and_parameter_counts_are_checked() {
     let err = load_error(dir.path(), &text, "policy = \"mlp\"", "policy = \"sac\"");
     assert_names(&err, "skills[0].action_scale");
     assert!(err.contains("sac policy"), "{err}");
-    // The second skill is named by its index.
-    let skills = &text[text.find("[[skills]]").unwrap()..];
+    // The second skill is named by its index (a copy of the first, moved on along τ to follow
+    // it).
+    let skills = text[text.find("[[skills]]").unwrap()..]
+        .replacen("start_index = 0", "start_index = 3", 1)
+        .replacen("target_index = 3", "target_index = 6", 1);
     let two = format!(
         "{}\n{skills}",
         text.replace("skill_count = 1", "skill_count = 2")
@@ -455,4 +458,41 @@ fn a_chain_whose_files_do_not_match_its_manifest_is_refused() {
     )
     .unwrap();
     assert_eq!(load(ours.path()).unwrap(), 2);
+}
+
+/// The skills of a manifest follow each other along τ: one whose second skill does not start
+/// where the first ends (a manifest cut at a skill boundary and recounted, its skills
+/// reordered, a skill repeated, a skill of no length) is refused naming the field.
+#[test]
+fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
+    let chain = |indices: &[(usize, usize)]| SkillChain {
+        skills: indices
+            .iter()
+            .map(|&(start_index, target_index)| Skill {
+                policy: Box::new(constant_policy([1.0, 0.0])),
+                activation: Ball::new(vec![0.5, 0.5], 0.1),
+                start_index,
+                target_index,
+                inputs: Inputs::new(vec![0.5, 0.5], vec![1.0, 1.0]),
+            })
+            .collect(),
+        kernel: Kernel::detect(),
+    };
+    let load = |indices: &[(usize, usize)]| {
+        let dir = tempfile::tempdir().unwrap();
+        chain(indices).save(dir.path()).unwrap();
+        SkillChain::load(dir.path(), Kernel::detect()).map(|c| c.skills.len())
+    };
+    assert_eq!(load(&[(0, 4), (4, 9), (9, 12)]).unwrap(), 3);
+    // Phase 2 left incomplete: the chain starts past τ_0, as it was saved.
+    assert_eq!(load(&[(17, 19), (19, 37)]).unwrap(), 2);
+    for (indices, field) in [
+        (&[(4, 9), (0, 4)][..], "skills[1].start_index"),
+        (&[(0, 4), (0, 4)][..], "skills[1].start_index"),
+        (&[(0, 4), (5, 9)][..], "skills[1].start_index"),
+        (&[(0, 4), (4, 4)][..], "skills[1].start_index"),
+    ] {
+        let err = load(indices).expect_err("a chain out of order must not load");
+        assert_names(&err.to_string(), field);
+    }
 }
