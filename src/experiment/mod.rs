@@ -37,6 +37,7 @@
 mod declared;
 mod key;
 mod layout;
+mod legacy;
 mod merge;
 mod row;
 mod row_record;

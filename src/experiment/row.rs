@@ -377,28 +377,34 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
             );
         }
         (Job::Vanilla(_), Some(_)) => {}
-        // Judged on PBCS's protocol after training, whose file this row lacks (written before
-        // it existed): nothing here to check the rate against.
-        (Job::Vanilla(j), None) if j.train.final_eval_episodes > 0 => {}
-        (Job::Vanilla(_), None) => {
-            let evals_path = super::run_file(dir, seed, ".evals.csv");
-            if evals_path.exists() {
-                let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(&evals_path)?;
+        // Every run writes its evaluation (a vanilla run, where its job evaluates after
+        // training; else its curve); only the committed rows listed as written before that may
+        // lack it ([`super::legacy`]).
+        (job, None) => {
+            let file = match job {
+                Job::Vanilla(j) if j.train.final_eval_episodes == 0 => {
+                    super::run_file(dir, seed, ".evals.csv")
+                }
+                _ => evaluation_path,
+            };
+            if !file.exists() && !super::legacy::may_lack_evaluation(path)? {
+                let why = format!("{}, but {} is missing", r.success_rate, file.display());
+                return wrong("success_rate", why);
+            }
+            if let (Job::Vanilla(_), true) = (job, file.exists()) {
+                let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(&file)?;
                 if let Some(last) = evals.last().filter(|e| e.success != r.success_rate) {
-                    return wrong(
-                        "success_rate",
-                        format!(
-                            "{}, but the last evaluation of {} (at {} steps) has success {}",
-                            r.success_rate,
-                            evals_path.display(),
-                            last.steps,
-                            last.success
-                        ),
+                    let (steps, success) = (last.steps, last.success);
+                    let why = format!(
+                        "{}, but the last evaluation of {} (at {steps} steps) has success \
+                         {success}",
+                        r.success_rate,
+                        file.display()
                     );
+                    return wrong("success_rate", why);
                 }
             }
         }
-        _ => {}
     }
     Ok(())
 }

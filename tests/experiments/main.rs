@@ -18,6 +18,7 @@ mod committed;
 mod cut_run;
 mod files;
 mod judged;
+mod legacy;
 mod locks;
 mod make_targets;
 mod rows;
