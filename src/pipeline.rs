@@ -232,6 +232,7 @@ pub fn render(
         let path = crate::tables::table_path(results, exp.name);
         if path.exists() {
             let stats = crate::tables::read_table(&path)?;
+            crate::tables::check_against_rows(&exp, results, &stats)?;
             tables.push((exp, stats));
         } else {
             skipped.push((exp.name, path));
@@ -272,6 +273,7 @@ pub fn render(
         )?);
         Ok(files)
     })?;
+    remove_stale(&[figures, tex], &files)?;
     Ok(Rendered {
         tables,
         skipped,
@@ -279,6 +281,31 @@ pub fn render(
         unjudged,
         files,
     })
+}
+
+/// What `figures` made before and no longer makes goes (an output a step no longer makes is
+/// removed by that step): in each folder, every figure or LaTeX file (`.png`, `.svg`, `.tex`)
+/// that is not one of `written`, and a staging folder (`.writing-*`) a killed run left.
+fn remove_stale(dirs: &[&Path], written: &[PathBuf]) -> Result<()> {
+    for dir in dirs {
+        for entry in std::fs::read_dir(dir).map_err(|e| crate::Error::io(dir, e))? {
+            let path = entry.map_err(|e| crate::Error::io(dir, e))?.path();
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            let drawn = path
+                .extension()
+                .is_some_and(|e| ["png", "svg", "tex"].iter().any(|x| e == *x));
+            let gone = if path.is_dir() {
+                name.is_some_and(|n| n.starts_with(".writing-"))
+                    && std::fs::remove_dir_all(&path).is_ok()
+            } else {
+                drawn && !written.contains(&path) && std::fs::remove_file(&path).is_ok()
+            };
+            if gone {
+                eprintln!("removed {}, which figures no longer makes", path.display());
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Writes every table of an experiment under `<results>/tables/` (the one writer of that

@@ -76,10 +76,77 @@ pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
             format!("{e} (run `make figures` to aggregate the raw results)"),
         )
     })?;
-    reader
+    let cells: Vec<CellStats> = reader
         .deserialize()
         .collect::<std::result::Result<Vec<_>, _>>()
-        .map_err(|e| Error::csv(path, e))
+        .map_err(|e| Error::csv(path, e))?;
+    for (i, c) in cells.iter().enumerate() {
+        check_counts(c).map_err(|why| Error::parse(path, format!("line {}: {why}", i + 2)))?;
+    }
+    Ok(cells)
+}
+
+/// A cell's counts as aggregation writes them: at least one run, no more successes than runs,
+/// the rate their quotient and the Wilson interval theirs, the steps finite and not negative.
+fn check_counts(c: &CellStats) -> std::result::Result<(), String> {
+    if c.n == 0 || c.successes > c.n {
+        return Err(format!("{} successes of {} runs", c.successes, c.n));
+    }
+    let (lo, hi) = crate::stats::wilson(c.successes, c.n, crate::stats::Z95);
+    let rate = c.successes as f64 / c.n as f64;
+    for (column, got, want) in [
+        ("success_rate", c.success_rate, rate),
+        ("wilson_lo", c.wilson_lo, lo),
+        ("wilson_hi", c.wilson_hi, hi),
+    ] {
+        if !((got - want).abs() <= 1e-9) {
+            return Err(format!(
+                "{column} is {got}, but {} successes of {} runs give {want}",
+                c.successes, c.n
+            ));
+        }
+    }
+    let steps = [
+        c.steps_median,
+        c.steps_q1,
+        c.steps_q3,
+        c.steps_min,
+        c.steps_max,
+    ];
+    if steps.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
+        return Err(format!("steps not finite and non-negative: {steps:?}"));
+    }
+    Ok(())
+}
+
+/// The table of `exp` agrees with its raw rows under `results`: per cell as many runs and as
+/// many solved as the rows hold (a table left from rows since removed or edited is an error,
+/// not figures drawn over a grid that says otherwise).
+pub fn check_against_rows(
+    exp: &crate::experiment::Experiment,
+    results: &Path,
+    stats: &[CellStats],
+) -> Result<()> {
+    let rows = crate::experiment::read_raw(exp, results)?;
+    let path = table_path(results, exp.name);
+    for c in stats {
+        let of_cell: Vec<_> = rows.iter().filter(|r| r.cell == c.cell).collect();
+        let solved = of_cell.iter().filter(|r| r.solved).count() as u64;
+        if (of_cell.len() as u64, solved) != (c.n, c.successes) {
+            return Err(Error::parse(
+                &path,
+                format!(
+                    "{}: {}/{} solved, but its raw rows hold {solved}/{}: run `pbcs aggregate` \
+                     (`make figures` does) so that the table is the rows'",
+                    c.cell,
+                    c.successes,
+                    c.n,
+                    of_cell.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The cells as a markdown table: solved k/n, Wilson interval, median and quartile steps, the

@@ -18,6 +18,19 @@ fn write_run(exp: &Experiment, results: &Path, cell: &Cell, seed: u64) -> PathBu
     )
     .unwrap();
     let row = made_up_row(exp, cell, seed);
+    // Its evaluation, as every run writes it: the row's rate over the job's episodes.
+    let Job::Pbcs(j) = &cell.job else {
+        unreachable!("made_up_row is a PBCS row")
+    };
+    let n = j.phase2.eval_episodes;
+    let wins = (row.success_rate as f64 * n as f64).round() as usize;
+    let episodes: Vec<pbcs::env::EvalEpisode> = (0..n)
+        .map(|i| pbcs::env::EvalEpisode {
+            success: i < wins,
+            steps: 40,
+        })
+        .collect();
+    pbcs::record::write_records(&run_file(&dir, seed, ".evaluation.csv"), &episodes).unwrap();
     let path = run_file(&dir, seed, ".csv");
     pbcs::record::write_record(&path, &row).unwrap();
     path
@@ -422,9 +435,46 @@ fn figures_are_written_all_or_none() {
         assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
     }
     std::fs::write(&picture, kept).unwrap();
+    // What an earlier `figures` made and this one does not (a figure of a table since removed)
+    // and a staging folder a killed run left go; a file of another kind stays.
+    let stale = [figures.join("gone_bars.png"), tex.join("gone_cells.tex")];
+    for f in &stale {
+        std::fs::write(f, "old").unwrap();
+    }
+    std::fs::create_dir_all(figures.join(".writing-killed/sub")).unwrap();
+    std::fs::write(figures.join("notes.txt"), "mine").unwrap();
     let again = render().unwrap().files;
     assert_eq!(again, written);
     assert!(written.iter().all(|f| std::fs::read(f).unwrap() != b"old"));
+    assert!(stale.iter().all(|f| !f.exists()) && !figures.join(".writing-killed").exists());
+    assert!(figures.join("notes.txt").exists());
+    // A table that its raw rows do not hold: one of the rooms' cells edited from 10/10 to a
+    // consistent 9/10 (its rate and interval with it) is refused, nothing drawn.
+    let table = results.join("tables/rooms.csv");
+    let text = std::fs::read_to_string(&table).unwrap();
+    let mut stats = pbcs::tables::read_table(&table).unwrap();
+    let (k, n) = (stats[0].successes - 1, stats[0].n);
+    let (lo, hi) = pbcs::stats::wilson(k, n, pbcs::stats::Z95);
+    stats[0].successes = k;
+    stats[0].success_rate = k as f64 / n as f64;
+    (stats[0].wilson_lo, stats[0].wilson_hi) = (lo, hi);
+    pbcs::record::write_records(&table, &stats).unwrap();
+    let err = render().map(|_| ()).unwrap_err().to_string();
+    assert!(
+        err.contains("raw rows hold") && err.contains("rooms.csv"),
+        "{err}"
+    );
+    // An inconsistent table is refused when it is read: more successes than runs, a rate
+    // that is not their quotient.
+    for (from, to) in [
+        (",10,10,1.0,", ",10,12,1.0,"),
+        (",10,10,1.0,", ",10,10,NaN,"),
+    ] {
+        assert!(text.contains(from), "{text}");
+        std::fs::write(&table, text.replacen(from, to, 1)).unwrap();
+        let err = pbcs::tables::read_table(&table).unwrap_err().to_string();
+        assert!(err.contains("rooms.csv") && err.contains("line 2"), "{err}");
+    }
 }
 
 /// A row is checked against what it summarises (issue 50's probes, which passed before): a
