@@ -99,7 +99,7 @@ fn check_counts(c: &CellStats) -> std::result::Result<(), String> {
         ("wilson_lo", c.wilson_lo, lo),
         ("wilson_hi", c.wilson_hi, hi),
     ] {
-        if !((got - want).abs() <= 1e-9) {
+        if (got - want).abs().is_nan() || (got - want).abs() > 1e-9 {
             return Err(format!(
                 "{column} is {got}, but {} successes of {} runs give {want}",
                 c.successes, c.n
