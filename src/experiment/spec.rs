@@ -455,8 +455,13 @@ fn fmt_sites(sites: &[Site]) -> String {
 impl Experiment {
     /// Reads and resolves an experiment file under `profile` (None: the committed grid).
     /// Every cell's job is validated; duplicate method names, an unknown profile, an empty
-    /// grid and keys that a job does not have are errors naming the method or field.
+    /// grid and keys that a job does not have are errors naming the method or field. Under a
+    /// profile the whole grid is validated too, so that the smoke check CI runs holds the
+    /// committed grid to the same checks.
     pub fn load(path: &Path, profile: Option<&str>) -> Result<Experiment> {
+        if profile.is_some() {
+            Experiment::load(path, None)?;
+        }
         let spec: ExperimentSpec = crate::validate::read_toml(path)?;
         let stem = path
             .file_stem()

@@ -43,10 +43,36 @@ pub use crate::stats::SOLVED_AT;
 
 /// Claims `out` for `job` before any work ([`crate::record::claim_out_dir`]): writes the
 /// resolved job as `config.toml` (so that `--config` re-runs exactly this job), refusing a
-/// path that is not a writable folder or a folder of another run.
+/// path that is not a writable folder, a folder of another run, or a sweep's results folder or
+/// cell folder ([`holds_sweep_results`]), whose rows a run's files would mix with.
 fn claim<T: Serialize>(job: &T, out: &Path) -> Result<()> {
+    if let Some(what) = holds_sweep_results(out) {
+        return Err(crate::Error::io(
+            out,
+            std::io::Error::other(format!(
+                "holds a sweep's results ({what}): a run's files would mix with its rows; \
+                 choose another output folder"
+            )),
+        ));
+    }
     let text = crate::validate::to_toml(job, &out.join("config.toml"))?;
     crate::record::claim_out_dir(out, &text)
+}
+
+/// What in `dir` says it is a results folder of sweeps or a cell folder of one: its lock
+/// ([`crate::record::FolderLock::path`]), its `raw/` folder, or a raw row (`s<seed>.csv`).
+fn holds_sweep_results(dir: &Path) -> Option<String> {
+    if crate::record::FolderLock::path(dir).exists() || dir.join("raw").is_dir() {
+        return Some("its lock or its raw/ folder".to_string());
+    }
+    let row = |name: &str| {
+        let seed = name.strip_prefix('s').and_then(|n| n.strip_suffix(".csv"));
+        seed.is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    std::fs::read_dir(dir).ok()?.flatten().find_map(|e| {
+        let name = e.file_name().to_string_lossy().into_owned();
+        row(&name).then_some(format!("the row {name}"))
+    })
 }
 
 /// Writes a run's `timing.toml` at `path` ([`crate::record::Timing`]): its wall clock and the

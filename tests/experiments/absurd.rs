@@ -213,3 +213,59 @@ fn every_count_has_an_upper_bound_checked_at_load() {
         assert!(code != 0 && err.contains("--episodes"), "{v}: {code} {err}");
     }
 }
+
+/// A profile's grid is no shelter for a bad committed grid: `exp list FILE --profile smoke`
+/// (what CI checks) validates the whole file too.
+#[test]
+fn a_profile_validates_the_whole_grid_too() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy("experiments/pbcs_paper.toml", dir.path().join("base.toml")).unwrap();
+    let method = "[[method]]\nname = \"a\"\nkind = \"pbcs\"\nbase = \"base.toml\"\n";
+    for (grid, needle) in [("mazes = [100000]", "maze"), ("mazes = [2, 2]", "unique")] {
+        let text = format!(
+            "title = \"t\"\nseeds = 2\n{method}{grid}\n[profile.smoke]\nmazes = [2]\nseeds = 1\n"
+        );
+        let text = text.replacen(
+            &format!("{method}{grid}\n"),
+            &format!("{grid}\n{method}"),
+            1,
+        );
+        let path = dir.path().join("grid.toml");
+        std::fs::write(&path, &text).unwrap();
+        let whole = Experiment::load(&path, None)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        let smoke = Experiment::load(&path, Some("smoke"))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(whole, smoke, "{grid}");
+        assert!(whole.contains(needle), "{grid}: {whole}");
+    }
+}
+
+/// `pbcs run --out` a sweep's results folder or one of its cell folders is refused before any
+/// work, the folder left as it was.
+#[test]
+fn a_run_into_a_sweeps_results_is_refused() {
+    for plant in ["sweep.lock", "raw/", "s3.csv"] {
+        let dir = tempfile::tempdir().unwrap();
+        match plant.strip_suffix('/') {
+            Some(folder) => std::fs::create_dir_all(dir.path().join(folder)).unwrap(),
+            None => std::fs::write(dir.path().join(plant), "").unwrap(),
+        }
+        let before = std::fs::read_dir(dir.path()).unwrap().count();
+        let out = dir.path().to_str().unwrap();
+        let (code, err) = pbcs_cli(&["run", "--maze", "2", "--seed", "0", "--quiet", "--out", out]);
+        assert!(
+            code != 0 && err.contains("holds a sweep's results"),
+            "{plant}: {code} {err}"
+        );
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            before,
+            "{plant}"
+        );
+    }
+}
