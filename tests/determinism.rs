@@ -125,3 +125,37 @@ fn vanilla_training_is_byte_identical_per_seed() {
     let evals = std::fs::read_to_string(a.path().join("evals.csv")).unwrap();
     assert_eq!(evals.lines().count(), 4, "header + 3 evaluations:\n{evals}");
 }
+
+/// A run folder's leftovers from a killed process of the same job (a temporary file, a
+/// staging folder) go when the job is run there again, and the files come out the same; while
+/// a process works in a folder, a second one of that job into it is refused, naming the lock.
+#[test]
+fn a_rerun_removes_a_killed_runs_leftovers_and_a_concurrent_one_is_refused() {
+    let mut job = ExploreJob::default();
+    job.maze.size = 3;
+    let dir = tempfile::tempdir().unwrap();
+    run(&job, dir.path());
+    let first = std::fs::read(dir.path().join("trajectory.csv")).unwrap();
+    let tmp = dir.path().join(".tmp-trajectory.csv.q8Zr1x");
+    let stage = dir.path().join(".writing-Ab12Cd");
+    std::fs::write(&tmp, "half a file").unwrap();
+    std::fs::create_dir_all(stage.join("chain")).unwrap();
+    std::fs::write(stage.join("summary.csv"), "staged").unwrap();
+    run(&job, dir.path());
+    assert!(!tmp.exists() && !stage.exists(), "the leftovers are gone");
+    assert_eq!(
+        std::fs::read(dir.path().join("trajectory.csv")).unwrap(),
+        first
+    );
+    let held = pbcs::record::WorkLock::acquire(&dir.path().join(pbcs::record::RUN_LOCK)).unwrap();
+    let e = run_explore(
+        &pbcs::validate::Check::valid(job.clone()).unwrap(),
+        dir.path(),
+        &pbcs::plot::draw_run,
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("another process") && e.contains(".lock"), "{e}");
+    drop(held);
+}

@@ -218,6 +218,9 @@ pub fn sweep_until(
         // instead of doing the run again and replacing its row.
         let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
             .and_then(|_lock| {
+                // What a killed process of this run left mid-write (its checkpoint's
+                // temporary file): the lock makes the names s<seed>.* this run's.
+                crate::record::remove_orphans(&dir, &format!("s{}.", p.seed))?;
                 // Finished by another sweep while this one was planning: read it back.
                 match read_finished(exp, p.cell, p.seed, &dir)? {
                     Some(row) => Ok(Some(row)),

@@ -116,7 +116,7 @@ pub fn run_explore(
     progress: impl FnMut(u64, usize),
 ) -> Result<(ExploreSummary, f64)> {
     let built = job.env_spec().build()?;
-    claim(job, out)?;
+    let _lock = claim(job, out)?;
     crate::with_env!(built, |env| {
         let run = ExploreRun::compute(env, job, progress)?;
         run.write(job, out, draw)?;

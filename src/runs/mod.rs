@@ -44,8 +44,9 @@ pub use crate::stats::SOLVED_AT;
 /// Claims `out` for `job` before any work ([`crate::record::claim_out_dir`]): writes the
 /// resolved job as `config.toml` (so that `--config` re-runs exactly this job), refusing a
 /// path that is not a writable folder, a folder of another run, or a sweep's results folder or
-/// cell folder ([`holds_sweep_results`]), whose rows a run's files would mix with.
-fn claim<T: Serialize>(job: &T, out: &Path) -> Result<()> {
+/// cell folder ([`holds_sweep_results`]), whose rows a run's files would mix with. The run
+/// holds the returned lock while it works.
+fn claim<T: Serialize>(job: &T, out: &Path) -> Result<crate::record::WorkLock> {
     if let Some(what) = holds_sweep_results(out) {
         return Err(crate::Error::io(
             out,

@@ -345,7 +345,7 @@ pub fn run_pbcs_until(
 ) -> Result<Option<(RunRecord, f64)>> {
     crate::with_env!(job.env_spec().build()?, |env| {
         let ready = PbcsRun::require_hooks(&env, job)?;
-        claim(job, out)?;
+        let _lock = claim(job, out)?;
         let config = crate::validate::to_toml(&**job, &out.join("config.toml"))?;
         let checkpoint = Checkpoint {
             stop_at,

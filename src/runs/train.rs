@@ -214,7 +214,7 @@ pub fn run_train(
     progress: impl FnMut(u64, f32),
 ) -> Result<(TrainSummary, f64)> {
     let built = job.env_spec().build()?;
-    claim(job, out)?;
+    let _lock = claim(job, out)?;
     let run = crate::with_env!(built, |env| {
         TrainRun::compute(env, job, kernel, progress)?
     });

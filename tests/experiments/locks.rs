@@ -108,3 +108,60 @@ fn single_runs_share_a_results_folder_and_a_sweep_of_several_does_not() {
         2
     );
 }
+
+/// A sweep in which one run fails (here its lock is held, as by another process) finishes the
+/// others and writes their rows, and returns the failure naming the run. Before, a panic in
+/// one worker took the whole sweep down, and a run finishing beside it was lost.
+#[test]
+fn a_sweep_with_one_failing_run_finishes_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    let runs = two_runs(&exp);
+    let file = |p: &Pending, suffix: &str| {
+        exp.cell_dir(dir.path(), p.cell)
+            .join(format!("s{}{suffix}", p.seed))
+    };
+    let held = pbcs::record::WorkLock::acquire(&file(&runs[0], ".lock")).unwrap();
+    let e = sweep(&exp, &runs, dir.path(), 2, Kernel::detect(), |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&runs[0].cell.id.to_string()) && e.contains("another process"),
+        "{e}"
+    );
+    assert!(!file(&runs[0], ".csv").exists());
+    assert!(
+        file(&runs[1], ".csv").exists(),
+        "the other run wrote its row"
+    );
+    drop(held);
+}
+
+/// What a process killed mid-write left in a cell folder (a checkpoint's temporary file,
+/// `.tmp-s<seed>.resume.*`) is removed by the next run of that seed, which owns those names
+/// through its lock; another seed's leftovers stay for that seed's run.
+#[test]
+fn a_killed_writers_temporary_files_go_with_the_next_run_of_that_seed() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = Experiment::load(Path::new("experiments/table.toml"), Some("smoke")).unwrap();
+    let runs = two_runs(&exp);
+    let cell = exp.cell_dir(dir.path(), runs[0].cell);
+    std::fs::create_dir_all(&cell).unwrap();
+    let seed = runs[0].seed;
+    let mine = cell.join(format!(".tmp-s{seed}.resume.Xk3q9A"));
+    let half_row = cell.join(format!(".tmp-s{seed}.csv.b7Rt2c"));
+    let other = cell.join(format!(".tmp-s{}0.resume.Xk3q9A", seed));
+    for f in [&mine, &half_row, &other] {
+        std::fs::write(f, vec![0u8; 4096]).unwrap();
+    }
+    sweep(&exp, &runs[..1], dir.path(), 1, Kernel::detect(), |_, _| {}).unwrap();
+    assert!(cell.join(format!("s{seed}.csv")).exists());
+    assert!(
+        !mine.exists() && !half_row.exists(),
+        "this seed's leftovers are gone"
+    );
+    assert!(
+        other.exists(),
+        "seed {seed}0's are not this run's to remove"
+    );
+}

@@ -8,6 +8,9 @@ use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+mod lock;
+pub use lock::{FolderLock, WorkLock};
+
 /// Temporary files become result files: give them ordinary read permissions (tempfile's
 /// default, 0600, would make results unreadable to other users).
 fn temp_builder<'a>(prefix: &'a str, suffix: &'a str) -> tempfile::Builder<'a, 'a> {
@@ -19,6 +22,52 @@ fn temp_builder<'a>(prefix: &'a str, suffix: &'a str) -> tempfile::Builder<'a, '
         b.permissions(std::fs::Permissions::from_mode(0o644));
     }
     b
+}
+
+/// The name of the temporary file that becomes `path` starts with `.tmp-<its name>.`, so that
+/// whoever owns `path` knows what a killed writer left ([`remove_orphans`]).
+fn temp_prefix(path: &Path) -> String {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+    format!(".tmp-{}.", name.unwrap_or_default())
+}
+
+/// Removes from `dir` what a writer killed mid-write left for files whose names start with
+/// `stem`: the temporary files ([`write_atomic`]) of such files, and, when `stem` is empty,
+/// every temporary file and staging folder (`.writing-*`, [`write_run_folder`]). The caller
+/// must own those names (a run's lock): a live writer's temporary file would go too. Returns
+/// how many it removed; a failure to remove one is an error naming it.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let d = dir.path();
+/// std::fs::write(d.join(".tmp-s1.csv.x7Yq"), "half").unwrap();
+/// std::fs::write(d.join(".tmp-s10.csv.x7Yq"), "another run's").unwrap();
+/// assert_eq!(pbcs::record::remove_orphans(d, "s1.").unwrap(), 1);
+/// assert!(d.join(".tmp-s10.csv.x7Yq").exists());
+/// ```
+pub fn remove_orphans(dir: &Path, stem: &str) -> Result<usize> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
+    let tmp = format!(".tmp-{stem}");
+    let mut removed = 0;
+    for entry in entries {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let path = entry.path();
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        if !is_dir && name.starts_with(&tmp) {
+            std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+        } else if is_dir && stem.is_empty() && name.starts_with(".writing-") {
+            std::fs::remove_dir_all(&path).map_err(|e| Error::io(&path, e))?;
+        } else {
+            continue;
+        }
+        removed += 1;
+    }
+    Ok(removed)
 }
 
 /// The SHA-256 of `bytes` in lower-case hex (a registered preset, a chain's files).
@@ -61,7 +110,7 @@ pub fn write_atomic(
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let tmp = temp_builder(".tmp-", "")
+    let tmp = temp_builder(&temp_prefix(path), "")
         .tempfile_in(dir)
         .map_err(|e| Error::io(dir, e))?;
     {
@@ -86,7 +135,7 @@ pub fn write_atomic_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
-    let tmp = temp_builder(".tmp-", &suffix)
+    let tmp = temp_builder(&temp_prefix(path), &suffix)
         .tempfile_in(dir)
         .map_err(|e| Error::io(dir, e))?;
     fill(tmp.path())?;
@@ -99,8 +148,11 @@ pub fn write_atomic_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>
 /// already holds another run (a `config.toml` with other contents) is refused, so a run never
 /// silently replaces a different run's files and never fails for its folder after the work.
 /// The config is written first, so the folder says whose it is from the start; re-running the
-/// same config into its own folder is allowed (runs are deterministic).
-pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
+/// same config into its own folder is allowed (runs are deterministic). The run holds the
+/// returned lock ([`RUN_LOCK`] in `dir`) while it works, so a second process of the same run
+/// into the same folder is refused; with it held, the temporary files and staging folders a
+/// killed process of this run left in `dir` are removed ([`remove_orphans`]).
+pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<WorkLock> {
     if dir.exists() && !dir.is_dir() {
         return Err(Error::io(
             dir,
@@ -108,6 +160,7 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
         ));
     }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let lock = WorkLock::acquire(&dir.join(RUN_LOCK))?;
     let config = dir.join("config.toml");
     match std::fs::read_to_string(&config) {
         Ok(stored) if stored != config_text => {
@@ -123,8 +176,13 @@ pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
         Err(e) => return Err(Error::io(&config, e)),
     }
-    write_atomic(&config, |w| w.write_all(config_text.as_bytes()))
+    remove_orphans(dir, "")?;
+    write_atomic(&config, |w| w.write_all(config_text.as_bytes()))?;
+    Ok(lock)
 }
+
+/// The lock file a run holds in its folder while it works ([`claim_out_dir`]).
+pub const RUN_LOCK: &str = ".lock";
 
 /// The file that marks a run folder as incomplete: present while [`write_run_folder`] moves a
 /// run's files into place, and left behind when that fails. Readers of run folders
@@ -271,149 +329,6 @@ pub fn check_complete(dir: &Path) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-/// An exclusive claim on one piece of work (a run of a sweep): an OS advisory lock
-/// ([`std::fs::File::try_lock`]: `flock` on Unix, `LockFileEx` on Windows) on the file
-/// `path`, held while the guard lives. A second claim of the same path fails with a message
-/// naming the file and its holder, so two sweeps into one results folder never do the same run
-/// twice or replace each other's rows. The operating system releases the lock when the process
-/// ends, however it ends, so a file left behind by an interrupted run blocks nothing: the
-/// interrupted sweep resumes by being started again. The file names its holder (`pid`,
-/// `host`) for that message and is removed when the guard is dropped.
-#[derive(Debug)]
-pub struct WorkLock {
-    path: std::path::PathBuf,
-    /// Holds the lock: closing it releases it.
-    _file: std::fs::File,
-}
-
-/// Whether the open `file` is the file `path` names now (a holder that finished may have
-/// removed the file after we opened it: a lock on the removed file claims nothing).
-fn names_file(path: &Path, file: &std::fs::File) -> bool {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        match (std::fs::metadata(path), file.metadata()) {
-            (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
-            _ => false,
-        }
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = file;
-        path.exists()
-    }
-}
-
-impl WorkLock {
-    /// Takes the lock `path` (its folder is created), or says who holds it.
-    pub fn acquire(path: &Path) -> Result<WorkLock> {
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
-        loop {
-            let mut file = std::fs::OpenOptions::new()
-                .read(true)
-                .write(true)
-                .create(true)
-                .truncate(false)
-                .open(path)
-                .map_err(|e| Error::io(path, e))?;
-            match file.try_lock() {
-                Ok(()) => {}
-                Err(std::fs::TryLockError::WouldBlock) => {
-                    let holder = std::fs::read_to_string(path).unwrap_or_default();
-                    return Err(Error::io(
-                        path,
-                        std::io::Error::other(format!(
-                            "another process is doing this run ({}); wait for it",
-                            holder.trim()
-                        )),
-                    ));
-                }
-                Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(path, e)),
-            }
-            if !names_file(path, &file) {
-                continue;
-            }
-            let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
-                .map(|h| h.trim().to_string())
-                .or_else(|_| std::env::var("HOSTNAME"))
-                .unwrap_or_default();
-            file.set_len(0)
-                .and_then(|()| writeln!(file, "pid = {}\nhost = \"{host}\"", std::process::id()))
-                .map_err(|e| Error::io(path, e))?;
-            return Ok(WorkLock {
-                path: path.to_path_buf(),
-                _file: file,
-            });
-        }
-    }
-}
-
-impl Drop for WorkLock {
-    /// Removes the file, then (closing it) releases the lock.
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
-/// A sweep's claim on a whole results folder: an OS advisory lock
-/// ([`std::fs::File::try_lock`], `flock` on Unix) on `<results>/sweep.lock`, held while the
-/// guard lives and released by the operating system when the process ends, however it ends.
-/// A sweep of several runs takes it exclusively before it reads what is finished and plans the
-/// rest, so a second sweep on the same folder is refused at its start, naming the folder,
-/// instead of taking a run the first one planned and making it stop between two runs. A
-/// process of one run (`pbcs exp run --cell C --seed S`, as `pbcs exp list --make` and
-/// `--slurm` start them side by side) takes it shared: such processes run together (each
-/// run's own [`WorkLock`] keeps two of them off one run), and none runs beside a sweep of
-/// several. The file stays (removing it could hand a new holder another file than the one a
-/// shared holder still locks); it holds nothing.
-#[derive(Debug)]
-pub struct FolderLock {
-    /// Holds the lock: closing it releases it.
-    _file: std::fs::File,
-}
-
-impl FolderLock {
-    /// The lock file of the results folder `results`.
-    pub fn path(results: &Path) -> std::path::PathBuf {
-        results.join("sweep.lock")
-    }
-
-    /// Takes the lock of the results folder `results` (created if needed): exclusively, or
-    /// `shared` with other holders that take it shared; refused, naming the folder, while
-    /// another process holds it in the other mode (or exclusively).
-    pub fn acquire(results: &Path, shared: bool) -> Result<FolderLock> {
-        std::fs::create_dir_all(results).map_err(|e| Error::io(results, e))?;
-        let path = FolderLock::path(results);
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)
-            .map_err(|e| Error::io(&path, e))?;
-        let taken = if shared {
-            file.try_lock_shared()
-        } else {
-            file.try_lock()
-        };
-        match taken {
-            Ok(()) => Ok(FolderLock { _file: file }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(Error::io(
-                results,
-                std::io::Error::other(format!(
-                    "results folder in use: another sweep is running on it (it holds {}); wait \
-                     for it to finish, or give this sweep another results folder (--results, \
-                     --out)",
-                    path.display()
-                )),
-            )),
-            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
-        }
-    }
 }
 
 /// Writes a CSV file atomically: a header and rows of already-formatted fields.
