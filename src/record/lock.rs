@@ -42,7 +42,7 @@ impl WorkLock {
     /// Takes the lock `path` (its folder is created), or says who holds it.
     pub fn acquire(path: &Path) -> Result<WorkLock> {
         if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            crate::record::create_folder(dir)?;
         }
         loop {
             let mut file = std::fs::OpenOptions::new()
@@ -118,7 +118,7 @@ impl FolderLock {
     /// `shared` with other holders that take it shared; refused, naming the folder, while
     /// another process holds it in the other mode (or exclusively).
     pub fn acquire(results: &Path, shared: bool) -> Result<FolderLock> {
-        std::fs::create_dir_all(results).map_err(|e| Error::io(results, e))?;
+        crate::record::create_folder(results)?;
         let path = FolderLock::path(results);
         let file = std::fs::OpenOptions::new()
             .read(true)

@@ -70,6 +70,32 @@ pub fn remove_orphans(dir: &Path, stem: &str) -> Result<usize> {
     Ok(removed)
 }
 
+/// Creates the folder `dir` and its parents ([`std::fs::create_dir_all`]); where `dir` or one
+/// of its parents is a file, the error names that path and says so (not `File exists`).
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let file = dir.path().join("f");
+/// std::fs::write(&file, "").unwrap();
+/// let e = pbcs::record::create_folder(&file.join("out")).unwrap_err().to_string();
+/// assert!(e.contains("f: exists and is not a folder"), "{e}");
+/// pbcs::record::create_folder(&dir.path().join("a/b")).unwrap();
+/// ```
+pub fn create_folder(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        let file = dir
+            .ancestors()
+            .find(|a| std::fs::metadata(a).is_ok_and(|m| !m.is_dir()));
+        match file {
+            Some(file) => Error::io(
+                file,
+                std::io::Error::other("exists and is not a folder; choose another folder"),
+            ),
+            None => Error::io(dir, e),
+        }
+    })
+}
+
 /// The SHA-256 of `bytes` in lower-case hex (a registered preset, a chain's files).
 ///
 /// ```
@@ -109,7 +135,7 @@ pub fn write_atomic(
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    create_folder(dir)?;
     let tmp = temp_builder(&temp_prefix(path), "")
         .tempfile_in(dir)
         .map_err(|e| Error::io(dir, e))?;
@@ -130,7 +156,7 @@ pub fn write_atomic_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    create_folder(dir)?;
     let suffix = path
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
@@ -153,13 +179,7 @@ pub fn write_atomic_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>
 /// into the same folder is refused; with it held, the temporary files and staging folders a
 /// killed process of this run left in `dir` are removed ([`remove_orphans`]).
 pub fn claim_out_dir(dir: &Path, config_text: &str) -> Result<WorkLock> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(Error::io(
-            dir,
-            std::io::Error::other("exists and is not a folder; choose another output folder"),
-        ));
-    }
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    create_folder(dir)?;
     let lock = WorkLock::acquire(&dir.join(RUN_LOCK))?;
     let config = dir.join("config.toml");
     match std::fs::read_to_string(&config) {
@@ -203,7 +223,7 @@ const INCOMPLETE_TEXT: &str = "This run folder is incomplete: the run that wrote
 /// is replaced), and the marker is removed last. A failure while moving (something in the way
 /// of a file) leaves the marker: readers refuse the folder until a run completes it.
 pub fn write_run_folder(out: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    create_folder(out)?;
     let staging = tempfile::Builder::new()
         .prefix(".writing-")
         .tempdir_in(out)
@@ -268,7 +288,7 @@ pub fn write_all_or_none<const N: usize>(
 ) -> Result<Vec<PathBuf>> {
     let mut stages = Vec::with_capacity(N);
     for dir in dirs {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        create_folder(dir)?;
         let stage = tempfile::Builder::new()
             .prefix(".writing-")
             .tempdir_in(dir)
@@ -286,7 +306,7 @@ pub fn write_all_or_none<const N: usize>(
             let rel = from.strip_prefix(stage.path()).unwrap_or(&from);
             let to = dir.join(rel);
             if let Some(parent) = to.parent() {
-                std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+                create_folder(parent)?;
             }
             std::fs::rename(&from, &to).map_err(|e| Error::io(&to, e))?;
         }

@@ -209,7 +209,7 @@ impl ChainEval {
     /// `--out` says otherwise).
     pub fn write(&self, out: &Path, draw: Draw) -> Result<()> {
         let seed = self.seed;
-        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        crate::record::create_folder(out)?;
         crate::record::write_records(&out.join(format!("eval-s{seed}.csv")), &self.rows)?;
         let title = format!(
             "saved chain, {}, eval seed {seed}: success {}/{}",

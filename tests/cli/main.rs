@@ -56,6 +56,97 @@ fn an_output_path_that_is_a_file_is_refused_before_any_work() {
     }
 }
 
+/// Before: `eval`, `table`, `exp run` and `figures` given a file for a folder said only `File
+/// exists (os error 17)`. Each names the path and says it is not a folder, before any work.
+#[test]
+fn every_command_names_an_output_folder_that_is_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("f");
+    std::fs::write(&file, "x").unwrap();
+    let run = dir.path().join("run");
+    let o = pbcs(&[
+        "run",
+        "--maze",
+        "2",
+        "--seed",
+        "0",
+        "--quiet",
+        "--out",
+        path(&run),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let chain = run.join("chain");
+    let under = file.join("sub");
+    let commands: Vec<Vec<&str>> = vec![
+        vec![
+            "eval",
+            "--chain",
+            path(&chain),
+            "--episodes",
+            "2",
+            "--out",
+            path(&file),
+        ],
+        vec![
+            "eval",
+            "--chain",
+            path(&chain),
+            "--episodes",
+            "2",
+            "--out",
+            path(&under),
+        ],
+        vec![
+            "table",
+            "--sizes",
+            "2",
+            "--seeds",
+            "1",
+            "--out",
+            path(&file),
+        ],
+        vec![
+            "exp",
+            "run",
+            "experiments/table.toml",
+            "--profile",
+            "smoke",
+            "--cell",
+        ]
+        .into_iter()
+        .chain(["ddpg-maze2", "--results", path(&file)])
+        .collect(),
+        vec![
+            "figures",
+            "--results",
+            "results",
+            "--figures",
+            path(&file),
+            "--tex",
+            path(&run),
+        ],
+        vec![
+            "figures",
+            "--results",
+            "results",
+            "--figures",
+            path(&run),
+            "--tex",
+            path(&file),
+        ],
+    ];
+    for args in commands {
+        let o = pbcs(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(
+            e.contains(&format!("{}: exists and is not a folder", path(&file))),
+            "{args:?}: {e}"
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "x", "{args:?}");
+    }
+}
+
 /// Before: a run with another config silently replaced a solved run in the default folder.
 #[test]
 fn a_folder_holding_another_run_is_refused_and_left_intact() {
