@@ -75,7 +75,50 @@ impl<T> std::ops::Deref for Valid<T> {
 /// Parses `text` (the contents of `path`) as TOML; a syntax error or an unknown key is an
 /// [`Error::Parse`] naming `path` and the key.
 pub fn parse_toml<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
-    toml::from_str(text).map_err(|e| Error::parse(path, e))
+    toml::from_str(text).map_err(|e| Error::parse(path, toml_message(text, &e)))
+}
+
+/// The longest line of a TOML error's message that is quoted whole: the parser echoes the
+/// line it stopped on, which a hostile file makes 100 KB long.
+const ECHO_CHARS: usize = 160;
+
+/// `e`'s message for a user: each echoed line cut to [`ECHO_CHARS`]; for the deserializer's
+/// `recursion limit`, which names no place, the line with the deepest dotted key.
+///
+/// ```
+/// use pbcs::validate::parse_toml;
+/// let deep = format!("seed = 1\nmaze = {}{}", "[".repeat(20_000), "]".repeat(20_000));
+/// let e = parse_toml::<toml::Table>(&deep, "deep.toml".as_ref()).unwrap_err().to_string();
+/// assert!(e.contains("line 2") && e.len() < 1_000, "{e}");
+/// let dotted = format!("seed = 1\n{} = 1", vec!["a"; 5_000].join("."));
+/// let e = parse_toml::<toml::Table>(&dotted, "dot.toml".as_ref()).unwrap_err().to_string();
+/// assert!(e.contains("line 2") && e.contains("5000 parts"), "{e}");
+/// ```
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let cut = |line: &str| match line.char_indices().nth(ECHO_CHARS) {
+        Some((at, _)) => format!("{}… ({} characters)", &line[..at], line.chars().count()),
+        None => line.to_string(),
+    };
+    let message: Vec<String> = e.to_string().lines().map(cut).collect();
+    let message = message.join("\n");
+    if e.span().is_some() || !message.contains("recursion limit") {
+        return message;
+    }
+    // Not parsed as a key, a line only counts if it reads `a.b.c = ...`.
+    let parts = |line: &str| {
+        let key = line.split_once('=').map_or("", |(k, _)| k);
+        let key = key.trim().trim_start_matches('[').trim_end_matches(']');
+        key.split('.').count()
+    };
+    match text.lines().enumerate().max_by_key(|(_, l)| parts(l)) {
+        Some((i, line)) if parts(line) > 1 => format!(
+            "{message}: line {}, a key of {} parts (dotted keys nested deeper than the parser \
+             allows; no config nests more than a few)",
+            i + 1,
+            parts(line)
+        ),
+        _ => message,
+    }
 }
 
 /// Reads and parses the TOML file `path`, with errors that name it.
@@ -158,9 +201,15 @@ pub fn count(field: &str, value: u64, max: u64) -> Result<()> {
 /// Ok if `value` is finite and in (0, `max`]; otherwise an error naming `field`.
 pub fn positive_finite(field: &str, value: f32, max: f32) -> Result<()> {
     if !(value.is_finite() && value > 0.0 && value <= max) {
+        // A positive value too small for 32 bits (1e-300) is read as 0: say so.
+        let read = if value == 0.0 {
+            " (a value under 1e-45 reads as 0 in 32 bits)"
+        } else {
+            ""
+        };
         return Err(Error::invalid(
             field,
-            format!("must be in (0, {max}], got {value}"),
+            format!("must be in (0, {max}], got {value}{read}"),
         ));
     }
     Ok(())

@@ -31,11 +31,20 @@ pub fn read_finished(
     let config_path = run_file(dir, seed, ".toml");
     let stored = std::fs::read_to_string(&config_path).map_err(|e| Error::io(&config_path, e))?;
     if !cell.job.with_seed(seed).same_as(&stored) {
+        let profile = match &exp.profile {
+            None => "; rows of a profile's grid (`make smoke` writes results-smoke/) are read \
+                     with that profile (--profile smoke)"
+                .to_string(),
+            Some(p) => format!("; this read the grid of the profile `{p}`"),
+        };
         return Err(Error::parse(
             &config_path,
-            "this finished run used another config than the experiment now gives (its file, or \
-             `pbcs table`'s preset or config); remove the cell's folder to re-run it, restore \
-             the file, or choose another results folder (--results, --out)",
+            format!(
+                "this finished run used another config than the experiment now gives (its \
+                 file, or `pbcs table`'s preset or config); remove the cell's folder to re-run \
+                 it, restore the file, or choose another results folder (--results, \
+                 --out){profile}"
+            ),
         ));
     }
     read_run_row(exp, cell, seed, &path).map(Some)

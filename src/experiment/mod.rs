@@ -167,7 +167,8 @@ pub const MAX_SEEDS: u64 = 100_000;
 /// ```
 /// use pbcs::experiment::check_seeds;
 /// assert!(check_seeds("seeds", 0, 10, &[0]).is_ok());
-/// for (first, count, pictures) in [(0, 0, vec![]), (0, u64::MAX, vec![]), (u64::MAX, 1, vec![]), (0, 2, vec![50])] {
+/// assert!(check_seeds("seeds", u64::MAX, 1, &[]).is_ok()); // the largest seed, alone
+/// for (first, count, pictures) in [(0, 0, vec![]), (0, u64::MAX, vec![]), (u64::MAX, 2, vec![]), (0, 2, vec![50])] {
 ///     assert!(check_seeds("seeds", first, count, &pictures).is_err());
 /// }
 /// ```
@@ -178,19 +179,18 @@ pub fn check_seeds(field: &str, first_seed: u64, count: u64, pictures: &[u64]) -
             format!("{count}: needs 1 to {MAX_SEEDS} seeds (each is a whole run; more is a typo)"),
         ));
     }
-    let Some(end) = first_seed.checked_add(count) else {
+    let Some(last) = first_seed.checked_add(count - 1) else {
         return Err(Error::invalid(
             "first_seed",
             format!("{first_seed} + {count} seeds passes the largest seed, 2^64 − 1"),
         ));
     };
-    if let Some(p) = pictures.iter().find(|p| !(first_seed..end).contains(p)) {
+    if let Some(p) = pictures.iter().find(|p| !(first_seed..=last).contains(p)) {
         return Err(Error::invalid(
             "picture_seeds",
             format!(
-                "{p} is not one of the grid's seeds {first_seed}..{} (its picture would never \
-                 be drawn)",
-                end - 1
+                "{p} is not one of the grid's seeds {first_seed}..={last} (its picture would \
+                 never be drawn)"
             ),
         ));
     }
@@ -310,7 +310,7 @@ pub const MUJOCO_TARGET: &str = "pointmaze";
 impl Experiment {
     /// The run seeds, in order.
     pub fn seeds(&self) -> Vec<u64> {
-        (self.first_seed..self.first_seed + self.seed_count).collect()
+        self.first_n_seeds(self.seed_count)
     }
 
     /// The run seeds of `cell`: [`Self::seeds`], or the first `seeds_by_maze[site]` of them.
@@ -319,7 +319,13 @@ impl Experiment {
             .seeds_by_maze
             .get(&cell.site)
             .map_or(self.seed_count, |&n| n.min(self.seed_count));
-        (self.first_seed..self.first_seed + n).collect()
+        self.first_n_seeds(n)
+    }
+
+    /// The first `n` run seeds (`n` ≤ the grid's count, whose last seed [`check_seeds`] keeps
+    /// within `u64`).
+    fn first_n_seeds(&self, n: u64) -> Vec<u64> {
+        (0..n).map(|i| self.first_seed + i).collect()
     }
 
     /// The environments of the grid this build cannot run, with the cargo feature each needs

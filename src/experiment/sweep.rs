@@ -339,9 +339,9 @@ pub fn plan<'a>(
                 return Err(Error::invalid(
                     "seed",
                     format!(
-                        "{s} is outside the experiment's seeds {}..{}",
+                        "{s} is outside the experiment's seeds {}..={}",
                         exp.first_seed,
-                        exp.first_seed + exp.seed_count
+                        exp.first_seed + (exp.seed_count - 1)
                     ),
                 ));
             }

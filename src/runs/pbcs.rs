@@ -455,9 +455,19 @@ pub(crate) fn write_skills_csv(chain: &SkillChain, path: &Path) -> Result<()> {
 impl RunRecord {
     /// What `pbcs run` prints: the outcome (over `eval_episodes` evaluation episodes) and where
     /// the environment steps went, with the wall clock `seconds`.
+    /// A chain is evaluated only when phase 2 ended without a failure ([`PbcsRun`]); else
+    /// no episode ran, and it says so.
     pub fn summary(&self, eval_episodes: usize, seconds: f64) -> String {
+        let success = if self.failure.is_none() && self.skills > 0 {
+            format!(
+                "chain success {:.0} % over {eval_episodes} episodes",
+                100.0 * self.success_rate
+            )
+        } else {
+            "chain not evaluated".to_string()
+        };
         format!(
-            "{} ({}) on {}, run seed {}: {} — chain success {:.0} % over {} episodes, {} \
+            "{} ({}) on {}, run seed {}: {} — {success}, {} \
              skills{}\nenv steps: phase 1 {}, training {}, tests {}, total {}; |τ| = {}; {:.1} s",
             self.variant.name(),
             self.learner,
@@ -467,8 +477,6 @@ impl RunRecord {
             },
             self.seed,
             if self.solved { "SOLVED" } else { "not solved" },
-            100.0 * self.success_rate,
-            eval_episodes,
             self.skills,
             self.failure
                 .map_or(String::new(), |f| format!(", stopped: {}", f.name())),

@@ -278,6 +278,33 @@ fn a_closed_pipe_is_not_a_panic() {
     assert!(!e.contains("panicked"), "{e}");
 }
 
+/// Before: a run stopped on its budget printed "chain success 0 % over 100000000000
+/// episodes" though no episode ran. Its line says the chain was not evaluated.
+#[test]
+fn a_run_stopped_on_its_budget_says_its_chain_was_not_evaluated() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("budget.toml");
+    std::fs::write(
+        &config,
+        "[phase2]\neval_episodes = 100000\nmax_env_steps = 8000\n",
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    let o = pbcs(
+        &["run", "--maze", "2", "--seed", "0", "--quiet"]
+            .into_iter()
+            .chain(["--config", path(&config), "--out", path(&out)])
+            .collect::<Vec<_>>(),
+    );
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(said.contains("not solved — chain not evaluated"), "{said}");
+    assert!(
+        said.contains("stopped: budget") && !said.contains("episodes"),
+        "{said}"
+    );
+}
+
 /// `pbcs eval --chain DIR` re-runs a saved chain from its folder alone: with the run's own
 /// seed it reproduces the run's evaluation (the reloaded chain acts as the trained one).
 #[test]

@@ -135,6 +135,10 @@ fn a_changed_experiment_refuses_to_resume_over_old_runs() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("another config"), "{err}");
+    // Read without the profile they were made under, the rows are refused with the hint.
+    let committed = Experiment::load(Path::new("experiments/unseen.toml"), None).unwrap();
+    let err = pbcs::experiment::read_raw(&committed, dir.path()).unwrap_err();
+    assert!(err.to_string().contains("(--profile smoke)"), "{err}");
 }
 
 /// Two sweeps into one results folder: a run that another process holds (its lock file) is
