@@ -120,6 +120,21 @@ impl Error {
         }
     }
 
+    /// An [`Error::Invalid`] found in the file `path` as an [`Error::Parse`] naming it (and
+    /// still the field); other errors name their file already and stay as they are.
+    ///
+    /// ```
+    /// use pbcs::Error;
+    /// let e = Error::invalid("maze.size", "must be at least 2").in_file("run.toml");
+    /// assert_eq!(e.to_string(), "run.toml: invalid `maze.size`: must be at least 2");
+    /// ```
+    pub fn in_file(self, path: impl Into<PathBuf>) -> Self {
+        match self {
+            Error::Invalid { .. } => Error::parse(path, self.to_string()),
+            other => other,
+        }
+    }
+
     /// Shorthand for [`Error::Parse`]: `path` could not be read as what it should hold.
     pub fn parse(path: impl Into<PathBuf>, message: impl std::fmt::Display) -> Self {
         Error::Parse {

@@ -136,7 +136,7 @@ pub fn to_toml<T: Serialize>(value: &T, path: &Path) -> Result<String> {
 /// unreadable files are errors that name the file (and the key, for parse errors).
 pub fn load<T: DeserializeOwned + Check>(path: &Path) -> Result<T> {
     let config: T = read_toml(path)?;
-    config.check()?;
+    config.check().map_err(|e| e.in_file(path))?;
     Ok(config)
 }
 

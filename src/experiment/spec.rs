@@ -462,6 +462,11 @@ impl Experiment {
         if profile.is_some() {
             Experiment::load(path, None)?;
         }
+        Experiment::resolve(path, profile).map_err(|e| e.in_file(path))
+    }
+
+    /// [`Experiment::load`]'s work, its errors not yet naming the file.
+    fn resolve(path: &Path, profile: Option<&str>) -> Result<Experiment> {
         let spec: ExperimentSpec = crate::validate::read_toml(path)?;
         let stem = path
             .file_stem()

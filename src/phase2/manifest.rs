@@ -29,6 +29,10 @@ pub(crate) struct Manifest {
     /// That file's SHA-256.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     job_sha256: Option<String>,
+    /// The length of the τ phase 2 chained along (shortened, where it was): the last skill
+    /// ends at its last state, the target (absent before issue 77: unchecked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    trajectory_len: Option<usize>,
     skills: Vec<ManifestSkill>,
 }
 
@@ -70,17 +74,25 @@ impl SkillChain {
     /// (activation balls, trajectory indices, network shapes, the number of skills and each
     /// policy file's SHA-256), written last.
     pub fn save(&self, dir: &Path) -> Result<()> {
-        self.save_with_job(dir, None)
+        self.save_with_job(dir, None, None)
     }
 
     /// [`SkillChain::save`], with the job that built the chain written beside it first
     /// (`job` = (file name, its text): `run.toml`), its SHA-256 in the manifest, so that a job
-    /// file copied in from another run is refused when the chain is loaded.
-    pub fn save_with_job(&self, dir: &Path, job: Option<(&str, &str)>) -> Result<()> {
+    /// file copied in from another run is refused when the chain is loaded; and the length of
+    /// the τ it chained along, `trajectory_len`, so that a last skill that does not end at τ's
+    /// end is refused too.
+    pub fn save_with_job(
+        &self,
+        dir: &Path,
+        job: Option<(&str, &str)>,
+        trajectory_len: Option<usize>,
+    ) -> Result<()> {
         let mut manifest = Manifest {
             skill_count: Some(self.skills.len()),
             job_file: None,
             job_sha256: None,
+            trajectory_len,
             skills: Vec::new(),
         };
         if let Some((name, text)) = job {
@@ -297,7 +309,21 @@ impl Manifest {
                 ));
             }
         }
-        Ok(())
+        let last = self.skills.len() - 1;
+        match self.trajectory_len {
+            Some(n) if self.skills[last].target_index.checked_add(1) != Some(n) => {
+                Err(Error::parse(
+                    path,
+                    format!(
+                        "skills[{last}].target_index: {}, but τ (trajectory_len = {n}) ends at \
+                         τ_{}: the last skill ends at τ's end, the target",
+                        self.skills[last].target_index,
+                        n.saturating_sub(1)
+                    ),
+                ))
+            }
+            _ => Ok(()),
+        }
     }
 }
 

@@ -248,9 +248,11 @@ impl<E: Planar> PbcsRun<E> {
         // manifest, so `pbcs eval --chain DIR` needs nothing else; the manifest records its
         // SHA-256 and each policy file's.
         let job_text = crate::validate::to_toml(job, &out.join("chain").join(CHAIN_JOB))?;
-        phase2
-            .chain
-            .save_with_job(&out.join("chain"), Some((CHAIN_JOB, &job_text)))?;
+        phase2.chain.save_with_job(
+            &out.join("chain"),
+            Some((CHAIN_JOB, &job_text)),
+            Some(record.phase2_trajectory_len),
+        )?;
         self.picture.write_csv(&out.join("picture.csv"))?;
         let title = format!(
             "{} {}, {}, seed {}: {} steps, {} skills, chain success {:.0} %",

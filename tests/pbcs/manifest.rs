@@ -372,7 +372,7 @@ fn a_chain_whose_files_do_not_match_its_manifest_is_refused() {
     let saved = |seeds: [u64; 2], job: &str| {
         let dir = tempfile::tempdir().unwrap();
         chain(seeds)
-            .save_with_job(dir.path(), Some(("run.toml", job)))
+            .save_with_job(dir.path(), Some(("run.toml", job)), None)
             .unwrap();
         dir
     };
@@ -494,5 +494,40 @@ fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
     ] {
         let err = load(indices).expect_err("a chain out of order must not load");
         assert_names(&err.to_string(), field);
+    }
+}
+
+/// The last skill ends at τ's end, the target: a manifest that records the length of the τ
+/// its chain followed (`trajectory_len`, since issue 77) and whose last `target_index` is not
+/// its last index (past it, `u64::MAX`, short of it) is refused naming the field.
+#[test]
+fn a_chain_whose_last_skill_does_not_end_at_the_target_is_refused() {
+    let chain = SkillChain {
+        skills: [(0, 4), (4, 12)]
+            .iter()
+            .map(|&(start_index, target_index)| Skill {
+                policy: Box::new(constant_policy([1.0, 0.0])),
+                activation: Ball::new(vec![0.5, 0.5], 0.1),
+                start_index,
+                target_index,
+                inputs: Inputs::new(vec![0.5, 0.5], vec![1.0, 1.0]),
+            })
+            .collect(),
+        kernel: Kernel::detect(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    chain.save_with_job(dir.path(), None, Some(13)).unwrap();
+    let load = || SkillChain::load(dir.path(), Kernel::detect()).map(|c| c.skills.len());
+    assert_eq!(load().unwrap(), 2);
+    let manifest = std::fs::read_to_string(dir.path().join("manifest.toml")).unwrap();
+    assert!(manifest.contains("trajectory_len = 13\n"), "{manifest}");
+    for (from, to) in [
+        ("target_index = 12", "target_index = 18446744073709551615"),
+        ("target_index = 12", "target_index = 30"),
+        ("target_index = 12", "target_index = 11"),
+        ("trajectory_len = 13", "trajectory_len = 40"),
+    ] {
+        let err = load_error(dir.path(), &manifest, from, to);
+        assert_names(&err, "skills[1].target_index");
     }
 }
