@@ -151,6 +151,21 @@ impl Error {
         }
     }
 
+    /// [`Error::csv`], where a value could not be read, naming its column from `header` (the
+    /// CSV reader names the field by its number) and the line.
+    pub fn csv_in(path: impl Into<PathBuf>, cause: csv::Error, header: &csv::StringRecord) -> Self {
+        if let csv::ErrorKind::Deserialize { pos, err } = cause.kind() {
+            if let Some(name) = err.field().and_then(|k| header.get(k as usize)) {
+                let line = pos.as_ref().map_or(0, csv::Position::line);
+                return Error::parse(
+                    path,
+                    format!("line {line}: column `{name}`: {}", err.kind()),
+                );
+            }
+        }
+        Error::csv(path, cause)
+    }
+
     /// Shorthand for [`Error::Io`].
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

@@ -7,6 +7,10 @@
 //! The names: [`crate::experiment::ExperimentName`], [`crate::experiment::Method`],
 //! [`crate::learner::LearnerName`].
 
+/// The longest name [`name!`] takes: names become folder and file names (a cell's folder is
+/// `<method>-<site>`), which file systems cut at 255 bytes.
+pub const MAX_NAME: usize = 64;
+
 /// Declares `$name`, a name of letters, digits and `_` (and `-` with `dash`), whose error
 /// names `$field` and says `$what`.
 #[macro_export]
@@ -21,6 +25,19 @@ macro_rules! name {
             /// The name `name`, or an error saying which characters a name holds.
             pub fn new(name: &str) -> $crate::error::Result<$name> {
                 let ok = |c: char| c.is_ascii_alphanumeric() || c == '_' || ($dash && c == '-');
+                if name.len() > $crate::name::MAX_NAME {
+                    let start: String = name.chars().take(16).collect();
+                    return Err($crate::error::Error::invalid(
+                        $field,
+                        format!(
+                            "`{start}…` ({} characters): {} is at most {} characters (it names \
+                             folders and files)",
+                            name.chars().count(),
+                            $what,
+                            $crate::name::MAX_NAME
+                        ),
+                    ));
+                }
                 if name.is_empty() || !name.chars().all(ok) {
                     let chars = if $dash { "letters, digits, `_` and `-`" } else { "letters, digits and `_`" };
                     return Err($crate::error::Error::invalid(

@@ -62,9 +62,8 @@ impl Default for ExploreConfig {
 impl Check for ExploreConfig {
     fn check(&self) -> Result<()> {
         positive_finite("explore.bin_side", self.bin_side, 1.0)?;
-        if self.budget == 0 {
-            return Err(Error::invalid("explore.budget", "must be at least 1"));
-        }
+        let budget = crate::validate::bounds::ENV_STEPS;
+        crate::validate::count("explore.budget", self.budget, budget)?;
         if self.hold == 0 {
             return Err(Error::invalid(
                 "explore.hold",

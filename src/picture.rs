@@ -60,10 +60,13 @@ pub struct PictureData {
     pub circles: Vec<((f32, f32), f32)>,
 }
 
+/// The columns of a picture's data file.
+const PICTURE_HEADER: [&str; 5] = ["layer", "index", "x", "y", "r"];
+
 impl PictureData {
     /// Writes the data as CSV (atomically): one row per point, `layer, index, x, y, r`.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
-        let header: Vec<String> = ["layer", "index", "x", "y", "r"].map(String::from).to_vec();
+        let header: Vec<String> = PICTURE_HEADER.map(String::from).to_vec();
         let mut rows: Vec<[String; 5]> = Vec::new();
         let row = |layer: Layer, i: usize, (x, y): (f32, f32), r: f32| {
             [
@@ -94,9 +97,21 @@ impl PictureData {
         crate::record::write_csv(path, &header, rows)
     }
 
-    /// Reads data written by [`PictureData::write_csv`].
+    /// Reads data written by [`PictureData::write_csv`]: its header, then rows; another header
+    /// (an empty file, another file) is an error naming the file.
     pub fn read_csv(path: &Path) -> Result<PictureData> {
         let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
+        let header = reader.headers().map_err(|e| Error::csv(path, e))?;
+        if header.iter().ne(PICTURE_HEADER) {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "line 1: the header is {:?}, a picture's is {:?} (not a picture's data)",
+                    header.iter().collect::<Vec<_>>(),
+                    PICTURE_HEADER
+                ),
+            ));
+        }
         let mut data = PictureData::default();
         let bad = |line: u64, what: &str| Error::parse(path, format!("line {line}: {what}"));
         let push = |paths: &mut Vec<Vec<(f32, f32)>>, i: usize, p| {

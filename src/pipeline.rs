@@ -47,8 +47,8 @@ fn same_folder(a: &Path, b: &Path) -> bool {
 }
 
 /// Refuses a results folder that does not exist (or is not a folder), naming it: `aggregate`
-/// and `figures` read what is there and never invent an empty result.
-fn existing_results(results: &Path) -> Result<()> {
+/// `figures` and `exp check` read what is there and never invent an empty result.
+pub fn existing_results(results: &Path) -> Result<()> {
     let why = if !results.exists() {
         "no such results folder"
     } else if !results.is_dir() {

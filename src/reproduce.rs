@@ -201,6 +201,7 @@ pub fn check_cell(
     kernel: Kernel,
     on_event: impl Fn(&Pending, &Event) + Sync,
 ) -> Result<CellCheck> {
+    crate::pipeline::existing_results(results)?;
     let runs = plan(exp, Some(cell), seed)?;
     let c = exp.cell_at(cell)?;
     let committed_dir = exp.cell_dir(results, c);

@@ -90,9 +90,11 @@ const ECHO_CHARS: usize = 160;
 /// let deep = format!("seed = 1\nmaze = {}{}", "[".repeat(20_000), "]".repeat(20_000));
 /// let e = parse_toml::<toml::Table>(&deep, "deep.toml".as_ref()).unwrap_err().to_string();
 /// assert!(e.contains("line 2") && e.len() < 1_000, "{e}");
-/// let dotted = format!("seed = 1\n{} = 1", vec!["a"; 5_000].join("."));
-/// let e = parse_toml::<toml::Table>(&dotted, "dot.toml".as_ref()).unwrap_err().to_string();
-/// assert!(e.contains("line 2") && e.contains("5000 parts"), "{e}");
+/// for dotted in ["{} = 1", "[{}]", "[[{}]]", "set = { {} = 1 }"] {
+///     let text = format!("seed = 1\n{}", dotted.replace("{}", &vec!["a"; 5_000].join(".")));
+///     let e = parse_toml::<toml::Table>(&text, "dot.toml".as_ref()).unwrap_err().to_string();
+///     assert!(e.contains("line 2") && e.contains("5000 parts"), "{dotted}: {e}");
+/// }
 /// ```
 fn toml_message(text: &str, e: &toml::de::Error) -> String {
     let cut = |line: &str| match line.char_indices().nth(ECHO_CHARS) {
@@ -104,11 +106,11 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
     if e.span().is_some() || !message.contains("recursion limit") {
         return message;
     }
-    // Not parsed as a key, a line only counts if it reads `a.b.c = ...`.
+    // The deepest dotted word of a line: a key (`a.b.c = 1`), a header (`[a.b.c]`), a key of
+    // an inline table (`set = { a.b.c = 1 }`).
     let parts = |line: &str| {
-        let key = line.split_once('=').map_or("", |(k, _)| k);
-        let key = key.trim().trim_start_matches('[').trim_end_matches(']');
-        key.split('.').count()
+        let words = line.split(|c: char| c.is_whitespace() || "=[]{},".contains(c));
+        words.map(|w| w.split('.').count()).max().unwrap_or(0)
     };
     match text.lines().enumerate().max_by_key(|(_, l)| parts(l)) {
         Some((i, line)) if parts(line) > 1 => format!(
@@ -173,6 +175,27 @@ pub mod bounds {
     pub const SAMPLES: u64 = 100_000;
     /// Training rounds, patience and the like: counts of repetitions of a learning step.
     pub const REPEATS: u64 = 1_000_000;
+    /// Environment steps of one run's budget (`train.steps`, `phase2.max_env_steps`,
+    /// `explore.budget`): the paper's largest is 22M, ours 50M.
+    pub const ENV_STEPS: u64 = 1_000_000_000;
+}
+
+/// Ok if `value` ≤ `max` (a count that may be 0); otherwise an error naming `field`.
+///
+/// ```
+/// use pbcs::validate::at_most;
+/// assert!(at_most("phase2.restarts", 0, 1_000_000).is_ok());
+/// let e = at_most("phase2.restarts", u64::MAX, 1_000_000).unwrap_err().to_string();
+/// assert!(e.contains("phase2.restarts") && e.contains("at most 1000000"), "{e}");
+/// ```
+pub fn at_most(field: &str, value: u64, max: u64) -> Result<()> {
+    if value > max {
+        return Err(Error::invalid(
+            field,
+            format!("must be at most {max} (more is a typo), got {value}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Ok if `value` is in 1 ..= `max`; otherwise an error naming `field` and both ends.

@@ -32,3 +32,51 @@ fn merge_tables(into: &mut toml::Table, from: &toml::Table) {
         }
     }
 }
+
+/// [`merge`] of a method's `set`, a `by_maze` or a profile's table (`what`: whose), refusing
+/// the keys a grid sets itself: its sites say where each run is (`maze.size`, `env`) and its
+/// seeds which runs there are (`seed`), so such a key would be silently replaced.
+pub(crate) fn merge_over(
+    into: &mut toml::Table,
+    from: &toml::Table,
+    what: &str,
+) -> crate::error::Result<()> {
+    let maze = from.get("maze").and_then(toml::Value::as_table);
+    let grid_key = [
+        from.contains_key("seed").then_some("seed"),
+        from.contains_key("env").then_some("env"),
+        maze.is_some_and(|m| m.contains_key("size"))
+            .then_some("maze.size"),
+    ];
+    if let Some(key) = grid_key.into_iter().flatten().next() {
+        return Err(crate::error::Error::invalid(
+            key,
+            format!(
+                "{what} sets it, which the grid sets for each run (its `mazes` and `envs`, \
+                 its seeds): list the site or the seeds in the experiment file instead"
+            ),
+        ));
+    }
+    merge(into, from);
+    Ok(())
+}
+
+/// The base job of the method `method`: the file `base` names beside the experiment file (in
+/// `folder`), read as a table; a `base` that names no file there is an error naming the field.
+pub(crate) fn read_base(
+    folder: &std::path::Path,
+    base: &std::path::Path,
+    method: &str,
+) -> crate::error::Result<toml::Table> {
+    let path = folder.join(base);
+    if base.as_os_str().is_empty() || !path.is_file() {
+        return Err(crate::error::Error::invalid(
+            "base",
+            format!(
+                "method `{method}`: {base:?} is not a file beside the experiment file (a job \
+                 such as \"pbcs_paper.toml\" or \"baseline.toml\")"
+            ),
+        ));
+    }
+    crate::validate::read_toml(&path)
+}

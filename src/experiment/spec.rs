@@ -2,7 +2,7 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::declared::{check_figures, check_report};
-use super::merge::merge;
+use super::merge::{merge_over, read_base};
 use super::site::{paper_run, place};
 use super::{
     check_seeds, Cell, CellKey, Experiment, ExperimentName, FigureSpec, Job, Kind, Method,
@@ -367,8 +367,8 @@ impl ExperimentSpec {
         let mut methods = Vec::new();
         let mut resolved = Vec::new();
         for m in all_methods.iter().copied() {
-            let mut table: toml::Table = crate::validate::read_toml(&folder.join(&m.base))?;
-            merge(&mut table, &m.set);
+            let mut table = read_base(folder, &m.base, &m.name)?;
+            merge_over(&mut table, &m.set, &format!("method `{}`", m.name))?;
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((Method::new(&m.name)?, label.clone()));
             resolved.push((m, label, table));
@@ -387,11 +387,19 @@ impl ExperimentSpec {
                 }
                 let mut table = table.clone();
                 if let Some(t) = self.by_maze.get(&key) {
-                    merge(&mut table, t.of(m.kind));
+                    merge_over(&mut table, t.of(m.kind), &format!("by_maze.{key}"))?;
                 }
-                merge(&mut table, KindTables::of_profile(prof, m.kind));
+                merge_over(
+                    &mut table,
+                    KindTables::of_profile(prof, m.kind),
+                    "the profile",
+                )?;
                 if let Some(t) = prof.by_maze.get(&key) {
-                    merge(&mut table, t.of(m.kind));
+                    merge_over(
+                        &mut table,
+                        t.of(m.kind),
+                        &format!("the profile's by_maze.{key}"),
+                    )?;
                 }
                 let method = Method::new(&m.name)?;
                 cells.push(Cell {

@@ -107,7 +107,11 @@ impl Check for HerConfig {
                 "must be at least 1 (0 relabels nothing: leave [train.her] out)",
             ));
         }
-        Ok(())
+        crate::validate::at_most(
+            "train.her.n_sampled_goal",
+            self.n_sampled_goal as u64,
+            crate::validate::bounds::SAMPLES,
+        )
     }
 }
 

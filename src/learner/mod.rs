@@ -236,13 +236,25 @@ macro_rules! learners {
                 Err(unknown_algo(algo))
             }
 
-            /// A `[learner]` table read as the family its `algo` names.
+            /// A `[learner]` table read as the family its `algo` names; a value of the wrong
+            /// type is named by its key (`learner.batch_size: invalid value ...`: the table,
+            /// read as a whole, loses where it was).
             fn from_table(algo: &str, table: toml::Table) -> std::result::Result<Self, String> {
                 $(if <$module::$settings as Family>::ALGOS.contains(&algo) {
-                    return toml::Value::Table(table)
-                        .try_into::<$module::$settings>()
-                        .map(LearnerConfig::$family)
-                        .map_err(|e| e.message().to_string());
+                    let read = |t: toml::Table| {
+                        toml::Value::Table(t).try_into::<$module::$settings>()
+                    };
+                    return read(table.clone()).map(LearnerConfig::$family).map_err(|e| {
+                        let alone = |k: &String| {
+                            let mut t = toml::Table::new();
+                            t.insert(k.clone(), table[k].clone());
+                            read(t).is_err()
+                        };
+                        match table.keys().find(|k| alone(k)) {
+                            Some(k) => format!("learner.{k}: {}", e.message()),
+                            None => e.message().to_string(),
+                        }
+                    });
                 })+
                 Err(unknown_algo(algo).to_string())
             }

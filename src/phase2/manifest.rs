@@ -19,6 +19,7 @@ pub const CHAIN_JOB: &str = "run.toml";
 /// its SHA-256; [`SkillChain::load`] refuses a folder whose files do not match. A manifest
 /// written before has none of them and loads as it did, its files unchecked.
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub(crate) struct Manifest {
     /// The number of skills (`[[skills]]` tables): a manifest cut short is refused.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -37,6 +38,7 @@ pub(crate) struct Manifest {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub(crate) struct ManifestSkill {
     file: String,
     /// The policy's kind ([`Policy::kind`], read back by [`load_policy`]; absent in manifests

@@ -24,6 +24,7 @@ pub mod goal;
 pub mod lookahead;
 mod manifest;
 pub mod procedure;
+mod ready;
 pub mod resume;
 pub mod skill_chain;
 pub mod starts;
@@ -31,9 +32,10 @@ pub mod task;
 
 pub use manifest::CHAIN_JOB;
 pub use procedure::{
-    ChainCheck, DeadWalk, EpisodeLimit, FastTests, Ideas, InputMode, KWalk, Phase2Config, Ready,
+    ChainCheck, DeadWalk, EpisodeLimit, FastTests, Ideas, InputMode, KWalk, Phase2Config,
     SkillInit, Stopping,
 };
+pub use ready::Ready;
 pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;

@@ -91,6 +91,27 @@ impl Drop for WorkLock {
     }
 }
 
+/// The `raw/` folder of a results folder (one that holds [`FolderLock::path`]) that `dir` is or
+/// lies inside, if any: no run's files and no other results folder belong there.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// std::fs::write(dir.path().join("sweep.lock"), "").unwrap();
+/// let raw = dir.path().join("raw");
+/// assert_eq!(pbcs::record::inside_rows(&raw.join("table/cell")), Some(raw.clone()));
+/// assert_eq!(pbcs::record::inside_rows(dir.path()), None);
+/// assert_eq!(pbcs::record::inside_rows(&dir.path().join("dev/issue1")), None);
+/// ```
+pub fn inside_rows(dir: &Path) -> Option<std::path::PathBuf> {
+    let dir = std::path::absolute(dir).ok()?;
+    dir.ancestors()
+        .find(|a| {
+            a.file_name().is_some_and(|n| n == "raw")
+                && a.parent().is_some_and(|r| FolderLock::path(r).exists())
+        })
+        .map(Path::to_path_buf)
+}
+
 /// A sweep's claim on a whole results folder: an OS advisory lock
 /// ([`std::fs::File::try_lock`], `flock` on Unix) on `<results>/sweep.lock`, held while the
 /// guard lives and released by the operating system when the process ends, however it ends.
@@ -118,6 +139,16 @@ impl FolderLock {
     /// `shared` with other holders that take it shared; refused, naming the folder, while
     /// another process holds it in the other mode (or exclusively).
     pub fn acquire(results: &Path, shared: bool) -> Result<FolderLock> {
+        if let Some(raw) = inside_rows(results) {
+            return Err(Error::io(
+                results,
+                std::io::Error::other(format!(
+                    "lies inside {}, the raw rows of a results folder: a sweep's rows would mix \
+                     with its cells; choose another results folder",
+                    raw.display()
+                )),
+            ));
+        }
         crate::record::create_folder(results)?;
         let path = FolderLock::path(results);
         let file = std::fs::OpenOptions::new()

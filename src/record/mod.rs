@@ -9,7 +9,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 mod lock;
-pub use lock::{FolderLock, WorkLock};
+pub use lock::{inside_rows, FolderLock, WorkLock};
 
 /// Temporary files become result files: give them ordinary read permissions (tempfile's
 /// default, 0600, would make results unreadable to other users).
@@ -395,10 +395,11 @@ pub fn write_records<T: serde::Serialize>(path: &Path, records: &[T]) -> Result<
 /// file and the line.
 pub fn read_records<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
     let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
+    let header = reader.headers().map_err(|e| Error::csv(path, e))?.clone();
     reader
         .deserialize()
         .collect::<std::result::Result<Vec<T>, _>>()
-        .map_err(|e| Error::csv(path, e))
+        .map_err(|e| Error::csv_in(path, e, &header))
 }
 
 /// Reads a CSV file that holds exactly one serde record (a summary line); any other count is

@@ -51,8 +51,7 @@ fn claim<T: Serialize>(job: &T, out: &Path) -> Result<crate::record::WorkLock> {
         return Err(crate::Error::io(
             out,
             std::io::Error::other(format!(
-                "holds a sweep's results ({what}): a run's files would mix with its rows; \
-                 choose another output folder"
+                "{what}: a run's files would mix with them; choose another output folder"
             )),
         ));
     }
@@ -60,11 +59,19 @@ fn claim<T: Serialize>(job: &T, out: &Path) -> Result<crate::record::WorkLock> {
     crate::record::claim_out_dir(out, &text)
 }
 
-/// What in `dir` says it is a results folder of sweeps or a cell folder of one: its lock
-/// ([`crate::record::FolderLock::path`]), its `raw/` folder, or a raw row (`s<seed>.csv`).
+/// What in `dir` says it is a results folder of sweeps, lies inside one's raw rows
+/// ([`crate::record::inside_rows`]) or is a cell folder of one: its lock
+/// ([`crate::record::FolderLock::path`]), its `raw/` folder, or a raw row (`s<seed>.csv`); or
+/// that it is a saved chain (`manifest.toml`).
 fn holds_sweep_results(dir: &Path) -> Option<String> {
     if crate::record::FolderLock::path(dir).exists() || dir.join("raw").is_dir() {
-        return Some("its lock or its raw/ folder".to_string());
+        return Some("holds a sweep's results (its lock or its raw/ folder)".to_string());
+    }
+    if let Some(raw) = crate::record::inside_rows(dir) {
+        return Some(format!("lies inside {}, a sweep's raw rows", raw.display()));
+    }
+    if dir.join("manifest.toml").exists() {
+        return Some("holds a saved chain (manifest.toml)".to_string());
     }
     let row = |name: &str| {
         let seed = name.strip_prefix('s').and_then(|n| n.strip_suffix(".csv"));
@@ -72,7 +79,7 @@ fn holds_sweep_results(dir: &Path) -> Option<String> {
     };
     std::fs::read_dir(dir).ok()?.flatten().find_map(|e| {
         let name = e.file_name().to_string_lossy().into_owned();
-        row(&name).then_some(format!("the row {name}"))
+        row(&name).then_some(format!("holds a sweep's results (the row {name})"))
     })
 }
 

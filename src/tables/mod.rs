@@ -76,10 +76,11 @@ pub fn read_table(path: &Path) -> Result<Vec<CellStats>> {
             format!("{e} (run `make figures` to aggregate the raw results)"),
         )
     })?;
+    let header = reader.headers().map_err(|e| Error::csv(path, e))?.clone();
     let cells: Vec<CellStats> = reader
         .deserialize()
         .collect::<std::result::Result<Vec<_>, _>>()
-        .map_err(|e| Error::csv(path, e))?;
+        .map_err(|e| Error::csv_in(path, e, &header))?;
     for (i, c) in cells.iter().enumerate() {
         check_counts(c).map_err(|why| Error::parse(path, format!("line {}: {why}", i + 2)))?;
     }
@@ -119,9 +120,11 @@ fn check_counts(c: &CellStats) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// The table of `exp` agrees with its raw rows under `results`: per cell as many runs and as
-/// many solved as the rows hold (a table left from rows since removed or edited is an error,
-/// not figures drawn over a grid that says otherwise).
+/// The table of `exp` is its raw rows' under `results`: what [`cell_stats`] computes from them,
+/// cell for cell and column for column (as written: a table is `pbcs aggregate`'s output of the
+/// plain computation). A table left from rows since removed or edited, a row of the table
+/// edited, duplicated or dropped, is an error naming the first cell and column that differ,
+/// not figures drawn over a grid that says otherwise.
 pub fn check_against_rows(
     exp: &crate::experiment::Experiment,
     results: &Path,
@@ -129,24 +132,61 @@ pub fn check_against_rows(
 ) -> Result<()> {
     let rows = crate::experiment::read_raw(exp, results)?;
     let path = table_path(results, exp.name);
-    for c in stats {
-        let of_cell: Vec<_> = rows.iter().filter(|r| r.cell == c.cell).collect();
-        let solved = of_cell.iter().filter(|r| r.solved).count() as u64;
-        if (of_cell.len() as u64, solved) != (c.n, c.successes) {
-            return Err(Error::parse(
-                &path,
-                format!(
-                    "{}: {}/{} solved, but its raw rows hold {solved}/{}: run `pbcs aggregate` \
-                     (`make figures` does) so that the table is the rows'",
-                    c.cell,
-                    c.successes,
-                    c.n,
-                    of_cell.len()
-                ),
-            ));
+    let want = cell_stats(exp, &rows);
+    let text = |cells: &[CellStats]| -> Vec<Vec<String>> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for c in cells {
+            // A CellStats always serialises (its fields are plain values).
+            let _ = w.serialize(c);
         }
+        let bytes = w.into_inner().unwrap_or_default();
+        let mut r = csv::Reader::from_reader(bytes.as_slice());
+        let header: Vec<String> = r
+            .headers()
+            .map_or(Vec::new(), |h| h.iter().map(String::from).collect());
+        let mut lines = vec![header];
+        lines.extend(
+            r.records()
+                .flatten()
+                .map(|rec| rec.iter().map(String::from).collect()),
+        );
+        lines
+    };
+    let (got, want_text) = (text(stats), text(&want));
+    if got == want_text {
+        return Ok(());
     }
-    Ok(())
+    let header = want_text.first().cloned().unwrap_or_default();
+    let why = match (1..got.len().max(want_text.len())).find(|&i| got.get(i) != want_text.get(i)) {
+        Some(i) => match (got.get(i), want_text.get(i)) {
+            (Some(g), Some(w)) => {
+                let k = (0..g.len()).find(|&k| g.get(k) != w.get(k)).unwrap_or(0);
+                format!(
+                    "line {}: {} {} is {}, its raw rows give {}",
+                    i + 1,
+                    w.get(1).map_or("", String::as_str),
+                    header.get(k).map_or("?", String::as_str),
+                    g.get(k).map_or("", String::as_str),
+                    w.get(k).map_or("", String::as_str)
+                )
+            }
+            (Some(g), None) => format!(
+                "line {}: {} has no raw rows (a row the table holds that the rows do not)",
+                i + 1,
+                g.get(1).map_or("", String::as_str)
+            ),
+            _ => format!(
+                "the table has {} cells, its raw rows give {}",
+                stats.len(),
+                want.len()
+            ),
+        },
+        None => "its columns are not the ones written".to_string(),
+    };
+    Err(Error::parse(
+        &path,
+        format!("{why}: run `pbcs aggregate` (`make figures` does) so that the table is the rows'"),
+    ))
 }
 
 /// The cells as a markdown table: solved k/n, Wilson interval, median and quartile steps, the

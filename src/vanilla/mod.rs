@@ -99,9 +99,7 @@ impl Check for TrainConfig {
             ("train.steps", self.steps),
             ("train.eval_every", self.eval_every),
         ] {
-            if v == 0 {
-                return Err(Error::invalid(field, "must be at least 1"));
-            }
+            count(field, v, bounds::ENV_STEPS)?;
         }
         for (field, v, max) in [
             (
@@ -118,19 +116,13 @@ impl Check for TrainConfig {
         ] {
             count(field, v as u64, max)?;
         }
-        if self.final_eval_episodes as u64 > bounds::EPISODES {
-            return Err(Error::invalid(
-                "train.final_eval_episodes",
-                format!(
-                    "must be at most {} (more is a typo), got {}",
-                    bounds::EPISODES,
-                    self.final_eval_episodes
-                ),
-            ));
-        }
-        if !(self.visit_bin.is_finite() && self.visit_bin > 0.0) {
-            return Err(Error::invalid("train.visit_bin", "must be positive"));
-        }
+        crate::validate::at_most(
+            "train.final_eval_episodes",
+            self.final_eval_episodes as u64,
+            bounds::EPISODES,
+        )?;
+        // A bin of the visited states' picture: at most the largest maze's side.
+        crate::validate::positive_finite("train.visit_bin", self.visit_bin, 100.0)?;
         if self.learning_starts > self.steps {
             return Err(Error::invalid(
                 "train.learning_starts",

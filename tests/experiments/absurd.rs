@@ -40,7 +40,7 @@ fn absurd_values_are_refused_naming_their_field() {
         ),
         (
             format!("picture_seeds = [50]\n{head}{}", method("a", "")),
-            "invalid `picture_seeds`: 50 is not one of the grid's seeds 0..1",
+            "invalid `picture_seeds`: 50 is not one of the grid's seeds 0..=1",
         ),
         (
             format!("{head}{}", method("a", "learner.argmax_samples = 0")),
@@ -120,7 +120,7 @@ fn absurd_values_are_refused_naming_their_field() {
     .unwrap();
     let err = Experiment::load(&path, Some("p")).unwrap_err().to_string();
     assert!(
-        err.contains("invalid `picture_seeds`: 1 is not one of the grid's seeds 0..0"),
+        err.contains("invalid `picture_seeds`: 1 is not one of the grid's seeds 0..=0"),
         "{err}"
     );
     Experiment::load(&path, None).unwrap();
@@ -168,6 +168,12 @@ fn every_count_has_an_upper_bound_checked_at_load() {
         ("phase2", "eval_max_steps"),
         ("phase2", "verify_episodes"),
         ("phase2", "chain_verify_episodes"),
+        // The re-probe (issue 77): budgets ran on for hours, repeats were unbounded.
+        ("phase2", "max_env_steps"),
+        ("phase2", "restarts"),
+        ("phase2", "retargets"),
+        ("phase2", "chain_repairs"),
+        ("explore", "budget"),
     ];
     for (table, key) in pbcs_fields {
         for v in huge {
@@ -176,16 +182,19 @@ fn every_count_has_an_upper_bound_checked_at_load() {
             assert!(names(&e, table, key), "{table}.{key} = {v}: {e}");
         }
     }
-    for key in [
-        "max_episode_steps",
-        "eval_episodes",
-        "final_eval_episodes",
-        "final_eval_max_steps",
+    for (table, key) in [
+        ("train", "max_episode_steps"),
+        ("train", "eval_episodes"),
+        ("train", "final_eval_episodes"),
+        ("train", "final_eval_max_steps"),
+        ("train", "steps"),
+        ("train", "eval_every"),
+        ("train.her", "n_sampled_goal"),
     ] {
         for v in huge {
-            let (_dir, path) = write_job(&format!("[train]\n{key} = {v}\n"));
+            let (_dir, path) = write_job(&format!("[{table}]\n{key} = {v}\n"));
             let e = load::<TrainJob>(&path).unwrap_err().to_string();
-            assert!(names(&e, "train", key), "train.{key} = {v}: {e}");
+            assert!(names(&e, table, key), "{table}.{key} = {v}: {e}");
         }
     }
     for hidden in [
@@ -268,4 +277,34 @@ fn a_run_into_a_sweeps_results_is_refused() {
             "{plant}"
         );
     }
+    // Inside a results folder's raw rows (its raw/ folder, a cell's), into a saved chain, or a
+    // sweep's results folder there: refused too, nothing made.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("sweep.lock"), "").unwrap();
+    let chain = dir.path().join("run/chain");
+    std::fs::create_dir_all(&chain).unwrap();
+    std::fs::write(chain.join("manifest.toml"), "").unwrap();
+    let raw = dir.path().join("raw");
+    for (out, needle) in [
+        (raw.clone(), "lies inside"),
+        (raw.join("table/ddpg-maze2"), "lies inside"),
+        (chain.clone(), "holds a saved chain"),
+    ] {
+        let o = out.to_str().unwrap();
+        let (code, err) = pbcs_cli(&["run", "--maze", "2", "--seed", "0", "--quiet", "--out", o]);
+        assert!(code != 0 && err.contains(needle), "{o}: {code} {err}");
+    }
+    let o = raw.join("table");
+    let args = [
+        "table",
+        "--sizes",
+        "2",
+        "--seeds",
+        "1",
+        "--out",
+        o.to_str().unwrap(),
+    ];
+    let (code, err) = pbcs_cli(&args);
+    assert!(code != 0 && err.contains("lies inside"), "{code} {err}");
+    assert!(!raw.exists(), "nothing was made");
 }

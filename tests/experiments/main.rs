@@ -23,3 +23,4 @@ mod locks;
 mod make_targets;
 mod rows;
 mod sweeps;
+mod tables_read;

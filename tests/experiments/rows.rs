@@ -461,7 +461,7 @@ fn figures_are_written_all_or_none() {
     pbcs::record::write_records(&table, &stats).unwrap();
     let err = render().map(|_| ()).unwrap_err().to_string();
     assert!(
-        err.contains("raw rows hold") && err.contains("rooms.csv"),
+        err.contains("raw rows give") && err.contains("rooms.csv"),
         "{err}"
     );
     // An inconsistent table is refused when it is read: more successes than runs, a rate

@@ -530,4 +530,12 @@ fn a_chain_whose_last_skill_does_not_end_at_the_target_is_refused() {
         let err = load_error(dir.path(), &manifest, from, to);
         assert_names(&err, "skills[1].target_index");
     }
+    // A key no manifest has (a typo, a line pasted in) is refused, not ignored.
+    let err = load_error(
+        dir.path(),
+        &manifest,
+        "skill_count = 2",
+        "skill_count = 2\nfoo = 1",
+    );
+    assert_names(&err, "foo");
 }

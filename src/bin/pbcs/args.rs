@@ -139,7 +139,7 @@ pub struct LearnerArgs {
     pub actor: Option<ActorUpdate>,
     /// Discount γ in [0, 1); overrides `learner.gamma` [default: the config's, else 0.9 for
     /// `run`, 0.99 for `train`].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub gamma: Option<f32>,
 }
 
@@ -232,7 +232,7 @@ pub enum Command {
         /// verification and repairs and its evaluation are not cut: past them the run
         /// finishes). Without it the run still saves itself every ten minutes and goes on from
         /// there when run again after a cut.
-        #[arg(long, value_parser = humantime::parse_duration)]
+        #[arg(long, value_parser = parse_stop_after)]
         stop_after: Option<std::time::Duration>,
     },
     /// The PBCS results table of one config: every maze size × seed, run by the same sweep as
@@ -363,7 +363,7 @@ pub enum ExpCommand {
         /// command goes on where it stopped, to the same bytes. Under a cluster's time limit,
         /// leave the time of an evaluation interval's training, the evaluation and the save
         /// (for a PBCS run, of a learning problem and the save) to spare.
-        #[arg(long, value_parser = humantime::parse_duration)]
+        #[arg(long, value_parser = parse_stop_after)]
         stop_after: Option<std::time::Duration>,
     },
     /// Print one `pbcs exp run` command per (cell, seed) (for `make -j` or a job array), with
@@ -408,14 +408,32 @@ pub enum ExpCommand {
     },
 }
 
-/// `--jobs`: a whole number of at least 1 (before: 0 silently ran as 1).
+/// The most runs at a time `--jobs` takes (one thread each; more is a typo).
+const MAX_JOBS: usize = 1024;
+
+/// `--jobs`: a whole number from 1 to [`MAX_JOBS`] (before: 0 silently ran as 1).
 fn parse_jobs(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
+        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
         _ => Err(format!(
-            "--jobs (runs at a time) is a whole number of at least 1, got {s:?}"
+            "--jobs (runs at a time, one thread each) is a whole number from 1 to {MAX_JOBS}, \
+             got {s:?}"
         )),
     }
+}
+
+/// The furthest deadline `--stop-after` takes: a year (more is a typo).
+const MAX_STOP_AFTER: std::time::Duration = std::time::Duration::from_secs(366 * 24 * 3600);
+
+/// `--stop-after`: a duration (`90s`, `45m`, `3h 50m`) of at most [`MAX_STOP_AFTER`].
+fn parse_stop_after(s: &str) -> Result<std::time::Duration, String> {
+    let d = humantime::parse_duration(s).map_err(|e| format!("{s:?}: {e}"))?;
+    if d > MAX_STOP_AFTER {
+        return Err(format!(
+            "{s:?} is more than a year ahead (at most 366 days; more is a typo)"
+        ));
+    }
+    Ok(d)
 }
 
 /// `--maze`: a whole number from 2 to [`MAX_MAZE_SIZE`], said so for anything else (a
