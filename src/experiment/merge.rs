@@ -34,8 +34,9 @@ fn merge_tables(into: &mut toml::Table, from: &toml::Table) {
 }
 
 /// [`merge`] of a method's `set`, a `by_maze` or a profile's table (`what`: whose), refusing
-/// the keys a grid sets itself: its sites say where each run is (`maze.size`, `env`) and its
-/// seeds which runs there are (`seed`), so such a key would be silently replaced.
+/// the keys a grid sets itself: its sites say where each run is (`maze.size`; `env` is refused
+/// where the job is placed, [`super::site::place`]) and its seeds which runs there are (`seed`),
+/// so such a key would be silently replaced.
 pub(crate) fn merge_over(
     into: &mut toml::Table,
     from: &toml::Table,
@@ -44,7 +45,6 @@ pub(crate) fn merge_over(
     let maze = from.get("maze").and_then(toml::Value::as_table);
     let grid_key = [
         from.contains_key("seed").then_some("seed"),
-        from.contains_key("env").then_some("env"),
         maze.is_some_and(|m| m.contains_key("size"))
             .then_some("maze.size"),
     ];
@@ -61,22 +61,44 @@ pub(crate) fn merge_over(
     Ok(())
 }
 
-/// The base job of the method `method`: the file `base` names beside the experiment file (in
-/// `folder`), read as a table; a `base` that names no file there is an error naming the field.
+/// The base job of a method (`whose`, as the message says it: "method `a`"): the file `base`
+/// names beside the experiment file (in `folder`), read as a table; a `base` that names no
+/// file there is an error naming the field.
 pub(crate) fn read_base(
     folder: &std::path::Path,
     base: &std::path::Path,
-    method: &str,
+    whose: &str,
 ) -> crate::error::Result<toml::Table> {
     let path = folder.join(base);
     if base.as_os_str().is_empty() || !path.is_file() {
         return Err(crate::error::Error::invalid(
             "base",
             format!(
-                "method `{method}`: {base:?} is not a file beside the experiment file (a job \
+                "{whose}: {base:?} is not a file beside the experiment file (a job \
                  such as \"pbcs_paper.toml\" or \"baseline.toml\")"
             ),
         ));
     }
     crate::validate::read_toml(&path)
+}
+
+/// The tables that override a method's job at the site `key`, in order, each merged with
+/// [`merge_over`]: the file's `by_maze` table for the site, the profile's table, the profile's
+/// `by_maze` table for the site (each `None` where the file has none).
+pub(crate) fn merge_site_layers(
+    into: &mut toml::Table,
+    key: &str,
+    layers: [Option<&toml::Table>; 3],
+) -> crate::error::Result<()> {
+    let names = [
+        format!("by_maze.{key}"),
+        "the profile".to_string(),
+        format!("the profile's by_maze.{key}"),
+    ];
+    for (layer, what) in layers.into_iter().zip(names) {
+        if let Some(t) = layer {
+            merge_over(into, t, &what)?;
+        }
+    }
+    Ok(())
 }

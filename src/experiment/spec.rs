@@ -2,7 +2,7 @@
 //! (base file ← method `set` ← `by_maze` ← profile), and the declared figures and report.
 
 use super::declared::{check_figures, check_report};
-use super::merge::{merge_over, read_base};
+use super::merge::{merge_over, merge_site_layers, read_base};
 use super::site::{paper_run, place};
 use super::{
     check_seeds, Cell, CellKey, Experiment, ExperimentName, FigureSpec, Job, Kind, Method,
@@ -367,8 +367,9 @@ impl ExperimentSpec {
         let mut methods = Vec::new();
         let mut resolved = Vec::new();
         for m in all_methods.iter().copied() {
-            let mut table = read_base(folder, &m.base, &m.name)?;
-            merge_over(&mut table, &m.set, &format!("method `{}`", m.name))?;
+            let whose = format!("method `{}`", m.name);
+            let mut table = read_base(folder, &m.base, &whose)?;
+            merge_over(&mut table, &m.set, &whose)?;
             let label = m.label.clone().unwrap_or_else(|| m.name.clone());
             methods.push((Method::new(&m.name)?, label.clone()));
             resolved.push((m, label, table));
@@ -386,21 +387,12 @@ impl ExperimentSpec {
                     continue;
                 }
                 let mut table = table.clone();
-                if let Some(t) = self.by_maze.get(&key) {
-                    merge_over(&mut table, t.of(m.kind), &format!("by_maze.{key}"))?;
-                }
-                merge_over(
-                    &mut table,
-                    KindTables::of_profile(prof, m.kind),
-                    "the profile",
-                )?;
-                if let Some(t) = prof.by_maze.get(&key) {
-                    merge_over(
-                        &mut table,
-                        t.of(m.kind),
-                        &format!("the profile's by_maze.{key}"),
-                    )?;
-                }
+                let layers = [
+                    self.by_maze.get(&key).map(|t| t.of(m.kind)),
+                    Some(KindTables::of_profile(prof, m.kind)),
+                    prof.by_maze.get(&key).map(|t| t.of(m.kind)),
+                ];
+                merge_site_layers(&mut table, &key, layers)?;
                 let method = Method::new(&m.name)?;
                 cells.push(Cell {
                     id: CellKey::new(method, site),

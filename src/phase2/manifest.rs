@@ -34,6 +34,10 @@ pub(crate) struct Manifest {
     /// ends at its last state, the target (absent before issue 77: unchecked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     trajectory_len: Option<usize>,
+    /// Where the chain starts along τ: 0 for a complete chain, past it for one phase 2 left
+    /// incomplete (saved since issue 77): a manifest cut at its first skill is refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    chain_start: Option<usize>,
     skills: Vec<ManifestSkill>,
 }
 
@@ -95,6 +99,9 @@ impl SkillChain {
             job_file: None,
             job_sha256: None,
             trajectory_len,
+            chain_start: trajectory_len
+                .and(self.skills.first())
+                .map(|s| s.start_index),
             skills: Vec::new(),
         };
         if let Some((name, text)) = job {
@@ -141,7 +148,8 @@ impl SkillChain {
     /// value of the manifest is checked before a weight is read: at least one skill; finite
     /// numbers; radius, action scales and action bounds positive; sizes, centre, origin and
     /// scales of agreeing lengths; `start_index < target_index`, each skill starting where the one
-    /// before it ends; a policy file inside the
+    /// before it ends, the first where the chain starts (`chain_start`) and the last at τ's end
+    /// (`trajectory_len`), where the manifest records them; a policy file inside the
     /// folder holding at least the parameters its sizes say. Then what belongs to the chain
     /// (where the manifest says it, as every manifest since issue 48 does): as many skills as
     /// `skill_count`, each policy file and the job file with the SHA-256 recorded, so that a
@@ -310,6 +318,19 @@ impl Manifest {
                     ),
                 ));
             }
+        }
+        if let Some(k) = self
+            .chain_start
+            .filter(|&k| k != self.skills[0].start_index)
+        {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "skills[0].start_index: {}, but the chain starts at τ_{k} (chain_start): a \
+                     manifest cut at its first skill",
+                    self.skills[0].start_index
+                ),
+            ));
         }
         let last = self.skills.len() - 1;
         match self.trajectory_len {

@@ -21,6 +21,7 @@ mod judged;
 mod legacy;
 mod locks;
 mod make_targets;
+mod reprobe;
 mod rows;
 mod sweeps;
 mod tables_read;

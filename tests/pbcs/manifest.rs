@@ -530,6 +530,12 @@ fn a_chain_whose_last_skill_does_not_end_at_the_target_is_refused() {
         let err = load_error(dir.path(), &manifest, from, to);
         assert_names(&err, "skills[1].target_index");
     }
+    // Cut at its first skill, its count fixed: where the chain starts is recorded too.
+    let first = manifest.find("[[skills]]").unwrap();
+    let second = first + 1 + manifest[first + 1..].find("[[skills]]").unwrap();
+    let cut = format!("{}{}", &manifest[..first], &manifest[second..]);
+    let err = load_error(dir.path(), &cut, "skill_count = 2", "skill_count = 1");
+    assert_names(&err, "skills[0].start_index");
     // A key no manifest has (a typo, a line pasted in) is refused, not ignored.
     let err = load_error(
         dir.path(),

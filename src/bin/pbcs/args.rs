@@ -416,8 +416,8 @@ fn parse_jobs(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
         _ => Err(format!(
-            "--jobs (runs at a time, one thread each) is a whole number from 1 to {MAX_JOBS}, \
-             got {s:?}"
+            "--jobs (runs at a time, one thread each) is a whole number of at least 1 and at \
+             most {MAX_JOBS}, got {s:?}"
         )),
     }
 }
