@@ -38,7 +38,7 @@ pub trait Backplayer {
     fn ball_is_clear(&self, k: usize) -> bool;
 }
 
-/// What Backplay needs of the procedure ([`super::Phase2Config::walk`]): α, how K walks and
+/// What Backplay needs of the procedure ([`Walk::of`] its settings): α, how K walks and
 /// when training at one K stops, and when a walk gives up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Walk {
@@ -67,6 +67,21 @@ pub struct Walk {
 }
 
 impl Walk {
+    /// Backplay's walk under the settings `config`, for a skill that has restarts left or not
+    /// (a walk that may restart gives up when dead: [`Walk::give_up_when_dead`]).
+    pub fn of(config: &super::Phase2Config, restarts_left: bool) -> Walk {
+        let i = &config.ideas;
+        Walk {
+            alpha: config.alpha,
+            k_walk: i.k_walk,
+            stopping: i.stopping,
+            stop_at_failure: i.stop_at_failure,
+            give_up_when_dead: restarts_left,
+            dead_walk: i.dead_walk.map(|d| d.after),
+            patience: i.patience,
+        }
+    }
+
     /// The paper's walk: K back one index at a time, training until α misses in a row, never
     /// giving up before K = 0.
     pub fn paper(alpha: usize) -> Walk {

@@ -508,7 +508,7 @@ pub fn skill_chaining_from<B: backplay::Backplayer>(
     while at.t > 0 {
         let mut b = next(at.made, at.t)?;
         at.made += 1;
-        let walk = config.walk(at.restarts < config.ideas.restarts);
+        let walk = backplay::Walk::of(config, at.restarts < config.ideas.restarts);
         let candidates = backplay::backplay_candidates(&mut b, at.t, &walk);
         let found = verified(&mut b, candidates, config.ideas.verify_skills);
         let exhausted = b.exhausted();

@@ -29,7 +29,6 @@
 //! assert_eq!(fast.inputs, InputMode::GoalRelative { init: SkillInit::Warm });
 //! ```
 
-use super::backplay::Walk;
 use super::flat::FlatPhase2;
 use super::goal::{BallMetric, Goal, Inputs};
 use super::{FirstStarts, LastGoal, StartMode};
@@ -140,7 +139,7 @@ pub struct Ideas {
     /// When training at one K ends.
     pub stopping: Stopping,
     /// End a skill at the first K that fails after training when its ball is clear of walls
-    /// ([`Walk::stop_at_failure`]; needs [`crate::env::Env::clear_balls`]).
+    /// ([`super::backplay::Walk::stop_at_failure`]; needs [`crate::env::Env::clear_balls`]).
     pub stop_at_failure: bool,
     /// Restarts of a skill with a fresh learner (0: the paper): while a skill has restarts
     /// left, a Backplay whose test after training fails before any K was saved gives up — at
@@ -151,7 +150,8 @@ pub struct Ideas {
     /// A bound on a walk without any success, and what follows it.
     pub dead_walk: Option<DeadWalk>,
     /// Once a K is saved, a walk ends after this many Ks in a row trained without another
-    /// save ([`Walk::patience`]; the paper walks on until a test after training reads 0 %).
+    /// save ([`super::backplay::Walk::patience`]; the paper walks on until a test after
+    /// training reads 0 %).
     pub patience: Option<usize>,
     /// Hand-over lookahead (ours; `None`: the paper): a skill's goal ball counts as reached
     /// only where the next `n` skills already found carry the entry on to the n-th one's
@@ -250,9 +250,9 @@ impl Stopping {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DeadWalk {
     /// A Backplay whose K is this many indices below T without a single success in any test
-    /// or training round gives up ([`Walk::dead_walk`]), writing a `dead_walk` trace row. Then
-    /// the skill restarts ([`Ideas::restarts`]), and once no restart is left the hand-over
-    /// moves (`retargets`) or the run fails.
+    /// or training round gives up ([`super::backplay::Walk::dead_walk`]), writing a
+    /// `dead_walk` trace row. Then the skill restarts ([`Ideas::restarts`]), and once no
+    /// restart is left the hand-over moves (`retargets`) or the run fails.
     pub after: usize,
     /// Moves of a hand-over (0: none): when no attempt at a skill finds any K, the skill found
     /// before it (target T′, start K = T) is verified greedily from the balls of the indices
@@ -479,21 +479,6 @@ impl Phase2Config {
         match self.inputs {
             InputMode::GoalRelative { .. } => vec![1.0; env.action_dim()],
             InputMode::Raw => (0..env.action_dim()).map(|i| env.action_bound(i)).collect(),
-        }
-    }
-
-    /// Backplay's walk from these settings, for a skill that has restarts left or not (a walk
-    /// that may restart gives up when dead: [`Walk::give_up_when_dead`]).
-    pub fn walk(&self, restarts_left: bool) -> Walk {
-        let i = &self.ideas;
-        Walk {
-            alpha: self.alpha,
-            k_walk: i.k_walk,
-            stopping: i.stopping,
-            stop_at_failure: i.stop_at_failure,
-            give_up_when_dead: restarts_left,
-            dead_walk: i.dead_walk.map(|d| d.after),
-            patience: i.patience,
         }
     }
 

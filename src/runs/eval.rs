@@ -2,7 +2,6 @@
 //! `phase2.first_starts = "drawn"`), the one used by `pbcs run`, the sweeps and `pbcs eval` (a
 //! saved chain re-run).
 
-use super::{ball_circles, DRAWN_ROLLOUTS};
 use crate::config::{Located, PbcsJob};
 use crate::env::Planar;
 use crate::env::{evaluation_starts, Env, Scene};
@@ -14,6 +13,18 @@ use crate::phase2::SkillChain;
 use crate::picture::{Draw, PictureData, RunPicture};
 use crate::rng::Seeds;
 use std::path::Path;
+
+/// Chain rollouts drawn in the picture.
+pub const DRAWN_ROLLOUTS: usize = 10;
+
+/// The activation balls of `chain` as drawn over `env` ([`Planar::ball_point`]).
+pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32, f32), f32)> {
+    chain
+        .skills
+        .iter()
+        .map(|s| (env.ball_point(&s.activation.center), s.activation.radius))
+        .collect()
+}
 
 pub use crate::env::EvalEpisode;
 

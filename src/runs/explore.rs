@@ -1,6 +1,6 @@
 //! `pbcs explore`: phase 1 alone, its trajectory, archive and picture.
 
-use super::{claim, write_timing};
+use super::folder::{claim, write_timing};
 use crate::config::{ExploreJob, Located};
 use crate::env::Env;
 use crate::env::Planar;

@@ -1,7 +1,9 @@
 //! `pbcs run`: PBCS — phase 1, phase 2, the chain's evaluation — and its record.
 
+use super::eval::{ball_circles, evaluate_chain, EvalEpisode, CHAIN_JOB};
+use super::explore::write_trajectory_csv;
+use super::folder::{claim, write_timing};
 use super::pbcs_resume;
-use super::{claim, evaluate_chain, write_timing, write_trajectory_csv, EvalEpisode, CHAIN_JOB};
 use crate::config::{Located, PbcsJob};
 use crate::env::{Planar, SampleBall};
 use crate::envs::EnvName;
@@ -66,9 +68,6 @@ pub struct RunRecord {
     /// The environment ([`EnvName`]; the last column, so the others keep their places).
     pub env: EnvName,
 }
-
-/// Chain rollouts drawn in the picture.
-pub const DRAWN_ROLLOUTS: usize = 10;
 
 /// One PBCS run's outcome ([`PbcsRun::compute`]): the record, τ, the chain and its trace,
 /// the evaluation's rollouts; [`PbcsRun::write`] writes it.
@@ -315,15 +314,6 @@ impl RunRecord {
             phase2_trajectory_len,
         }
     }
-}
-
-/// The activation balls of `chain` as drawn over `env` ([`Planar::ball_point`]).
-pub(crate) fn ball_circles<E: Planar>(env: &E, chain: &SkillChain) -> Vec<((f32, f32), f32)> {
-    chain
-        .skills
-        .iter()
-        .map(|s| (env.ball_point(&s.activation.center), s.activation.radius))
-        .collect()
 }
 
 /// Runs PBCS for `job` into `out` on the environment it names ([`crate::envs`]): refuses a

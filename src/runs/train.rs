@@ -1,6 +1,6 @@
 //! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on an environment's own reward.
 
-use super::{claim, write_timing};
+use super::folder::{claim, write_timing};
 use crate::config::{Located, TrainJob};
 use crate::env::{Planar, Scene};
 use crate::envs::EnvName;
