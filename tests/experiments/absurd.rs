@@ -134,15 +134,9 @@ fn write_job(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
     (dir, path)
 }
 
-/// `pbcs ARGS`: its exit code and its standard error, which holds no panic.
+/// `pbcs ARGS` here: its exit code and its standard error, which holds no panic.
 fn pbcs_cli(args: &[&str]) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbcs"))
-        .args(args)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "panic on {args:?}: {stderr}");
-    (out.status.code().unwrap_or(-1), stderr)
+    super::pbcs_in(std::path::Path::new("."), args)
 }
 
 /// Every count a job can set has an upper bound, checked when the file is read: the values a

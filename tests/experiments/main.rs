@@ -7,6 +7,18 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Mutex;
 
+/// `pbcs ARGS` in `dir`: its exit code and standard error, which holds no panic.
+pub(crate) fn pbcs_in(dir: &Path, args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbcs"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic on {args:?}: {stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
 fn files() -> Vec<std::path::PathBuf> {
     experiment_files(Path::new("experiments")).unwrap()
 }

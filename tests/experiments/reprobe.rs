@@ -3,18 +3,6 @@
 
 use super::*;
 
-/// `pbcs ARGS` in `dir`: its exit code and standard error, which holds no panic.
-fn pbcs_in(dir: &Path, args: &[&str]) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbcs"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "panic on {args:?}: {stderr}");
-    (out.status.code().unwrap_or(-1), stderr)
-}
-
 #[test]
 fn counts_of_the_command_line_are_bounded_and_flags_take_negative_numbers() {
     let dir = tempfile::tempdir().unwrap();

@@ -460,12 +460,9 @@ fn a_chain_whose_files_do_not_match_its_manifest_is_refused() {
     assert_eq!(load(ours.path()).unwrap(), 2);
 }
 
-/// The skills of a manifest follow each other along τ: one whose second skill does not start
-/// where the first ends (a manifest cut at a skill boundary and recounted, its skills
-/// reordered, a skill repeated, a skill of no length) is refused naming the field.
-#[test]
-fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
-    let chain = |indices: &[(usize, usize)]| SkillChain {
+/// A chain of constant skills with these (start_index, target_index) along τ.
+fn chain_along(indices: &[(usize, usize)]) -> SkillChain {
+    SkillChain {
         skills: indices
             .iter()
             .map(|&(start_index, target_index)| Skill {
@@ -477,10 +474,17 @@ fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
             })
             .collect(),
         kernel: Kernel::detect(),
-    };
+    }
+}
+
+/// The skills of a manifest follow each other along τ: one whose second skill does not start
+/// where the first ends (a manifest cut at a skill boundary and recounted, its skills
+/// reordered, a skill repeated, a skill of no length) is refused naming the field.
+#[test]
+fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
     let load = |indices: &[(usize, usize)]| {
         let dir = tempfile::tempdir().unwrap();
-        chain(indices).save(dir.path()).unwrap();
+        chain_along(indices).save(dir.path()).unwrap();
         SkillChain::load(dir.path(), Kernel::detect()).map(|c| c.skills.len())
     };
     assert_eq!(load(&[(0, 4), (4, 9), (9, 12)]).unwrap(), 3);
@@ -502,19 +506,7 @@ fn a_chain_whose_skills_do_not_follow_each_other_along_tau_is_refused() {
 /// its last index (past it, `u64::MAX`, short of it) is refused naming the field.
 #[test]
 fn a_chain_whose_last_skill_does_not_end_at_the_target_is_refused() {
-    let chain = SkillChain {
-        skills: [(0, 4), (4, 12)]
-            .iter()
-            .map(|&(start_index, target_index)| Skill {
-                policy: Box::new(constant_policy([1.0, 0.0])),
-                activation: Ball::new(vec![0.5, 0.5], 0.1),
-                start_index,
-                target_index,
-                inputs: Inputs::new(vec![0.5, 0.5], vec![1.0, 1.0]),
-            })
-            .collect(),
-        kernel: Kernel::detect(),
-    };
+    let chain = chain_along(&[(0, 4), (4, 12)]);
     let dir = tempfile::tempdir().unwrap();
     chain.save_with_job(dir.path(), None, Some(13)).unwrap();
     let load = || SkillChain::load(dir.path(), Kernel::detect()).map(|c| c.skills.len());
