@@ -37,7 +37,7 @@ use pbcs::envs::Built;
 use pbcs::phase1::{explore, Exploration};
 use pbcs::phase2::goal::dist;
 use pbcs::phase2::{
-    chain_skills_with_starts, phase2_trajectory, ArchiveStarts, Ball, LastGoal, SkillChain,
+    chain_skills, phase2_trajectory, ArchiveStarts, Ball, LastGoal, Phase2Inputs, SkillChain,
     StartMode,
 };
 use pbcs::rng::{Seeds, Stream};
@@ -101,23 +101,18 @@ fn main() -> anyhow::Result<()> {
                 (None, Some(a)) => Some(a),
                 (None, None) => None,
             };
-            let out = chain_skills_with_starts(
-                &env,
-                &tau,
-                starts,
-                &job.learner,
-                job.phase2.ready(&env)?,
-                &Seeds::new(job.seed),
-                steps,
-                kernel,
-                |n, p| {
-                    let s = clock.elapsed().as_secs_f64();
-                    eprintln!(
-                        "[{s:.0} s] problem {n} K {} T {} {:?} {:.2} ({} train, {} test)",
-                        p.k, p.t, p.kind, p.success, p.steps.train, p.steps.test
-                    );
-                },
-            )?;
+            let seeds = Seeds::new(job.seed);
+            let ready = job.phase2.ready(&env)?;
+            let inputs = Phase2Inputs::new(&env, &tau, ready, &job.learner, &seeds, kernel)
+                .after(steps)
+                .with_starts(starts);
+            let out = chain_skills(inputs, |n, p| {
+                let s = clock.elapsed().as_secs_f64();
+                eprintln!(
+                    "[{s:.0} s] problem {n} K {} T {} {:?} {:.2} ({} train, {} test)",
+                    p.k, p.t, p.kind, p.success, p.steps.train, p.steps.test
+                );
+            })?;
             println!(
                 "phase 2: {:?}, {} skills, {} training and {} test env steps, {:.0} s",
                 out.failure,

@@ -13,7 +13,7 @@ use pbcs::config::Preset;
 use pbcs::env::evaluation_starts;
 use pbcs::envs::rooms::TwoRooms;
 use pbcs::phase1::explore;
-use pbcs::phase2::{chain_skills, phase2_trajectory};
+use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Inputs};
 use pbcs::rng::{Seeds, Stream};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -43,13 +43,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // Phase 2: Backplay + shaped DDPG from starts in B_ε(τ_K), chaining skills.
     let out = chain_skills(
-        &env,
-        &tau,
-        &job.learner,
-        job.phase2.ready(&env)?,
-        &seeds,
-        found.env_steps,
-        pbcs::nn::kernel::Kernel::detect(),
+        Phase2Inputs::new(
+            &env,
+            &tau,
+            job.phase2.ready(&env)?,
+            &job.learner,
+            &seeds,
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .after(found.env_steps),
         |_, _| {},
     )?;
     if let Some(f) = out.failure {

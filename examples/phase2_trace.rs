@@ -4,7 +4,7 @@ use pbcs::config::{self, PbcsJob};
 use pbcs::env::Env;
 use pbcs::envs::maze::Maze;
 use pbcs::phase1::explore;
-use pbcs::phase2::chain_skills;
+use pbcs::phase2::{chain_skills, Phase2Inputs};
 use pbcs::rng::{Seeds, Stream};
 
 fn main() -> anyhow::Result<()> {
@@ -27,13 +27,15 @@ fn main() -> anyhow::Result<()> {
     println!("phase 1: {} steps, |τ| = {}", found.env_steps, tau.len());
     let t0 = std::time::Instant::now();
     let out = chain_skills(
-        &maze,
-        tau,
-        &job.learner,
-        job.phase2.ready(&maze)?,
-        &seeds,
-        found.env_steps,
-        pbcs::nn::kernel::Kernel::detect(),
+        Phase2Inputs::new(
+            &maze,
+            tau,
+            job.phase2.ready(&maze)?,
+            &job.learner,
+            &seeds,
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .after(found.env_steps),
         |n, p| {
             println!(
                 "{:7.1}s skill {n} K {:4} T {:4} {:?} {:.2} steps {}/{}",

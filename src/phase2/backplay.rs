@@ -20,7 +20,7 @@ pub trait Backplayer {
     fn verify(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32;
     /// The same greedy episodes, run to move a hand-over: whether the skill found last
     /// (`policy`, this problem's goal) also reaches its goal from the later ball B_ε(τ_k)
-    /// (`phase2.retargets`, [`super::chaining::skill_chaining`]). Default: [`Self::verify`].
+    /// (`phase2.retargets`, [`super::Between::step`]). Default: [`Self::verify`].
     fn verify_handover(&mut self, k: usize, policy: &Self::Policy, episodes: usize) -> f32 {
         self.verify(k, policy, episodes)
     }
@@ -108,7 +108,11 @@ pub const MAX_ADAPTIVE_STEP: usize = 16;
 /// success tends to drift away from it during the α further rounds. With `max_rounds`
 /// (ours), training also ends after that many rounds: a K that needs more is rarely solved at
 /// all, and the rounds spent there before α misses are most of a skill's training.
-pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (usize, f32) {
+pub fn train_until_stable<B: Backplayer + ?Sized>(
+    b: &mut B,
+    k: usize,
+    walk: &Walk,
+) -> (usize, f32) {
     let (mut best, mut misses, mut rounds) = (f32::NEG_INFINITY, 0, 0);
     let Stopping {
         early_stop,
@@ -151,14 +155,18 @@ pub fn train_until_stable<B: Backplayer>(b: &mut B, k: usize, walk: &Walk) -> (u
 /// never end, so we let K reach 0 (the start τ_0). [`Walk`] holds our options (larger or
 /// adaptive K steps, early stopping, a bound on a walk without any success); the pseudo-code
 /// above is [`Walk::paper`].
-pub fn backplay<B: Backplayer>(b: &mut B, t: usize, walk: &Walk) -> Option<(usize, B::Policy)> {
+pub fn backplay<B: Backplayer + ?Sized>(
+    b: &mut B,
+    t: usize,
+    walk: &Walk,
+) -> Option<(usize, B::Policy)> {
     backplay_candidates(b, t, walk).pop()
 }
 
 /// Algorithm 2, returning every (K, π) it saved, in the order saved (decreasing K): the last
 /// one is the paper's (K_s, π_s); the earlier ones are shorter-reaching skills to fall back on
 /// when the last fails its verification.
-pub fn backplay_candidates<B: Backplayer>(
+pub fn backplay_candidates<B: Backplayer + ?Sized>(
     b: &mut B,
     t: usize,
     walk: &Walk,
@@ -231,7 +239,7 @@ pub const MAX_HANDOVER_TRIES: usize = 4;
 /// the indices t + 1 … t + `span` before t_last, those whose ball is clear of obstacles first,
 /// nearest first; at most [`MAX_HANDOVER_TRIES`] of them are tried, the first from which
 /// `policy` reaches its goal in every one of `episodes` greedy episodes is returned.
-pub fn handover<B: Backplayer>(
+pub fn handover<B: Backplayer + ?Sized>(
     b: &mut B,
     t: usize,
     t_last: usize,
@@ -261,7 +269,7 @@ pub const MAX_VERIFIED_CANDIDATES: usize = 4;
 /// one whose policy reaches the goal in all `episodes` greedy episodes from its ball, trying
 /// at most [`MAX_VERIFIED_CANDIDATES`] from the last; if none passes, the one with the best
 /// verified success (the farthest-reaching among ties).
-pub fn verified<B: Backplayer>(
+pub fn verified<B: Backplayer + ?Sized>(
     b: &mut B,
     mut candidates: Vec<(usize, B::Policy)>,
     episodes: Option<usize>,

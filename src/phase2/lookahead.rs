@@ -9,10 +9,11 @@
 //! `docs/antmaze.md`). The skills looked ahead to are those of the same section (a chain
 //! repair's section sees only its own).
 
-use super::chaining::Chainer;
 use super::goal::Goal;
-use super::{Progress, SkillChain};
+use super::inputs::Along;
+use super::SkillChain;
 use crate::env::Env;
+use crate::policy::Policy;
 
 /// A hand-over lookahead ([`super::Ideas::lookahead`]): the next skills already found, in
 /// execution order (the first one's ball is the task's goal), and the target they must carry
@@ -41,20 +42,27 @@ impl Lookahead {
     }
 }
 
-impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
+impl Lookahead {
     /// The next `n` skills after a learning problem whose goal is τ_{lo+t} on the section from
-    /// τ_lo, in execution order: the skill found whose start is τ_{lo+t}, and those found before
-    /// it (a hand-over's try, whose goal is the target of the skill found last, looks ahead from
-    /// the skill after it); and their target (`phase2.lookahead`). `None` when no skill found
-    /// starts there (the first problem, and the first skill's hand-over tries).
-    pub(super) fn lookahead(&self, lo: usize, t: usize, n: usize) -> Option<Lookahead> {
-        let next = next_skills(&self.found.borrow(), t, n)?;
-        let target = self.config.goal(self.env, &self.obs, lo + next.last()?.1);
+    /// τ_lo, in execution order: of the skills `found` so far on it (Algorithm 1's order), the
+    /// one whose start is τ_{lo+t}, and those found before it (a hand-over's try, whose goal is
+    /// the target of the skill found last, looks ahead from the skill after it); and their
+    /// target (`phase2.lookahead`). `None` when no skill found starts there (the first problem,
+    /// and the first skill's hand-over tries).
+    pub(super) fn after<E: Env>(
+        along: Along<'_, '_, E>,
+        found: &[(usize, usize, Box<dyn Policy>)],
+        lo: usize,
+        t: usize,
+        n: usize,
+    ) -> Option<Lookahead> {
+        let next = next_skills(found, t, n)?;
+        let target = along.goal(lo + next.last()?.1);
         let chain = SkillChain {
-            skills: self.skills(lo, next),
-            kernel: self.kernel,
+            skills: along.skills(lo, next),
+            kernel: along.inputs.kernel,
         };
-        let per_skill = self.config.max_steps;
+        let per_skill = along.config().max_steps;
         Some(Lookahead {
             chain,
             target,
@@ -64,7 +72,7 @@ impl<E: Env, P: FnMut(usize, Progress)> Chainer<'_, E, P> {
 }
 
 /// Of the skills `found` (Algorithm 1's order, decreasing K), the one that starts at τ_t and
-/// the `n` − 1 found before it, in execution order ([`Chainer::lookahead`]).
+/// the `n` − 1 found before it, in execution order ([`Lookahead::after`]).
 fn next_skills<P: Clone>(
     found: &[(usize, usize, P)],
     t: usize,

@@ -7,8 +7,10 @@
 //!   one region), [`goal::BallMetric`] — what the balls measure (the position, or with
 //!   momentum position and velocity, `phase2.velocity_scale`), and [`goal::Inputs`] — what its
 //!   networks see (goal-relative observations, actions in [−1, 1]ᵈ);
-//! * [`chain_skills`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
-//!   collecting skills backwards, then reversing them;
+//! * [`Between::step`] — Algorithm 1: Backplay on τ_0 … τ_T, then on τ_0 … τ_{K_s}, and so on,
+//!   collecting skills backwards, then reversing them; [`Phase2Run`] runs it on τ one
+//!   learning problem at a time, then verifies and repairs the chain ([`chain_skills`]: to
+//!   the end);
 //! * [`ArchiveStarts`] — Backplay's starts among phase 1's archived states in B_ε(τ_K)
 //!   (`phase2.start = "archive"`, [`starts`]);
 //! * [`SkillChain`] — the result: policies π_i with activation balls A_i = B_ε(τ_{K_i});
@@ -17,15 +19,18 @@
 //! * [`Phase2Config`] — the procedure: the paper's settings and our [`Ideas`] ([`procedure`]),
 //!   read from and written to files in the flat form of [`flat`].
 
+pub mod algorithm1;
 pub mod backplay;
-pub mod chaining;
 pub mod flat;
 pub mod goal;
+mod inputs;
 pub mod lookahead;
 mod manifest;
 pub mod procedure;
 mod ready;
-pub mod resume;
+mod repair;
+pub mod run;
+mod section;
 pub mod skill_chain;
 pub mod starts;
 pub mod task;
@@ -40,12 +45,12 @@ pub use skill_chain::{Ball, Rollout, Skill, SkillChain};
 
 use crate::env::Env;
 use crate::error::Result;
+pub use algorithm1::{Between, Made, Problems};
 pub use backplay::{handover, verified, MAX_HANDOVER_TRIES, MAX_VERIFIED_CANDIDATES};
-pub use chaining::{chain_skills, chain_skills_with_starts, skill_chaining, skill_chaining_from};
-pub use resume::{chain_skills_resumable, Between, Chained, Pause, Phase2State};
+pub use inputs::Phase2Inputs;
+pub use run::{chain_skills, Phase2Run, Phase2State};
 use serde::{Deserialize, Serialize};
 pub use starts::ArchiveStarts;
-use task::StepCounts;
 
 /// Where Backplay's episodes start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
@@ -59,7 +64,7 @@ pub enum StartMode {
     Exact,
     /// In B_ε(τ_K), among the states phase 1's archive visited there ([`ArchiveStarts`]):
     /// states the environment reached, with their own velocities, instead of made-up ones.
-    /// Needs the archive: [`chain_skills_with_starts`] (`pbcs run` and experiments pass it).
+    /// Needs the archive: [`Phase2Inputs::with_starts`] (`pbcs run` and experiments pass it).
     Archive,
 }
 
@@ -169,6 +174,15 @@ impl EventKind {
     pub fn name(self) -> &'static str {
         self.into()
     }
+}
+
+/// Environment steps spent, by purpose.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StepCounts {
+    /// In training episodes (Algorithm 3).
+    pub train: u64,
+    /// In greedy test episodes (Backplay's tests).
+    pub test: u64,
 }
 
 /// A progress report from inside Backplay.

@@ -87,7 +87,7 @@ impl Phase2Config {
 
 /// Phase 2's settings, checked and checked against the environment they run on: made once per
 /// run by [`Phase2Config::ready`] (or by a run from its valid job), taken by
-/// [`super::chain_skills`] and [`super::SkillTask::new`], which check nothing again.
+/// [`super::Phase2Inputs`] and [`super::SkillTask::new`], which check nothing again.
 #[derive(Debug)]
 pub struct Ready<'a, E: ?Sized> {
     config: &'a Phase2Config,

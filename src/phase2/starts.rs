@@ -139,7 +139,7 @@ pub(crate) fn archive_starts<'a, S>(
         (StartMode::Archive, None) => Err(Error::invalid(
             "phase2.start",
             "\"archive\" draws Backplay's starts from phase 1's archive, which this call was \
-             not given (chain_skills_with_starts; `pbcs run` and experiments pass it)",
+             not given (`Phase2Inputs::with_starts`; `pbcs run` and experiments pass it)",
         )),
         (StartMode::Archive, starts) => Ok(starts),
         _ => Ok(None),

@@ -5,22 +5,13 @@
 
 use super::backplay::Backplayer;
 use super::goal::{dist, BallMetric, Goal, GoalKind, Inputs};
-use super::{EventKind, Phase2Config, StartMode};
+use super::{EventKind, Phase2Config, StartMode, StepCounts};
 use crate::env::{DrawGoals, DrawStarts, Env, SampleBall, VelocityBalls};
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::Learner;
 use crate::policy::Policy;
 use crate::rng::Rng;
 use crate::rollout::{lockstep, Agent, Tally, Verdict};
-
-/// Environment steps spent, by purpose.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct StepCounts {
-    /// In training episodes (Algorithm 3).
-    pub train: u64,
-    /// In greedy test episodes (Backplay's tests).
-    pub test: u64,
-}
 
 /// L_k for each of `states` = τ_0 … τ_T: τ's length from τ_k to τ_T (in position,
 /// [`Env::position`]).
@@ -198,7 +189,7 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// With [`StartMode::Archive`], draws the starts in B_ε(τ_k) with `starts` (phase 1's
     /// archive, [`crate::phase2::ArchiveStarts`]); otherwise (or with `None`) changes nothing:
     /// a task with archive starts that is not given them draws from the environment's ball
-    /// ([`crate::phase2::chain_skills_with_starts`] refuses that case).
+    /// ([`crate::phase2::Phase2Run::new`] refuses that case).
     pub fn with_starts(mut self, starts: Option<&'a dyn SampleBall<E::State>>) -> Self {
         if let (StartMode::Archive, Some(starts)) = (self.config.start, starts) {
             self.ball = Some(starts);
@@ -209,6 +200,11 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// The index of the goal's state in this task's section (τ_T).
     pub fn target(&self) -> usize {
         self.t
+    }
+
+    /// The steps it spent and its learner (the next skill's, with `phase2.warm_start`).
+    pub fn into_parts(self) -> (StepCounts, Box<dyn Learner>) {
+        (self.steps, self.learner)
     }
 
     fn spent_budget(&self) -> bool {

@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase1::{explore, Exploration};
 use crate::phase2::{
-    chain_skills_resumable, ArchiveStarts, Failure, Phase2Outcome, Progress, Ready, SkillChain,
+    ArchiveStarts, Failure, Phase2Inputs, Phase2Outcome, Phase2Run, Progress, Ready, SkillChain,
     StartMode, Variant,
 };
 use crate::picture::{Draw, PictureData, RunPicture};
@@ -106,7 +106,7 @@ impl<E: Planar> PbcsRun<E> {
 
     /// Runs PBCS for `job` on `env` (the environment `job` names: [`run_pbcs`] and
     /// [`run_outcome`] make it from the name): phase 1, phase 2
-    /// ([`crate::phase2::chain_skills_with_starts`], with the archive's starts when the job
+    /// ([`crate::phase2::Phase2Run`], with the archive's starts when the job
     /// asks for them), then the chain's evaluation from starts uniform in B_ε(s_0), every
     /// network on `kernel`. A hook `env` lacks is refused before phase 1
     /// ([`PbcsRun::require_hooks`]). `progress(skill, report)` is called during phase 2.
@@ -171,22 +171,22 @@ impl<E: Planar> PbcsRun<E> {
                 )
             }
         };
-        let phase2 = chain_skills_resumable(
-            &env,
-            &tau,
-            archived.as_ref().map(|a| a as &dyn SampleBall<E::State>),
-            &job.learner,
-            ready,
-            &seeds,
-            found.env_steps,
-            kernel,
-            progress,
-            from,
-            |p| saver.as_mut().map_or(Ok(false), |s| s.pause(p)),
-        )?;
-        let Some(phase2) = phase2 else {
-            return Ok(None);
+        let inputs = Phase2Inputs::new(&env, &tau, ready, &job.learner, &seeds, kernel)
+            .after(found.env_steps)
+            .with_starts(archived.as_ref().map(|a| a as &dyn SampleBall<E::State>));
+        let mut progress = progress;
+        let mut run = match from {
+            None => Phase2Run::new(inputs)?,
+            Some(state) => Phase2Run::resume(inputs, state)?,
         };
+        while run.next_problem(&mut progress)?.is_continue() {
+            if let Some(saver) = saver.as_mut() {
+                if saver.pause(&run)? {
+                    return Ok(None);
+                }
+            }
+        }
+        let phase2 = run.finish(&mut progress)?;
         // Evaluation: episodes from starts uniform in B_ε(s_0) (or drawn: `first_starts`),
         // stream Eval.
         let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()

@@ -1,5 +1,5 @@
 //! Checkpoints of a PBCS run: phase 2 saved between two learning problems
-//! ([`crate::phase2::resume`]), so that a run of hours (AntMaze) cut by a session's end or a
+//! ([`crate::phase2::run`]), so that a run of hours (AntMaze) cut by a session's end or a
 //! cluster job's limit goes on from its last save and ends with the bytes of a run never cut.
 //!
 //! The file is the vanilla run's [`Checkpoint`] (`s<seed>.resume` in an experiment: same
@@ -15,8 +15,7 @@
 use crate::error::{Error, Result};
 use crate::learner::load_policy;
 use crate::nn::kernel::Kernel;
-use crate::phase2::task::StepCounts;
-use crate::phase2::{Between, Pause, Phase2State, TraceRow};
+use crate::phase2::{Between, Phase2Run, Phase2State, StepCounts, TraceRow};
 use crate::policy::Policy;
 use crate::vanilla::resume::Checkpoint;
 use serde::{Deserialize, Serialize};
@@ -250,7 +249,7 @@ pub fn load(
     Ok(Some((state, envelope.seconds)))
 }
 
-/// The `pause` of a PBCS run saving to `checkpoint` ([`crate::phase2::chain_skills_resumable`]):
+/// The saves of a PBCS run to `checkpoint` ([`crate::phase2::Phase2Run`], between learning problems):
 /// saves at the end of a learning problem [`Checkpoint::every`] or more after the last save
 /// (or the start), and at the first one at or past the deadline, where it asks the run to
 /// stop. A save that fails is reported on standard error and the run goes on, the older file
@@ -292,13 +291,13 @@ impl<'c> Saver<'c> {
     }
 
     /// Whether the run stops here (saved).
-    pub fn pause(&mut self, p: Pause<'_>) -> Result<bool> {
+    pub fn pause<E: crate::env::Env>(&mut self, run: &Phase2Run<'_, E>) -> Result<bool> {
         let now = Instant::now();
         let stop = self.checkpoint.stop_at.is_some_and(|t| now >= t);
         if !stop && now.duration_since(self.last_save) < self.checkpoint.every {
             return Ok(false);
         }
-        let saved = p.state().and_then(|state| {
+        let saved = run.state().and_then(|state| {
             save(
                 self.checkpoint,
                 &state,

@@ -12,7 +12,7 @@ use pbcs::error::Error;
 use pbcs::learner::LearnerConfig;
 use pbcs::nn::kernel::Kernel;
 use pbcs::phase1::Trajectory;
-use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Config, StartMode};
+use pbcs::phase2::{chain_skills, phase2_trajectory, Phase2Config, Phase2Inputs, StartMode};
 use pbcs::rng::Seeds;
 
 /// The error `config` gets on the plane before phase 2 runs ([`Phase2Config::ready`], which
@@ -155,13 +155,14 @@ fn archive_starts_need_the_archive_and_the_ball() {
     let maze = Maze::new(&MazeConfig::default()).unwrap();
     let tau: Vec<_> = (0..5).map(|_| maze.start()).collect();
     let e = chain_skills(
-        &maze,
-        &tau,
-        &LearnerConfig::ddpg(),
-        c.ready(&maze).unwrap(),
-        &Seeds::new(0),
-        0,
-        Kernel::detect(),
+        Phase2Inputs::new(
+            &maze,
+            &tau,
+            c.ready(&maze).unwrap(),
+            &LearnerConfig::ddpg(),
+            &Seeds::new(0),
+            Kernel::detect(),
+        ),
         |_, _| {},
     )
     .expect_err("refused without the archive");
@@ -244,7 +245,7 @@ fn archive_starts_find_exactly_the_archived_states_in_the_ball() {
 #[test]
 fn archive_starts_are_the_ones_backplay_draws() {
     use pbcs::env::SampleBall;
-    use pbcs::phase2::{chain_skills_with_starts, Phase2Outcome};
+    use pbcs::phase2::Phase2Outcome;
     use std::cell::Cell;
     struct Counting(Cell<usize>);
     impl SampleBall<[f32; 2]> for Counting {
@@ -262,15 +263,16 @@ fn archive_starts_are_the_ones_backplay_draws() {
     let run = |c: &Phase2Config, counting: Option<&Counting>| -> Phase2Outcome {
         let starts = counting.map(|k| k as &dyn SampleBall<[f32; 2]>);
         let seeds = Seeds::new(1);
-        chain_skills_with_starts(
-            &TwoRooms,
-            &tau,
-            starts,
-            &learner,
-            c.ready(&TwoRooms).unwrap(),
-            &seeds,
-            0,
-            Kernel::detect(),
+        chain_skills(
+            Phase2Inputs::new(
+                &TwoRooms,
+                &tau,
+                c.ready(&TwoRooms).unwrap(),
+                &learner,
+                &seeds,
+                Kernel::detect(),
+            )
+            .with_starts(starts),
             |_, _| {},
         )
         .unwrap()
@@ -279,13 +281,14 @@ fn archive_starts_are_the_ones_backplay_draws() {
     let ball = run(&c, Some(&counting));
     assert_eq!(counting.0.get(), 0, "ball starts drew from the archive's");
     let plain = chain_skills(
-        &TwoRooms,
-        &tau,
-        &learner,
-        c.ready(&TwoRooms).unwrap(),
-        &Seeds::new(1),
-        0,
-        Kernel::detect(),
+        Phase2Inputs::new(
+            &TwoRooms,
+            &tau,
+            c.ready(&TwoRooms).unwrap(),
+            &learner,
+            &Seeds::new(1),
+            Kernel::detect(),
+        ),
         |_, _| {},
     )
     .unwrap();
@@ -432,13 +435,14 @@ fn velocity_balls_draw_backplays_starts() {
     c.ideas.dead_walk = None;
     let run = |c: &Phase2Config, env: &Moving| {
         chain_skills(
-            env,
-            &tau,
-            &LearnerConfig::ddpg(),
-            c.ready(env).unwrap(),
-            &Seeds::new(1),
-            0,
-            Kernel::detect(),
+            Phase2Inputs::new(
+                env,
+                &tau,
+                c.ready(env).unwrap(),
+                &LearnerConfig::ddpg(),
+                &Seeds::new(1),
+                Kernel::detect(),
+            ),
             |_, _| {},
         )
         .unwrap()

@@ -9,7 +9,9 @@ use pbcs::env::{DrawGoals, DrawStarts, Env, Goals, SampleBall, Step};
 use pbcs::learner::LearnerConfig;
 use pbcs::nn::kernel::Kernel;
 use pbcs::phase2::goal::{Goal, GoalKind, Inputs, REACHED_REWARD};
-use pbcs::phase2::{chain_skills, Ball, FirstStarts, LastGoal, Phase2Config, Skill, SkillChain};
+use pbcs::phase2::{
+    chain_skills, Ball, FirstStarts, LastGoal, Phase2Config, Phase2Inputs, Skill, SkillChain,
+};
 use std::cell::Cell;
 
 /// The task's goal: τ ends within [`REACH`] of it.
@@ -299,13 +301,14 @@ fn phase2(
 ) -> pbcs::phase2::Phase2Outcome {
     let learner = LearnerConfig::ddpg();
     chain_skills(
-        env,
-        tau,
-        &learner,
-        c.ready(env).unwrap(),
-        &Seeds::new(0),
-        0,
-        kernel,
+        Phase2Inputs::new(
+            env,
+            tau,
+            c.ready(env).unwrap(),
+            &learner,
+            &Seeds::new(0),
+            kernel,
+        ),
         |_, _| {},
     )
     .unwrap()

@@ -5,9 +5,27 @@ use pbcs::env::{Env, Step};
 use pbcs::nn::{Head, Mlp};
 use pbcs::phase2::backplay::{backplay, backplay_candidates, Backplayer, KWalk, Stopping, Walk};
 use pbcs::phase2::goal::Inputs;
-use pbcs::phase2::{skill_chaining, Ball, Failure, Phase2Config, Skill, SkillChain};
+use pbcs::phase2::{Ball, Between, Failure, Made, Phase2Config, Skill, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 use std::collections::HashMap;
+
+/// Algorithm 1 run to its end ([`Between::step`] until it breaks) on the problems `next(n, T)`
+/// makes and `finished` takes back: the skills in execution order and why it stopped early.
+#[allow(clippy::type_complexity)]
+fn skill_chaining<B: Backplayer>(
+    n: usize,
+    config: &Phase2Config,
+    next: impl FnMut(usize, usize) -> pbcs::error::Result<B>,
+    finished: impl FnMut(B),
+) -> pbcs::error::Result<(Vec<(usize, usize, B::Policy)>, Option<Failure>)> {
+    let mut problems = Made::new(next, finished);
+    let mut at = Between::start(n);
+    loop {
+        if let std::ops::ControlFlow::Break(failure) = at.step(config, &mut problems)? {
+            return Ok((at.into_skills(), failure));
+        }
+    }
+}
 
 mod backplay;
 mod capabilities;

@@ -3,11 +3,12 @@
 //! run's is refused and left as it is.
 
 use super::backplay::DeadTarget;
+use super::skill_chaining;
 use pbcs::config::PbcsJob;
 use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
 use pbcs::phase2::TraceRow;
-use pbcs::phase2::{skill_chaining, DeadWalk, Ideas, Phase2Config};
+use pbcs::phase2::{DeadWalk, Ideas, Phase2Config};
 use pbcs::runs::PbcsRun;
 use pbcs::validate::{Check, Valid};
 use pbcs::vanilla::resume::Checkpoint;
@@ -188,26 +189,13 @@ fn a_pbcs_run_saved_on_avx512_goes_on_on_avx2_to_the_same_run() {
         .unwrap();
     // The learner handed over at the resumed run's first pause is on AVX2.
     let (env, seeds, phase1_steps, tau, _) = phase1(&job);
-    let mut kernels = Vec::new();
     let ready = job.phase2.ready(&env).unwrap();
-    pbcs::phase2::chain_skills_resumable(
-        &env,
-        &tau,
-        None,
-        &job.learner,
-        ready,
-        &seeds,
-        phase1_steps,
-        Kernel::Avx2,
-        |_, _| {},
-        Some(state),
-        |p| {
-            kernels.push(p.warm_kernel());
-            Ok(true)
-        },
-    )
-    .unwrap();
-    assert_eq!(kernels, [Some(Kernel::Avx2)]);
+    let inputs =
+        pbcs::phase2::Phase2Inputs::new(&env, &tau, ready, &job.learner, &seeds, Kernel::Avx2)
+            .after(phase1_steps);
+    let mut run = pbcs::phase2::Phase2Run::resume(inputs, state).unwrap();
+    assert!(run.next_problem(&mut |_, _| {}).unwrap().is_continue());
+    assert_eq!(run.warm_kernel(), Some(Kernel::Avx2));
     assert_eq!(resumed.record, whole.record);
     assert_eq!(resumed.phase2.chain.skills, whole.phase2.chain.skills);
     assert_eq!(resumed.evaluation, whole.evaluation);
@@ -244,11 +232,12 @@ fn phase1(
 }
 
 /// Algorithm 1 stopped after every learning problem and resumed from where it stood
-/// (`skill_chaining_from`, [`pbcs::phase2::Between`]): the same problems in the same order and
+/// ([`pbcs::phase2::Between::step`], a copy of it kept each time): the same problems in the same order and
 /// the same skills as a run never stopped, through a restart and a moved hand-over.
 #[test]
 fn skill_chaining_stopped_after_every_problem_resumes_to_the_same_skills() {
-    use pbcs::phase2::{skill_chaining_from, Between, Chained};
+    use pbcs::phase2::{Between, Made};
+    use std::ops::ControlFlow;
     let config = Phase2Config {
         alpha: 2,
         ideas: Ideas {
@@ -277,20 +266,14 @@ fn skill_chaining_stopped_after_every_problem_resumes_to_the_same_skills() {
     let mut made = Vec::new();
     let (mut at, mut stops, mut seen) = (Between::start(35), 0, Vec::new());
     let resumed = loop {
-        let stopped = skill_chaining_from(
-            at,
-            &config,
-            |n, t| problem(&mut made, n, t),
-            |_| {},
-            |b| {
-                seen.push((b.made, b.t, b.restarts, b.moves));
-                Ok(true)
-            },
-        )
-        .unwrap();
-        match stopped {
-            Chained::Done(skills, failure) => break (skills, failure),
-            Chained::Paused(b) => (at, stops) = (b, stops + 1),
+        // Each time a new process: new problems, from the copy the last one left.
+        let mut problems = Made::new(|n, t| problem(&mut made, n, t), |_| {});
+        match at.step(&config, &mut problems).unwrap() {
+            ControlFlow::Break(failure) => break (at.into_skills(), failure),
+            ControlFlow::Continue(()) => {
+                seen.push((at.made, at.t, at.restarts, at.moves));
+                (at, stops) = (at.clone(), stops + 1);
+            }
         }
     };
     assert_eq!(resumed, whole);
