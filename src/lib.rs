@@ -52,6 +52,7 @@
 
 #[cfg(feature = "polars")]
 pub mod aggregate;
+pub mod checkpoint;
 pub mod claims;
 pub mod config;
 pub mod criteria;

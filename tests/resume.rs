@@ -3,6 +3,7 @@
 //! damaged, cut short, another job's, another kernel's or another learner's is refused, naming
 //! the file, and left as it was.
 
+use pbcs::checkpoint::Checkpoint;
 use pbcs::env::Env;
 use pbcs::envs::maze::{Maze, MazeConfig};
 use pbcs::envs::toy::Toy1D;
@@ -10,7 +11,6 @@ use pbcs::learner::her::HerConfig;
 use pbcs::learner::LearnerConfig;
 use pbcs::nn::kernel::Kernel;
 use pbcs::rng::Seeds;
-use pbcs::vanilla::resume::Checkpoint;
 use pbcs::vanilla::{train_vanilla, TrainConfig, TrainOutcome, Updates, VanillaRun};
 
 fn maze() -> Maze {
@@ -81,10 +81,9 @@ fn cut_and_resume<E: Env>(
     let mut run = VanillaRun::new(env, learner, train, &seeds, kernel).unwrap();
     run.train_until(cut, |_, _, _| Ok(())).unwrap();
     assert_eq!(run.steps(), cut);
-    checkpoint.save(&run, 2.0).unwrap();
+    run.save(&checkpoint, 2.0).unwrap();
     drop(run);
-    let mut resumed = checkpoint
-        .resume(env, learner, train, &seeds, kernel)
+    let mut resumed = VanillaRun::resume(&checkpoint, env, learner, train, &seeds, kernel)
         .unwrap()
         .expect("a checkpoint was saved");
     assert_eq!(resumed.steps(), cut);
@@ -164,16 +163,16 @@ fn a_stopped_run_stays_stopped_and_no_file_is_a_fresh_run() {
         final_eval_episodes: 0,
         ..schedule(false)
     };
-    assert!(checkpoint
-        .resume(&Toy1D, &l, &train, &seeds, kernel)
-        .unwrap()
-        .is_none());
+    assert!(
+        VanillaRun::resume(&checkpoint, &Toy1D, &l, &train, &seeds, kernel)
+            .unwrap()
+            .is_none()
+    );
     let mut run = VanillaRun::new(&Toy1D, &l, &train, &seeds, kernel).unwrap();
     run.train_until(u64::MAX, |_, _, _| Ok(())).unwrap();
     assert!(run.done() && run.steps() < train.steps, "stopped early");
-    checkpoint.save(&run, 0.0).unwrap();
-    let mut resumed = checkpoint
-        .resume(&Toy1D, &l, &train, &seeds, kernel)
+    run.save(&checkpoint, 0.0).unwrap();
+    let mut resumed = VanillaRun::resume(&checkpoint, &Toy1D, &l, &train, &seeds, kernel)
         .unwrap()
         .unwrap();
     assert!(resumed.done());
@@ -195,12 +194,11 @@ fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
     let checkpoint = Checkpoint::new(&path, "job A");
     let mut run = VanillaRun::new(&maze, &l, &train, &seeds, kernel).unwrap();
     run.train_until(600, |_, _, _| Ok(())).unwrap();
-    checkpoint.save(&run, 0.0).unwrap();
+    run.save(&checkpoint, 0.0).unwrap();
     let good = std::fs::read(&path).unwrap();
     let refused = |bytes: &[u8], checkpoint: &Checkpoint, l: &LearnerConfig, kernel, want: &str| {
         std::fs::write(&path, bytes).unwrap();
-        let err = checkpoint
-            .resume(&maze, l, &train, &seeds, kernel)
+        let err = VanillaRun::resume(checkpoint, &maze, l, &train, &seeds, kernel)
             .err()
             .unwrap_or_else(|| panic!("resumed, but wanted: {want}"))
             .to_string();
@@ -240,8 +238,7 @@ fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
     std::fs::write(&path, &good).unwrap();
     for other in [Kernel::Avx2, Kernel::Avx512] {
         if other != kernel && other.available() && kernel != Kernel::Portable {
-            let back = checkpoint
-                .resume(&maze, &l, &train, &seeds, other)
+            let back = VanillaRun::resume(&checkpoint, &maze, &l, &train, &seeds, other)
                 .unwrap()
                 .unwrap();
             assert_eq!(back.steps(), 600);
@@ -249,8 +246,7 @@ fn a_bad_checkpoint_is_refused_and_left_as_it_was() {
     }
     // And the good file still resumes.
     std::fs::write(&path, &good).unwrap();
-    let back = checkpoint
-        .resume(&maze, &l, &train, &seeds, kernel)
+    let back = VanillaRun::resume(&checkpoint, &maze, &l, &train, &seeds, kernel)
         .unwrap()
         .unwrap();
     assert_eq!(back.steps(), 600);
@@ -289,8 +285,7 @@ fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
     }));
     assert!(killed.is_err(), "the run was not killed");
     // Saved at 500 steps; the callback at 1 000 ran before that evaluation's save.
-    let saved = checkpoint
-        .resume(&maze, &l, &train, &seeds, kernel)
+    let saved = VanillaRun::resume(&checkpoint, &maze, &l, &train, &seeds, kernel)
         .unwrap()
         .unwrap();
     assert_eq!(saved.steps(), 500);
@@ -309,8 +304,7 @@ fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
     assert_same(&whole, &out, "killed at 1 000 steps");
     assert!(out.earlier_seconds > 0.0);
     // The last evaluation ends the run: no save there, the one at 1 000 stays.
-    let last = checkpoint
-        .resume(&maze, &l, &train, &seeds, kernel)
+    let last = VanillaRun::resume(&checkpoint, &maze, &l, &train, &seeds, kernel)
         .unwrap()
         .unwrap();
     assert_eq!(last.steps(), 1_000);
@@ -321,7 +315,7 @@ fn a_run_killed_after_its_periodic_saves_resumes_to_the_uncut_runs_bytes() {
 /// another job, not a checkpoint, or cut within its head is an error naming the file.
 #[test]
 fn a_checkpoints_head_says_how_far_its_run_got() {
-    use pbcs::vanilla::resume::Saved;
+    use pbcs::checkpoint::Saved;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s3.resume");
     let maze = maze();
@@ -331,7 +325,7 @@ fn a_checkpoints_head_says_how_far_its_run_got() {
     assert_eq!(checkpoint.peek().unwrap(), None);
     let mut run = VanillaRun::new(&maze, &l, &train, &seeds, Kernel::detect()).unwrap();
     run.train_until(700, |_, _, _| Ok(())).unwrap();
-    checkpoint.save(&run, 12.5).unwrap();
+    run.save(&checkpoint, 12.5).unwrap();
     let saved = Saved {
         steps: 700,
         seconds: 12.5,

@@ -2,11 +2,11 @@
 //! runs them in parallel, resumably.
 
 use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
+use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
 use crate::runs::run_outcome_resumable;
 use crate::validate::Check;
-use crate::vanilla::resume::Checkpoint;
 use std::path::Path;
 use std::time::Instant;
 
@@ -116,6 +116,14 @@ pub struct Pending<'a> {
 pub enum Event {
     /// It was already finished and was read back.
     Skipped(RawRow),
+    /// It goes on from the checkpoint a run cut earlier left (told before any run begins).
+    Resumes {
+        /// The checkpoint.
+        from: std::path::PathBuf,
+        /// Environment steps saved, where the file's head says (a file that would be refused
+        /// is refused by the run, naming it).
+        steps: Option<u64>,
+    },
     /// It ran now, in this many wall seconds.
     Ran(RawRow, f64),
     /// It stopped at the sweep's deadline after this many environment steps, saved to its
@@ -198,10 +206,24 @@ pub fn sweep_until(
     for p in runs {
         let dir = exp.cell_dir(results, p.cell);
         let done = read_finished(exp, p.cell, p.seed, &dir)?;
-        if let Some(r) = &done {
+        let saved = checkpoint(p.cell, p.seed, &dir);
+        match &done {
             // A checkpoint left by a process stopped between the row and its deletion.
-            drop_checkpoint(&checkpoint(p.cell, p.seed, &dir));
-            on_event(p, &Event::Skipped(r.clone()));
+            Some(r) => {
+                drop_checkpoint(&saved);
+                on_event(p, &Event::Skipped(r.clone()));
+            }
+            None if saved.path.is_file() => {
+                let steps = saved.peek().ok().flatten().map(|s| s.steps);
+                on_event(
+                    p,
+                    &Event::Resumes {
+                        from: saved.path,
+                        steps,
+                    },
+                );
+            }
+            None => {}
         }
         rows.push(done);
     }

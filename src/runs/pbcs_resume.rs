@@ -2,9 +2,9 @@
 //! ([`crate::phase2::run`]), so that a run of hours (AntMaze) cut by a session's end or a
 //! cluster job's limit goes on from its last save and ends with the bytes of a run never cut.
 //!
-//! The file is the vanilla run's [`Checkpoint`] (`s<seed>.resume` in an experiment: same
-//! place, same head of format, job, wall clock and env steps, which `pbcs exp list` reads),
-//! with another [`FORMAT`] and body: Algorithm 1's loop, the skills found so far (each its
+//! The file is a [`Checkpoint`] (`s<seed>.resume` in an experiment, as a vanilla run's: the
+//! same envelope of format, job, wall clock and env steps, which `pbcs exp list` reads, and a
+//! checksum), with its own [`FORMAT`] and body: Algorithm 1's loop, the skills found so far (each its
 //! policy's kind, sizes, bounds and the chain's own safetensors bytes), the step counts, the
 //! trace, the learner the next skill takes over, and the SHA-256 of τ's observations. A
 //! resumed run does phase 1 again (deterministic, and cheap beside phase 2) and refuses a
@@ -12,32 +12,17 @@
 //! minutes or more after the last save or the (re)start, and at the first one at or past
 //! the deadline ([`Checkpoint::stop_at`]), where the run stops.
 
+use crate::checkpoint::{Checkpoint, Saves};
 use crate::error::{Error, Result};
 use crate::learner::load_policy;
 use crate::nn::kernel::Kernel;
 use crate::phase2::{Between, Phase2Run, Phase2State, StepCounts, TraceRow};
 use crate::policy::Policy;
-use crate::vanilla::resume::Checkpoint;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// The first field of a PBCS run's checkpoint: a file of another format or version is refused
-/// by it.
-pub use crate::vanilla::resume::PBCS_FORMAT as FORMAT;
-
-/// What the file holds: [`Checkpoint`]'s head, then the state and its SHA-256.
-#[derive(Serialize, Deserialize)]
-struct Envelope {
-    format: String,
-    job: String,
-    /// Wall-clock seconds of the run so far.
-    seconds: f64,
-    /// Environment steps so far (phase 1 included).
-    steps: u64,
-    /// SHA-256 of `state`.
-    sha256: String,
-    state: Vec<u8>,
-}
+/// The format of a PBCS run's checkpoint ([`crate::checkpoint::PBCS`]).
+pub use crate::checkpoint::PBCS as FORMAT;
 
 /// One skill found so far.
 #[derive(Serialize, Deserialize)]
@@ -140,19 +125,7 @@ pub fn save(
     };
     let body =
         postcard::to_stdvec(&saved).map_err(|e| Error::invalid("phase 2 state", e.to_string()))?;
-    let envelope = Envelope {
-        format: FORMAT.into(),
-        job: checkpoint.job.clone(),
-        seconds,
-        steps: state.spent,
-        sha256: crate::record::sha256_hex(&body),
-        state: body,
-    };
-    crate::record::write_atomic(&checkpoint.path, |w| {
-        postcard::to_io(&envelope, w)
-            .map(|_| ())
-            .map_err(std::io::Error::other)
-    })
+    checkpoint.write(FORMAT, state.spent, seconds, &body)
 }
 
 /// The PBCS run saved at `checkpoint`'s file, with its wall-clock seconds, or `None` where
@@ -164,36 +137,11 @@ pub fn load(
     tau: &str,
     kernel: Kernel,
 ) -> Result<Option<(Phase2State, f64)>> {
-    let path = &checkpoint.path;
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(Error::io(path, e)),
+    let Some(opened) = checkpoint.read(FORMAT)? else {
+        return Ok(None);
     };
-    let refused = |m: String| {
-        Error::parse(
-            path,
-            format!("this checkpoint {m}; delete it to start the run afresh"),
-        )
-    };
-    let envelope = postcard::from_bytes::<Envelope>(&bytes)
-        .ok()
-        .filter(|e| e.format == FORMAT)
-        .ok_or_else(|| {
-            refused(format!(
-                "is not a {FORMAT} (another version, another file, or cut short)"
-            ))
-        })?;
-    if envelope.sha256 != crate::record::sha256_hex(&envelope.state) {
-        return Err(refused("is damaged: its checksum does not match".into()));
-    }
-    if envelope.job != checkpoint.job {
-        return Err(refused(format!(
-            "was saved by another job, not this one (its job:\n{}\n)",
-            envelope.job
-        )));
-    }
-    let saved: Saved = postcard::from_bytes(&envelope.state)
+    let refused = |m: String| checkpoint.refused(m);
+    let saved: Saved = postcard::from_bytes(&opened.body)
         .map_err(|e| refused(format!("does not decode ({e})")))?;
     if saved.tau_sha256 != tau {
         return Err(refused(
@@ -202,7 +150,7 @@ pub fn load(
     }
     if !Kernel::same_bytes(&saved.kernel, kernel.name()) {
         return Err(Error::parse(
-            path,
+            &checkpoint.path,
             format!(
                 "this checkpoint was computed on the `{}` kernel, whose bytes the `{}` kernel \
                  does not compute: go on with PBCS_KERNEL={}, or delete it to start the run \
@@ -246,21 +194,20 @@ pub fn load(
         trace,
         warm: saved.warm,
     };
-    Ok(Some((state, envelope.seconds)))
+    Ok(Some((state, opened.seconds)))
 }
 
-/// The saves of a PBCS run to `checkpoint` ([`crate::phase2::Phase2Run`], between learning problems):
-/// saves at the end of a learning problem [`Checkpoint::every`] or more after the last save
-/// (or the start), and at the first one at or past the deadline, where it asks the run to
-/// stop. A save that fails is reported on standard error and the run goes on, the older file
-/// kept; at the deadline it is an error (stopping unsaved would lose the work).
+/// The saves of a PBCS run to `checkpoint` between phase 2's learning problems
+/// ([`crate::phase2::Phase2Run`], [`crate::checkpoint::Saves`]: at the end of a learning
+/// problem [`Checkpoint::every`] or more after the last save or the start, and at the first one
+/// at or past the deadline, where the run stops).
 pub struct Saver<'c> {
+    saves: Saves<'c>,
     checkpoint: &'c Checkpoint,
     tau: String,
     kernel: Kernel,
     earlier_seconds: f64,
     clock: Instant,
-    last_save: Instant,
 }
 
 impl<'c> Saver<'c> {
@@ -274,12 +221,12 @@ impl<'c> Saver<'c> {
         clock: Instant,
     ) -> Self {
         Saver {
+            saves: checkpoint.saves(),
             checkpoint,
             tau,
             kernel,
             earlier_seconds,
             clock,
-            last_save: Instant::now(),
         }
     }
 
@@ -292,25 +239,11 @@ impl<'c> Saver<'c> {
 
     /// Whether the run stops here (saved).
     pub fn pause<E: crate::env::Env>(&mut self, run: &Phase2Run<'_, E>) -> Result<bool> {
-        let now = Instant::now();
-        let stop = self.checkpoint.stop_at.is_some_and(|t| now >= t);
-        if !stop && now.duration_since(self.last_save) < self.checkpoint.every {
-            return Ok(false);
-        }
-        let saved = run.state().and_then(|state| {
-            save(
-                self.checkpoint,
-                &state,
-                &self.tau,
-                self.kernel,
-                self.seconds(),
-            )
-        });
-        match saved {
-            Ok(()) => self.last_save = now,
-            Err(e) if stop => return Err(e),
-            Err(e) => eprintln!("warning: the run goes on unsaved: {e}"),
-        }
-        Ok(stop)
+        let seconds = self.seconds();
+        let (checkpoint, tau, kernel) = (self.checkpoint, &self.tau, self.kernel);
+        self.saves.due("", || {
+            let state = run.state()?;
+            save(checkpoint, &state, tau, kernel, seconds)
+        })
     }
 }

@@ -1,6 +1,7 @@
 //! `pbcs train`: a vanilla baseline (DDPG, TD3, argmax actor) on an environment's own reward.
 
 use super::folder::{claim, write_timing};
+use crate::checkpoint::Checkpoint;
 use crate::config::{Located, TrainJob};
 use crate::env::{Planar, Scene};
 use crate::envs::EnvName;
@@ -11,7 +12,7 @@ use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
 use crate::rng::Seeds;
 use crate::validate::Valid;
-use crate::vanilla::resume::{train_vanilla_resumable, Checkpoint};
+use crate::vanilla::resume::train_vanilla_resumable;
 use crate::vanilla::train_vanilla;
 use serde::Serialize;
 use std::path::Path;

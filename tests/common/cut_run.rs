@@ -28,7 +28,7 @@ pub fn resumes_to_the_same_rows(exp: &Experiment) -> usize {
                 pbcs::vanilla::VanillaRun::new(&env, learner, train, &seeds, kernel).unwrap();
             run.train_until(train.steps / 2 + 1, |_, _, _| Ok(()))
                 .unwrap();
-            saved.save(&run, 1000.0).unwrap();
+            run.save(&saved, 1000.0).unwrap();
         });
         let resumed = run_cell_seed(exp, cell, 0, &dir_b, kernel, None, |_, _| {})
             .unwrap()

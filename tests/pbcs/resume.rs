@@ -4,6 +4,7 @@
 
 use super::backplay::DeadTarget;
 use super::skill_chaining;
+use pbcs::checkpoint::Checkpoint;
 use pbcs::config::PbcsJob;
 use pbcs::envs::maze::Maze;
 use pbcs::nn::kernel::Kernel;
@@ -11,7 +12,6 @@ use pbcs::phase2::TraceRow;
 use pbcs::phase2::{DeadWalk, Ideas, Phase2Config};
 use pbcs::runs::PbcsRun;
 use pbcs::validate::{Check, Valid};
-use pbcs::vanilla::resume::Checkpoint;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -65,7 +65,7 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s1.resume");
     let checkpoint = cutting(&path, "maze 3, seed 1");
-    let (mut cuts, mut last) = (0, None::<pbcs::vanilla::resume::Saved>);
+    let (mut cuts, mut last) = (0, None::<pbcs::checkpoint::Saved>);
     let resumed = loop {
         if let Some(run) = compute(&job, Some(&checkpoint)) {
             break run;

@@ -335,25 +335,6 @@ fn sweep(
             bar.println(line);
         }
     };
-    // Runs cut earlier that go on from their checkpoints (vanilla runs, `vanilla::resume`).
-    for p in runs {
-        let dir = exp.cell_dir(results, p.cell);
-        let saved = pbcs::experiment::checkpoint(p.cell, p.seed, &dir);
-        let finished = pbcs::experiment::run_file(&dir, p.seed, ".csv").is_file();
-        if saved.path.is_file() && !finished {
-            // How far it got, where the file's head says (a bad file is refused by the run).
-            let at = match saved.peek() {
-                Ok(Some(s)) => format!(" ({} env steps saved)", s.steps),
-                _ => String::new(),
-            };
-            say(format!(
-                "{} seed {}: resumes from {}{at}",
-                p.cell.id,
-                p.seed,
-                saved.path.display()
-            ));
-        }
-    }
     let (steps, ran) = (AtomicU64::new(0), AtomicUsize::new(0));
     let clock = Instant::now();
     // Per running vanilla run, its first evaluation seen (time, steps), for its rate; and when
@@ -406,6 +387,15 @@ fn sweep(
                 ));
             }
             Event::Skipped(_) => bar.inc(1),
+            Event::Resumes { from, steps } => {
+                let at = steps.map_or(String::new(), |s| format!(" ({s} env steps saved)"));
+                say(format!(
+                    "{} seed {}: resumes from {}{at}",
+                    p.cell.id,
+                    p.seed,
+                    from.display()
+                ));
+            }
         }
     };
     let swept = pbcs::experiment::sweep_until(exp, runs, results, jobs, kernel, stop_at, on_event)?;
