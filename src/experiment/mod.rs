@@ -39,8 +39,9 @@ mod key;
 mod layout;
 mod legacy;
 mod merge;
+mod plan;
+mod read_row;
 mod row;
-mod row_record;
 mod site;
 mod spec;
 mod sweep;
@@ -48,15 +49,12 @@ mod sweep;
 pub use declared::{Baseline, FigureSpec, ReportSpec, SettingsSpec};
 pub use key::{CellKey, ExperimentName, Method};
 pub use layout::run_file;
-pub use layout::{
-    evals_file, evaluation_file, experiment_files, picture_file, read_finished, read_raw,
-    read_wall_seconds,
-};
-pub use row::{read_row, read_run_row, KindRow, PbcsRow, RawRow, VanillaRow};
+pub use layout::{evals_file, evaluation_file, experiment_files, picture_file, read_wall_seconds};
+pub use plan::{plan, Pending};
+pub use read_row::{read_finished, read_raw, read_row, read_run_row};
+pub use row::{KindRow, PbcsRow, RawRow, VanillaRow};
 pub use site::{paper_run, Site};
-pub use sweep::{
-    checkpoint, plan, run_cell_seed, run_parallel, sweep, sweep_until, Event, Pending, Swept,
-};
+pub use sweep::{checkpoint, run_cell_seed, run_parallel, sweep, sweep_until, Event, Swept};
 
 use crate::config::{PbcsJob, TrainJob};
 use crate::error::{Error, Result};

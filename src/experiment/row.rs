@@ -1,17 +1,16 @@
 //! The raw row: one finished (cell, seed) run's outcome, the unit every table is built from.
 
-use super::row_record::RowRecord;
-use super::{Cell, CellKey, Experiment, ExperimentName, Job, Kind, Method, Site};
+use super::{Cell, CellKey, Experiment, ExperimentName, Kind, Method, Site};
 use crate::config::{Located, PbcsJob, TrainJob};
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::learner::LearnerName;
 use crate::phase2::{Failure, StartMode};
 use crate::runs::{RunRecord, TrainSummary};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 
 /// One run's raw result: the row every table and figure is computed from. What every run
 /// records is a field here; what only a vanilla or only a PBCS run records is its [`KindRow`].
-/// On disk both kinds share one header ([`super::row_record`]); reading a row turns it into its
+/// On disk both kinds share one header ([`RowRecord`]); reading a row turns it into its
 /// kind, checking that the other kind's columns are empty.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RowRecord", into = "RowRecord")]
@@ -178,423 +177,154 @@ impl RawRow {
 
 /// A raw row's `maze_seed` of a job: the maze's layout seed ([`crate::envs::EnvSpec::maze_columns`]),
 /// 0 for another environment.
-fn layout_seed(job: &impl Located) -> u64 {
+pub(super) fn layout_seed(job: &impl Located) -> u64 {
     job.env_spec().maze_columns().1.unwrap_or(0)
 }
 
-/// Reads one raw row file: a header and exactly one record, every value in range (a rate in
-/// [0, 1], no NaN or infinity, `solved` as the rate and the failure give it, the columns of the
-/// other kind empty or 0, the step counts adding up). An error names the file, the line and
-/// the column. [`read_run_row`] also checks the row against its place in an experiment.
-pub fn read_row(path: &Path) -> Result<RawRow> {
-    let (row, line) = read_row_at(path)?;
-    check_values(&row, path, line).map(|()| row)
+/// A raw row as its CSV holds it: vanilla and PBCS runs share one header, so every row file
+/// and table written since the first sweep reads as it did; a column of the other kind holds
+/// 0 or nothing. Reading one turns it into its kind ([`RawRow`] with its [`KindRow`]), and a
+/// column of the other kind that holds something is an error naming the kind and the column.
+#[derive(Clone, Serialize, Deserialize)]
+pub(super) struct RowRecord {
+    experiment: ExperimentName,
+    cell: CellKey,
+    method: Method,
+    kind: Kind,
+    maze: Site,
+    maze_seed: u64,
+    seed: u64,
+    learner: LearnerName,
+    gamma: f32,
+    chaining: bool,
+    starts: Option<StartMode>,
+    solved: bool,
+    success_rate: f32,
+    env_steps: u64,
+    budget: u64,
+    first_success_steps: Option<u64>,
+    phase1_steps: u64,
+    train_steps: u64,
+    test_steps: u64,
+    skills: usize,
+    failure: Option<Failure>,
 }
 
-/// Reads the raw row of (`cell`, `seed`) of `exp` at `path` ([`read_row`]) and checks that it
-/// is that run's row: the experiment's name, the cell's id, method, kind, maze size and
-/// layout seed, the seed, and what the cell's job fixes (learner, γ, chaining, starts,
-/// budget). A row edited or moved into another cell's folder is an error naming the file, the
-/// line and the column, never a run of another cell counted here.
-pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Result<RawRow> {
-    let (row, line) = read_row_at(path)?;
-    let starts = |s: Option<StartMode>| s.map_or("", <&str>::from);
-    let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
-        Job::Vanilla(j) => (
-            Kind::Vanilla,
-            layout_seed(j),
-            j.learner_name(),
-            j.learner.gamma(),
-            false,
-            None,
-            j.train.steps,
-        ),
-        Job::Pbcs(j) => (
-            Kind::Pbcs,
-            layout_seed(j),
-            j.learner.record_name(),
-            j.learner.gamma(),
-            j.phase2.chaining,
-            Some(j.phase2.start),
-            j.phase2.max_env_steps,
-        ),
-    };
-    // Each column the job fixes, compared as its type (γ: the job's f32, which the row holds);
-    // in words where they differ.
-    fn differ<T: PartialEq + std::fmt::Display>(found: T, want: T) -> Option<(String, String)> {
-        (found != want).then(|| (found.to_string(), want.to_string()))
-    }
-    let row_starts = row.pbcs_row().map(|p| p.starts);
-    let fields: [(&str, Option<(String, String)>); 12] = [
-        ("experiment", differ(row.experiment, exp.name)),
-        ("cell", differ(row.cell, cell.id)),
-        ("method", differ(row.method, cell.method)),
-        ("kind", differ(row.kind().name(), kind.name())),
-        ("maze", differ(&row.site, &cell.site)),
-        ("maze_seed", differ(row.maze_seed, maze_seed)),
-        ("seed", differ(row.seed, seed)),
-        ("learner", differ(row.learner, learner)),
-        ("gamma", differ(row.gamma, gamma)),
-        (
-            "chaining",
-            differ(row.pbcs_row().is_some_and(|p| p.chaining), chaining),
-        ),
-        ("starts", differ(starts(row_starts), starts(start))),
-        ("budget", differ(row.budget, budget)),
-    ];
-    // A vanilla run stops before its budget only with `train.stop_at_successes`.
-    let stops = match &cell.job {
-        Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
-        Job::Pbcs(_) => true,
-    };
-    if !stops && row.kind() == Kind::Vanilla && row.env_steps != row.budget {
-        return Err(Error::parse(
-            path,
-            format!(
-                "line {line}, column `env_steps`: {} of a budget of {}, but the job of cell \
-                 `{}` trains its whole budget (it has no train.stop_at_successes)",
-                row.env_steps, row.budget, cell.id
-            ),
-        ));
-    }
-    let differs = fields
-        .into_iter()
-        .find_map(|(c, d)| d.map(|(found, want)| (c, found, want)));
-    match differs {
-        None => {
-            check_values(&row, path, line)?;
-            check_summary(&row, cell, seed, path, line)?;
-            Ok(row)
+impl From<RawRow> for RowRecord {
+    fn from(r: RawRow) -> RowRecord {
+        let (first_success_steps, p) = match r.kind {
+            KindRow::Vanilla(v) => (v.first_success_steps, None),
+            KindRow::Pbcs(p) => (None, Some(p)),
+        };
+        RowRecord {
+            experiment: r.experiment,
+            cell: r.cell,
+            method: r.method,
+            kind: r.kind(),
+            maze: r.site,
+            maze_seed: r.maze_seed,
+            seed: r.seed,
+            learner: r.learner,
+            gamma: r.gamma,
+            chaining: p.is_some_and(|p| p.chaining),
+            starts: p.map(|p| p.starts),
+            solved: r.solved,
+            success_rate: r.success_rate,
+            env_steps: r.env_steps,
+            budget: r.budget,
+            first_success_steps,
+            phase1_steps: p.map_or(0, |p| p.phase1_steps),
+            train_steps: p.map_or(0, |p| p.train_steps),
+            test_steps: p.map_or(0, |p| p.test_steps),
+            skills: p.map_or(0, |p| p.skills),
+            failure: p.and_then(|p| p.failure),
         }
-        Some((column, found, want)) => Err(Error::parse(
-            path,
-            format!(
-                "line {line}, column `{column}`: holds `{found}`, but this file is the row of \
-                 experiment `{}`, cell `{}`, seed {seed}, whose {column} is `{want}` (a row \
-                 edited or moved from another cell's folder is never counted; restore it, or \
-                 remove it and run the cell's seed again)",
-                exp.name, cell.id
-            ),
-        )),
     }
 }
 
-/// Checks a row against the files it summarises, beside it (where they exist: rows written
-/// before a file existed lack it): a PBCS row's `s<seed>.evaluation.csv` holds the job's
-/// `phase2.eval_episodes` episodes and the rate is their wins over them, or is empty for a run
-/// that stopped (a failure) or made no skill, whose rate is 0; a vanilla row's rate is that of
-/// its `s<seed>.evaluation.csv` (PBCS's protocol after training) or else of the last
-/// evaluation of its `s<seed>.evals.csv`. An error names the row's file, line and column.
-fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> Result<()> {
-    use crate::env::EvalEpisode;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let evaluation_path = super::run_file(dir, seed, ".evaluation.csv");
-    let evaluation: Option<Vec<EvalEpisode>> = evaluation_path
-        .exists()
-        .then(|| crate::record::read_records(&evaluation_path))
-        .transpose()?;
-    let rate_of =
-        |e: &[EvalEpisode]| e.iter().filter(|e| e.success).count() as f32 / e.len() as f32;
-    let wrong = |column: &str, why: String| {
-        Err(Error::parse(
-            path,
-            format!("line {line}, column `{column}`: {why}"),
-        ))
-    };
-    match (&cell.job, evaluation) {
-        (Job::Pbcs(_), Some(e)) if e.is_empty() => {
-            if r.failure().is_none() && r.skills() > 0 {
-                return wrong(
-                    "failure",
-                    format!(
-                        "empty, but {} holds no evaluation episode: a chain of {} skills with \
-                         no failure is evaluated",
-                        evaluation_path.display(),
-                        r.skills()
-                    ),
-                );
-            }
-            if r.success_rate != 0.0 {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "{}, but {} holds no evaluation episode",
-                        r.success_rate,
-                        evaluation_path.display()
-                    ),
-                );
-            }
+impl TryFrom<RowRecord> for RawRow {
+    type Error = String;
+
+    /// The row of its kind; an error (`column `kind`: …, but column `skills` holds 2`) where a
+    /// column of the other kind holds something, or a PBCS row has no starts.
+    fn try_from(r: RowRecord) -> Result<RawRow, String> {
+        if r.cell.method != r.method || r.cell.site != r.maze {
+            let (method, site) = (r.method, r.maze);
+            return Err(format!(
+                "column `cell`: {}, but column `method` holds {method} and column `maze` {site}",
+                r.cell
+            ));
         }
-        (Job::Pbcs(j), Some(e)) => {
-            if e.len() != j.phase2.eval_episodes {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "of {} episodes in {}, but the job evaluates {}",
-                        e.len(),
-                        evaluation_path.display(),
-                        j.phase2.eval_episodes
+        let kind = match r.kind {
+            Kind::Vanilla => {
+                let pbcs_only = [
+                    (
+                        "phase1_steps",
+                        r.phase1_steps.to_string(),
+                        r.phase1_steps != 0,
                     ),
-                );
-            }
-            if let Some(f) = r.failure() {
-                return wrong(
-                    "failure",
-                    format!(
-                        "{}, but the run's chain was evaluated ({})",
-                        f.name(),
-                        evaluation_path.display()
+                    ("train_steps", r.train_steps.to_string(), r.train_steps != 0),
+                    ("test_steps", r.test_steps.to_string(), r.test_steps != 0),
+                    ("skills", r.skills.to_string(), r.skills != 0),
+                    ("chaining", r.chaining.to_string(), r.chaining),
+                    (
+                        "starts",
+                        r.starts.map_or("", <&str>::from).to_string(),
+                        r.starts.is_some(),
                     ),
-                );
-            }
-            if r.success_rate != rate_of(&e) {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "{}, but {} holds {} wins of {} episodes",
-                        r.success_rate,
-                        evaluation_path.display(),
-                        e.iter().filter(|e| e.success).count(),
-                        e.len()
+                    (
+                        "failure",
+                        r.failure.map_or("", Failure::name).to_string(),
+                        r.failure.is_some(),
                     ),
-                );
-            }
-        }
-        (Job::Vanilla(j), Some(e))
-            if !e.is_empty()
-                && (e.len() != j.train.final_eval_episodes || r.success_rate != rate_of(&e)) =>
-        {
-            return wrong(
-                "success_rate",
-                format!(
-                    "{}, but {} holds {} wins of {} episodes (the job evaluates {})",
-                    r.success_rate,
-                    evaluation_path.display(),
-                    e.iter().filter(|e| e.success).count(),
-                    e.len(),
-                    j.train.final_eval_episodes
-                ),
-            );
-        }
-        (Job::Vanilla(_), Some(_)) => {}
-        // Every run writes its evaluation (a vanilla run, where its job evaluates after
-        // training; else its curve); only the committed rows listed as written before that may
-        // lack it ([`super::legacy`]).
-        (job, None) => {
-            let file = match job {
-                Job::Vanilla(j) if j.train.final_eval_episodes == 0 => {
-                    super::run_file(dir, seed, ".evals.csv")
+                ];
+                if let Some((column, value, _)) = pbcs_only.into_iter().find(|c| c.2) {
+                    return Err(format!(
+                        "column `kind`: vanilla, but column `{column}` holds {value} (a PBCS \
+                         column: 0 or empty in a vanilla row)"
+                    ));
                 }
-                _ => evaluation_path,
-            };
-            if !file.exists() && !super::legacy::may_lack_evaluation(path)? {
-                let why = format!("{}, but {} is missing", r.success_rate, file.display());
-                return wrong("success_rate", why);
+                KindRow::Vanilla(VanillaRow {
+                    first_success_steps: r.first_success_steps,
+                })
             }
-            if let (Job::Vanilla(_), true) = (job, file.exists()) {
-                let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(&file)?;
-                if let Some(last) = evals.last().filter(|e| e.success != r.success_rate) {
-                    let (steps, success) = (last.steps, last.success);
-                    let why = format!(
-                        "{}, but the last evaluation of {} (at {steps} steps) has success \
-                         {success}",
-                        r.success_rate,
-                        file.display()
-                    );
-                    return wrong("success_rate", why);
+            Kind::Pbcs => {
+                let Some(starts) = r.starts else {
+                    return Err("column `starts`: empty in a PBCS row (`ball`, `exact` or \
+                                `archive`)"
+                        .into());
+                };
+                if let Some(first) = r.first_success_steps {
+                    return Err(format!(
+                        "column `first_success_steps`: {first} in a PBCS row (vanilla only: \
+                         empty)"
+                    ));
                 }
+                KindRow::Pbcs(PbcsRow {
+                    chaining: r.chaining,
+                    starts,
+                    phase1_steps: r.phase1_steps,
+                    train_steps: r.train_steps,
+                    test_steps: r.test_steps,
+                    skills: r.skills,
+                    failure: r.failure,
+                })
             }
-        }
-    }
-    Ok(())
-}
-
-/// The row of `path` (one record under the header, its values not yet checked) and the line
-/// its record starts on.
-fn read_row_at(path: &Path) -> Result<(RawRow, u64)> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| Error::csv(path, e))?;
-    let headers = reader.headers().map_err(|e| row_error(path, e))?.clone();
-    let mut record = csv::StringRecord::new();
-    if !reader
-        .read_record(&mut record)
-        .map_err(|e| row_error(path, e))?
-    {
-        return Err(Error::parse(
-            path,
-            "holds no record under its header (a raw row file holds exactly one)",
-        ));
-    }
-    let line = record.position().map_or(2, csv::Position::line);
-    let row: RawRow = record
-        .deserialize(Some(&headers))
-        .map_err(|e| match e.kind() {
-            csv::ErrorKind::Deserialize { err, .. } => {
-                let message = err.kind().to_string();
-                // The reader's own errors (a number that does not parse) name the field's
-                // index; serde's (an unknown enum value) quote the value, found here.
-                let index = err.field().map(|i| i as usize).or_else(|| {
-                    let quoted = message.split('`').nth(1)?;
-                    let mut hits = (0..record.len()).filter(|&i| &record[i] == quoted);
-                    hits.next().filter(|_| hits.next().is_none())
-                });
-                let column = index
-                    .and_then(|i| Some((headers.get(i)?, record.get(i)?)))
-                    .map_or(String::new(), |(name, value)| {
-                        format!(", column `{name}` (`{value}`)")
-                    });
-                Error::parse(path, format!("line {line}{column}: {message}"))
-            }
-            _ => row_error(path, e),
-        })?;
-    let mut next = csv::StringRecord::new();
-    if reader
-        .read_record(&mut next)
-        .map_err(|e| row_error(path, e))?
-    {
-        let at = next.position().map_or(line + 1, csv::Position::line);
-        return Err(Error::parse(
-            path,
-            format!(
-                "line {at}: a second record (a raw row file holds exactly one run's row, on \
-                 line {line})"
-            ),
-        ));
-    }
-    Ok((row, line))
-}
-
-/// A CSV reader's error on a raw row file, said by line: a record of the wrong length names
-/// its line and both lengths; anything else is the reader's own message (which locates it).
-fn row_error(path: &Path, e: csv::Error) -> Error {
-    match e.kind() {
-        csv::ErrorKind::UnequalLengths {
-            pos,
-            expected_len,
-            len,
-        } => Error::parse(
-            path,
-            format!(
-                "line {}: {len} fields, but the header has {expected_len}",
-                pos.as_ref().map_or(0, csv::Position::line)
-            ),
-        ),
-        _ => Error::csv(path, e),
-    }
-}
-
-/// The checks of one row's own values ([`read_row`]), the row of `path` on `line`: an error
-/// names the column and what is wrong.
-fn check_values(r: &RawRow, path: &Path, line: u64) -> Result<()> {
-    value_error(r).map_err(|(column, message)| {
-        Error::parse(path, format!("line {line}, column `{column}`: {message}"))
-    })
-}
-
-/// The first of a row's values out of range or at odds with the others: its column and what is
-/// wrong. Each check holds for every row a run writes ([`RawRow::vanilla`], [`RawRow::pbcs`]).
-fn value_error(r: &RawRow) -> std::result::Result<(), (&'static str, String)> {
-    let fail = |column, message: String| Err((column, message));
-    if !(r.success_rate.is_finite() && (0.0..=1.0).contains(&r.success_rate)) {
-        return fail(
-            "success_rate",
-            format!("{} is not a rate in [0, 1]", r.success_rate),
-        );
-    }
-    if !(r.gamma.is_finite() && (0.0..1.0).contains(&r.gamma)) {
-        return fail("gamma", format!("{} is not a discount in [0, 1)", r.gamma));
-    }
-    if r.budget == 0 {
-        return fail("budget", "0: a run's step budget is at least 1".into());
-    }
-    match &r.kind {
-        KindRow::Vanilla(v) => vanilla_value_error(r, v)?,
-        KindRow::Pbcs(p) => pbcs_value_error(r, p)?,
-    }
-    let solved = crate::stats::solved(r.failure().is_some(), r.success_rate);
-    if r.solved != solved {
-        return fail(
-            "solved",
-            format!(
-                "{}, but a run with success_rate {} and {} is {}solved (solved: no failure and \
-                 a success rate of at least {})",
-                r.solved,
-                r.success_rate,
-                r.failure().map_or("no failure".to_string(), |f| format!(
-                    "failure {}",
-                    f.name()
-                )),
-                if solved { "" } else { "not " },
-                crate::runs::SOLVED_AT
-            ),
-        );
-    }
-    Ok(())
-}
-
-/// [`value_error`] of a vanilla row: the whole budget trained, or stopped where it solved.
-/// (That PBCS's columns are empty was checked when the row was read, [`super::row_record`].)
-fn vanilla_value_error(
-    r: &RawRow,
-    v: &VanillaRow,
-) -> std::result::Result<(), (&'static str, String)> {
-    let fail = |column, message: String| Err((column, message));
-    // A run trains its whole budget, or stops earlier at an evaluation that solved it
-    // (`train.stop_at_successes`; whether its job has that stop is checked against the cell,
-    // [`read_run_row`]).
-    if r.env_steps > r.budget || (r.env_steps < r.budget && !r.solved) {
-        return fail(
-            "env_steps",
-            format!(
-                "{} in a vanilla row of budget {}{}: a run trains its whole budget, or stops \
-                 earlier at an evaluation that solved it",
-                r.env_steps,
-                r.budget,
-                if r.solved { "" } else { " not solved" }
-            ),
-        );
-    }
-    if let Some(first) = v.first_success_steps.filter(|&s| s > r.env_steps) {
-        return fail(
-            "first_success_steps",
-            format!("{first}, after the run's {} env steps", r.env_steps),
-        );
-    }
-    Ok(())
-}
-
-/// [`value_error`] of a PBCS row: its steps summing up.
-fn pbcs_value_error(r: &RawRow, p: &PbcsRow) -> std::result::Result<(), (&'static str, String)> {
-    let sum = [p.phase1_steps, p.train_steps, p.test_steps]
-        .into_iter()
-        .try_fold(0u64, u64::checked_add);
-    if sum != Some(r.env_steps) {
-        return Err((
-            "env_steps",
-            format!(
-                "{}, but phase1_steps + train_steps + test_steps = {} + {} + {}",
-                r.env_steps, p.phase1_steps, p.train_steps, p.test_steps
-            ),
-        ));
-    }
-    Ok(())
-}
-
-/// One line per run, as sweeps print it: `pbcs-maze2 seed 3: solved (success 1.00) in 160484
-/// env steps`, with the failure where phase 2 stopped.
-impl std::fmt::Display for RawRow {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} seed {}: {} (success {:.2}) in {} env steps",
-            self.cell,
-            self.seed,
-            if self.solved { "solved" } else { "not solved" },
-            self.success_rate,
-            self.env_steps
-        )?;
-        match self.failure() {
-            Some(failure) => write!(f, ", {}", failure.name()),
-            None => Ok(()),
-        }
+        };
+        Ok(RawRow {
+            experiment: r.experiment,
+            cell: r.cell,
+            method: r.method,
+            site: r.maze,
+            maze_seed: r.maze_seed,
+            seed: r.seed,
+            learner: r.learner,
+            gamma: r.gamma,
+            solved: r.solved,
+            success_rate: r.success_rate,
+            env_steps: r.env_steps,
+            budget: r.budget,
+            kind,
+        })
     }
 }

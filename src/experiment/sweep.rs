@@ -1,7 +1,7 @@
-//! Running an experiment: one (cell, seed) run, the plan of pending runs, and the sweep that
-//! runs them in parallel, resumably.
+//! Running an experiment: one (cell, seed) run, and the sweep that runs the plan's runs
+//! ([`super::plan`]) in parallel, resumably.
 
-use super::{read_finished, run_file, Cell, Experiment, Job, RawRow};
+use super::{read_finished, run_file, Cell, Experiment, Job, Pending, RawRow};
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Result};
 use crate::nn::kernel::Kernel;
@@ -100,15 +100,6 @@ fn drop_checkpoint(checkpoint: &Checkpoint) {
     if let Err(e) = checkpoint.remove() {
         eprintln!("warning: a finished run's checkpoint stays: {e}");
     }
-}
-
-/// A (cell, seed) pair of a sweep.
-#[derive(Debug, Clone)]
-pub struct Pending<'a> {
-    /// The cell.
-    pub cell: &'a Cell,
-    /// The run seed.
-    pub seed: u64,
 }
 
 /// What happened to one (cell, seed) of a sweep.
@@ -342,44 +333,4 @@ fn caught<R>(f: impl FnOnce() -> Result<R>) -> Result<R> {
             .unwrap_or_else(|| "a panic without a message".to_string());
         Err(Error::invalid("run", format!("panicked: {message}")))
     })
-}
-
-/// Every (cell, seed) of the experiment (each cell with the seeds of its maze), or of one
-/// cell, or one seed.
-pub fn plan<'a>(
-    exp: &'a Experiment,
-    cell: Option<super::CellKey>,
-    seed: Option<u64>,
-) -> Result<Vec<Pending<'a>>> {
-    let cells: Vec<&Cell> = match cell {
-        Some(key) => vec![exp.cell_at(key)?],
-        None => exp.cells.iter().collect(),
-    };
-    let seeds = match seed {
-        Some(s) => {
-            if !exp.seeds().contains(&s) {
-                return Err(Error::invalid(
-                    "seed",
-                    format!(
-                        "{s} is outside the experiment's seeds {}..={}",
-                        exp.first_seed,
-                        exp.first_seed + (exp.seed_count - 1)
-                    ),
-                ));
-            }
-            vec![s]
-        }
-        None => exp.seeds(),
-    };
-    // A cell runs the seeds of its maze ([`Experiment::seeds_of`]).
-    Ok(cells
-        .into_iter()
-        .flat_map(|c| {
-            let own = exp.seeds_of(c);
-            seeds
-                .iter()
-                .filter(move |s| own.contains(s))
-                .map(move |&s| Pending { cell: c, seed: s })
-        })
-        .collect())
 }

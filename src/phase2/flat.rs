@@ -11,7 +11,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::validate::Check;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// The networks' inputs as the file names them (`inputs = "goal_relative"` or `"raw"`);
 /// [`super::InputMode`] adds where warm starts are possible.
@@ -181,6 +181,22 @@ impl FlatPhase2 {
             (None, Some(p)) => Ok(Some(EpisodeLimit::Greedy(p))),
             (None, None) => Ok(None),
         }
+    }
+}
+
+/// Phase 2's settings are read in their flat form, then checked as one typed procedure (what
+/// `#[serde(try_from = "FlatPhase2")]` would derive).
+impl<'de> Deserialize<'de> for Phase2Config {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        Phase2Config::try_from(FlatPhase2::deserialize(d)?).map_err(serde::de::Error::custom)
+    }
+}
+
+/// Phase 2's settings are written in their flat form (what `#[serde(into = "FlatPhase2")]`
+/// would derive).
+impl Serialize for Phase2Config {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        FlatPhase2::from(self.clone()).serialize(s)
     }
 }
 

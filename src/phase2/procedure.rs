@@ -11,7 +11,7 @@
 //! [`Check::check`] naming both fields, and a part that needs a hook the environment lacks by
 //! [`Phase2Config::require_hooks`].
 //!
-//! Files hold the flat form ([`FlatPhase2`], today's `[phase2]` table): reading one converts
+//! Files hold the flat form ([`super::flat::FlatPhase2`], today's `[phase2]` table): reading one converts
 //! it, refusing what the typed form cannot hold with a message naming the fields; writing
 //! one converts back field for field, so committed presets, rows and run folders read and
 //! write the same bytes.
@@ -29,18 +29,16 @@
 //! assert_eq!(fast.inputs, InputMode::GoalRelative { init: SkillInit::Warm });
 //! ```
 
-use super::flat::FlatPhase2;
 use super::goal::{BallMetric, Goal, Inputs};
 use super::{FirstStarts, LastGoal, StartMode};
 use crate::env::Env;
 use crate::error::{Error, Result};
 use crate::validate::Check;
-use serde::{Deserialize, Serialize};
 
 /// Phase-2 settings: the paper's procedure and our [`Ideas`], validated by [`Check::check`].
-/// Read from and written to files in the flat form ([`FlatPhase2`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "FlatPhase2", into = "FlatPhase2")]
+/// Read from and written to files in the flat form ([`super::flat::FlatPhase2`], which implements
+/// its `Serialize` and `Deserialize`).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Phase2Config {
     /// α: consecutive non-improvements of the training success that end training at one K.
     pub alpha: usize,
