@@ -96,7 +96,7 @@ fn archive_counters_follow_the_selection_rule() {
 
 #[test]
 fn shortened_trajectories_are_real_steps_and_much_shorter() {
-    use pbcs::phase1::shorten;
+    use pbcs::phase2::shorten;
     for size in [2, 5, 10, 15] {
         let maze = Maze::new(&MazeConfig {
             size,

@@ -381,7 +381,7 @@ impl EnvSpec {
         }
     }
 
-    /// How run folders name where they ran ([`crate::runs::default_out`]): `maze<N>-m<layout>`
+    /// How run folders name where they ran ([`crate::runs::explore_out`]): `maze<N>-m<layout>`
     /// for the maze, `pointmaze-<H>x<W>-<hash>` (`antmaze-…`) for a map of one's own (the
     /// first 8 hex digits of its rows' SHA-256, so that two maps do not share a folder; a clash
     /// of those 32 bits would be refused by the folder's claim, which compares the whole job),

@@ -34,6 +34,7 @@ mod section;
 pub mod skill_chain;
 pub mod starts;
 pub mod task;
+mod trajectory;
 
 pub use manifest::CHAIN_JOB;
 pub use procedure::{
@@ -51,6 +52,7 @@ pub use inputs::Phase2Inputs;
 pub use run::{chain_skills, Phase2Run, Phase2State};
 use serde::{Deserialize, Serialize};
 pub use starts::ArchiveStarts;
+pub use trajectory::{phase2_trajectory, shorten};
 
 /// Where Backplay's episodes start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
@@ -272,18 +274,4 @@ pub struct TraceRow {
     /// Wall-clock seconds since phase 2 began (not in the CSV).
     #[serde(skip)]
     pub seconds: f64,
-}
-
-/// The trajectory phase 2 works on: τ itself, or τ shortened with clearance ε when
-/// [`Ideas::shorten`] is on.
-pub fn phase2_trajectory<E: Env>(
-    env: &E,
-    tau: &crate::phase1::Trajectory<E::State>,
-    config: &Phase2Config,
-) -> Result<crate::phase1::Trajectory<E::State>> {
-    if config.ideas.shorten {
-        crate::phase1::shorten(env, tau, config.epsilon)
-    } else {
-        Ok(tau.clone())
-    }
 }

@@ -173,7 +173,7 @@ pub struct Ideas {
     /// Verification, and repair, of the finished chain.
     pub chain_check: Option<ChainCheck>,
     /// Shorten τ before phase 2 by cutting the random walk's detours
-    /// ([`crate::phase1::shorten`]; needs [`crate::env::Env::connector`]).
+    /// ([`super::shorten`]; needs [`crate::env::Env::connector`]).
     pub shorten: bool,
 }
 

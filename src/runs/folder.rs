@@ -1,8 +1,7 @@
 //! A run's folder: claimed before any work ([`claim`]), named by default from its job
-//! ([`default_out`], [`method_name`]), and its wall clock beside the results ([`write_timing`]).
+//! ([`explore_out`], [`train_out`], [`run_out`], [`method_name`]), and its wall clock beside the results ([`write_timing`]).
 
-use crate::config::{PbcsJob, Preset, TrainJob};
-use crate::envs::EnvSpec;
+use crate::config::{ExploreJob, Located, PbcsJob, Preset, TrainJob};
 use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase2::goal::BallMetric;
@@ -63,22 +62,41 @@ pub fn write_timing(
     crate::record::Timing::now(seconds, env_steps, kernel.map(Kernel::name)).write(path)
 }
 
-/// The default output folder of a run (`pbcs explore`, `train`, `run` without `--out`):
-/// `out/<command>/<where>-s<seed><suffix>`, where is [`EnvSpec::folder_name`] (`maze4-m1`,
-/// `rooms`); `command` may hold a subfolder (`run/fast`). The one place run folders are
-/// named.
+/// The default output folder of `pbcs explore` without `--out`:
+/// `out/explore/<where>-s<seed>`, where is [`crate::envs::EnvSpec::folder_name`] (`maze4-m1`, `rooms`).
+/// With [`train_out`] and [`run_out`], the one place run folders are named.
 ///
 /// ```
+/// use pbcs::config::{ExploreJob, PbcsJob};
 /// use pbcs::envs::{EnvName, EnvSpec};
-/// use pbcs::runs::default_out;
-/// let mut maze = EnvSpec::default();
-/// (maze.maze.size, maze.maze.seed) = (4, 1);
-/// let out = default_out("run/fast", &maze, 2, "-exact");
-/// assert_eq!(out, std::path::Path::new("out/run/fast/maze4-m1-s2-exact"));
-/// let out = default_out("explore", &EnvSpec::named(EnvName::Rooms), 0, "");
-/// assert_eq!(out, std::path::Path::new("out/explore/rooms-s0"));
+/// use pbcs::phase2::StartMode;
+/// use pbcs::runs::{explore_out, run_out};
+/// let mut job = PbcsJob::default();
+/// (job.maze.size, job.maze.seed, job.seed) = (4, 1, 2);
+/// job.phase2.start = StartMode::Exact;
+/// assert_eq!(run_out(&job, "fast"), std::path::Path::new("out/run/fast/maze4-m1-s2-exact"));
+/// let rooms = ExploreJob { env: EnvName::Rooms, ..ExploreJob::default() };
+/// assert_eq!(explore_out(&rooms), std::path::Path::new("out/explore/rooms-s0"));
 /// ```
-pub fn default_out(command: &str, env: &EnvSpec, seed: u64, suffix: &str) -> PathBuf {
+pub fn explore_out(job: &ExploreJob) -> PathBuf {
+    folder("explore", job, "")
+}
+
+/// The default output folder of `pbcs train` without `--out`:
+/// `out/train/<where>-s<seed>-<learner>` ([`explore_out`]; the learner as [`train_suffix`]).
+pub fn train_out(job: &TrainJob) -> PathBuf {
+    folder("train", job, &train_suffix(job))
+}
+
+/// The default output folder of `pbcs run` without `--out`, for the procedure named `method`
+/// ([`method_name`]): `out/run/<method>/<where>-s<seed><departures>` ([`explore_out`]; the
+/// departures from the preset as [`pbcs_suffix`]).
+pub fn run_out(job: &PbcsJob, method: &str) -> PathBuf {
+    folder(&format!("run/{method}"), job, &pbcs_suffix(job))
+}
+
+fn folder(command: &str, job: &impl Located, suffix: &str) -> PathBuf {
+    let (env, seed) = (job.env_spec(), job.seed());
     PathBuf::from(format!(
         "out/{command}/{}-s{seed}{suffix}",
         env.folder_name()
@@ -88,7 +106,7 @@ pub fn default_out(command: &str, env: &EnvSpec, seed: u64, suffix: &str) -> Pat
 /// The part of a PBCS run's default folder that names its departures from the preset:
 /// `-nochain` without chaining, `-exact` with exact starts, `-archive` with archive starts,
 /// `-velocity` with balls in position and velocity.
-pub fn pbcs_suffix(job: &PbcsJob) -> String {
+fn pbcs_suffix(job: &PbcsJob) -> String {
     let mut suffix = String::new();
     if !job.phase2.chaining {
         suffix.push_str("-nochain");
@@ -106,7 +124,7 @@ pub fn pbcs_suffix(job: &PbcsJob) -> String {
 
 /// The part of a vanilla run's default folder that names its learner: `-ddpg`, `-td3`, with
 /// `-am` for the argmax actor; `-sac`; then `-her` with hindsight experience replay.
-pub fn train_suffix(job: &TrainJob) -> String {
+fn train_suffix(job: &TrainJob) -> String {
     format!("-{}", job.learner_name().as_str().replace('_', "-"))
 }
 

@@ -22,7 +22,7 @@ pub use eval::{
     EvalEpisode, CHAIN_JOB, DRAWN_ROLLOUTS,
 };
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
-pub use folder::{default_out, method_name, pbcs_suffix, train_suffix, write_timing};
+pub use folder::{explore_out, method_name, run_out, train_out, write_timing};
 pub use pbcs::{
     run_outcome, run_outcome_resumable, run_pbcs, run_pbcs_until, PbcsRun, RunOutcome, RunRecord,
     RUN_CHECKPOINT,

@@ -9,7 +9,6 @@ use pbcs::envs::EnvName;
 use pbcs::experiment::Experiment;
 use pbcs::learner::td3::ActorUpdate;
 use pbcs::learner::LearnerConfig;
-use pbcs::runs;
 use serde::{de::DeserializeOwned, Serialize};
 use std::path::PathBuf;
 
@@ -109,9 +108,8 @@ impl RunArgs {
         Ok(job)
     }
 
-    /// `--out`, else the run's default folder ([`runs::default_out`]).
-    pub fn out_dir(&self, command: &str, job: &impl Located, suffix: &str) -> PathBuf {
-        let default = || runs::default_out(command, &job.env_spec(), job.seed(), suffix);
+    /// `--out`, else the run's default folder (`runs::explore_out`, `train_out`, `run_out`).
+    pub fn out_dir(&self, default: impl FnOnce() -> PathBuf) -> PathBuf {
         self.out.clone().unwrap_or_else(default)
     }
 

@@ -444,7 +444,7 @@ fn pbcs_run(
     stop_at: Option<std::time::Instant>,
     kernel: Kernel,
 ) -> anyhow::Result<()> {
-    let out = run.out_dir(&format!("run/{label}"), &*job, &runs::pbcs_suffix(&job));
+    let out = run.out_dir(|| runs::run_out(&job, label));
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
     let clock = std::time::Instant::now();
     // Steps of the skills already finished, and the running skill's latest count.
@@ -496,7 +496,7 @@ fn pbcs_run(
 
 fn explore(run: &RunArgs) -> anyhow::Result<()> {
     let job = run.load(|| Ok(ExploreJob::default()))?.valid()?;
-    let out = run.out_dir("explore", &*job, "");
+    let out = run.out_dir(|| runs::explore_out(&job));
     let template = "{spinner} phase 1: {human_pos} env steps ({per_sec}), {msg} [{elapsed}]";
     let bar = run.bar(template, None);
     let (summary, seconds) =
@@ -522,7 +522,7 @@ fn train(
     learner.apply(&mut job.learner)?;
     job.train.steps = steps.unwrap_or(job.train.steps);
     let job = job.valid()?;
-    let out = run.out_dir("train", &*job, &runs::train_suffix(&job));
+    let out = run.out_dir(|| runs::train_out(&job));
     let template = "{bar:30} {human_pos}/{human_len} env steps ({per_sec}, eta {eta}), {msg}";
     let bar = run.bar(template, Some(job.train.steps));
     let (summary, seconds) = runs::run_train(
