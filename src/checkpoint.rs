@@ -247,3 +247,16 @@ impl Saves<'_> {
         Ok(stop)
     }
 }
+
+/// The instant `after` from now (`--stop-after`, counted from the start of the command), for
+/// [`Checkpoint::stop_at`]; one too far ahead to be an instant is refused.
+pub fn deadline(after: Option<Duration>) -> Result<Option<Instant>> {
+    let Some(d) = after else {
+        return Ok(None);
+    };
+    let at = Instant::now().checked_add(d).ok_or_else(|| {
+        let d = humantime::format_duration(d);
+        Error::invalid("--stop-after", format!("{d}: too far ahead"))
+    })?;
+    Ok(Some(at))
+}

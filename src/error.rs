@@ -174,3 +174,31 @@ impl Error {
         }
     }
 }
+
+/// Work stopped at its deadline (`--stop-after`, [`crate::checkpoint::Checkpoint::stop_at`])
+/// with this many runs unfinished, those in progress saved: the same command goes on.
+#[derive(Debug)]
+pub struct Unfinished(pub usize);
+
+impl Unfinished {
+    /// The exit status of a command that stopped so: 75, sysexits.h's EX_TEMPFAIL ("try again
+    /// later", for a cluster script to requeue on).
+    pub const EXIT: u8 = 75;
+}
+
+impl std::fmt::Display for Unfinished {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "stopped at the deadline (--stop-after) with {} unfinished, the runs in \
+             progress saved; run the same command again to go on (exit status {})",
+            match self.0 {
+                1 => "1 run".to_string(),
+                n => format!("{n} runs"),
+            },
+            Self::EXIT
+        )
+    }
+}
+
+impl std::error::Error for Unfinished {}

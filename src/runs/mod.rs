@@ -24,8 +24,8 @@ pub use eval::{
 pub use explore::{run_explore, ExploreRun, ExploreSummary};
 pub use folder::{explore_out, method_name, run_out, train_out, write_timing};
 pub use pbcs::{
-    run_outcome, run_outcome_resumable, run_pbcs, run_pbcs_until, PbcsRun, RunOutcome, RunRecord,
-    RUN_CHECKPOINT,
+    run_outcome, run_outcome_resumable, run_pbcs, run_pbcs_until, PbcsRun, Phase2Progress,
+    RunOutcome, RunRecord, RUN_CHECKPOINT,
 };
 pub use train::{run_train, train_outcome, TrainRun, TrainSummary};
 

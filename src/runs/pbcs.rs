@@ -481,3 +481,67 @@ impl RunRecord {
         )
     }
 }
+
+/// Phase 2's progress as `pbcs run` shows it ([`Phase2Progress::report`], the `progress` of
+/// [`run_pbcs_until`]): a spinner with the learning problem under way, its K, T, last event
+/// and env steps per second; without a terminal (logs, CI, cluster jobs), where the spinner is
+/// hidden, a line per skill attempt (a skill saved, dropped or restarted) and the status every
+/// [`Phase2Progress::LOG_EVERY`] seconds.
+pub struct Phase2Progress {
+    bar: indicatif::ProgressBar,
+    lines: bool,
+    clock: Instant,
+    /// Steps of the skill attempts already finished, and the running one's latest count.
+    finished: u64,
+    current: u64,
+    current_skill: usize,
+    logged: f64,
+}
+
+impl Phase2Progress {
+    /// Seconds between two status lines without a terminal.
+    pub const LOG_EVERY: f64 = 30.0;
+
+    /// Shown on `bar`; with `lines`, also as lines on standard error.
+    pub fn new(bar: indicatif::ProgressBar, lines: bool) -> Self {
+        Phase2Progress {
+            bar,
+            lines,
+            clock: Instant::now(),
+            finished: 0,
+            current: 0,
+            current_skill: 0,
+            logged: 0.0,
+        }
+    }
+
+    /// A report of learning problem `skill`.
+    pub fn report(&mut self, skill: usize, p: Progress) {
+        let secs = self.clock.elapsed().as_secs_f64();
+        if skill != self.current_skill {
+            (self.finished, self.current_skill) = (self.finished + self.current, skill);
+            if self.lines {
+                eprintln!(
+                    "[{secs:.0} s] {skill} skill attempts done, attempt {} starts; {} phase-2 \
+                     env steps so far",
+                    skill + 1,
+                    self.finished
+                );
+            }
+        }
+        self.current = p.steps.train + p.steps.test;
+        let total = self.finished + self.current;
+        let status = p.status(skill, total, total as f64 / secs.max(1e-9));
+        if self.lines && secs >= self.logged + Self::LOG_EVERY {
+            self.logged = secs;
+            eprintln!("[{secs:.0} s] {status}");
+        }
+        self.bar.set_message(status);
+        self.bar.tick();
+    }
+
+    /// Clears the spinner.
+    pub fn finish(self) {
+        self.bar.finish_and_clear();
+    }
+}

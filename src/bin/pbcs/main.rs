@@ -7,9 +7,8 @@ mod args;
 use anyhow::Context;
 use args::{Cli, Command, ExpArgs, ExpCommand, LearnerArgs, RunArgs, SetArgs};
 use clap::Parser;
-use indicatif::{ProgressBar, ProgressStyle};
 use pbcs::config::{self, Check, ExploreJob, Located, PbcsJob, Preset, TrainJob};
-use pbcs::experiment::{Experiment, Pending, Swept};
+use pbcs::experiment::{Experiment, Pending, SweepProgress, Swept};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs;
 use pbcs::validate::Valid;
@@ -36,9 +35,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // Not a failure: the work so far is saved, and the same command goes on (sysexits.h's
         // EX_TEMPFAIL, "try again later", for a cluster script to requeue on).
-        Err(e) if e.is::<Unfinished>() => {
+        Err(e) if e.is::<pbcs::error::Unfinished>() => {
             eprintln!("{e}");
-            ExitCode::from(Unfinished::EXIT)
+            ExitCode::from(pbcs::error::Unfinished::EXIT)
         }
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -46,32 +45,6 @@ fn main() -> ExitCode {
         }
     }
 }
-
-/// `pbcs exp run --stop-after`: the sweep stopped at its deadline with runs unfinished.
-#[derive(Debug)]
-struct Unfinished(usize);
-
-impl Unfinished {
-    /// The exit status: 75, EX_TEMPFAIL.
-    const EXIT: u8 = 75;
-}
-
-impl std::fmt::Display for Unfinished {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "stopped at the deadline (--stop-after) with {} unfinished, the runs in \
-             progress saved; run the same command again to go on (exit status {})",
-            match self.0 {
-                1 => "1 run".to_string(),
-                n => format!("{n} runs"),
-            },
-            Self::EXIT
-        )
-    }
-}
-
-impl std::error::Error for Unfinished {}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     // The layer kernel of every run (PBCS_KERNEL, else the best this CPU runs), read once: a
@@ -92,7 +65,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             exact_starts,
             stop_after,
         } => {
-            let stop_at = deadline(stop_after)?;
+            let stop_at = pbcs::checkpoint::deadline(stop_after)?;
             let preset = preset.unwrap_or(Preset::Fast);
             let mut job = run.load(|| preset.job())?;
             learner.apply(&mut job.learner)?;
@@ -133,32 +106,37 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         ),
         Command::Aggregate { set } => aggregate(&set),
         Command::Figures { set, figures, tex } => render(&set, figures, tex),
-        Command::Exp { command } => match command {
-            ExpCommand::Run {
-                exp: args,
-                cell,
-                seed,
-                jobs,
-                skip_unavailable,
-                stop_after,
-            } => {
-                let stop_at = deadline(stop_after)?;
-                exp_run(&args, (cell, seed), jobs, skip_unavailable, stop_at, kernel)
-            }
-            ExpCommand::List {
-                exp: args,
-                make,
-                slurm,
-                skip_unavailable,
-            } => exp_list(&args, make, slurm, skip_unavailable),
-            ExpCommand::Check {
-                exp: args,
-                cell,
-                seed,
-                jobs,
-                exact,
-            } => exp_check(&args, cell, seed, jobs, kernel, exact),
-        },
+        Command::Exp { command } => exp(command, kernel),
+    }
+}
+
+/// `pbcs exp run`, `list` and `check`.
+fn exp(command: ExpCommand, kernel: Kernel) -> anyhow::Result<()> {
+    match command {
+        ExpCommand::Run {
+            exp: args,
+            cell,
+            seed,
+            jobs,
+            skip_unavailable,
+            stop_after,
+        } => {
+            let stop_at = pbcs::checkpoint::deadline(stop_after)?;
+            exp_run(&args, (cell, seed), jobs, skip_unavailable, stop_at, kernel)
+        }
+        ExpCommand::List {
+            exp: args,
+            make,
+            slurm,
+            skip_unavailable,
+        } => exp_list(&args, make, slurm, skip_unavailable),
+        ExpCommand::Check {
+            exp: args,
+            cell,
+            seed,
+            jobs,
+            exact,
+        } => exp_check(&args, cell, seed, jobs, kernel, exact),
     }
 }
 
@@ -248,7 +226,7 @@ fn exp_run(
     let plan = pbcs::experiment::plan(&exp, cell, seed)?;
     let (swept, ran) = sweep(&exp, &plan, &results, jobs, stop_at, kernel)?;
     if swept.unfinished > 0 {
-        return Err(Unfinished(swept.unfinished).into());
+        return Err(pbcs::error::Unfinished(swept.unfinished).into());
     }
     let rows = swept.rows;
     println!(
@@ -304,17 +282,8 @@ fn aggregate(set: &SetArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn run_bar(total: u64) -> ProgressBar {
-    let bar = ProgressBar::new(total);
-    let style = "{bar:30} {pos}/{len} runs [{elapsed}, eta {eta}] {msg}";
-    bar.set_style(ProgressStyle::with_template(style).expect("valid template"));
-    bar
-}
-
 /// Runs `runs` with [`pbcs::experiment::sweep_until`] behind a progress bar (finished runs are
-/// read back): one line per run as it finishes or stops at the deadline `stop_at`,
-/// environment steps per second in the bar. Returns what the sweep did and how many runs ran
-/// now.
+/// read back; [`SweepProgress`]). Returns what the sweep did and how many runs ran now.
 fn sweep(
     exp: &Experiment,
     runs: &[Pending],
@@ -323,84 +292,10 @@ fn sweep(
     stop_at: Option<std::time::Instant>,
     kernel: Kernel,
 ) -> anyhow::Result<(Swept, usize)> {
-    use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-    use std::time::Instant;
-    let bar = run_bar(runs.len() as u64);
-    // Without a terminal the bar is hidden and drops its lines: a log (nohup, a cluster's job
-    // output) still gets them.
-    let say = |line: String| {
-        if bar.is_hidden() {
-            eprintln!("{line}");
-        } else {
-            bar.println(line);
-        }
-    };
-    let (steps, ran) = (AtomicU64::new(0), AtomicUsize::new(0));
-    let clock = Instant::now();
-    // Per running vanilla run, its first evaluation seen (time, steps), for its rate; and when
-    // a hidden bar last logged an evaluation (at most one line a minute).
-    let first_seen = std::sync::Mutex::new(std::collections::HashMap::new());
-    let logged = std::sync::Mutex::new(None::<Instant>);
-    let on_event = |p: &Pending, event: &pbcs::experiment::Event| {
-        use pbcs::experiment::Event;
-        match event {
-            Event::Evaluated { steps, success } => {
-                let (t0, s0) = *first_seen
-                    .lock()
-                    .unwrap()
-                    .entry((p.cell.id, p.seed))
-                    .or_insert((Instant::now(), *steps));
-                // The rate from the second evaluation this process saw on.
-                let rate = match steps - s0 {
-                    0 => String::new(),
-                    n => format!(
-                        " ({:.0} steps/s)",
-                        n as f64 / t0.elapsed().as_secs_f64().max(1e-9)
-                    ),
-                };
-                let line = format!(
-                    "{} seed {}: {steps} env steps, greedy success {success:.2}{rate}",
-                    p.cell.id, p.seed
-                );
-                let mut last = logged.lock().unwrap();
-                if !bar.is_hidden() {
-                    bar.set_message(line);
-                } else if last.is_none_or(|t| t.elapsed().as_secs() >= 60) {
-                    *last = Some(Instant::now());
-                    eprintln!("{line}");
-                }
-            }
-            Event::Ran(row, secs) => {
-                bar.inc(1);
-                ran.fetch_add(1, Ordering::SeqCst);
-                let total = steps.fetch_add(row.env_steps, Ordering::SeqCst) + row.env_steps;
-                say(format!("{row} ({secs:.0} s)"));
-                let rate = total as f64 / clock.elapsed().as_secs_f64().max(1e-9);
-                bar.set_message(format!("{rate:.0} env steps/s"));
-            }
-            Event::Saved { steps } => {
-                bar.inc(1);
-                say(format!(
-                    "{} seed {}: stopped at the deadline after {steps} env steps, saved to its \
-                     checkpoint",
-                    p.cell.id, p.seed
-                ));
-            }
-            Event::Skipped(_) => bar.inc(1),
-            Event::Resumes { from, steps } => {
-                let at = steps.map_or(String::new(), |s| format!(" ({s} env steps saved)"));
-                say(format!(
-                    "{} seed {}: resumes from {}{at}",
-                    p.cell.id,
-                    p.seed,
-                    from.display()
-                ));
-            }
-        }
-    };
+    let progress = SweepProgress::new(runs.len() as u64);
+    let on_event = |p: &Pending, e: &_| progress.on_event(p, e);
     let swept = pbcs::experiment::sweep_until(exp, runs, results, jobs, kernel, stop_at, on_event)?;
-    bar.finish_and_clear();
-    Ok((swept, ran.into_inner()))
+    Ok((swept, progress.finish()))
 }
 
 fn exp_check(
@@ -413,28 +308,14 @@ fn exp_check(
 ) -> anyhow::Result<()> {
     use pbcs::reproduce::check_cell;
     let (exp, results) = args.load()?;
-    let bar = run_bar(pbcs::experiment::plan(&exp, Some(cell), seed)?.len() as u64);
-    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |_, e| {
-        bar.inc(u64::from(e.is_final()))
+    let progress = SweepProgress::new(pbcs::experiment::plan(&exp, Some(cell), seed)?.len() as u64);
+    let check = check_cell(&exp, &results, cell, seed, jobs, kernel, |p, e| {
+        progress.on_event(p, e)
     })?;
-    bar.finish_and_clear();
+    progress.finish();
     println!("{}", check.report(cell));
     println!("{}", check.verdict(cell, exact)?);
     Ok(())
-}
-
-/// The instant of `--stop-after` (counted from the start of the command).
-fn deadline(stop_after: Option<std::time::Duration>) -> anyhow::Result<Option<std::time::Instant>> {
-    let Some(d) = stop_after else {
-        return Ok(None);
-    };
-    let at = std::time::Instant::now().checked_add(d).ok_or_else(|| {
-        anyhow::anyhow!(
-            "--stop-after {}: too far ahead",
-            humantime::format_duration(d)
-        )
-    })?;
-    Ok(Some(at))
 }
 
 fn pbcs_run(
@@ -446,47 +327,20 @@ fn pbcs_run(
 ) -> anyhow::Result<()> {
     let out = run.out_dir(|| runs::run_out(&job, label));
     let bar = run.bar("{spinner} [{elapsed}] {msg}", None);
-    let clock = std::time::Instant::now();
-    // Steps of the skills already finished, and the running skill's latest count.
-    let (mut finished, mut current, mut current_skill) = (0u64, 0u64, 0usize);
-    // Without a terminal (logs, CI, cluster jobs) the bar is hidden: a line per skill attempt
-    // (a skill saved, dropped or restarted), and the bar's message every `LOG_EVERY` seconds.
-    const LOG_EVERY: f64 = 30.0;
     let lines = !run.quiet && !std::io::stderr().is_terminal();
-    let mut logged = 0.0;
+    let mut progress = runs::Phase2Progress::new(bar, lines);
     let done = runs::run_pbcs_until(
         &job,
         kernel,
         &out,
         &pbcs::plot::draw_run,
         stop_at,
-        |skill, p| {
-            let secs = clock.elapsed().as_secs_f64();
-            if skill != current_skill {
-                (finished, current_skill) = (finished + current, skill);
-                if lines {
-                    eprintln!(
-                        "[{secs:.0} s] {skill} skill attempts done, attempt {} starts; {finished} \
-                     phase-2 env steps so far",
-                        skill + 1
-                    );
-                }
-            }
-            current = p.steps.train + p.steps.test;
-            let total = finished + current;
-            let status = p.status(skill, total, total as f64 / secs.max(1e-9));
-            if lines && secs >= logged + LOG_EVERY {
-                logged = secs;
-                eprintln!("[{secs:.0} s] {status}");
-            }
-            bar.set_message(status);
-            bar.tick();
-        },
+        |skill, p| progress.report(skill, p),
     )
     .with_context(|| format!("PBCS on {} seed {}", job.env_spec().label(), job.seed))?;
-    bar.finish_and_clear();
+    progress.finish();
     let Some((record, seconds)) = done else {
-        return Err(Unfinished(1).into());
+        return Err(pbcs::error::Unfinished(1).into());
     };
     println!("{}", record.summary(job.phase2.eval_episodes, seconds));
     let wrote = "{record,skills,trace,trajectory}.csv, chain/, run.png, run.svg";
