@@ -1,12 +1,14 @@
 //! The package's shape stays as the redesign left it: no source file over 600 lines, and no
 //! import circle between the library's top-level modules (data flows one way) nor between
-//! any two of its files ([`files`]).
+//! any two of its files ([`files`]), and no function over 80 lines ([`functions`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 #[path = "layout/files.rs"]
 mod files;
+#[path = "layout/functions.rs"]
+mod functions;
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap() {

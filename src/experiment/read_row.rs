@@ -3,6 +3,7 @@
 
 use super::row::{layout_seed, KindRow, PbcsRow, RawRow, VanillaRow};
 use super::{plan, run_file, Cell, Experiment, Job, Kind};
+use crate::env::EvalEpisode;
 use crate::error::{Error, Result};
 use crate::phase2::StartMode;
 use std::path::Path;
@@ -74,6 +75,49 @@ pub fn read_row(path: &Path) -> Result<RawRow> {
 /// line and the column, never a run of another cell counted here.
 pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Result<RawRow> {
     let (row, line) = read_row_at(path)?;
+    // A vanilla run stops before its budget only with `train.stop_at_successes`.
+    let stops = match &cell.job {
+        Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
+        Job::Pbcs(_) => true,
+    };
+    if !stops && row.kind() == Kind::Vanilla && row.env_steps != row.budget {
+        return Err(Error::parse(
+            path,
+            format!(
+                "line {line}, column `env_steps`: {} of a budget of {}, but the job of cell \
+                 `{}` trains its whole budget (it has no train.stop_at_successes)",
+                row.env_steps, row.budget, cell.id
+            ),
+        ));
+    }
+    match first_difference(&row, exp, cell, seed) {
+        None => {
+            check_values(&row, path, line)?;
+            check_summary(&row, cell, seed, path, line)?;
+            Ok(row)
+        }
+        Some((column, found, want)) => Err(Error::parse(
+            path,
+            format!(
+                "line {line}, column `{column}`: holds `{found}`, but this file is the row of \
+                 experiment `{}`, cell `{}`, seed {seed}, whose {column} is `{want}` (a row \
+                 edited or moved from another cell's folder is never counted; restore it, or \
+                 remove it and run the cell's seed again)",
+                exp.name, cell.id
+            ),
+        )),
+    }
+}
+
+/// The first column of `row` that differs from what (`cell`, `seed`) of `exp` fixes (the
+/// experiment's name, the cell's id, method, kind, maze size and layout seed, the seed, the
+/// job's learner, γ, chaining, starts and budget): (column, found, wanted).
+fn first_difference(
+    row: &RawRow,
+    exp: &Experiment,
+    cell: &Cell,
+    seed: u64,
+) -> Option<(&'static str, String, String)> {
     let starts = |s: Option<StartMode>| s.map_or("", <&str>::from);
     let (kind, maze_seed, learner, gamma, chaining, start, budget) = match &cell.job {
         Job::Vanilla(j) => (
@@ -118,41 +162,9 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
         ("starts", differ(starts(row_starts), starts(start))),
         ("budget", differ(row.budget, budget)),
     ];
-    // A vanilla run stops before its budget only with `train.stop_at_successes`.
-    let stops = match &cell.job {
-        Job::Vanilla(j) => j.train.stop_at_successes.is_some(),
-        Job::Pbcs(_) => true,
-    };
-    if !stops && row.kind() == Kind::Vanilla && row.env_steps != row.budget {
-        return Err(Error::parse(
-            path,
-            format!(
-                "line {line}, column `env_steps`: {} of a budget of {}, but the job of cell \
-                 `{}` trains its whole budget (it has no train.stop_at_successes)",
-                row.env_steps, row.budget, cell.id
-            ),
-        ));
-    }
-    let differs = fields
+    fields
         .into_iter()
-        .find_map(|(c, d)| d.map(|(found, want)| (c, found, want)));
-    match differs {
-        None => {
-            check_values(&row, path, line)?;
-            check_summary(&row, cell, seed, path, line)?;
-            Ok(row)
-        }
-        Some((column, found, want)) => Err(Error::parse(
-            path,
-            format!(
-                "line {line}, column `{column}`: holds `{found}`, but this file is the row of \
-                 experiment `{}`, cell `{}`, seed {seed}, whose {column} is `{want}` (a row \
-                 edited or moved from another cell's folder is never counted; restore it, or \
-                 remove it and run the cell's seed again)",
-                exp.name, cell.id
-            ),
-        )),
-    }
+        .find_map(|(c, d)| d.map(|(found, want)| (c, found, want)))
 }
 
 /// Checks a row against the files it summarises, beside it (where they exist: rows written
@@ -162,97 +174,28 @@ pub fn read_run_row(exp: &Experiment, cell: &Cell, seed: u64, path: &Path) -> Re
 /// its `s<seed>.evaluation.csv` (PBCS's protocol after training) or else of the last
 /// evaluation of its `s<seed>.evals.csv`. An error names the row's file, line and column.
 fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> Result<()> {
-    use crate::env::EvalEpisode;
     let dir = path.parent().unwrap_or(Path::new("."));
     let evaluation_path = run_file(dir, seed, ".evaluation.csv");
     let evaluation: Option<Vec<EvalEpisode>> = evaluation_path
         .exists()
         .then(|| crate::record::read_records(&evaluation_path))
         .transpose()?;
-    let rate_of =
-        |e: &[EvalEpisode]| e.iter().filter(|e| e.success).count() as f32 / e.len() as f32;
-    let wrong = |column: &str, why: String| {
-        Err(Error::parse(
-            path,
-            format!("line {line}, column `{column}`: {why}"),
-        ))
-    };
-    match (&cell.job, evaluation) {
-        (Job::Pbcs(_), Some(e)) if e.is_empty() => {
-            if r.failure().is_none() && r.skills() > 0 {
-                return wrong(
-                    "failure",
-                    format!(
-                        "empty, but {} holds no evaluation episode: a chain of {} skills with \
-                         no failure is evaluated",
-                        evaluation_path.display(),
-                        r.skills()
-                    ),
-                );
-            }
-            if r.success_rate != 0.0 {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "{}, but {} holds no evaluation episode",
-                        r.success_rate,
-                        evaluation_path.display()
-                    ),
-                );
+    let file = evaluation_path.display();
+    let wrong = match (&cell.job, evaluation) {
+        (Job::Pbcs(j), Some(e)) => pbcs_evaluation_error(r, j.phase2.eval_episodes, &e, &file),
+        (Job::Vanilla(j), Some(e)) => {
+            let (n, wins) = (j.train.final_eval_episodes, wins(&e));
+            let wrong = !e.is_empty() && (e.len() != n || r.success_rate != rate(&e));
+            let why = || {
+                let (rate, len) = (r.success_rate, e.len());
+                format!("{rate}, but {file} holds {wins} wins of {len} episodes (the job evaluates {n})")
+            };
+            if wrong {
+                Err(("success_rate", why()))
+            } else {
+                Ok(())
             }
         }
-        (Job::Pbcs(j), Some(e)) => {
-            if e.len() != j.phase2.eval_episodes {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "of {} episodes in {}, but the job evaluates {}",
-                        e.len(),
-                        evaluation_path.display(),
-                        j.phase2.eval_episodes
-                    ),
-                );
-            }
-            if let Some(f) = r.failure() {
-                return wrong(
-                    "failure",
-                    format!(
-                        "{}, but the run's chain was evaluated ({})",
-                        f.name(),
-                        evaluation_path.display()
-                    ),
-                );
-            }
-            if r.success_rate != rate_of(&e) {
-                return wrong(
-                    "success_rate",
-                    format!(
-                        "{}, but {} holds {} wins of {} episodes",
-                        r.success_rate,
-                        evaluation_path.display(),
-                        e.iter().filter(|e| e.success).count(),
-                        e.len()
-                    ),
-                );
-            }
-        }
-        (Job::Vanilla(j), Some(e))
-            if !e.is_empty()
-                && (e.len() != j.train.final_eval_episodes || r.success_rate != rate_of(&e)) =>
-        {
-            return wrong(
-                "success_rate",
-                format!(
-                    "{}, but {} holds {} wins of {} episodes (the job evaluates {})",
-                    r.success_rate,
-                    evaluation_path.display(),
-                    e.iter().filter(|e| e.success).count(),
-                    e.len(),
-                    j.train.final_eval_episodes
-                ),
-            );
-        }
-        (Job::Vanilla(_), Some(_)) => {}
         // Every run writes its evaluation (a vanilla run, where its job evaluates after
         // training; else its curve); only the committed rows listed as written before that may
         // lack it ([`super::legacy`]).
@@ -261,28 +204,95 @@ fn check_summary(r: &RawRow, cell: &Cell, seed: u64, path: &Path, line: u64) -> 
                 Job::Vanilla(j) if j.train.final_eval_episodes == 0 => {
                     run_file(dir, seed, ".evals.csv")
                 }
-                _ => evaluation_path,
+                _ => evaluation_path.clone(),
             };
-            if !file.exists() && !super::legacy::may_lack_evaluation(path)? {
-                let why = format!("{}, but {} is missing", r.success_rate, file.display());
-                return wrong("success_rate", why);
-            }
-            if let (Job::Vanilla(_), true) = (job, file.exists()) {
-                let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(&file)?;
-                if let Some(last) = evals.last().filter(|e| e.success != r.success_rate) {
-                    let (steps, success) = (last.steps, last.success);
-                    let why = format!(
-                        "{}, but the last evaluation of {} (at {steps} steps) has success \
-                         {success}",
-                        r.success_rate,
-                        file.display()
-                    );
-                    return wrong("success_rate", why);
-                }
-            }
+            without_evaluation_error(r, job, &file, path)?
         }
+    };
+    wrong.map_err(|(column, why)| {
+        Error::parse(path, format!("line {line}, column `{column}`: {why}"))
+    })
+}
+
+/// Of `episodes`, those that reached the goal, and the rate they make.
+fn wins(episodes: &[EvalEpisode]) -> usize {
+    episodes.iter().filter(|e| e.success).count()
+}
+
+fn rate(episodes: &[EvalEpisode]) -> f32 {
+    wins(episodes) as f32 / episodes.len() as f32
+}
+
+/// What is wrong with a PBCS row beside its evaluation `e` (in `file`) of a job evaluating
+/// `n` episodes: the column and why.
+fn pbcs_evaluation_error(
+    r: &RawRow,
+    n: usize,
+    e: &[EvalEpisode],
+    file: &impl std::fmt::Display,
+) -> std::result::Result<(), (&'static str, String)> {
+    let rate_is = r.success_rate;
+    if e.is_empty() {
+        // A run that stopped (a failure) or made no skill is not evaluated: its rate is 0.
+        if r.failure().is_none() && r.skills() > 0 {
+            let skills = r.skills();
+            let why = format!(
+                "empty, but {file} holds no evaluation episode: a chain of {skills} skills with \
+                 no failure is evaluated"
+            );
+            return Err(("failure", why));
+        }
+        if rate_is != 0.0 {
+            return Err((
+                "success_rate",
+                format!("{rate_is}, but {file} holds no evaluation episode"),
+            ));
+        }
+        return Ok(());
+    }
+    if e.len() != n {
+        let len = e.len();
+        let why = format!("of {len} episodes in {file}, but the job evaluates {n}");
+        return Err(("success_rate", why));
+    }
+    if let Some(f) = r.failure() {
+        let why = format!("{}, but the run's chain was evaluated ({file})", f.name());
+        return Err(("failure", why));
+    }
+    if rate_is != rate(e) {
+        let (wins, len) = (wins(e), e.len());
+        let why = format!("{rate_is}, but {file} holds {wins} wins of {len} episodes");
+        return Err(("success_rate", why));
     }
     Ok(())
+}
+
+/// What is wrong with a row of `job` that has no evaluation file: the file it should have
+/// (`file`) missing, unless the committed row at `path` is listed as written before it
+/// ([`super::legacy`]); a vanilla row's rate not its curve's last evaluation.
+fn without_evaluation_error(
+    r: &RawRow,
+    job: &Job,
+    file: &Path,
+    path: &Path,
+) -> Result<std::result::Result<(), (&'static str, String)>> {
+    if !file.exists() && !super::legacy::may_lack_evaluation(path)? {
+        let why = format!("{}, but {} is missing", r.success_rate, file.display());
+        return Ok(Err(("success_rate", why)));
+    }
+    if let (Job::Vanilla(_), true) = (job, file.exists()) {
+        let evals: Vec<crate::vanilla::EvalRow> = crate::record::read_records(file)?;
+        if let Some(last) = evals.last().filter(|e| e.success != r.success_rate) {
+            let (steps, success) = (last.steps, last.success);
+            let why = format!(
+                "{}, but the last evaluation of {} (at {steps} steps) has success {success}",
+                r.success_rate,
+                file.display()
+            );
+            return Ok(Err(("success_rate", why)));
+        }
+    }
+    Ok(Ok(()))
 }
 
 /// The row of `path` (one record under the header, its values not yet checked) and the line

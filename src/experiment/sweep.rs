@@ -193,7 +193,33 @@ pub fn sweep_until(
     }
     let _folder = crate::record::FolderLock::acquire(results, runs.len() <= 1)?;
     // Finished runs first (cheap), so that a config mismatch is reported before any work.
-    let mut rows: Vec<Option<RawRow>> = Vec::with_capacity(runs.len());
+    let mut rows = read_back(exp, runs, results, &on_event)?;
+    let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
+    let ran = run_parallel(&todo, jobs, |&i| {
+        if stop_at.is_some_and(|t| Instant::now() >= t) {
+            return Ok(None);
+        }
+        run_pending(exp, &runs[i], results, kernel, stop_at, &on_event)
+    })?;
+    for (i, row) in todo.into_iter().zip(ran) {
+        rows[i] = row;
+    }
+    let unfinished = rows.iter().filter(|r| r.is_none()).count();
+    Ok(Swept {
+        rows: rows.into_iter().flatten().collect(),
+        unfinished,
+    })
+}
+
+/// The finished rows of `runs` (`None` for a run not finished), each told as
+/// [`Event::Skipped`]; a run with a checkpoint and no row is told as [`Event::Resumes`].
+fn read_back(
+    exp: &Experiment,
+    runs: &[Pending],
+    results: &Path,
+    on_event: &impl Fn(&Pending, &Event),
+) -> Result<Vec<Option<RawRow>>> {
+    let mut rows = Vec::with_capacity(runs.len());
     for p in runs {
         let dir = exp.cell_dir(results, p.cell);
         let done = read_finished(exp, p.cell, p.seed, &dir)?;
@@ -206,75 +232,69 @@ pub fn sweep_until(
             }
             None if saved.path.is_file() => {
                 let steps = saved.peek().ok().flatten().map(|s| s.steps);
-                on_event(
-                    p,
-                    &Event::Resumes {
-                        from: saved.path,
-                        steps,
-                    },
-                );
+                let from = saved.path;
+                on_event(p, &Event::Resumes { from, steps });
             }
             None => {}
         }
         rows.push(done);
     }
-    let todo: Vec<usize> = (0..runs.len()).filter(|&i| rows[i].is_none()).collect();
-    let ran = run_parallel(&todo, jobs, |&i| {
-        let p = &runs[i];
-        if stop_at.is_some_and(|t| Instant::now() >= t) {
-            return Ok(None);
-        }
-        let clock = Instant::now();
-        let dir = exp.cell_dir(results, p.cell);
-        let mut last_steps = 0;
-        // One process per run: a second sweep into this folder stops here with a message
-        // instead of doing the run again and replacing its row.
-        let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
-            .and_then(|_lock| {
-                // What a killed process of this run left mid-write (its checkpoint's
-                // temporary file): the lock makes the names s<seed>.* this run's.
-                crate::record::remove_orphans(&dir, &format!("s{}.", p.seed))?;
-                // Finished by another sweep while this one was planning: read it back.
-                match read_finished(exp, p.cell, p.seed, &dir)? {
-                    Some(row) => Ok(Some(row)),
-                    None => run_cell_seed(
-                        exp,
-                        p.cell,
-                        p.seed,
-                        &dir,
-                        kernel,
-                        stop_at,
-                        |steps, success| {
-                            last_steps = steps;
-                            on_event(p, &Event::Evaluated { steps, success })
-                        },
-                    ),
-                }
-            })
-            .map_err(|e| Error::Run {
-                cell: p.cell.id.to_string(),
-                seed: p.seed,
-                cause: Box::new(e),
-            })?;
-        match &row {
-            Some(row) => on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64())),
-            None => {
-                // A PBCS run reports no evaluations: its checkpoint's head says how far it got.
-                let saved = checkpoint(p.cell, p.seed, &dir).peek().ok().flatten();
-                let steps = saved.map_or(last_steps, |s| s.steps);
-                on_event(p, &Event::Saved { steps })
+    Ok(rows)
+}
+
+/// Runs `p` under its lock ([`run_cell_seed`]; read back where another sweep finished it
+/// meanwhile): its row, or `None` where it stopped at `stop_at`, saved. Told as
+/// [`Event::Evaluated`] as it goes, then [`Event::Ran`] or [`Event::Saved`].
+fn run_pending(
+    exp: &Experiment,
+    p: &Pending,
+    results: &Path,
+    kernel: Kernel,
+    stop_at: Option<Instant>,
+    on_event: &impl Fn(&Pending, &Event),
+) -> Result<Option<RawRow>> {
+    let clock = Instant::now();
+    let dir = exp.cell_dir(results, p.cell);
+    let mut last_steps = 0;
+    // One process per run: a second sweep into this folder stops here with a message
+    // instead of doing the run again and replacing its row.
+    let row = crate::record::WorkLock::acquire(&run_file(&dir, p.seed, ".lock"))
+        .and_then(|_lock| {
+            // What a killed process of this run left mid-write (its checkpoint's
+            // temporary file): the lock makes the names s<seed>.* this run's.
+            crate::record::remove_orphans(&dir, &format!("s{}.", p.seed))?;
+            // Finished by another sweep while this one was planning: read it back.
+            match read_finished(exp, p.cell, p.seed, &dir)? {
+                Some(row) => Ok(Some(row)),
+                None => run_cell_seed(
+                    exp,
+                    p.cell,
+                    p.seed,
+                    &dir,
+                    kernel,
+                    stop_at,
+                    |steps, success| {
+                        last_steps = steps;
+                        on_event(p, &Event::Evaluated { steps, success })
+                    },
+                ),
             }
+        })
+        .map_err(|e| Error::Run {
+            cell: p.cell.id.to_string(),
+            seed: p.seed,
+            cause: Box::new(e),
+        })?;
+    match &row {
+        Some(row) => on_event(p, &Event::Ran(row.clone(), clock.elapsed().as_secs_f64())),
+        None => {
+            // A PBCS run reports no evaluations: its checkpoint's head says how far it got.
+            let saved = checkpoint(p.cell, p.seed, &dir).peek().ok().flatten();
+            let steps = saved.map_or(last_steps, |s| s.steps);
+            on_event(p, &Event::Saved { steps })
         }
-        Ok(row)
-    })?;
-    for (i, row) in todo.into_iter().zip(ran) {
-        rows[i] = row;
     }
-    let unfinished = rows.iter().filter(|r| r.is_none()).count();
-    Ok(Swept {
-        rows: rows.into_iter().flatten().collect(),
-        unfinished,
-    })
+    Ok(row)
 }
 
 /// `f` on every item, `jobs` at a time (a pool of `jobs` threads, at most one per item), the

@@ -317,6 +317,42 @@ impl Default for Phase2Config {
 impl Check for Phase2Config {
     /// Every number in range, and the two parts that act between skills only with chaining.
     fn check(&self) -> Result<()> {
+        self.check_counts()?;
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!("must be positive, got {}", self.epsilon),
+            ));
+        }
+        if self.epsilon > 1.0 {
+            return Err(Error::invalid(
+                "phase2.epsilon",
+                format!(
+                    "is a radius in the environment's units (the maze's cells are 1 wide), \
+                     at most 1, got {}",
+                    self.epsilon
+                ),
+            ));
+        }
+        let limit = match self.ideas.episode_limit {
+            Some(EpisodeLimit::Every(p)) => Some(("phase2.path_limit", p)),
+            Some(EpisodeLimit::Greedy(p)) => Some(("phase2.test_path_limit", p)),
+            None => None,
+        };
+        if let Some((field, p)) = limit {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(Error::invalid(field, format!("must be positive, got {p}")));
+            }
+        }
+        self.check_repeats()?;
+        self.check_ball()?;
+        self.check_combinations()
+    }
+}
+
+impl Phase2Config {
+    /// Each count of the procedure at least 1 and at most its bound.
+    fn check_counts(&self) -> Result<()> {
         use crate::validate::bounds::{EPISODES as EP, EPISODE_STEPS as ST, REPEATS as RE};
         let i = &self.ideas;
         // Each count: its field, its value (1 where the switch is off) and its upper bound.
@@ -345,32 +381,14 @@ impl Check for Phase2Config {
         ] {
             crate::validate::count(&format!("phase2.{field}"), v as u64, max)?;
         }
-        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
-            return Err(Error::invalid(
-                "phase2.epsilon",
-                format!("must be positive, got {}", self.epsilon),
-            ));
-        }
-        if self.epsilon > 1.0 {
-            return Err(Error::invalid(
-                "phase2.epsilon",
-                format!(
-                    "is a radius in the environment's units (the maze's cells are 1 wide), \
-                     at most 1, got {}",
-                    self.epsilon
-                ),
-            ));
-        }
-        let limit = match i.episode_limit {
-            Some(EpisodeLimit::Every(p)) => Some(("phase2.path_limit", p)),
-            Some(EpisodeLimit::Greedy(p)) => Some(("phase2.test_path_limit", p)),
-            None => None,
-        };
-        if let Some((field, p)) = limit {
-            if !(p.is_finite() && p > 0.0) {
-                return Err(Error::invalid(field, format!("must be positive, got {p}")));
-            }
-        }
+        Ok(())
+    }
+
+    /// The step budget and the repeats (restarts, hand-over moves, repairs) at most their
+    /// bounds.
+    fn check_repeats(&self) -> Result<()> {
+        use crate::validate::bounds::REPEATS as RE;
+        let i = &self.ideas;
         crate::validate::count(
             "phase2.max_env_steps",
             self.max_env_steps,
@@ -386,7 +404,13 @@ impl Check for Phase2Config {
         ] {
             crate::validate::at_most(field, v as u64, RE)?;
         }
-        self.check_ball()?;
+        Ok(())
+    }
+
+    /// The parts that act between skills only with chaining, and drawn last goals only with
+    /// goal-relative inputs.
+    fn check_combinations(&self) -> Result<()> {
+        let i = &self.ideas;
         if !self.chaining && i.dead_walk.is_some_and(|d| d.retargets > 0) {
             return Err(Error::invalid(
                 "phase2.retargets",

@@ -441,76 +441,88 @@ pub fn settings_tex(
         );
     };
     for c in exp.cells.iter().filter(|c| c.site == exp.sites[0]) {
-        match &c.job {
-            Job::Pbcs(j) if c.method == settings.pbcs => {
-                let (p, l) = (&j.phase2, &j.learner);
-                put("alpha", p.alpha.to_string());
-                put("beta", p.beta.to_string());
-                put("epsilon", p.epsilon.to_string());
-                put("maxsteps", p.max_steps.to_string());
-                put("kstep", p.ideas.k_walk.first_step().to_string());
-                put("pbcsbudget", human_steps(p.max_env_steps as f64));
-                put("evalepisodes", p.eval_episodes.to_string());
-                put("evalmaxsteps", p.eval_max_steps.to_string());
-                put("pbcsgamma", l.gamma().to_string());
-            }
-            _ => {}
-        }
-        // The preset's learner is TD3's family (DDPG): its own settings.
-        match &c.job {
-            Job::Pbcs(j) if c.method == settings.pbcs && j.learner.as_td3().is_some() => {
-                let l = j.learner.as_td3().expect("matched");
-                put(
-                    "hidden",
-                    l.hidden
-                        .iter()
-                        .map(|h| h.to_string())
-                        .collect::<Vec<_>>()
-                        .join("×"),
-                );
-                put("actorlr", l.actor_lr.to_string());
-                put("criticlr", l.critic_lr.to_string());
-                put("tau", l.tau.to_string());
-                put("batch", l.batch_size.to_string());
-                put("replay", human_steps(l.replay_size as f64));
-                put("noisesigma", l.noise_sigma.to_string());
-                put("argmaxsamples", l.argmax_samples.to_string());
-            }
-            _ => {}
-        }
-        match &c.job {
-            Job::Pbcs(j) if c.method == settings.pbcs => {
-                put("mazeseed", j.maze.seed.to_string());
-            }
-            Job::Vanilla(j) if c.method == settings.vanilla => {
-                put("vanillabudget", human_steps(j.train.steps as f64));
-                put("vanillagamma", j.learner.gamma().to_string());
-                put("episodesteps", j.train.max_episode_steps.to_string());
-                put(
-                    "learningstarts",
-                    human_steps(j.train.learning_starts as f64),
-                );
-                if let Some(l) = j.learner.as_td3() {
-                    put(
-                        "vanillahidden",
-                        l.hidden
-                            .iter()
-                            .map(|h| h.to_string())
-                            .collect::<Vec<_>>()
-                            .join("×"),
-                    );
-                    put("vanillaactorlr", l.actor_lr.to_string());
-                    put("vanillacriticlr", l.critic_lr.to_string());
-                    put("vanillatau", l.tau.to_string());
-                    put("vanillabatch", l.batch_size.to_string());
-                    put("vanillanoisesigma", l.noise_sigma.to_string());
-                }
-            }
-            _ => {}
+        let named = match &c.job {
+            Job::Pbcs(j) if c.method == settings.pbcs => pbcs_settings(j),
+            Job::Vanilla(j) if c.method == settings.vanilla => vanilla_settings(j),
+            _ => Vec::new(),
+        };
+        for (name, value) in named {
+            put(&name, value);
         }
     }
     put("seeds", exp.seed_count.to_string());
     s
+}
+
+/// The settings a PBCS job gives `settings.tex`: phase 2's, its learner's where it is TD3's
+/// family (DDPG), and the maze's layout seed.
+fn pbcs_settings(j: &crate::config::PbcsJob) -> Vec<(String, String)> {
+    let (p, l) = (&j.phase2, &j.learner);
+    let mut named: Vec<(String, String)> = [
+        ("alpha", p.alpha.to_string()),
+        ("beta", p.beta.to_string()),
+        ("epsilon", p.epsilon.to_string()),
+        ("maxsteps", p.max_steps.to_string()),
+        ("kstep", p.ideas.k_walk.first_step().to_string()),
+        ("pbcsbudget", human_steps(p.max_env_steps as f64)),
+        ("evalepisodes", p.eval_episodes.to_string()),
+        ("evalmaxsteps", p.eval_max_steps.to_string()),
+        ("pbcsgamma", l.gamma().to_string()),
+    ]
+    .map(|(n, v)| (n.to_string(), v))
+    .to_vec();
+    if let Some(l) = l.as_td3() {
+        named.extend(td3_settings("", l, true));
+    }
+    named.push(("mazeseed".into(), j.maze.seed.to_string()));
+    named
+}
+
+/// The settings a vanilla job gives `settings.tex`, its learner's prefixed `vanilla`.
+fn vanilla_settings(j: &crate::config::TrainJob) -> Vec<(String, String)> {
+    let mut named: Vec<(String, String)> = [
+        ("vanillabudget", human_steps(j.train.steps as f64)),
+        ("vanillagamma", j.learner.gamma().to_string()),
+        ("episodesteps", j.train.max_episode_steps.to_string()),
+        (
+            "learningstarts",
+            human_steps(j.train.learning_starts as f64),
+        ),
+    ]
+    .map(|(n, v)| (n.to_string(), v))
+    .to_vec();
+    if let Some(l) = j.learner.as_td3() {
+        named.extend(td3_settings("vanilla", l, false));
+    }
+    named
+}
+
+/// A TD3-family learner's settings, named with `prefix`; `pbcs` adds the replay size and the
+/// argmax actor's samples, which only the PBCS cell's table quotes.
+fn td3_settings(
+    prefix: &str,
+    l: &crate::learner::td3::Td3Config,
+    pbcs: bool,
+) -> Vec<(String, String)> {
+    let hidden: Vec<String> = l.hidden.iter().map(|h| h.to_string()).collect();
+    let mut named = vec![
+        ("hidden", hidden.join("×")),
+        ("actorlr", l.actor_lr.to_string()),
+        ("criticlr", l.critic_lr.to_string()),
+        ("tau", l.tau.to_string()),
+        ("batch", l.batch_size.to_string()),
+    ];
+    if pbcs {
+        named.push(("replay", human_steps(l.replay_size as f64)));
+    }
+    named.push(("noisesigma", l.noise_sigma.to_string()));
+    if pbcs {
+        named.push(("argmaxsamples", l.argmax_samples.to_string()));
+    }
+    named
+        .into_iter()
+        .map(|(n, v)| (format!("{prefix}{n}"), v))
+        .collect()
 }
 
 #[cfg(test)]

@@ -88,11 +88,11 @@ pub fn train_out(job: &TrainJob) -> PathBuf {
     folder("train", job, &train_suffix(job))
 }
 
-/// The default output folder of `pbcs run` without `--out`, for the procedure named `method`
-/// ([`method_name`]): `out/run/<method>/<where>-s<seed><departures>` ([`explore_out`]; the
+/// The default output folder of `pbcs run` without `--out`, for the procedure named `name`
+/// ([`method_name`]): `out/run/<name>/<where>-s<seed><departures>` ([`explore_out`]; the
 /// departures from the preset as [`pbcs_suffix`]).
-pub fn run_out(job: &PbcsJob, method: &str) -> PathBuf {
-    folder(&format!("run/{method}"), job, &pbcs_suffix(job))
+pub fn run_out(job: &PbcsJob, name: &str) -> PathBuf {
+    folder(&format!("run/{name}"), job, &pbcs_suffix(job))
 }
 
 fn folder(command: &str, job: &impl Located, suffix: &str) -> PathBuf {

@@ -6,6 +6,7 @@
 use super::judged::{judged_path, JudgedCell};
 use super::outside::{Library, PointMazeBaseline};
 use super::{read_table, table_path, CellStats};
+use crate::envs::EnvName;
 use crate::error::{Error, Result};
 use crate::experiment::{CellKey, ExperimentName, Method, Site};
 use crate::fmt::human_steps;
@@ -96,68 +97,80 @@ fn pointmaze_table(results: &Path) -> Result<String> {
     );
     for c in &grid {
         let Site::Env(env) = c.site else { continue };
-        let name: &str = env.into();
-        let map = env.point_map().map_or(name, <&str>::from);
-        let judged_cell = |cells: &[JudgedCell], stats: &[CellStats]| -> Result<String> {
-            let stats = cell(stats, c.method, c.site)?;
-            let j = cells.iter().find(|j| j.cell == stats.cell).ok_or_else(|| {
-                Error::parse(
-                    Path::new("results/tables"),
-                    format!("{}: not judged", stats.cell),
-                )
-            })?;
-            Ok(format!(
-                "{}/{}, {}",
-                j.solved,
-                j.seeds,
-                human_steps(stats.steps_median)
-            ))
-        };
-        let baseline = |method: Method| -> Result<String> {
-            let b = baselines
-                .iter()
-                .find(|b| b.method == method && b.env == env)
-                .ok_or_else(|| {
-                    Error::parse(
-                        Path::new("results/tables/outside.pointmaze.csv"),
-                        format!("no line for {method} on {name}"),
-                    )
-                })?;
-            Ok(match b.solved_at_min {
-                Some(at) => format!("{}/{} (from {})", b.solved, b.runs, human_steps(at as f64)),
-                None => format!("{}/{}", b.solved, b.runs),
-            })
-        };
-        // Ours by SB3's protocol, on the env's reset law (`<name>_goals`): runs solved of
-        // those with rows (the grid may still be running: `–` where none has a row yet), and
-        // the median steps of the solved ones (over as many runs as were solved: the legend
-        // says so, and the docs' table names the count; the README's line has no room).
-        let goals = env.goals_task();
-        let ours = |method: Method| -> Result<String> {
-            let line = baselines
-                .iter()
-                .find(|b| b.library == Library::Ours && b.method == method && Some(b.env) == goals);
-            Ok(match line {
-                None => "–".to_string(),
-                Some(b) => match b.solved_at_median {
-                    Some(m) => format!("{}/{}, {}", b.solved, b.runs, human_steps(m as f64)),
-                    None => format!("{}/{}", b.solved, b.runs),
-                },
-            })
-        };
+        let map = env.point_map().map_or(env.into(), <&str>::from);
+        let (m, site) = (c.method, c.site);
         let _ = writeln!(
             s,
             "| {map} | **{}** | {} | {} | {} | {} | {} | {} |",
-            judged_cell(&grid_judged, &grid)?,
-            judged_cell(&held_judged, &held)?,
-            baseline(ddpg)?,
-            baseline(td3)?,
-            baseline(sac_her)?,
-            ours(sac_her)?,
-            ours(td3_her)?,
+            judged_text(&grid_judged, &grid, m, site)?,
+            judged_text(&held_judged, &held, m, site)?,
+            baseline_text(&baselines, ddpg, env)?,
+            baseline_text(&baselines, td3, env)?,
+            baseline_text(&baselines, sac_her, env)?,
+            ours_text(&baselines, sac_her, env),
+            ours_text(&baselines, td3_her, env),
         );
     }
     Ok(s)
+}
+
+/// A judged cell of PointMaze's table: seeds solved by gymnasium-robotics' judge of those run,
+/// and the cell's median steps.
+fn judged_text(
+    cells: &[JudgedCell],
+    stats: &[CellStats],
+    method: Method,
+    site: Site,
+) -> Result<String> {
+    let stats = cell(stats, method, site)?;
+    let j = cells.iter().find(|j| j.cell == stats.cell).ok_or_else(|| {
+        Error::parse(
+            Path::new("results/tables"),
+            format!("{}: not judged", stats.cell),
+        )
+    })?;
+    Ok(format!(
+        "{}/{}, {}",
+        j.solved,
+        j.seeds,
+        human_steps(stats.steps_median)
+    ))
+}
+
+/// An outside baseline's cell: runs solved, and from how many steps the first was.
+fn baseline_text(baselines: &[PointMazeBaseline], method: Method, env: EnvName) -> Result<String> {
+    let name: &str = env.into();
+    let b = baselines
+        .iter()
+        .find(|b| b.method == method && b.env == env)
+        .ok_or_else(|| {
+            Error::parse(
+                Path::new("results/tables/outside.pointmaze.csv"),
+                format!("no line for {method} on {name}"),
+            )
+        })?;
+    Ok(match b.solved_at_min {
+        Some(at) => format!("{}/{} (from {})", b.solved, b.runs, human_steps(at as f64)),
+        None => format!("{}/{}", b.solved, b.runs),
+    })
+}
+
+/// Ours by SB3's protocol, on the env's reset law (`<name>_goals`): runs solved of those with
+/// rows (the grid may still be running: `–` where none has a row yet), and the median steps of
+/// the solved ones (over as many runs as were solved: the legend says so, and the docs' table
+/// names the count; the README's line has no room).
+fn ours_text(baselines: &[PointMazeBaseline], method: Method, env: EnvName) -> String {
+    let goals = env.goals_task();
+    let line = baselines
+        .iter()
+        .find(|b| b.library == Library::Ours && b.method == method && Some(b.env) == goals);
+    match line {
+        None => "–".to_string(),
+        Some(b) => match b.solved_at_median {
+            Some(m) => format!("{}/{}, {}", b.solved, b.runs, human_steps(m as f64)),
+            None => format!("{}/{}", b.solved, b.runs),
+        },
+    }
 }
 
 /// `40k (median of 2)`: a median of the steps to solve with the number of runs it is over

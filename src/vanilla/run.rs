@@ -101,6 +101,46 @@ pub struct VanillaRun<'a, E: Env> {
     pub(super) earlier_seconds: f64,
 }
 
+/// With `train.her`, the environment's goals (refused where it has none, or where the replay
+/// buffer cannot hold a whole episode); `None` without HER.
+fn her_goals<'a, E: Env>(
+    env: &'a E,
+    lc: &LearnerConfig,
+    train: &TrainConfig,
+) -> Result<Option<&'a dyn Goals<E::State>>> {
+    if train.her.is_none() {
+        return Ok(None);
+    }
+    Capability::Goals.require(env, "train.her")?;
+    if lc.replay_size() < train.max_episode_steps {
+        return Err(Error::invalid(
+            "learner.replay_size",
+            "must hold a whole episode (train.max_episode_steps) with train.her",
+        ));
+    }
+    Ok(Some(env.goals().expect("required")))
+}
+
+/// With `[train.her] goal_frame = "body"`, the rewrite of the networks' inputs into the body's
+/// frame (refused where the environment has no body); `None` otherwise.
+fn body_frame<S>(
+    goals: Option<&dyn Goals<S>>,
+    train: &TrainConfig,
+) -> Result<Option<fn(&mut [f32])>> {
+    match (goals, &train.her) {
+        (Some(goals), Some(her)) if her.goal_frame == GoalFrame::Body => {
+            Ok(Some(goals.body_frame().ok_or_else(|| {
+                Error::invalid(
+                    "train.her.goal_frame",
+                    "is \"body\", but this environment has no body to see the goal from \
+                     (leave it out: \"world\")",
+                )
+            })?))
+        }
+        _ => Ok(None),
+    }
+}
+
 impl<'a, E: Env> VanillaRun<'a, E> {
     /// A fresh learner and the first episode's start.
     pub fn new(
@@ -112,19 +152,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
     ) -> Result<Self> {
         train.check()?;
         let (obs_dim, act_dim) = (env.obs_dim(), env.action_dim());
-        let goals = match &train.her {
-            Some(_) => {
-                Capability::Goals.require(env, "train.her")?;
-                if lc.replay_size() < train.max_episode_steps {
-                    return Err(Error::invalid(
-                        "learner.replay_size",
-                        "must hold a whole episode (train.max_episode_steps) with train.her",
-                    ));
-                }
-                Some(env.goals().expect("required"))
-            }
-            None => None,
-        };
+        let goals = her_goals(env, lc, train)?;
         let (replay, goal_dim) = match (goals, &train.her) {
             (Some(goals), Some(config)) => {
                 let g = goals.goal_dim();
@@ -137,18 +165,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
                 0,
             ),
         };
-        let frame = match (goals, &train.her) {
-            (Some(goals), Some(her)) if her.goal_frame == GoalFrame::Body => {
-                Some(goals.body_frame().ok_or_else(|| {
-                    Error::invalid(
-                        "train.her.goal_frame",
-                        "is \"body\", but this environment has no body to see the goal from \
-                         (leave it out: \"world\")",
-                    )
-                })?)
-            }
-            _ => None,
-        };
+        let frame = body_frame(goals, train)?;
         let learner = lc.build(obs_dim + goal_dim, &vec![1.0; act_dim], seeds, kernel)?;
         let mut rng_start = seeds.stream(Stream::Start);
         let state = env.sample_start(&mut rng_start);
