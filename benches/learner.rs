@@ -17,7 +17,7 @@ use pbcs::config::Preset;
 use pbcs::learner::replay::{Batch, Replay};
 use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::candle_ref::{self, CandleMlp};
-use pbcs::nn::kernel::{Kernel, Post};
+use pbcs::nn::kernel::{Kernel, Matrix, Post};
 use pbcs::nn::Mlp;
 use pbcs::rng::{Seeds, Stream};
 use rand::Rng;
@@ -45,7 +45,14 @@ fn matmul_rate(kernel: Kernel) -> f64 {
     let b = a.clone();
     let mut c = vec![0.0f32; n * n];
     let s = best_of(5, || {
-        kernel.gemm_nn(n, n, n, &a, (n, 1), &b, n, &mut c, None, Post::Identity)
+        kernel.gemm_nn(
+            (n, n, n),
+            Matrix::rows(&a, n),
+            Matrix::rows(&b, n),
+            &mut c,
+            None,
+            Post::Identity,
+        )
     });
     2.0 * (n * n * n) as f64 / s
 }

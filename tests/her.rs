@@ -6,11 +6,12 @@ use pbcs::envs::maze::{Maze, MazeConfig};
 use pbcs::envs::rooms::TwoRooms;
 use pbcs::envs::three_rooms::ThreeRooms;
 use pbcs::envs::toy::Toy1D;
-use pbcs::learner::her::{GoalSelection, HerConfig, HerReplay};
+use pbcs::learner::her::{GoalSelection, GoalTransition, HerConfig, HerReplay};
 use pbcs::learner::replay::Batch;
 use pbcs::learner::LearnerConfig;
 use pbcs::nn::kernel::Kernel;
 use pbcs::rng::{Seeds, Stream};
+use pbcs::vanilla::GoalInputs;
 use pbcs::vanilla::{train_vanilla, TrainConfig};
 use rand::Rng as _;
 
@@ -113,7 +114,16 @@ fn episode(her: &mut HerReplay, from: f32, len: usize, aim: f32) {
         let (s, s2) = (from + t as f32, from + t as f32 + 1.0);
         let rest = if t % 2 == 1 { -1.0 } else { 0.0 };
         let r = f32::from(u8::from(s2 == aim)) + rest;
-        her.push(&[s], &[0.5], r, &[s2], s2 == aim, &[aim], &[s2], rest);
+        her.push(GoalTransition {
+            obs: &[s],
+            act: &[0.5],
+            rew: r,
+            next_obs: &[s2],
+            done: s2 == aim,
+            desired: &[aim],
+            achieved_next: &[s2],
+            rest,
+        });
     }
     her.end_episode();
 }
@@ -131,16 +141,16 @@ fn future_goals_come_from_later_in_the_same_episode() {
     episode(&mut her, 0.0, 10, 100.0);
     episode(&mut her, 200.0, 5, 100.0);
     // An unfinished episode: never in a batch.
-    her.push(
-        &[500.0],
-        &[0.5],
-        0.0,
-        &[501.0],
-        false,
-        &[100.0],
-        &[501.0],
-        0.0,
-    );
+    her.push(GoalTransition {
+        obs: &[500.0],
+        act: &[0.5],
+        rew: 0.0,
+        next_obs: &[501.0],
+        done: false,
+        desired: &[100.0],
+        achieved_next: &[501.0],
+        rest: 0.0,
+    });
     assert_eq!(her.sampleable(), 15);
     let mut b = Batch::default();
     let mut rng = Seeds::new(1).stream(Stream::Replay);
@@ -318,8 +328,10 @@ fn training_with_her_is_deterministic_and_refused_where_it_cannot_run() {
     let (_, _, length) = pbcs::vanilla::evaluate(
         &maze,
         trained.learner.as_mut(),
-        goals,
-        Some(count),
+        GoalInputs {
+            goals,
+            frame: Some(count),
+        },
         3,
         40,
         &Seeds::new(0),
@@ -331,8 +343,10 @@ fn training_with_her_is_deterministic_and_refused_where_it_cannot_run() {
     let episodes = pbcs::vanilla::greedy_episodes(
         &maze,
         trained.learner.as_mut(),
-        goals,
-        Some(count),
+        GoalInputs {
+            goals,
+            frame: Some(count),
+        },
         starts,
         40,
     );

@@ -8,7 +8,7 @@
 
 use pbcs::learner::replay::Batch;
 use pbcs::learner::td3::{Td3, Td3Config};
-use pbcs::nn::kernel::{transpose, Kernel, Post};
+use pbcs::nn::kernel::{transpose, Kernel, Matrix, Post};
 use pbcs::rng::{Seeds, Stream};
 use proptest::prelude::*;
 use rand::Rng;
@@ -153,7 +153,8 @@ fn gemm_nn_matches_naive(m: usize, k: usize, n: usize, transposed_a: bool, seed:
                 _ => Post::Identity,
             };
             let mut c = vec![f32::NAN; m * n];
-            kernel.gemm_nn(m, k, n, &a, strides, &b, n, &mut c, bias.as_deref(), post);
+            let (a_m, b_m) = (Matrix::strided(&a, strides), Matrix::rows(&b, n));
+            kernel.gemm_nn((m, k, n), a_m, b_m, &mut c, bias.as_deref(), post);
             let want = naive_nn(
                 kernel,
                 (m, k, n),
@@ -185,7 +186,8 @@ fn gemm_nt_matches_naive(m: usize, k: usize, n: usize, seed: u32) {
                 _ => Post::Identity,
             };
             let mut c = vec![f32::NAN; m * n];
-            kernel.gemm_nt(m, k, n, &a, k, &b, k, &mut c, bias.as_deref(), post);
+            let (a_m, b_m) = (Matrix::rows(&a, k), Matrix::rows(&b, k));
+            kernel.gemm_nt((m, k, n), a_m, b_m, &mut c, bias.as_deref(), post);
             let want = naive_nt(
                 kernel,
                 (m, k, n),

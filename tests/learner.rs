@@ -405,7 +405,13 @@ fn the_final_protocol_evaluation_changes_no_training_byte() {
     assert!(starts
         .iter()
         .all(|s| (s - maze.start()).norm() <= 0.1 + 1e-6));
-    let again = pbcs::vanilla::greedy_episodes(&maze, a.learner.as_mut(), None, None, starts, 30);
+    let again = pbcs::vanilla::greedy_episodes(
+        &maze,
+        a.learner.as_mut(),
+        pbcs::vanilla::GoalInputs::NONE,
+        starts,
+        30,
+    );
     assert_eq!(again, b.final_eval);
     for e in &b.final_eval {
         assert!(e.steps >= 1 && e.steps <= 30);

@@ -130,7 +130,13 @@ fn greedy_episodes_through_the_engine_equal_the_plain_loop() {
             .unwrap()
         };
         let (mut a, mut b) = (learner(seed), learner(seed));
-        let engine = pbcs::vanilla::greedy_episodes(&env, &mut a, None, None, starts.clone(), 60);
+        let engine = pbcs::vanilla::greedy_episodes(
+            &env,
+            &mut a,
+            pbcs::vanilla::GoalInputs::NONE,
+            starts.clone(),
+            60,
+        );
         for (e, s) in engine.iter().zip(&starts) {
             let plain = plain_greedy(&env, &mut b, *s);
             assert_eq!((e.success, e.steps), plain, "seed {seed}, start {s}");

@@ -14,7 +14,7 @@
 //! episode stops being sampled.
 //!
 //! ```
-//! use pbcs::learner::her::{HerConfig, HerReplay};
+//! use pbcs::learner::her::{GoalTransition, HerConfig, HerReplay};
 //! use pbcs::learner::replay::Batch;
 //! use pbcs::rng::{Seeds, Stream};
 //! // A 1-D goal space: the goal is the observation; reward 1 exactly at the goal.
@@ -23,7 +23,8 @@
 //! for t in 0..3 {
 //!     let (obs, next) = ([t as f32], [t as f32 + 1.0]);
 //!     // Aiming at 10, never reached: every stored reward is 0.
-//!     her.push(&obs, &[1.0], 0.0, &next, false, &[10.0], &next, 0.0);
+//!     her.push(GoalTransition { obs: &obs, act: &[1.0], rew: 0.0, next_obs: &next, done: false,
+//!                               desired: &[10.0], achieved_next: &next, rest: 0.0 });
 //! }
 //! assert_eq!(her.sampleable(), 0); // the episode is not over
 //! her.end_episode();
@@ -177,6 +178,27 @@ pub struct HerReplay {
     goal: Vec<f32>,
 }
 
+/// One transition as [`HerReplay::push`] stores it.
+#[derive(Debug, Clone, Copy)]
+pub struct GoalTransition<'t> {
+    /// s.
+    pub obs: &'t [f32],
+    /// a.
+    pub act: &'t [f32],
+    /// r.
+    pub rew: f32,
+    /// s′.
+    pub next_obs: &'t [f32],
+    /// Whether s′ is terminal.
+    pub done: bool,
+    /// The episode's goal.
+    pub desired: &'t [f32],
+    /// The goal s′ achieved.
+    pub achieved_next: &'t [f32],
+    /// The part of r that is not the goal's (a relabelled transition keeps it).
+    pub rest: f32,
+}
+
 impl HerReplay {
     /// An empty buffer of `capacity` transitions.
     pub fn new(
@@ -212,20 +234,18 @@ impl HerReplay {
         self.sampleable
     }
 
-    /// Stores one transition of the current episode: s, a, r, s', whether s' is terminal, the
-    /// episode's goal, the goal s' achieved, and the part of r that is not the goal's.
-    #[allow(clippy::too_many_arguments)]
-    pub fn push(
-        &mut self,
-        obs: &[f32],
-        act: &[f32],
-        rew: f32,
-        next_obs: &[f32],
-        done: bool,
-        desired: &[f32],
-        achieved_next: &[f32],
-        rest: f32,
-    ) {
+    /// Stores one transition of the current episode.
+    pub fn push(&mut self, t: GoalTransition<'_>) {
+        let GoalTransition {
+            obs,
+            act,
+            rew,
+            next_obs,
+            done,
+            desired,
+            achieved_next,
+            rest,
+        } = t;
         let w = self.width();
         let i = self.next;
         // Overwriting a finished episode (the ring writes in order: at its first transition):

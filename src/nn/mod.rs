@@ -182,8 +182,7 @@ impl Mlp {
             // Y = relu(X·W + b) on hidden layers, X·W + b on the last.
             ws.kernel.dense_forward(
                 &before[l],
-                &self.params[w..b],
-                &self.params[b..b + fan_out],
+                (&self.params[w..b], &self.params[b..b + fan_out]),
                 (batch, fan_in, fan_out),
                 l + 1 < layers,
                 out,
@@ -369,15 +368,14 @@ impl Adam {
         let c2 = 1.0 - b2.powi(self.t);
         let step = self.lr / c1;
         let c2_sqrt = c2.sqrt();
-        self.kernel.adam(
-            params,
-            grad,
-            &mut self.m,
-            &mut self.v,
-            (b1, b2, self.eps),
+        let h = kernel::AdamStep {
+            b1,
+            b2,
+            eps: self.eps,
             step,
             c2_sqrt,
-        );
+        };
+        self.kernel.adam(params, grad, &mut self.m, &mut self.v, h);
     }
 
     /// Number of subnormal values among the moments (the bench reports it).

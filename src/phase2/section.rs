@@ -79,7 +79,8 @@ impl<E: Env> Section<'_, '_, E> {
         let budget = config.max_env_steps.saturating_sub(self.ledger.spent);
         let states = &inputs.tau[lo..=self.hi];
         let goal = self.along.goal(lo + t);
-        let mut task = SkillTask::new(env, inputs.ready, states, goal, t, learner, rngs, budget)
+        let mut task = SkillTask::new(env, inputs.ready, states, goal, t, learner, rngs)
+            .with_budget(budget)
             .with_entries(self.entries.to_vec())
             .with_starts(inputs.starts)
             .with_lookahead(lookahead)

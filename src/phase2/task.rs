@@ -103,8 +103,8 @@ impl<'a, E: Env> SkillTask<'a, E> {
     /// The task of reaching `goal` (the goal of τ_T, `t`: [`Phase2Config::goal`]) along
     /// `states` with `learner`, whose actions live in [`Phase2Config::learner_bounds`]; random
     /// streams for starts, noise and replay sampling are passed in. The settings come checked
-    /// against `env` ([`super::Ready`]).
-    #[allow(clippy::too_many_arguments)]
+    /// against `env` ([`super::Ready`]). Its step budget is unbounded until
+    /// [`SkillTask::with_budget`] sets it.
     pub fn new(
         env: &'a E,
         ready: super::Ready<'a, E>,
@@ -113,7 +113,6 @@ impl<'a, E: Env> SkillTask<'a, E> {
         t: usize,
         learner: Box<dyn Learner>,
         rngs: [Rng; 3],
-        budget: u64,
     ) -> Self {
         let config = ready.settings();
         let [rng_start, rng_noise, rng_replay] = rngs;
@@ -153,13 +152,20 @@ impl<'a, E: Env> SkillTask<'a, E> {
             rng_noise,
             rng_replay,
             steps: StepCounts::default(),
-            budget,
+            budget: u64::MAX,
             entries: Vec::new(),
             limits: episode_limits(ready, train_limit, &lengths),
             test_limits: episode_limits(ready, greedy_limit, &lengths),
             lookahead: None,
             on_event: None,
         }
+    }
+
+    /// Spends at most `budget` environment steps: once spent, tests and rounds return 0 without
+    /// running.
+    pub fn with_budget(mut self, budget: u64) -> Self {
+        self.budget = budget;
+        self
     }
 
     /// Draws half of the starts at K = 0 from `entries` (where an executed chain entered

@@ -210,18 +210,40 @@ pub struct TrainOutcome {
     pub earlier_seconds: f64,
 }
 
+/// What a policy sees beside each observation: with `goals` (a learner trained with HER) the
+/// episode's goal, rewritten by `frame` when given ([`crate::env::Goals::body_frame`]). `NONE`:
+/// the observation alone.
+pub struct GoalInputs<'g, S> {
+    /// The environment's goals, for a learner trained with HER.
+    pub goals: Option<&'g dyn Goals<S>>,
+    /// The rewrite of the inputs into the body's frame.
+    pub frame: Option<fn(&mut [f32])>,
+}
+
+impl<S> Clone for GoalInputs<'_, S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S> Copy for GoalInputs<'_, S> {}
+
+impl<S> GoalInputs<'_, S> {
+    /// The observation alone.
+    pub const NONE: Self = GoalInputs {
+        goals: None,
+        frame: None,
+    };
+}
+
 /// Runs the greedy policy for `episodes` episodes from [`Env::sample_start`] (stream
-/// [`Stream::Eval`], so evaluation never shifts training's randomness): the fraction that
-/// reached a positive terminal reward, and the mean return and length per episode.
-///
-/// With `goals` (a learner trained with HER), the policy sees each observation followed by
-/// the episode's goal, rewritten by `frame` when given ([`crate::env::Goals::body_frame`]).
-#[allow(clippy::too_many_arguments)]
+/// [`Stream::Eval`], substream `round`, so evaluation never shifts training's randomness): the
+/// fraction that reached a positive terminal reward, and the mean return and length per
+/// episode. The policy sees `inputs` beside each observation.
 pub fn evaluate<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
-    goals: Option<&dyn Goals<E::State>>,
-    frame: Option<fn(&mut [f32])>,
+    inputs: GoalInputs<'_, E::State>,
     episodes: usize,
     max_steps: usize,
     seeds: &Seeds,
@@ -229,11 +251,11 @@ pub fn evaluate<E: Env>(
 ) -> (f32, f32, f32) {
     let mut rng = seeds.substream(Stream::Eval, round);
     let mut greedy = Greedy::new(env, learner);
-    greedy.frame = frame;
+    greedy.frame = inputs.frame;
     let mut wins = 0usize;
     for _ in 0..episodes {
         let start = env.sample_start(&mut rng);
-        aim(&mut greedy, goals, &start);
+        aim(&mut greedy, inputs.goals, &start);
         wins += usize::from(greedy.episode(env, start, max_steps));
     }
     let e = episodes as f32;
@@ -241,16 +263,16 @@ pub fn evaluate<E: Env>(
 }
 
 /// The greedy policy of `learner` from each of `starts`, each episode at most `max_steps`
-/// steps: whether it reached a positive terminal reward, and in how many steps. `goals` and
-/// `frame` as for [`evaluate`].
+/// steps: whether it reached a positive terminal reward, and in how many steps. `inputs` as for
+/// [`evaluate`].
 pub fn greedy_episodes<E: Env>(
     env: &E,
     learner: &mut dyn Learner,
-    goals: Option<&dyn Goals<E::State>>,
-    frame: Option<fn(&mut [f32])>,
+    inputs: GoalInputs<'_, E::State>,
     starts: Vec<E::State>,
     max_steps: usize,
 ) -> Vec<EvalEpisode> {
+    let (goals, frame) = (inputs.goals, inputs.frame);
     let mut greedy = Greedy::new(env, learner);
     greedy.frame = frame;
     starts

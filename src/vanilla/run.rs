@@ -5,7 +5,7 @@
 use super::{evaluate, greedy_episodes, EvalRow, TrainConfig, TrainOutcome, Updates};
 use crate::env::{evaluation_starts, random_action, Capability, Env, Goals};
 use crate::error::{Error, Result};
-use crate::learner::her::{GoalFrame, HerReplay};
+use crate::learner::her::{GoalFrame, GoalTransition, HerReplay};
 use crate::learner::replay::{Batch, Replay};
 use crate::learner::{Learner, LearnerConfig};
 use crate::nn::kernel::Kernel;
@@ -94,12 +94,15 @@ pub struct VanillaRun<'a, E: Env> {
     goals: Option<&'a dyn Goals<E::State>>,
     /// The rewrite of the networks' inputs into the body's frame (`[train.her] goal_frame =
     /// "body"`).
-    frame: Option<fn(&mut [f32])>,
+    frame: Option<Frame>,
     learner: Box<dyn Learner>,
     p: Progress<E::State>,
     /// Wall-clock seconds of the run before it was resumed (0 for a fresh run).
     pub(super) earlier_seconds: f64,
 }
+
+/// A rewrite of the networks' inputs in place (into the body's frame, [`body_frame`]).
+type Frame = fn(&mut [f32]);
 
 /// With `train.her`, the environment's goals (refused where it has none, or where the replay
 /// buffer cannot hold a whole episode); `None` without HER.
@@ -123,10 +126,7 @@ fn her_goals<'a, E: Env>(
 
 /// With `[train.her] goal_frame = "body"`, the rewrite of the networks' inputs into the body's
 /// frame (refused where the environment has no body); `None` otherwise.
-fn body_frame<S>(
-    goals: Option<&dyn Goals<S>>,
-    train: &TrainConfig,
-) -> Result<Option<fn(&mut [f32])>> {
+fn body_frame<S>(goals: Option<&dyn Goals<S>>, train: &TrainConfig) -> Result<Option<Frame>> {
     match (goals, &train.her) {
         (Some(goals), Some(her)) if her.goal_frame == GoalFrame::Body => {
             Ok(Some(goals.body_frame().ok_or_else(|| {
@@ -373,16 +373,16 @@ impl<'a, E: Env> VanillaRun<'a, E> {
             (Store::Her(her), Some(goals)) => {
                 goals.achieved_goal(&p.next_obs, &mut p.achieved);
                 let rest = reward - goals.goal_reward(&p.achieved, &p.desired);
-                her.push(
-                    &p.obs,
-                    &p.action,
-                    reward,
-                    &p.next_obs,
-                    terminal,
-                    &p.desired,
-                    &p.achieved,
+                her.push(GoalTransition {
+                    obs: &p.obs,
+                    act: &p.action,
+                    rew: reward,
+                    next_obs: &p.next_obs,
+                    done: terminal,
+                    desired: &p.desired,
+                    achieved_next: &p.achieved,
                     rest,
-                );
+                });
             }
             (Store::Her(_), None) => unreachable!("a HER replay is made with the env's goals"),
         }
@@ -428,14 +428,22 @@ impl<'a, E: Env> VanillaRun<'a, E> {
         }
     }
 
+    /// What the policy sees beside each observation.
+    fn inputs(&self) -> super::GoalInputs<'a, E::State> {
+        super::GoalInputs {
+            goals: self.goals,
+            frame: self.frame,
+        }
+    }
+
     /// The greedy evaluation after step `step_i`, kept as a row; its success rate.
     fn evaluate(&mut self, step_i: u64) -> f32 {
         let round = self.p.evals.len() as u32;
+        let inputs = self.inputs();
         let (success, mean_return, mean_length) = evaluate(
             self.env,
             self.learner.as_mut(),
-            self.goals,
-            self.frame,
+            inputs,
             self.train.eval_episodes,
             self.train.max_episode_steps,
             self.seeds,
@@ -454,6 +462,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
     /// The outcome, after PBCS's protocol if it is on (it reads only the Eval stream, so it
     /// changes nothing of the training: a run with it and one without train the same bytes).
     pub fn finish(mut self) -> Result<TrainOutcome> {
+        let inputs = self.inputs();
         let mut visited: Vec<Vec<i32>> = self.p.visited.into_iter().collect();
         visited.sort();
         let t = self.train;
@@ -467,8 +476,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
             greedy_episodes(
                 self.env,
                 self.learner.as_mut(),
-                self.goals,
-                self.frame,
+                inputs,
                 starts,
                 t.final_eval_max_steps,
             )

@@ -418,8 +418,8 @@ fn drawn_starts_are_the_chains_start_only() {
             6 - lo,
             learner,
             rngs,
-            1_000_000,
         )
+        .with_budget(1_000_000)
         .at_offset(lo);
         task.test(0);
         let drawn = env.starts_drawn.get();

@@ -85,8 +85,8 @@ fn task_with<'a>(
         t,
         Box::new(learner),
         rngs,
-        budget,
     )
+    .with_budget(budget)
 }
 
 #[test]

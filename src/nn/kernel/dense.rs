@@ -1,17 +1,15 @@
 //! One dense layer (forward, parameter and input gradients) on a kernel's products.
 
-use super::{scalar_epilogue, Kernel, Post, NARROW};
+use super::{scalar_epilogue, Kernel, Matrix, Post, NARROW};
 
 impl Kernel {
     /// One dense layer forward: Y (batch × fan_out) = X·W + b, then ReLU if `relu`. W is
     /// fan_in × fan_out row-major. `scratch` holds Wᵀ when the output is too narrow for
     /// vector lanes.
-    #[allow(clippy::too_many_arguments)]
     pub fn dense_forward(
         self,
         x: &[f32],
-        w: &[f32],
-        b: &[f32],
+        (w, b): (&[f32], &[f32]),
         (batch, fan_in, fan_out): (usize, usize, usize),
         relu: bool,
         y: &mut [f32],
@@ -21,36 +19,15 @@ impl Kernel {
         if fan_out < NARROW && self != Kernel::Matrixmultiply {
             let wt = room(scratch, fan_in * fan_out);
             self.transpose(fan_in, fan_out, w, wt);
-            self.gemm_nt(
-                batch,
-                fan_in,
-                fan_out,
-                x,
-                fan_in,
-                wt,
-                fan_in,
-                y,
-                Some(b),
-                post,
-            );
+            let (x, wt) = (Matrix::rows(x, fan_in), Matrix::rows(wt, fan_in));
+            self.gemm_nt((batch, fan_in, fan_out), x, wt, y, Some(b), post);
         } else {
-            self.gemm_nn(
-                batch,
-                fan_in,
-                fan_out,
-                x,
-                (fan_in, 1),
-                w,
-                fan_out,
-                y,
-                Some(b),
-                post,
-            );
+            let (x, w) = (Matrix::rows(x, fan_in), Matrix::rows(w, fan_out));
+            self.gemm_nn((batch, fan_in, fan_out), x, w, y, Some(b), post);
         }
     }
 
     /// A dense layer's parameter gradients: ∂W (fan_in × fan_out) = Xᵀ·δ and ∂b = Σ_rows δ.
-    #[allow(clippy::too_many_arguments)]
     pub fn dense_param_grad(
         self,
         x: &[f32],
@@ -63,28 +40,28 @@ impl Kernel {
         if fan_out < NARROW && fan_in >= NARROW && self != Kernel::Matrixmultiply {
             // ∂Wᵀ (fan_out × fan_in) = δᵀ·X has wide rows; transpose it back.
             let gwt = room(scratch, fan_out * fan_in);
+            let (delta_t, x) = (
+                Matrix::strided(delta, (1, fan_out)),
+                Matrix::rows(x, fan_in),
+            );
             self.gemm_nn(
-                fan_out,
-                batch,
-                fan_in,
-                delta,
-                (1, fan_out),
+                (fan_out, batch, fan_in),
+                delta_t,
                 x,
-                fan_in,
                 gwt,
                 None,
                 Post::Identity,
             );
             self.transpose(fan_out, fan_in, gwt, gw);
         } else {
+            let (x_t, delta) = (
+                Matrix::strided(x, (1, fan_in)),
+                Matrix::rows(delta, fan_out),
+            );
             self.gemm_nn(
-                fan_in,
-                batch,
-                fan_out,
-                x,
-                (1, fan_in),
+                (fan_in, batch, fan_out),
+                x_t,
                 delta,
-                fan_out,
                 gw,
                 None,
                 Post::Identity,
@@ -95,7 +72,6 @@ impl Kernel {
 
     /// A dense layer's input gradient: ∂X (batch × fan_in) = δ·Wᵀ, zeroed where `below` (the
     /// previous layer's ReLU output, batch × fan_in) is ≤ 0.
-    #[allow(clippy::too_many_arguments)]
     pub fn dense_input_grad(
         self,
         delta: &[f32],
@@ -132,24 +108,13 @@ impl Kernel {
             scalar_epilogue(batch, fan_in, fan_in, dx, None, post);
         } else if fan_in < NARROW {
             // Rows of δ against rows of W: dot products, no transpose.
-            self.gemm_nt(
-                batch, fan_out, fan_in, delta, fan_out, w, fan_out, dx, None, post,
-            );
+            let (delta, w) = (Matrix::rows(delta, fan_out), Matrix::rows(w, fan_out));
+            self.gemm_nt((batch, fan_out, fan_in), delta, w, dx, None, post);
         } else {
             let wt = room(scratch, fan_in * fan_out);
             self.transpose(fan_in, fan_out, w, wt);
-            self.gemm_nn(
-                batch,
-                fan_out,
-                fan_in,
-                delta,
-                (fan_out, 1),
-                wt,
-                fan_in,
-                dx,
-                None,
-                post,
-            );
+            let (delta, wt) = (Matrix::rows(delta, fan_out), Matrix::rows(wt, fan_in));
+            self.gemm_nn((batch, fan_out, fan_in), delta, wt, dx, None, post);
         }
     }
 }

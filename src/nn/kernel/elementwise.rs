@@ -33,25 +33,12 @@ impl Kernel {
     /// expressions in every kernel but `matrixmultiply`, which keeps the earlier form
     /// θ −= s·m / (√v / √c2 + ε) so that it reproduces earlier results; the others use Kingma
     /// and Ba's equivalent θ −= (s·√c2)·m / (√v + ε·√c2), one division fewer per parameter.
-    #[allow(clippy::too_many_arguments)]
-    pub fn adam(
-        self,
-        params: &mut [f32],
-        grad: &[f32],
-        m: &mut [f32],
-        v: &mut [f32],
-        (b1, b2, eps): (f32, f32, f32),
-        step: f32,
-        c2_sqrt: f32,
-    ) {
+    pub fn adam(self, params: &mut [f32], grad: &[f32], m: &mut [f32], v: &mut [f32], h: AdamStep) {
         assert!(grad.len() == params.len() && m.len() == params.len() && v.len() == params.len());
         if self == Kernel::Matrixmultiply {
-            adam_body::<false>(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
+            adam_body::<false>(params, grad, m, v, h)
         } else {
-            elementwise!(
-                self,
-                adam_folded(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
-            )
+            elementwise!(self, adam_folded(params, grad, m, v, h))
         }
     }
 
@@ -88,35 +75,42 @@ fn column_block<const W: usize>(m: &[f32], cols: usize, out: &mut [f32], mut j: 
     j
 }
 
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn adam_folded(
-    params: &mut [f32],
-    grad: &[f32],
-    m: &mut [f32],
-    v: &mut [f32],
-    b1: f32,
-    b2: f32,
-    eps: f32,
-    step: f32,
-    c2_sqrt: f32,
-) {
-    adam_body::<true>(params, grad, m, v, b1, b2, eps, step, c2_sqrt)
+/// The numbers of one Adam step ([`Kernel::adam`]): β₁, β₂, ε, the step lr / (1 − β₁ᵗ), and
+/// √(1 − β₂ᵗ).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdamStep {
+    /// β₁, the first moment's decay.
+    pub b1: f32,
+    /// β₂, the second moment's decay.
+    pub b2: f32,
+    /// ε.
+    pub eps: f32,
+    /// lr / (1 − β₁ᵗ).
+    pub step: f32,
+    /// √(1 − β₂ᵗ).
+    pub c2_sqrt: f32,
 }
 
-#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn adam_folded(params: &mut [f32], grad: &[f32], m: &mut [f32], v: &mut [f32], h: AdamStep) {
+    adam_body::<true>(params, grad, m, v, h)
+}
+
 #[inline(always)]
 fn adam_body<const FOLDED: bool>(
     params: &mut [f32],
     grad: &[f32],
     m: &mut [f32],
     v: &mut [f32],
-    b1: f32,
-    b2: f32,
-    eps: f32,
-    step: f32,
-    c2_sqrt: f32,
+    h: AdamStep,
 ) {
+    let AdamStep {
+        b1,
+        b2,
+        eps,
+        step,
+        c2_sqrt,
+    } = h;
     let (folded_step, folded_eps) = (step * c2_sqrt, eps * c2_sqrt);
     for (((p, g), m), v) in params
         .iter_mut()

@@ -81,6 +81,9 @@ pub(super) fn tree16(mut x: [f32; 16]) -> f32 {
 
 /// See [`super::Kernel::gemm_nn`]: column panels of NR vectors, row blocks of MR rows,
 /// each an MR × NR register tile over the whole k.
+// The raw-pointer inner kernels take BLAS's operands one by one (shape, pointers, strides):
+// the safe dispatchers (`Kernel::gemm_nn`, `gemm_nt`) check them, grouped, first. These five
+// (here and x86.rs) are the crate's only `too_many_arguments`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) unsafe fn gemm_nn<S: Simd>(

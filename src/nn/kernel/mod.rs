@@ -39,14 +39,15 @@
 //! module existed (the committed `results/` of issue 9 and earlier).
 //!
 //! ```
-//! use pbcs::nn::kernel::{Kernel, Post};
+//! use pbcs::nn::kernel::{Kernel, Matrix, Post};
 //!
 //! // C (2 × 3) = A (2 × 2) · B (2 × 3) + bias, then ReLU.
 //! let a = [1.0, 2.0, 3.0, 4.0];
 //! let b = [1.0, 0.0, -1.0, 0.0, 1.0, -1.0];
 //! let mut c = [0.0; 6];
 //! let k = Kernel::detect();
-//! k.gemm_nn(2, 2, 3, &a, (2, 1), &b, 3, &mut c, Some(&[0.5, 0.5, 0.5]), Post::Relu);
+//! let (a, b) = (Matrix::rows(&a, 2), Matrix::rows(&b, 3));
+//! k.gemm_nn((2, 2, 3), a, b, &mut c, Some(&[0.5, 0.5, 0.5]), Post::Relu);
 //! assert_eq!(c, [1.5, 2.5, 0.0, 3.5, 4.5, 0.0]);
 //! ```
 
@@ -202,27 +203,30 @@ impl Kernel {
         );
     }
 
-    /// C (m × n, row-major, row stride `ldc`) = A·B + bias, then `post`. A is m × k with
-    /// strides `(rsa, csa)` (so Aᵀ of a row-major matrix is `(1, cols)`), B is k × n
-    /// row-major with row stride `ldb`, `bias` has n values, a `KeepWherePositive` matrix is
-    /// laid out as C.
+    /// C (m × n, row-major) = A·B + bias, then `post`. A is m × k with any strides (so Aᵀ of a
+    /// row-major matrix is [`Matrix::strided`] `(1, cols)`), B is k × n row-major
+    /// ([`Matrix::rows`]), `bias` has n values, a `KeepWherePositive` matrix is laid out as C.
     ///
     /// # Panics
-    /// If an operand is too short for its shape, or this CPU cannot run the kernel.
-    #[allow(clippy::too_many_arguments)]
+    /// If an operand is too short for its shape, B is not row-major, or this CPU cannot run the
+    /// kernel.
     pub fn gemm_nn(
         self,
-        m: usize,
-        k: usize,
-        n: usize,
-        a: &[f32],
-        (rsa, csa): (usize, usize),
-        b: &[f32],
-        ldb: usize,
+        (m, k, n): (usize, usize, usize),
+        a: Matrix<'_>,
+        b: Matrix<'_>,
         c: &mut [f32],
         bias: Option<&[f32]>,
         post: Post,
     ) {
+        let (
+            Matrix {
+                data: a,
+                strides: (rsa, csa),
+            },
+            ldb,
+        ) = (a, b.row_stride("gemm_nn: B"));
+        let b = b.data;
         let ldc = n;
         if m == 0 || n == 0 {
             return;
@@ -286,25 +290,22 @@ impl Kernel {
     }
 
     /// C (m × n, row-major) = A·Bᵀ + bias, then `post`: C\[i, j\] is the dot product of row i
-    /// of A (m × k, row stride `lda`) and row j of B (n × k, row stride `ldb`). For outputs
-    /// only a few columns wide, where [`Kernel::gemm_nn`] would waste its vector lanes.
+    /// of A (m × k) and row j of B (n × k), both row-major ([`Matrix::rows`]). For outputs only
+    /// a few columns wide, where [`Kernel::gemm_nn`] would waste its vector lanes.
     ///
     /// # Panics
-    /// As [`Kernel::gemm_nn`].
-    #[allow(clippy::too_many_arguments)]
+    /// As [`Kernel::gemm_nn`], and where A is not row-major.
     pub fn gemm_nt(
         self,
-        m: usize,
-        k: usize,
-        n: usize,
-        a: &[f32],
-        lda: usize,
-        b: &[f32],
-        ldb: usize,
+        (m, k, n): (usize, usize, usize),
+        a: Matrix<'_>,
+        b: Matrix<'_>,
         c: &mut [f32],
         bias: Option<&[f32]>,
         post: Post,
     ) {
+        let (lda, ldb) = (a.row_stride("gemm_nt: A"), b.row_stride("gemm_nt: B"));
+        let (a, b) = (a.data, b.data);
         let ldc = n;
         if m == 0 || n == 0 {
             return;
@@ -357,6 +358,36 @@ impl Kernel {
             #[cfg(not(target_arch = "x86_64"))]
             Kernel::Avx2 | Kernel::Avx512 => unreachable!(),
         }
+    }
+}
+
+/// A matrix operand of a product: its values and its strides (between rows, between columns).
+#[derive(Debug, Clone, Copy)]
+pub struct Matrix<'a> {
+    /// The values.
+    pub data: &'a [f32],
+    /// (row stride, column stride).
+    pub strides: (usize, usize),
+}
+
+impl<'a> Matrix<'a> {
+    /// A row-major matrix whose rows are `row_stride` apart.
+    pub fn rows(data: &'a [f32], row_stride: usize) -> Self {
+        Matrix {
+            data,
+            strides: (row_stride, 1),
+        }
+    }
+
+    /// A matrix of any strides (row, column).
+    pub fn strided(data: &'a [f32], strides: (usize, usize)) -> Self {
+        Matrix { data, strides }
+    }
+
+    /// The row stride of a row-major matrix; a panic naming `what` for another layout.
+    fn row_stride(&self, what: &str) -> usize {
+        assert_eq!(self.strides.1, 1, "{what} must be row-major");
+        self.strides.0
     }
 }
 
@@ -426,5 +457,5 @@ mod generic;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-pub use elementwise::transpose;
+pub use elementwise::{transpose, AdamStep};
 use generic::Portable;

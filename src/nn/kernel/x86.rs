@@ -202,6 +202,7 @@ pub(super) unsafe fn transpose_avx(rows: usize, cols: usize, src: *const f32, ds
 
 macro_rules! entry {
     ($feat:literal, $unit:ty, $nn:ident, $nt:ident, $dv:literal, $ew:ident) => {
+        // As generic.rs's inner kernels: BLAS's operands one by one, checked by the caller.
         #[allow(clippy::too_many_arguments)]
         #[target_feature(enable = $feat)]
         pub(super) unsafe fn $nn(
