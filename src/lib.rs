@@ -50,38 +50,39 @@
 
 #![warn(missing_docs)]
 
-#[cfg(feature = "polars")]
-pub mod aggregate;
 pub mod checkpoint;
-pub mod claims;
 pub mod config;
-pub mod criteria;
 pub mod env;
 pub mod envs;
 pub mod error;
-pub mod experiment;
-pub mod figures;
 pub mod fmt;
-pub mod launch;
 pub mod learner;
-pub mod mathtext;
 pub mod name;
 pub mod nn;
 pub mod phase1;
 pub mod phase2;
 pub mod picture;
-pub mod pipeline;
-pub mod plot;
 pub mod policy;
 pub mod record;
-pub mod report;
-pub mod reproduce;
 pub mod rng;
 pub mod rollout;
 pub mod runs;
 pub mod stats;
-pub mod tables;
 pub mod validate;
 pub mod vanilla;
 
 pub use error::{Error, Result};
+
+/// The lab that reproduces the paper (experiments, sweeps, tables, claims, figures, the
+/// report): feature `lab`, on by default; the core above compiles without it, and without
+/// plotters and polars (`cargo check --lib --no-default-features`). Its modules are named at
+/// the crate's root as they were before it had a folder (`pbcs::experiment`, `pbcs::tables`).
+#[cfg(feature = "lab")]
+pub mod lab;
+#[cfg(feature = "polars")]
+pub use lab::aggregate;
+#[cfg(feature = "lab")]
+pub use lab::{
+    claims, criteria, experiment, figures, launch, mathtext, pipeline, plot, report, reproduce,
+    tables,
+};

@@ -14,7 +14,7 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
-static FONT: &[u8] = include_bytes!("../figures/fonts/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../figures/fonts/DejaVuSans.ttf");
 
 /// Registers the bundled font as "sans-serif" (idempotent).
 pub fn register_font() {

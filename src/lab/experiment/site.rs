@@ -229,7 +229,7 @@ pub fn paper_run(variant: Variant, site: Site) -> (Option<u64>, Option<bool>) {
     }
     let path = std::path::Path::new("experiments/table.toml");
     let spec: Option<PaperRuns> =
-        crate::validate::parse_toml(include_str!("../../experiments/table.toml"), path).ok();
+        crate::validate::parse_toml(include_str!("../../../experiments/table.toml"), path).ok();
     let method = spec
         .as_ref()
         .and_then(|s| s.method.iter().find(|m| m.name == variant.name()));
