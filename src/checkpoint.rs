@@ -37,8 +37,8 @@ pub const EVERY: Duration = Duration::from_secs(600);
 /// The format of a vanilla run's checkpoint ([`crate::vanilla::resume`]): a file of another
 /// format or version is refused by it. Bump the version with any change to what a vanilla run
 /// computes or to its state's layout (version 2: the learner's and the run's states in one
-/// body).
-pub const VANILLA: &str = "pbcs vanilla run checkpoint, version 2";
+/// body; 3: each HER row holds the goal its target bootstraps through, for value chaining).
+pub const VANILLA: &str = "pbcs vanilla run checkpoint, version 3";
 
 /// The format of a PBCS run's checkpoint ([`crate::runs::pbcs_resume`]). Bump the version with
 /// any change to what a PBCS run computes or to its saved state's layout.

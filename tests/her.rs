@@ -123,6 +123,7 @@ fn episode(her: &mut HerReplay, from: f32, len: usize, aim: f32) {
             desired: &[aim],
             achieved_next: &[s2],
             rest,
+            chained: None,
         });
     }
     her.end_episode();
@@ -150,6 +151,7 @@ fn future_goals_come_from_later_in_the_same_episode() {
         desired: &[100.0],
         achieved_next: &[501.0],
         rest: 0.0,
+        chained: None,
     });
     assert_eq!(her.sampleable(), 15);
     let mut b = Batch::default();

@@ -24,7 +24,7 @@
 //!     let (obs, next) = ([t as f32], [t as f32 + 1.0]);
 //!     // Aiming at 10, never reached: every stored reward is 0.
 //!     her.push(GoalTransition { obs: &obs, act: &[1.0], rew: 0.0, next_obs: &next, done: false,
-//!                               desired: &[10.0], achieved_next: &next, rest: 0.0 });
+//!                               desired: &[10.0], achieved_next: &next, rest: 0.0, chained: None });
 //! }
 //! assert_eq!(her.sampleable(), 0); // the episode is not over
 //! her.end_episode();
@@ -149,6 +149,10 @@ struct Relabelling {
     goal_selection_strategy: GoalSelection,
 }
 
+/// How a relabelled transition is rewarded and ended: `(achieved, goal, rest, stored end)` to
+/// `(reward, end)`.
+type Relabel<'f> = dyn Fn(&[f32], &[f32], f32, f32) -> (f32, f32) + 'f;
+
 /// Whole episodes of transitions with their goals, sampled with relabelled goals.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HerReplay {
@@ -158,8 +162,9 @@ pub struct HerReplay {
     obs_dim: usize,
     act_dim: usize,
     goal_dim: usize,
-    /// Per transition: s, a, r, s', done, desired goal, goal achieved in s', the reward's part
-    /// that is not the goal's.
+    /// Per transition: s, a, r, s', done, desired goal, the goal its own target bootstraps
+    /// through (the desired one but with value chaining), goal achieved in s', the reward's
+    /// part that is not the goal's.
     rows: Vec<f32>,
     /// Per transition: where its episode began (ring index).
     ep_start: Vec<usize>,
@@ -197,6 +202,11 @@ pub struct GoalTransition<'t> {
     pub achieved_next: &'t [f32],
     /// The part of r that is not the goal's (a relabelled transition keeps it).
     pub rest: f32,
+    /// The goal this transition's own target bootstraps through, when it is not `desired`:
+    /// value chaining's next sub-goal at a step that reached its own
+    /// ([`crate::phase2::goal_conditioned`]). A relabelled copy bootstraps through its new
+    /// goal, as every relabelled transition does. `None`: `desired`.
+    pub chained: Option<&'t [f32]>,
 }
 
 impl HerReplay {
@@ -226,7 +236,7 @@ impl HerReplay {
     }
 
     fn width(&self) -> usize {
-        2 * self.obs_dim + self.act_dim + 3 + 2 * self.goal_dim
+        2 * self.obs_dim + self.act_dim + 3 + 3 * self.goal_dim
     }
 
     /// Transitions that can be sampled (those of finished episodes still whole in the ring).
@@ -245,6 +255,7 @@ impl HerReplay {
             desired,
             achieved_next,
             rest,
+            chained,
         } = t;
         let w = self.width();
         let i = self.next;
@@ -265,6 +276,7 @@ impl HerReplay {
             next_obs,
             &[f32::from(u8::from(done))],
             desired,
+            chained.unwrap_or(desired),
             achieved_next,
             &[rest],
         ]
@@ -314,6 +326,57 @@ impl HerReplay {
         reward: &dyn Fn(&[f32], &[f32]) -> f32,
         out: &mut Batch,
     ) -> bool {
+        let relabel = |achieved: &[f32], goal: &[f32], rest: f32, done: f32| {
+            (reward(achieved, goal) + rest, done)
+        };
+        self.sample_with(n, rng, &relabel, out)
+    }
+
+    /// [`HerReplay::sample`] for a task that ends where its goal is reached (a goal-conditioned
+    /// chain's sub-goals): a relabelled transition whose next observation `reached(achieved,
+    /// goal)` gets reward 1 and ends there (its target does not bootstrap), any other reward 0
+    /// and its stored end.
+    ///
+    /// ```
+    /// use pbcs::learner::her::{GoalTransition, HerConfig, HerReplay};
+    /// use pbcs::learner::replay::Batch;
+    /// use pbcs::rng::{Seeds, Stream};
+    /// let mut her = HerReplay::new(10, 1, 1, 1, HerConfig { n_sampled_goal: 1_000_000, ..HerConfig::default() });
+    /// her.push(GoalTransition { obs: &[0.0], act: &[1.0], rew: 0.0, next_obs: &[1.0], done: false,
+    ///                           desired: &[5.0], achieved_next: &[1.0], rest: 0.0, chained: None });
+    /// her.end_episode();
+    /// let mut batch = Batch::default();
+    /// let reached = |a: &[f32], g: &[f32]| (a[0] - g[0]).abs() <= 0.1;
+    /// assert!(her.sample_reaching(4, &mut Seeds::new(0).stream(Stream::Replay), &reached, &mut batch));
+    /// // Every row relabelled with the goal its step achieved: reached, rewarded and ended.
+    /// assert_eq!((batch.rew[3], batch.done[3], batch.next_obs[7]), (1.0, 1.0, 1.0));
+    /// ```
+    pub fn sample_reaching(
+        &mut self,
+        n: usize,
+        rng: &mut Rng,
+        reached: &dyn Fn(&[f32], &[f32]) -> bool,
+        out: &mut Batch,
+    ) -> bool {
+        let relabel = |achieved: &[f32], goal: &[f32], _rest: f32, done: f32| {
+            if reached(achieved, goal) {
+                (1.0, 1.0)
+            } else {
+                (0.0, done)
+            }
+        };
+        self.sample_with(n, rng, &relabel, out)
+    }
+
+    /// A mini-batch of `n`, a relabelled transition's reward and end given by
+    /// `relabel(achieved, goal, rest, stored end)`.
+    fn sample_with(
+        &mut self,
+        n: usize,
+        rng: &mut Rng,
+        relabel: &Relabel<'_>,
+        out: &mut Batch,
+    ) -> bool {
         if self.sampleable == 0 {
             return false;
         }
@@ -344,6 +407,7 @@ impl HerReplay {
             let (s2, rest) = rest.split_at(o);
             let (done, rest) = rest.split_at(1);
             let (desired, rest) = rest.split_at(g);
+            let (chained, rest) = rest.split_at(g);
             let (achieved, other) = rest.split_at(g);
             let goal_and_reward = if k < real {
                 None
@@ -356,19 +420,20 @@ impl HerReplay {
                     GoalSelection::Episode => rng.random_range(0..len),
                 };
                 let j = (start + t2) % self.capacity;
-                let at = j * w + 2 * o + a + 2 + g;
+                let at = j * w + 2 * o + a + 2 + 2 * g;
                 self.goal.copy_from_slice(&self.rows[at..at + g]);
-                Some(reward(achieved, &self.goal) + other[0])
+                Some(relabel(achieved, &self.goal, other[0], done[0]))
             };
-            let goal = match goal_and_reward {
-                Some(_) => &self.goal[..],
-                None => desired,
+            let (goal, next_goal) = match goal_and_reward {
+                Some(_) => (&self.goal[..], &self.goal[..]),
+                None => (desired, chained),
             };
+            let (rew, end) = goal_and_reward.unwrap_or((r[0], done[0]));
             out.obs.extend(s.iter().chain(goal));
             out.act.extend_from_slice(act);
-            out.rew.push(goal_and_reward.unwrap_or(r[0]));
-            out.next_obs.extend(s2.iter().chain(goal));
-            out.done.push(done[0]);
+            out.rew.push(rew);
+            out.next_obs.extend(s2.iter().chain(next_goal));
+            out.done.push(end);
         }
         true
     }

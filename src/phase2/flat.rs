@@ -5,6 +5,7 @@
 //! that make no sense cannot be written. The conversions both ways are here.
 
 use super::goal::BallMetric;
+use super::goal_conditioned::settings::{ChainName, ChainStrategy, GoalConditioned};
 use super::{
     ChainCheck, DeadWalk, EpisodeLimit, FastTests, FirstStarts, Ideas, InputMode, KWalk, LastGoal,
     Phase2Config, SkillInit, StartMode, Stopping,
@@ -100,6 +101,13 @@ pub struct FlatPhase2 {
     pub eval_episodes: usize,
     /// [`Phase2Config::eval_max_steps`].
     pub eval_max_steps: usize,
+    /// [`Phase2Config::chain`] (`per_skill`, the default, not written).
+    #[serde(skip_serializing_if = "ChainName::is_per_skill")]
+    pub chain: ChainName,
+    /// The settings of `chain = "goal_conditioned"` (`[phase2.goal_conditioned]`; absent: its
+    /// defaults; refused with the per-skill chain).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub goal_conditioned: Option<GoalConditioned>,
 }
 
 impl Default for FlatPhase2 {
@@ -137,6 +145,21 @@ fn positive(p: f32) -> Option<f32> {
 }
 
 impl FlatPhase2 {
+    /// The chaining strategy the flat form names; refuses its settings' table without it.
+    fn typed_chain(&self) -> Result<ChainStrategy> {
+        match (self.chain, &self.goal_conditioned) {
+            (ChainName::PerSkill, None) => Ok(ChainStrategy::PerSkill),
+            (ChainName::PerSkill, Some(_)) => Err(Error::invalid(
+                "phase2.goal_conditioned",
+                "sets the goal-conditioned chain, while phase2.chain is \"per_skill\": set \
+                 phase2.chain = \"goal_conditioned\", or leave the table out",
+            )),
+            (ChainName::GoalConditioned, s) => Ok(ChainStrategy::GoalConditioned(Box::new(
+                s.clone().unwrap_or_default(),
+            ))),
+        }
+    }
+
     /// The episode limit the flat form writes; refuses, naming both fields, what the typed
     /// form cannot hold (a setting without the one it needs, or both path limits).
     fn typed_limit(&self) -> Result<Option<EpisodeLimit>> {
@@ -271,6 +294,7 @@ impl TryFrom<FlatPhase2> for Phase2Config {
                 }),
                 shorten: f.shorten,
             },
+            chain: f.typed_chain()?,
         };
         config.check()?;
         Ok(config)
@@ -322,6 +346,14 @@ impl From<Phase2Config> for FlatPhase2 {
             max_env_steps: c.max_env_steps,
             eval_episodes: c.eval_episodes,
             eval_max_steps: c.eval_max_steps,
+            chain: match c.chain {
+                ChainStrategy::PerSkill => ChainName::PerSkill,
+                ChainStrategy::GoalConditioned(_) => ChainName::GoalConditioned,
+            },
+            goal_conditioned: match c.chain {
+                ChainStrategy::PerSkill => None,
+                ChainStrategy::GoalConditioned(s) => Some(*s),
+            },
         }
     }
 }

@@ -296,6 +296,13 @@ pub struct Inputs {
     /// told the goal through where it stands from it. Absent in a manifest: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub episode_goal: bool,
+    /// A sub-goal the networks see after the observation, as its offset from the position
+    /// (goal − position; a goal-conditioned chain's skill, [`super::goal_conditioned`]): empty
+    /// for a skill that sees the observation alone (every per-skill chain's). With
+    /// [`Inputs::episode_goal`] the episode's own goal takes its place (the last sub-goal).
+    /// Absent in a manifest: empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub goal: Vec<f32>,
 }
 
 impl Inputs {
@@ -305,14 +312,52 @@ impl Inputs {
             origin,
             action_scale,
             episode_goal: false,
+            goal: Vec::new(),
         }
+    }
+
+    /// The inputs of a goal-conditioned skill aiming at `goal` (a point of the position space):
+    /// the observation as it is, then `goal` − position; with `episode_goal`, each episode's
+    /// own goal instead of `goal` (the last sub-goal). Actions in [−1, 1] scaled by
+    /// `action_scale`.
+    ///
+    /// ```
+    /// use pbcs::phase2::goal::Inputs;
+    /// let inputs = Inputs::toward_goal(2, vec![3.0, 1.0], false, vec![0.1, 0.1]);
+    /// let mut seen = Vec::new();
+    /// inputs.observation_toward(&[1.0, 1.5], None, &mut seen);
+    /// assert_eq!(seen, [1.0, 1.5, 2.0, -0.5]);
+    /// // The last sub-goal sees each episode's own goal.
+    /// let last = Inputs::toward_goal(2, vec![3.0, 1.0], true, vec![0.1, 0.1]);
+    /// last.observation_toward(&[1.0, 1.5], Some(&[4.0, 2.0]), &mut seen);
+    /// assert_eq!(seen, [1.0, 1.5, 3.0, 0.5]);
+    /// ```
+    pub fn toward_goal(
+        obs_dim: usize,
+        goal: Vec<f32>,
+        episode_goal: bool,
+        action_scale: Vec<f32>,
+    ) -> Self {
+        Inputs {
+            episode_goal,
+            goal,
+            ..Inputs::new(vec![0.0; obs_dim], action_scale)
+        }
+    }
+
+    /// How many numbers the networks see: the observation's, and the sub-goal's where there
+    /// is one.
+    pub fn input_dim(&self) -> usize {
+        self.origin.len() + self.goal.len()
     }
 
     /// These inputs for an episode whose goal is `goal` (its position): with
     /// [`Inputs::episode_goal`], the origin's position moved there; otherwise unchanged.
     pub fn toward(&self, goal: &[f32]) -> Inputs {
         let mut moved = self.clone();
-        if self.episode_goal {
+        if self.episode_goal && !self.goal.is_empty() {
+            moved.goal = goal.to_vec();
+        } else if self.episode_goal {
             for (o, g) in moved.origin.iter_mut().zip(goal) {
                 *o = *g;
             }
@@ -348,13 +393,27 @@ impl Inputs {
     /// [`Inputs::observation`] in an episode whose goal is `goal`: with
     /// [`Inputs::episode_goal`] and a goal, the position relative to it; otherwise (no goal
     /// given: the task's own, `origin`) the same.
+    ///
+    /// A goal-conditioned skill ([`Inputs::toward_goal`]) sees the observation, then its
+    /// sub-goal (with [`Inputs::episode_goal`] and a goal: that goal) minus the position.
+    /// `out` is resized to [`Inputs::input_dim`].
     #[inline]
-    pub fn observation_toward(&self, raw: &[f32], goal: Option<&[f32]>, out: &mut [f32]) {
-        self.observation(raw, out);
-        if let (true, Some(goal)) = (self.episode_goal, goal) {
-            for ((o, r), g) in out.iter_mut().zip(raw).zip(goal) {
-                *o = r - g;
+    pub fn observation_toward(&self, raw: &[f32], goal: Option<&[f32]>, out: &mut Vec<f32>) {
+        out.resize(self.input_dim(), 0.0);
+        let (seen, sub_goal) = out.split_at_mut(self.origin.len());
+        self.observation(raw, seen);
+        let episode = goal.filter(|_| self.episode_goal);
+        if self.goal.is_empty() {
+            if let Some(goal) = episode {
+                for ((o, r), g) in seen.iter_mut().zip(raw).zip(goal) {
+                    *o = r - g;
+                }
             }
+            return;
+        }
+        let aim = episode.unwrap_or(&self.goal);
+        for ((o, g), x) in sub_goal.iter_mut().zip(aim).zip(raw) {
+            *o = g - x;
         }
     }
 

@@ -69,6 +69,9 @@ pub(crate) struct ManifestSkill {
     /// [`Inputs::episode_goal`] (absent: `false`, as in every manifest before it).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     episode_goal: bool,
+    /// [`Inputs::goal`] (absent: empty, a skill that sees the observation alone).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    goal: Vec<f32>,
 }
 
 fn mlp_kind() -> String {
@@ -110,9 +113,22 @@ impl SkillChain {
             manifest.job_sha256 = Some(crate::record::sha256_hex(text.as_bytes()));
         }
         for (i, skill) in self.skills.iter().enumerate() {
-            let file = format!("skill{i}.safetensors");
-            skill.policy.save(&dir.join(&file))?;
-            let sha256 = Some(crate::record::file_sha256(&dir.join(&file))?);
+            // Skills that share one policy (a goal-conditioned chain's) share its file.
+            let earlier = self.skills[..i]
+                .iter()
+                .position(|e| e.policy.same(skill.policy.as_ref()));
+            let (file, sha256) = match earlier {
+                Some(j) => (
+                    manifest.skills[j].file.clone(),
+                    manifest.skills[j].sha256.clone(),
+                ),
+                None => {
+                    let file = format!("skill{i}.safetensors");
+                    skill.policy.save(&dir.join(&file))?;
+                    let sha256 = Some(crate::record::file_sha256(&dir.join(&file))?);
+                    (file, sha256)
+                }
+            };
             manifest.skills.push(ManifestSkill {
                 file,
                 policy: skill.policy.kind().to_string(),
@@ -127,6 +143,7 @@ impl SkillChain {
                 origin: skill.inputs.origin.clone(),
                 action_scale: skill.inputs.action_scale.clone(),
                 episode_goal: skill.inputs.episode_goal,
+                goal: skill.inputs.goal.clone(),
             });
         }
         let text = crate::validate::to_toml(&manifest, &dir.join("manifest.toml"))?;
@@ -161,8 +178,33 @@ impl SkillChain {
         let manifest: Manifest = crate::validate::read_toml(&path)?;
         manifest.check(&path)?;
         manifest.check_files(dir, &path)?;
-        let mut skills = Vec::new();
+        let mut skills: Vec<Skill> = Vec::new();
+        let files: Vec<String> = manifest.skills.iter().map(|m| m.file.clone()).collect();
         for (i, m) in manifest.skills.into_iter().enumerate() {
+            // A policy file shared by skills (a goal-conditioned chain's) is read once.
+            if let Some(j) = files[..i].iter().position(|f| *f == m.file) {
+                let shared = m;
+                let policy = skills[j].policy.clone();
+                let same = policy.kind() == shared.policy
+                    && policy.sizes() == shared.sizes.as_slice()
+                    && policy.action_bounds() == shared.action_bounds.as_slice();
+                if !same {
+                    return Err(Error::parse(
+                        &path,
+                        format!(
+                            "skills[{i}].file: {} is skills[{j}]'s, whose policy is a {} of \
+                             sizes {:?} (and its action bounds), not a {} of sizes {:?}",
+                            shared.file,
+                            policy.kind(),
+                            policy.sizes(),
+                            shared.policy,
+                            shared.sizes
+                        ),
+                    ));
+                }
+                skills.push(shared.into_skill(policy));
+                continue;
+            }
             // Sizes that promise more parameters than the file holds are refused before the
             // network is allocated (a typo in `sizes` must not exhaust the memory).
             let weights = dir.join(&m.file);
@@ -189,22 +231,30 @@ impl SkillChain {
                     other => other,
                 },
             )?;
-            skills.push(Skill {
-                policy,
-                activation: Ball {
-                    center: m.center,
-                    radius: m.radius,
-                    weights: m.weights,
-                },
-                start_index: m.start_index,
-                target_index: m.target_index,
-                inputs: Inputs {
-                    episode_goal: m.episode_goal,
-                    ..Inputs::new(m.origin, m.action_scale)
-                },
-            });
+            skills.push(m.into_skill(policy));
         }
         Ok(SkillChain { skills, kernel })
+    }
+}
+
+impl ManifestSkill {
+    /// The skill this entry describes, acting by `policy` (its file, read).
+    fn into_skill(self, policy: Box<dyn crate::policy::Policy>) -> Skill {
+        Skill {
+            policy,
+            activation: Ball {
+                center: self.center,
+                radius: self.radius,
+                weights: self.weights,
+            },
+            start_index: self.start_index,
+            target_index: self.target_index,
+            inputs: Inputs {
+                episode_goal: self.episode_goal,
+                goal: self.goal,
+                ..Inputs::new(self.origin, self.action_scale)
+            },
+        }
     }
 }
 
@@ -386,6 +436,28 @@ impl ManifestSkill {
         Ok(())
     }
 
+    /// How many of the network's inputs are the observation: all but a goal-conditioned
+    /// skill's sub-goal, which follows it (refused when it leaves none, or is not finite).
+    fn observation_inputs(&self) -> std::result::Result<usize, (&'static str, String)> {
+        if self.goal.len() >= self.sizes[0] {
+            return Err((
+                "goal",
+                format!(
+                    "has {} values, more than the network's {} inputs leave the observation",
+                    self.goal.len(),
+                    self.sizes[0]
+                ),
+            ));
+        }
+        if self.goal.iter().any(|v| !v.is_finite()) {
+            return Err((
+                "goal",
+                format!("must be finite numbers, got {:?}", self.goal),
+            ));
+        }
+        Ok(self.sizes[0] - self.goal.len())
+    }
+
     /// The first bad value of the skill, as (field, why).
     fn check(&self) -> std::result::Result<(), (&'static str, String)> {
         let plain = Path::new(&self.file).file_name() == Some(std::ffi::OsStr::new(&self.file));
@@ -415,7 +487,7 @@ impl ManifestSkill {
         }
         // The policy's actions per observation: its kind says how its network gives them (an
         // unknown kind is refused when the policy loads, naming the field).
-        let input = self.sizes[0];
+        let input = self.observation_inputs()?;
         let output = crate::learner::policy_action_dim(&self.policy, &self.sizes)
             .unwrap_or(self.sizes[self.sizes.len() - 1]);
         let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);

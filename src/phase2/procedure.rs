@@ -30,6 +30,7 @@
 //! ```
 
 use super::goal::{BallMetric, Goal, Inputs};
+use super::goal_conditioned::settings::ChainStrategy;
 use super::{FirstStarts, LastGoal, StartMode};
 use crate::env::Env;
 use crate::error::{Error, Result};
@@ -74,6 +75,9 @@ pub struct Phase2Config {
     pub eval_max_steps: usize,
     /// Our ideas, each off ([`Ideas::NONE`]) in the paper's procedure.
     pub ideas: Ideas,
+    /// How τ becomes a chain: the paper's skills, one per Backplay stall (the default), or
+    /// one goal-conditioned learner along τ ([`super::goal_conditioned`]).
+    pub chain: ChainStrategy,
 }
 
 /// What a skill's networks see and emit.
@@ -310,6 +314,7 @@ impl Default for Phase2Config {
             eval_episodes: 100,
             eval_max_steps: 5_000,
             ideas: Ideas::NONE,
+            chain: ChainStrategy::PerSkill,
         }
     }
 }
@@ -346,6 +351,9 @@ impl Check for Phase2Config {
         }
         self.check_repeats()?;
         self.check_ball()?;
+        if let ChainStrategy::GoalConditioned(settings) = &self.chain {
+            settings.check()?;
+        }
         self.check_combinations()
     }
 }

@@ -38,6 +38,9 @@ impl Phase2Config {
     pub fn require_hooks<E: Env + ?Sized>(&self, env: &E) -> Result<()> {
         use crate::env::Capability;
         let i = &self.ideas;
+        if let super::ChainStrategy::GoalConditioned(_) = self.chain {
+            Capability::Goals.require(env, "phase2.chain = \"goal_conditioned\"")?;
+        }
         match self.start {
             StartMode::Ball => Capability::SampleBall.require(env, "phase2.start = \"ball\"")?,
             // Where no archived state lies in the ball, the environment's own sample.

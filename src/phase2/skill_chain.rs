@@ -194,13 +194,13 @@ impl SkillChain {
     }
 
     /// Skill `i`'s action at observation `raw`, in the environment's units, into `action`
-    /// (`obs` is scratch space of the observation's length): π_i on what it sees
+    /// (`obs` is scratch space, resized to what π_i sees): π_i on what it sees
     /// ([`Inputs::observation`]), scaled back by [`Inputs::env_action`].
     pub fn act(
         &self,
         i: usize,
         raw: &[f32],
-        obs: &mut [f32],
+        obs: &mut Vec<f32>,
         action: &mut [f32],
         ws: &mut crate::nn::Workspace,
     ) {
@@ -216,7 +216,7 @@ impl SkillChain {
         i: usize,
         raw: &[f32],
         goal: Option<&[f32]>,
-        obs: &mut [f32],
+        obs: &mut Vec<f32>,
         action: &mut [f32],
         ws: &mut crate::nn::Workspace,
     ) {
@@ -262,14 +262,29 @@ impl SkillChain {
         for (i, s) in self.skills.iter().enumerate() {
             let sizes = s.policy.sizes();
             let (input, output) = (s.policy.obs_dim(), s.policy.action_dim());
-            if input != env.obs_dim() || output != env.action_dim() {
+            let seen = env.obs_dim() + s.inputs.goal.len();
+            if input != seen || output != env.action_dim() {
+                let goal = match s.inputs.goal.len() {
+                    0 => String::new(),
+                    g => format!(" and a sub-goal of {g}"),
+                };
                 return Err(Error::parse(
                     path,
                     format!(
                         "skills[{i}].sizes: {sizes:?} takes {input} inputs and gives {output} \
-                         actions, the environment has {} observations and {} actions",
+                         actions, the environment has {} observations{goal} and {} actions",
                         env.obs_dim(),
                         env.action_dim()
+                    ),
+                ));
+            }
+            if !s.inputs.goal.is_empty() && s.inputs.goal.len() != env.position_dims() {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "skills[{i}].goal: has {} values, the environment's position {}",
+                        s.inputs.goal.len(),
+                        env.position_dims()
                     ),
                 ));
             }

@@ -12,8 +12,8 @@ use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase1::{explore, Exploration};
 use crate::phase2::{
-    ArchiveStarts, Failure, Phase2Inputs, Phase2Outcome, Phase2Run, Progress, Ready, SkillChain,
-    StartMode, Variant,
+    ArchiveStarts, ChainStrategy, Failure, Phase2Inputs, Phase2Outcome, Phase2Run, Progress, Ready,
+    SkillChain, StartMode, Variant,
 };
 use crate::picture::{Draw, PictureData, RunPicture};
 use crate::record::{write_csv, write_record};
@@ -175,18 +175,18 @@ impl<E: Planar> PbcsRun<E> {
             .after(found.env_steps)
             .with_starts(archived.as_ref().map(|a| a as &dyn SampleBall<E::State>));
         let mut progress = progress;
-        let mut run = match from {
-            None => Phase2Run::new(inputs)?,
-            Some(state) => Phase2Run::resume(inputs, state)?,
-        };
-        while run.next_problem(&mut progress)?.is_continue() {
-            if let Some(saver) = saver.as_mut() {
-                if saver.pause(&run)? {
-                    return Ok(None);
+        let phase2 = match &job.phase2.chain {
+            ChainStrategy::PerSkill => {
+                match per_skill(inputs, from, saver.as_mut(), &mut progress)? {
+                    Some(outcome) => outcome,
+                    None => return Ok(None),
                 }
             }
-        }
-        let phase2 = run.finish(&mut progress)?;
+            // Not cut between learning problems: one run to its end.
+            ChainStrategy::GoalConditioned(settings) => {
+                crate::phase2::chain_goal_conditioned(inputs, settings, &mut progress)?
+            }
+        };
         // Evaluation: episodes from starts uniform in B_ε(s_0) (or drawn: `first_starts`),
         // stream Eval.
         let (evaluation, rollouts) = if phase2.failure.is_none() && !phase2.chain.skills.is_empty()
@@ -544,4 +544,27 @@ impl Phase2Progress {
     pub fn finish(self) {
         self.bar.finish_and_clear();
     }
+}
+
+/// The paper's per-skill phase 2 ([`Phase2Run`]) from `from` (a saved state) or from its start,
+/// saved by `saver` between learning problems: `None` where it stopped at the checkpoint's
+/// deadline.
+fn per_skill<E: crate::env::Env>(
+    inputs: Phase2Inputs<'_, E>,
+    from: Option<crate::phase2::Phase2State>,
+    mut saver: Option<&mut pbcs_resume::Saver<'_>>,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<Option<Phase2Outcome>> {
+    let mut run = match from {
+        None => Phase2Run::new(inputs)?,
+        Some(state) => Phase2Run::resume(inputs, state)?,
+    };
+    while run.next_problem(progress)?.is_continue() {
+        if let Some(saver) = saver.as_mut() {
+            if saver.pause(&run)? {
+                return Ok(None);
+            }
+        }
+    }
+    run.finish(progress).map(Some)
 }

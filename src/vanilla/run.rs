@@ -382,6 +382,7 @@ impl<'a, E: Env> VanillaRun<'a, E> {
                     desired: &p.desired,
                     achieved_next: &p.achieved,
                     rest,
+                    chained: None,
                 });
             }
             (Store::Her(_), None) => unreachable!("a HER replay is made with the env's goals"),

@@ -240,10 +240,11 @@ fn a_drawn_goal_moves_the_potential_and_the_inputs_to_the_episodes_goal() {
     let mut view = [0.0; 2];
     inputs.toward(&g).observation(&[1.0, 0.5], &mut view);
     assert_eq!(view, [1.0 - 1.3, 0.5 + 0.2]);
-    inputs.observation_toward(&[1.0, 0.5], Some(&g), &mut view);
-    assert_eq!(view, [1.0 - 1.3, 0.5 + 0.2]);
-    inputs.observation_toward(&[1.0, 0.5], None, &mut view);
-    assert_eq!(view, [0.0, 0.5]);
+    let mut seen = Vec::new();
+    inputs.observation_toward(&[1.0, 0.5], Some(&g), &mut seen);
+    assert_eq!(seen, [1.0 - 1.3, 0.5 + 0.2]);
+    inputs.observation_toward(&[1.0, 0.5], None, &mut seen);
+    assert_eq!(seen, [0.0, 0.5]);
 }
 
 #[test]

@@ -30,6 +30,7 @@ fn skill_chaining<B: Backplayer>(
 mod backplay;
 mod capabilities;
 mod drawn;
+mod goal_conditioned;
 mod patience;
 use backplay::{walk, Scripted};
 

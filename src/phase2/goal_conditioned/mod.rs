@@ -1,0 +1,207 @@
+//! A second chaining strategy (`phase2.chain = "goal_conditioned"`): one goal-conditioned
+//! learner for every sub-goal cut from τ, after DCIL-II (Chenu et al. 2022), instead of the
+//! paper's separately trained skills. On a body (AntMaze) those do not hand over: each is
+//! trained from τ_K's own joint state and the skill before it leaves the legs elsewhere. Here
+//! hand-overs happen in training, because the same policy carries on through them.
+//!
+//! ```text
+//! cut τ into sub-goals g_1 … g_M, ‖g_{i+1} − g_i‖ ≥ spacing in the goal space (g_M: the
+//!     episode's own goal), each keeping τ's whole state s_i at its index
+//! one learner π(s, g − position), Q(s, a, g − position), HER replay
+//! repeat until a greedy test passes or the budget is spent:
+//!     j ← the curriculum (failure-weighted, or Backplay's frontier);  s ← B_ε(s_j);  i ← j + 1
+//!     until the final goal, a failure of the body, or steps_per_goal steps on g_i:
+//!         a ← π(s, g_i) + noise;  s′ ← step(s, a)
+//!         if s′ reaches g_i, i < M:  store (s, g_i, a, r = 1, s′, g_{i+1}, not done)   value chaining
+//!                                    i ← i + 1                                         overshoot
+//!         else if s′ reaches g_M:    store (s, g_M, a, 1, s′, g_M, done)
+//!         else:                      store (s, g_i, a, 0, s′, g_i, failed)
+//!         update π, Q on a batch of real and relabelled transitions
+//! the chain: skill i = (π, A_i = B_radius(g_i), g_{i+1}), the last aiming at the episode's goal
+//! ```
+//!
+//! The result is an ordinary [`SkillChain`]: its skills share one policy (one file in the saved
+//! chain) and differ by the sub-goal they see ([`Inputs::goal`]); executing it gives the
+//! policy each sub-goal in turn, as training did. Settings: [`GoalConditioned`].
+
+mod run;
+pub mod settings;
+
+pub use settings::{ChainName, ChainStrategy, Curriculum, GoalConditioned};
+
+use super::goal::{ball_center, Inputs};
+use super::{Ball, LastGoal, Phase2Inputs, Phase2Outcome, Progress, Skill, SkillChain};
+use crate::env::{Env, Goals};
+use crate::error::{Error, Result};
+use crate::policy::Policy;
+
+/// Phase 2 by the goal-conditioned strategy on τ = `inputs.tau`, with `settings`:
+/// `progress(0, report)` after each training round and test.
+pub fn chain_goal_conditioned<E: Env>(
+    inputs: Phase2Inputs<'_, E>,
+    settings: &GoalConditioned,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<Phase2Outcome> {
+    let env = inputs.env;
+    let goals = env.goals().ok_or_else(|| {
+        crate::env::Capability::Goals.missing("phase2.chain = \"goal_conditioned\"")
+    })?;
+    let sub_goals = SubGoals::cut(env, goals, inputs.tau, settings.spacing)?;
+    run::Training::new(&inputs, settings, goals, sub_goals)?.run(progress)
+}
+
+/// Rewrites a HER batch (rows of an observation of `obs_dim` then a goal of `goal_dim`) into
+/// what the goal-conditioned networks see: each goal minus the position, the observation's
+/// first `goal_dim` numbers ([`Inputs::observation_toward`] at acting time).
+pub fn goal_minus_position(
+    batch: &mut crate::learner::replay::Batch,
+    obs_dim: usize,
+    goal_dim: usize,
+) {
+    for rows in [&mut batch.obs, &mut batch.next_obs] {
+        for row in rows.chunks_mut(obs_dim + goal_dim) {
+            let (seen, goal) = row.split_at_mut(obs_dim);
+            for (g, x) in goal.iter_mut().zip(seen.iter()) {
+                *g -= x;
+            }
+        }
+    }
+}
+
+/// The sub-goals cut from τ: their indices on τ and their points in the goal space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubGoals {
+    /// The index on τ of each sub-goal g_1 … g_M (increasing; the last is τ's end, N).
+    pub at: Vec<usize>,
+    /// g_1 … g_M: the goal τ achieves at each index (the last is replaced by each episode's
+    /// own goal in training and in the chain).
+    pub points: Vec<Vec<f32>>,
+    /// The observations of τ.
+    obs: Vec<Vec<f32>>,
+}
+
+impl SubGoals {
+    /// Walks τ and cuts a sub-goal wherever the goal achieved lies `spacing` or more from the
+    /// last one cut (the first from τ_0's), then at τ's end (which replaces a last cut within
+    /// spacing / 2 of it). The goal space must be the position ([`Env::position`]): the chain's
+    /// activation balls measure the position.
+    ///
+    /// ```
+    /// use pbcs::envs::maze::{Maze, MazeConfig};
+    /// use pbcs::env::Env;
+    /// use pbcs::phase2::goal_conditioned::SubGoals;
+    /// let maze = Maze::new(&MazeConfig { size: 2, ..MazeConfig::default() }).unwrap();
+    /// // A straight τ from (0.5, 0.5), 0.1 a step to (0.5, 1.7), cut every 0.45.
+    /// let tau: Vec<_> = (0..=12).map(|i| nalgebra::Point2::new(0.5, 0.5 + 0.1 * i as f32)).collect();
+    /// let cut = SubGoals::cut(&maze, maze.goals().unwrap(), &tau, 0.45).unwrap();
+    /// assert_eq!(cut.at, [5, 12]); // 0.5 from τ_0, then τ's end (τ_10, 0.2 from it, is dropped)
+    /// ```
+    pub fn cut<E: Env>(
+        env: &E,
+        goals: &dyn Goals<E::State>,
+        tau: &[E::State],
+        spacing: f32,
+    ) -> Result<Self> {
+        let obs = crate::env::observations(env, tau);
+        let achieved: Vec<Vec<f32>> = obs
+            .iter()
+            .map(|o| {
+                let mut g = vec![0.0; goals.goal_dim()];
+                goals.achieved_goal(o, &mut g);
+                g
+            })
+            .collect();
+        if let Some(i) = (0..obs.len()).find(|&i| achieved[i] != env.position(&obs[i])) {
+            return Err(Error::invalid(
+                "phase2.chain",
+                format!(
+                    "\"goal_conditioned\" needs goals that are the position (Env::position): \
+                     τ_{i} achieves {:?} at the position {:?}",
+                    achieved[i],
+                    env.position(&obs[i])
+                ),
+            ));
+        }
+        let n = obs.len() - 1;
+        let mut at: Vec<usize> = Vec::new();
+        for i in 1..n {
+            let last = at.last().map_or(0, |&k| k);
+            if super::goal::dist(&achieved[i], &achieved[last]) >= spacing {
+                at.push(i);
+            }
+        }
+        if let Some(&k) = at.last() {
+            if super::goal::dist(&achieved[k], &achieved[n]) < spacing / 2.0 {
+                at.pop();
+            }
+        }
+        at.push(n);
+        let points = at.iter().map(|&k| achieved[k].clone()).collect();
+        Ok(SubGoals { at, points, obs })
+    }
+
+    /// M: how many sub-goals (the last is the final goal).
+    pub fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Whether there are none (never: τ's end is always one).
+    pub fn is_empty(&self) -> bool {
+        self.at.is_empty()
+    }
+
+    /// The index on τ where an episode starting at sub-goal `j` starts: τ_0 for j = 0, else
+    /// the index of g_j (of `at[j − 1]`).
+    pub fn start_index(&self, j: usize) -> usize {
+        if j == 0 {
+            0
+        } else {
+            self.at[j - 1]
+        }
+    }
+
+    /// The chain that gives `policy` each sub-goal in turn: skill i aims at g_{i+1} and takes
+    /// over in A_i = B_radius(g_i) (skill 0 in B_ε(τ_0)); the last sees the episode's own goal
+    /// where `phase2.last_goal = "drawn"` draws one per episode, the task's `final_goal`
+    /// otherwise.
+    pub(super) fn chain<E: Env>(
+        &self,
+        inputs: &Phase2Inputs<'_, E>,
+        radius: f32,
+        final_goal: &[f32],
+        policy: &dyn Policy,
+    ) -> SkillChain {
+        let env = inputs.env;
+        let config = inputs.config();
+        let scale: Vec<f32> = (0..env.action_dim()).map(|i| env.action_bound(i)).collect();
+        let m = self.len();
+        let skills = (0..m)
+            .map(|i| {
+                let last = i + 1 == m;
+                let aim = if last { final_goal } else { &self.points[i] };
+                let start = self.start_index(i);
+                let activation = match i {
+                    0 => Ball::new(ball_center(env, &self.obs[0]), config.epsilon),
+                    _ => Ball::new(self.points[i - 1].clone(), radius),
+                };
+                let episode_goal = last && config.last_goal == LastGoal::Drawn;
+                Skill {
+                    policy: policy.boxed(),
+                    activation,
+                    start_index: start,
+                    target_index: self.at[i],
+                    inputs: Inputs::toward_goal(
+                        env.obs_dim(),
+                        aim.to_vec(),
+                        episode_goal,
+                        scale.clone(),
+                    ),
+                }
+            })
+            .collect();
+        SkillChain {
+            skills,
+            kernel: inputs.kernel,
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! The settings of the goal-conditioned chain (`[phase2.goal_conditioned]`), validated as
+//! linfa validates its hyper-parameters: each bad value names its field.
+
+use crate::error::{Error, Result};
+use crate::learner::her::HerConfig;
+use crate::validate::{bounds, count, Check};
+use serde::{Deserialize, Serialize};
+
+/// How phase 2 turns τ into a chain (`phase2.chain`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum ChainStrategy {
+    /// The paper's: Backplay walks K back along τ and a new skill is trained, with its own
+    /// networks, wherever DDPG stops improving (Algorithms 1–3).
+    #[default]
+    PerSkill,
+    /// One goal-conditioned learner for every sub-goal cut from τ, with overshoot and value
+    /// chaining (DCIL-II's mechanisms, [`super`]).
+    GoalConditioned(Box<GoalConditioned>),
+}
+
+/// `phase2.chain` as the file names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChainName {
+    /// [`ChainStrategy::PerSkill`].
+    #[default]
+    PerSkill,
+    /// [`ChainStrategy::GoalConditioned`].
+    GoalConditioned,
+}
+
+impl ChainName {
+    /// The default, left out of written files (those written before it existed keep their
+    /// bytes).
+    pub fn is_per_skill(&self) -> bool {
+        *self == ChainName::PerSkill
+    }
+}
+
+/// Where a goal-conditioned chain's training episodes start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Curriculum {
+    /// DCIL-II's: at sub-goal j with weight 1 / (success rate of its last `window` tries),
+    /// 10 while that rate is at most 0.1 (and before any try); a try from j succeeds when it
+    /// reaches sub-goal j + 1.
+    FailureWeighted,
+    /// Backplay's order (the paper's idea): uniformly at or after a frontier that begins at
+    /// the last sub-goal and moves one back once `advance_at` of the frontier's last `window`
+    /// tries reached the final goal.
+    Backplay,
+}
+
+/// The goal-conditioned chain's settings (`[phase2.goal_conditioned]`). Distances are in the
+/// units of the environment's goal space (the maze's cells are 1 wide; PointMaze's and
+/// AntMaze's in metres).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GoalConditioned {
+    /// Distance between two sub-goals cut from τ (the first at least this far from τ_0).
+    pub spacing: f32,
+    /// A sub-goal is reached within this distance of it.
+    pub radius: f32,
+    /// Steps an episode may spend on one sub-goal; the episode ends (truncated, not terminal)
+    /// when they run out.
+    pub steps_per_goal: usize,
+    /// Where training episodes start.
+    pub curriculum: Curriculum,
+    /// Tries per start that the curriculum remembers.
+    pub window: usize,
+    /// Backplay's frontier moves back once this fraction of its last tries succeeded.
+    pub advance_at: f32,
+    /// Value chaining: a step that reaches sub-goal i bootstraps through Q(s′, g_{i+1})
+    /// instead of ending (`false`: it ends there, reward 1, as the final goal does).
+    pub value_chaining: bool,
+    /// Training steps of uniformly random actions before the learner acts and learns.
+    pub learning_starts: u64,
+    /// A greedy test of the chain after every this many training steps.
+    pub test_every: u64,
+    /// Episodes of a test (from B_ε(s_0), or drawn starts); the test stops at its first
+    /// failure, and phase 2 ends at the first test they all pass.
+    pub test_episodes: usize,
+    /// Hindsight relabelling of the learner's replay.
+    pub her: HerConfig,
+}
+
+impl Default for GoalConditioned {
+    fn default() -> Self {
+        GoalConditioned {
+            spacing: 0.5,
+            radius: 0.1,
+            steps_per_goal: 50,
+            curriculum: Curriculum::FailureWeighted,
+            window: 10,
+            advance_at: 0.5,
+            value_chaining: true,
+            learning_starts: 1_000,
+            test_every: 5_000,
+            test_episodes: 20,
+            her: HerConfig::default(),
+        }
+    }
+}
+
+impl Check for GoalConditioned {
+    fn check(&self) -> Result<()> {
+        let field = |f: &str| format!("phase2.goal_conditioned.{f}");
+        for (name, v) in [("spacing", self.spacing), ("radius", self.radius)] {
+            crate::validate::positive_finite(&field(name), v, 1e6)?;
+        }
+        if self.radius >= self.spacing {
+            return Err(Error::invalid(
+                field("radius"),
+                format!(
+                    "{} is not below phase2.goal_conditioned.spacing = {}: a sub-goal's ball \
+                     would hold the next one",
+                    self.radius, self.spacing
+                ),
+            ));
+        }
+        for (name, v, max) in [
+            (
+                "steps_per_goal",
+                self.steps_per_goal as u64,
+                bounds::EPISODE_STEPS,
+            ),
+            ("window", self.window as u64, bounds::EPISODES),
+            ("test_every", self.test_every, bounds::ENV_STEPS),
+            ("test_episodes", self.test_episodes as u64, bounds::EPISODES),
+        ] {
+            count(&field(name), v, max)?;
+        }
+        crate::validate::at_most(
+            &field("learning_starts"),
+            self.learning_starts,
+            bounds::ENV_STEPS,
+        )?;
+        if !(self.advance_at > 0.0 && self.advance_at <= 1.0) {
+            return Err(Error::invalid(
+                field("advance_at"),
+                format!("must be in (0, 1], got {}", self.advance_at),
+            ));
+        }
+        self.her.check()
+    }
+}
