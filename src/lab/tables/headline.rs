@@ -20,10 +20,12 @@ use std::path::Path;
 /// and the learners alone (`outside.pointmaze.csv`; our SAC+HER and TD3+HER by SB3's protocol
 /// `–` until their grid has a row there). A missing table or cell is an error naming it.
 pub fn headline_markdown(results: &Path) -> Result<String> {
-    let mut s = maze_table(&read_table(&table_path(
+    let table = read_table(&table_path(results, ExperimentName::new("table")?))?;
+    let chained = read_table(&table_path(
         results,
-        ExperimentName::new("table")?,
-    ))?)?;
+        ExperimentName::new("goal_conditioned")?,
+    ))?;
+    let mut s = maze_table(&table, &chained)?;
     s.push('\n');
     s.push_str(&pointmaze_table(results)?);
     Ok(s)
@@ -50,11 +52,25 @@ fn solved_steps(c: &CellStats) -> String {
     format!("{}, {}", solved(c), human_steps(c.steps_median))
 }
 
-fn maze_table(stats: &[CellStats]) -> Result<String> {
+/// A cell of a grid that may still be running: its solved of runs and median steps, `–` where
+/// it has no row yet.
+fn solved_steps_so_far(stats: &[CellStats], method: Method, site: Site) -> String {
+    let key = CellKey::new(method, site);
+    stats
+        .iter()
+        .find(|c| c.cell == key)
+        .map_or("–".into(), solved_steps)
+}
+
+/// The maze table: the `table` experiment's cells, and the goal-conditioned chain's
+/// (`goal_conditioned`, `chained`).
+fn maze_table(stats: &[CellStats], chained: &[CellStats]) -> Result<String> {
     let sizes = super::distinct(stats.iter().map(|c| c.site));
+    let gc = Method::new("gc")?;
     let mut s = String::from(
-        "| maze | the paper's PBCS (1 run) | DDPG, 1M steps | TD3, 1M steps | PBCS `paper` | \
-         PBCS `fast` |\n| --- | --- | --- | --- | --- | --- |\n",
+        "| maze | the paper's PBCS (1 run) | DDPG, 1M | TD3, 1M | PBCS `paper` | PBCS `fast` | \
+         GC chain |\n\
+         | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     let [pbcs, ddpg, td3, fast] = ["pbcs", "ddpg", "td3", "pbcs_fast"].map(Method::new);
     let (pbcs, ddpg, td3, fast) = (pbcs?, ddpg?, td3?, fast?);
@@ -68,11 +84,12 @@ fn maze_table(stats: &[CellStats]) -> Result<String> {
         let label = site.size().map_or(site.to_string(), |n| format!("{n}×{n}"));
         let _ = writeln!(
             s,
-            "| {label} | {paper} | {} | {} | {} | **{}** |",
+            "| {label} | {paper} | {} | {} | {} | **{}** | {} |",
             solved(cell(stats, ddpg, site)?),
             solved(cell(stats, td3, site)?),
             solved_steps(pbcs),
             solved_steps(cell(stats, fast, site)?),
+            solved_steps_so_far(chained, gc, site),
         );
     }
     Ok(s)
@@ -89,6 +106,18 @@ fn pointmaze_table(results: &Path) -> Result<String> {
         crate::record::read_records(&judged_path(results, name))
     };
     let (grid_judged, held_judged) = (judged(grid_name)?, judged(held_name)?);
+    // The goal-conditioned chain's grid: judged where its judge has run.
+    let gc_name = ExperimentName::new("pointmaze_gc")?;
+    let gc = read_table(&table_path(results, gc_name))?;
+    let gc_judged = match judged_path(results, gc_name) {
+        p if p.exists() => crate::record::read_records(&p)?,
+        _ => Vec::new(),
+    };
+    let gc_method = Method::new("gc_pm")?;
+    let mut chained = String::from(
+        "| map | GC chain, in our env | GC chain, judged by gymnasium-robotics |\n\
+         | --- | --- | --- |\n",
+    );
     let baselines: Vec<PointMazeBaseline> =
         crate::record::read_records(&super::outside::outside_table(results, "pointmaze"))?;
     let mut s = String::from(
@@ -110,7 +139,15 @@ fn pointmaze_table(results: &Path) -> Result<String> {
             ours_text(&baselines, sac_her, env),
             ours_text(&baselines, td3_her, env),
         );
+        let _ = writeln!(
+            chained,
+            "| {map} | {} | {} |",
+            solved_steps_so_far(&gc, gc_method, site),
+            judged_so_far(&gc_judged, &gc, gc_method, site),
+        );
     }
+    s.push('\n');
+    s.push_str(&chained);
     Ok(s)
 }
 
@@ -135,6 +172,11 @@ fn judged_text(
         j.seeds,
         human_steps(stats.steps_median)
     ))
+}
+
+/// A judged cell of a grid that may still be running or unjudged: `–` until its judge has run.
+fn judged_so_far(cells: &[JudgedCell], stats: &[CellStats], method: Method, site: Site) -> String {
+    judged_text(cells, stats, method, site).unwrap_or_else(|_| "–".into())
 }
 
 /// An outside baseline's cell: runs solved, and from how many steps the first was.
