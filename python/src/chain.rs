@@ -82,19 +82,22 @@ fn finite_floats(
     Ok(v)
 }
 
-/// The input and output sizes (and ball dimension) every skill of `chain` shares, or an error
-/// naming the skill that differs.
+/// The observation and action sizes (and ball dimension) every skill of `chain` shares, or an
+/// error naming the skill that differs.
 fn shared_dims(chain: &SkillChain, manifest: &std::path::Path) -> PyResult<(usize, usize)> {
     let dims = |i: usize| {
         let s = &chain.skills[i];
         let p = &s.policy;
-        (p.obs_dim(), p.action_dim(), s.activation.center.len())
+        // The observation a skill is given: its policy's inputs less the sub-goal it sees
+        // (`Inputs::goal`: a goal-conditioned chain's), which `act` appends itself.
+        let seen = p.obs_dim().saturating_sub(s.inputs.goal.len());
+        (seen, p.action_dim(), s.activation.center.len())
     };
     let first = dims(0);
     match (1..chain.skills.len()).find(|&i| dims(i) != first) {
         Some(i) => Err(PyValueError::new_err(format!(
-            "{}: skill {i} takes {} inputs, gives {} actions and has a ball of {} coordinates, \
-             skill 0 {}, {} and {}",
+            "{}: skill {i} takes {} observations, gives {} actions and has a ball of {} \
+             coordinates, skill 0 {}, {} and {}",
             manifest.display(),
             dims(i).0,
             dims(i).1,
@@ -134,7 +137,7 @@ impl ChainCore {
         if let Ok(env) = &env {
             if env.obs_dim() != dims.0 {
                 return Err(PyValueError::new_err(format!(
-                    "{}: the skills take {} inputs, but env = \"{}\" observes {}",
+                    "{}: the skills take {} observations, but env = \"{}\" observes {}",
                     manifest.display(),
                     dims.0,
                     job.env.name(),

@@ -9,6 +9,7 @@ import pytest
 
 import pbcs
 
+ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def chain_dir(tmp_path_factory):
@@ -154,3 +155,34 @@ def test_a_chain_aiming_at_each_episodes_goal_needs_the_goal_to_act(chain_dir, t
     moved = 2 * centre - np.array(origin, dtype=np.float32)
     drawn.reset()
     assert drawn.act(centre, moved).tolist() != plain.act(centre).tolist()
+
+
+def test_a_goal_conditioned_chain_acts_in_python_as_in_the_core(tmp_path):
+    """A chain of the goal-conditioned strategy (phase2.chain = "goal_conditioned": one policy
+    whose skills each see their sub-goal) re-made from its committed job file (maze 2, seed 0
+    of experiments/goal_conditioned.toml: the row's env steps), loaded in Python: its skills
+    take the maze's observation (the sub-goal appended by the chain), and its rollouts and
+    evaluation equal the core's."""
+    import csv
+
+    cell = ROOT / "results/raw/goal_conditioned/gc-maze2"
+    row = next(csv.DictReader((cell / "s0.csv").open()))
+    record = pbcs.run(config=str(cell / "s0.toml"), seed=0, out=str(tmp_path))
+    assert record["total_steps"] == int(row["env_steps"])
+    chain = pbcs.load_chain(tmp_path / "chain")
+    assert len(chain) == int(row["skills"])
+    ours = chain.evaluate(episodes=20, seed=3)
+    core = chain.evaluate_in_core(episodes=20, seed=3)
+    assert ours["success"].tolist() == core["success"].tolist()
+    assert ours["steps"].tolist() == core["steps"].tolist()
+    r = chain.core_rollout()
+    env = chain.make_env()
+    obs, _ = env.reset()
+    chain.reset()
+    used = []
+    for _ in range(r["steps"]):
+        a = chain.act(obs)
+        used.append(chain.active_skill)
+        obs, *_ = env.step(a)
+    assert used == r["skill_used"].tolist()
+    assert obs.tobytes() == r["states"][-1].tobytes()
