@@ -210,6 +210,7 @@ def test_our_goal_resets_draw_as_gymnasium_robotics_does(ours, name):
         ("pointmaze/pbcs_pm-pointmaze_umaze", 1, None),
         ("pointmaze_velocity/pbcs_pm_velocity-pointmaze_umaze", 21, [1.0, 1.0, 0.1, 0.1]),
         ("pointmaze_own/pbcs_pm-pointmaze", 7, None),
+        ("pointmaze_gc/gc_pm-pointmaze_umaze", 7, None),
     ],
 )
 def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
@@ -218,7 +219,9 @@ def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
     """The table's number, re-made: UMaze seed 1 of experiments/pointmaze.toml (balls in
     position), seed 21 of experiments/pointmaze_velocity.toml's velocity arm (balls in
     position and velocity, whose weights the manifest keeps) and seed 7 on the map of one's
-    own (experiments/pointmaze_own.toml, judged with `maze_map=` its rows) run again from their job files
+    own (experiments/pointmaze_own.toml, judged with `maze_map=` its rows), and seed 7 of the
+    goal-conditioned chain (experiments/pointmaze_gc.toml: skills sharing one policy, each
+    told its sub-goal) run again from their job files
     (the same env steps as their rows), each chain loaded in Python and judged by
     gymnasium-robotics (python/benches/pointmaze_gym.py's protocol): the same successes as the
     committed s<seed>.gym.csv. Needs `pbcs` built with --features mujoco:
@@ -249,6 +252,7 @@ def test_a_committed_pointmaze_chain_scores_its_committed_gymnasium_number(
         "pbcs_pm-pointmaze_umaze": ((1, 1), (3, 1)),
         "pbcs_pm_velocity-pointmaze_umaze": ((1, 1), (3, 1)),
         "pbcs_pm-pointmaze": ((1, 3), (8, 7)),
+        "gc_pm-pointmaze_umaze": ((1, 1), (3, 1)),
     }[row["cell"]])
     assert str(limit) == judged["time_limit"]
     # A map of one's own is judged on its rows (`maze_map=`), the named maps on their own.
