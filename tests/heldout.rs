@@ -243,6 +243,55 @@ fn a_paired_comparison_names_two_methods_of_its_file() {
     }
 }
 
+/// `baseline_from` names another experiment file of the folder, whose method the baseline is;
+/// the file itself, or a file that is not there, is an error naming the field. With it, the
+/// baseline need not be a method of the file, and may share the variant's name.
+#[test]
+fn a_paired_baseline_from_another_experiment_names_a_file_of_the_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in ["pbcs_fast.toml", "table.toml"] {
+        std::fs::copy(Path::new("experiments").join(f), dir.path().join(f)).unwrap();
+    }
+    let text = std::fs::read_to_string("experiments/goal_conditioned_strict.toml").unwrap();
+    let good = "baseline_from = \"table\"";
+    assert!(text.contains(good));
+    let path = dir.path().join("cmp.toml");
+    std::fs::write(&path, &text).unwrap();
+    let exp = Experiment::load(&path, None).unwrap();
+    let reg = exp.registered.as_ref().unwrap();
+    assert_eq!(reg.baseline_from.unwrap().as_str(), "table");
+    std::fs::write(
+        &path,
+        text.replace("[\"pbcs_fast\", \"gc100\"]", "[\"gc100\", \"gc100\"]"),
+    )
+    .unwrap();
+    assert!(
+        Experiment::load(&path, None).is_ok(),
+        "the same name, another file's method"
+    );
+    for (bad, why) in [
+        (
+            "baseline_from = \"cmp\"",
+            "`cmp` is not another experiment file",
+        ),
+        (
+            "baseline_from = \"nowhere\"",
+            "`nowhere` is not another experiment file",
+        ),
+    ] {
+        std::fs::write(&path, text.replace(good, bad)).unwrap();
+        let e = Experiment::load(&path, None).unwrap_err().to_string();
+        assert!(
+            e.contains("registered.baseline_from") && e.contains(why),
+            "{e}"
+        );
+    }
+    let e = text.replace("\"pbcs_fast\", \"gc100\"", "\"pbcs_fast\", \"nothing\"");
+    std::fs::write(&path, e).unwrap();
+    let e = Experiment::load(&path, None).unwrap_err().to_string();
+    assert!(e.contains("`nothing` is not a method"), "{e}");
+}
+
 /// The registered comparison of SAC and DDPG skills (`experiments/sac_skills.toml`) runs, site
 /// by site, the committed grids' jobs (table.toml's `fast` cells on mazes 5 and 10,
 /// pointmaze.toml's Medium cell) and those jobs with only `[learner]` changed to SAC's, for

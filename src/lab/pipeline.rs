@@ -152,7 +152,9 @@ pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>>
 #[cfg(feature = "polars")]
 pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>> {
     let mut out = Vec::new();
-    for (exp, rows) in exps.iter().zip(read_all_raw(exps, results)?) {
+    let all = read_all_raw(exps, results)?;
+    for (exp, rows) in exps.iter().zip(&all) {
+        let baseline_rows = paired_baseline_rows(exp, exps, &all)?.unwrap_or(rows);
         let table = crate::tables::table_path(results, exp.name);
         let mut done = Aggregated {
             experiment: exp.name,
@@ -162,13 +164,44 @@ pub fn aggregate(exps: &[Experiment], results: &Path) -> Result<Vec<Aggregated>>
             table,
         };
         if !rows.is_empty() {
-            let stats = crate::aggregate::aggregate(exp, &rows)?;
-            write_tables(exp, results, &stats, &rows)?;
+            let stats = crate::aggregate::aggregate(exp, rows)?;
+            write_tables(exp, results, &stats, rows, baseline_rows)?;
             done.cells = stats.len();
         }
         out.push(done);
     }
     Ok(out)
+}
+
+/// The rows of the experiment whose method is `exp`'s registered paired baseline, where its
+/// `baseline_from` names another experiment (`rows[i]` being `exps[i]`'s); an error when that
+/// experiment is not among `exps` or does not declare the method.
+#[cfg(feature = "polars")]
+fn paired_baseline_rows<'a>(
+    exp: &Experiment,
+    exps: &[Experiment],
+    rows: &'a [Vec<RawRow>],
+) -> Result<Option<&'a [RawRow]>> {
+    let Some(reg) = exp.registered.as_ref() else {
+        return Ok(None);
+    };
+    let (Some(from), Some([baseline, _])) = (reg.baseline_from, reg.paired) else {
+        return Ok(None);
+    };
+    let field = format!("registered.baseline_from of {}", exp.name);
+    let Some(i) = exps.iter().position(|e| e.name == from) else {
+        return Err(crate::Error::invalid(
+            field,
+            format!("`{from}` is not an experiment of the folder"),
+        ));
+    };
+    if !exps[i].methods.iter().any(|(m, _)| *m == baseline) {
+        return Err(crate::Error::invalid(
+            field,
+            format!("`{from}` has no method `{baseline}`, the registered baseline"),
+        ));
+    }
+    Ok(Some(&rows[i]))
 }
 
 /// What [`render`] read and wrote.
@@ -324,6 +357,7 @@ pub fn write_tables(
     results: &Path,
     stats: &[CellStats],
     rows: &[RawRow],
+    baseline_rows: &[RawRow],
 ) -> Result<()> {
     crate::tables::write_table(&crate::tables::table_path(results, exp.name), stats)?;
     let chains = crate::criteria::chain_successes(exp, rows);
@@ -366,7 +400,7 @@ pub fn write_tables(
     }
     let judged = crate::tables::judged::judged_cells(exp, results, rows)?;
     write_nonempty(&crate::tables::judged::judged_path(results, name), &judged)?;
-    let paired = crate::tables::paired::paired_sites(exp, rows);
+    let paired = crate::tables::paired::paired_sites(exp, rows, baseline_rows);
     write_nonempty(&crate::tables::paired::paired_path(results, name), &paired)?;
     let phases = crate::tables::phases::cell_phases(exp, rows);
     write_nonempty(&crate::tables::phases::phases_path(results, name), &phases)?;

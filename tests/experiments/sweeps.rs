@@ -67,7 +67,7 @@ fn smoke_profile_runs_end_to_end_deterministically() {
         let rows = read_raw(&exp, a.path()).unwrap();
         let stats = pbcs::tables::cell_stats(&exp, &rows);
         assert_eq!(stats.len(), exp.cells.len());
-        pbcs::pipeline::write_tables(&exp, a.path(), &stats, &rows).unwrap();
+        pbcs::pipeline::write_tables(&exp, a.path(), &stats, &rows, &rows).unwrap();
         let back = pbcs::tables::read_table(&pbcs::tables::table_path(a.path(), exp.name)).unwrap();
         assert_eq!(back, stats);
         loaded.push((exp, stats));

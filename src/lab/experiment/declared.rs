@@ -150,10 +150,29 @@ pub(crate) fn check_paired(
         return Ok(());
     };
     let field = format!("registered.paired in {}", path.display());
-    if baseline == variant {
+    let from = registered.and_then(|r| r.baseline_from);
+    if let Some(from) = from {
+        let file = path.with_file_name(format!("{from}.toml"));
+        if path.file_stem().and_then(|s| s.to_str()) == Some(from.as_str()) || !file.is_file() {
+            return Err(Error::invalid(
+                format!("registered.baseline_from in {}", path.display()),
+                format!(
+                    "`{from}` is not another experiment file of the folder ({})",
+                    file.display()
+                ),
+            ));
+        }
+    } else if baseline == variant {
         return Err(Error::invalid(field, format!("names `{baseline}` twice")));
     }
-    match [baseline, variant]
+    // The baseline of another file is checked against that file's methods when the rows are
+    // paired ([`crate::pipeline::aggregate`]).
+    let own = if from.is_some() {
+        vec![variant]
+    } else {
+        vec![baseline, variant]
+    };
+    match own
         .into_iter()
         .find(|m| !methods.iter().any(|(n, _)| n == *m))
     {

@@ -255,6 +255,11 @@ pub struct Registration {
     /// `<experiment>.paired.csv`, [`crate::tables::paired`]).
     #[serde(default)]
     pub paired: Option<[Method; 2]>,
+    /// Where the baseline's rows are, where they are not this file's: another experiment of
+    /// the folder (`baseline_from = "table"`) whose method `paired[0]` ran the same sites and
+    /// seeds; `pbcs aggregate` pairs the variant's rows with that experiment's.
+    #[serde(default)]
+    pub baseline_from: Option<ExperimentName>,
     /// Where the preset file is: `preset` in the experiment file's folder (set by
     /// [`Experiment::load`]).
     #[serde(skip)]

@@ -1,5 +1,6 @@
 //! A registered paired comparison: an experiment file whose `[registered]` table says
-//! `paired = [baseline, variant]` ran two methods on the same sites and seeds, and its
+//! `paired = [baseline, variant]` ran two methods on the same sites and seeds (the baseline's
+//! rows those of another experiment where it says `baseline_from = "<experiment>"`), and its
 //! registered outcome is, per site and over all sites pooled, the seeds where the variant used
 //! fewer env steps (phase 1 included) than the baseline, with the two-sided exact sign test
 //! ([`crate::stats::sign_test`], ties dropped). `pbcs aggregate` writes it to
@@ -16,6 +17,8 @@ use std::path::{Path, PathBuf};
 pub struct PairedSite {
     /// The site (`pointmaze_medium`), or all of them pooled (written `all`).
     pub site: Scope<Site>,
+    /// The experiment whose rows the baseline's are (the file's own, or its `baseline_from`).
+    pub baseline_from: ExperimentName,
     /// The baseline method.
     pub baseline: Method,
     /// The variant method.
@@ -39,20 +42,30 @@ pub fn paired_path(results: &Path, experiment: ExperimentName) -> PathBuf {
         .join(format!("{experiment}.paired.csv"))
 }
 
-/// The registered comparison of `exp` on its `rows`, per site (in the file's order, sites
-/// without a pair left out) and pooled; none when `exp` registers no paired comparison.
+/// The registered comparison of `exp`, its variant's steps from `rows` and its baseline's
+/// from `baseline_rows` (`rows` again, or the rows of the experiment its `baseline_from`
+/// names), per site (in the file's order, sites without a pair left out) and pooled; none
+/// when `exp` registers no paired comparison.
 ///
 /// ```
 /// use pbcs::experiment::Experiment;
 /// // Without `[registered] paired`, no comparison.
 /// let exp = Experiment::load(std::path::Path::new("experiments/pointmaze.toml"), None).unwrap();
-/// assert!(pbcs::tables::paired::paired_sites(&exp, &[]).is_empty());
+/// assert!(pbcs::tables::paired::paired_sites(&exp, &[], &[]).is_empty());
 /// ```
-pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
-    let Some([baseline, variant]) = exp.registered.as_ref().and_then(|r| r.paired) else {
+pub fn paired_sites(
+    exp: &Experiment,
+    rows: &[RawRow],
+    baseline_rows: &[RawRow],
+) -> Vec<PairedSite> {
+    let Some(registered) = exp.registered.as_ref() else {
         return Vec::new();
     };
-    let steps = |method, site, seed| {
+    let Some([baseline, variant]) = registered.paired else {
+        return Vec::new();
+    };
+    let baseline_from = registered.baseline_from.unwrap_or(exp.name);
+    let steps = |rows: &[RawRow], method, site, seed| {
         let cell = CellKey::new(method, site);
         rows.iter()
             .find(|r| r.cell == cell && r.seed == seed)
@@ -66,6 +79,7 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
         );
         PairedSite {
             site,
+            baseline_from,
             baseline,
             variant,
             pairs: diffs.len() as u64,
@@ -81,7 +95,10 @@ pub fn paired_sites(exp: &Experiment, rows: &[RawRow]) -> Vec<PairedSite> {
         let diffs: Vec<_> = exp
             .seeds()
             .into_iter()
-            .filter_map(|s| Some(steps(variant, site, s)?.cmp(&steps(baseline, site, s)?)))
+            .filter_map(|s| {
+                let ours = steps(rows, variant, site, s)?;
+                Some(ours.cmp(&steps(baseline_rows, baseline, site, s)?))
+            })
             .collect();
         if !diffs.is_empty() {
             all.extend_from_slice(&diffs);
@@ -113,7 +130,7 @@ pub fn paired_numbers(
 }
 
 /// `p` to two significant digits (`0.021`, `0.34`, `1.0`).
-fn two_digits(p: f64) -> String {
+pub(crate) fn two_digits(p: f64) -> String {
     if p <= 0.0 || !p.is_finite() {
         return p.to_string();
     }
@@ -176,7 +193,7 @@ mod known {
         // Medium's seed 23 has no variant row: not a pair.
         let medium: CellKey = "pbcs_pm_velocity-pointmaze_medium".parse().unwrap();
         ours.retain(|r| !(r.cell == medium && r.seed == 23));
-        let got: Vec<_> = paired_sites(&exp, &ours)
+        let got: Vec<_> = paired_sites(&exp, &ours, &ours)
             .into_iter()
             .map(|s| (s.site.to_string(), s.pairs, s.fewer, s.more, s.ties))
             .collect();
@@ -189,7 +206,63 @@ mod known {
                 ("all".to_string(), 11, 9, 1, 1),
             ]
         );
-        let all = paired_sites(&exp, &ours).pop().unwrap();
+        let all = paired_sites(&exp, &ours, &ours).pop().unwrap();
         assert_eq!(all.p_value, crate::stats::sign_test(9, 1));
+    }
+
+    /// Known counts across two experiments: goal_conditioned_strict.toml's variant against the
+    /// table's pbcs_fast rows (its `baseline_from`), the variant's steps the baseline's ± 1.
+    #[test]
+    fn pairs_the_variant_with_another_experiments_baseline() {
+        let exp =
+            Experiment::load(Path::new("experiments/goal_conditioned_strict.toml"), None).unwrap();
+        let table = Experiment::load(Path::new("experiments/table.toml"), None).unwrap();
+        let fast = Method::new("pbcs_fast").unwrap();
+        let base: Vec<RawRow> = crate::experiment::read_raw(&table, Path::new("results"))
+            .unwrap()
+            .into_iter()
+            .filter(|r| r.cell.method == fast && r.seed < 3)
+            .collect();
+        let gc100 = Method::new("gc100").unwrap();
+        // Maze 2: seed 0 fewer, 1 the same, 2 more; other mazes: every seed fewer.
+        let ours: Vec<RawRow> = (base.iter())
+            .map(|r| RawRow {
+                cell: CellKey::new(gc100, r.site),
+                env_steps: match (r.site, r.seed) {
+                    (Site::Maze(2), 1) => r.env_steps,
+                    (Site::Maze(2), 2) => r.env_steps + 1,
+                    _ => r.env_steps - 1,
+                },
+                ..r.clone()
+            })
+            .collect();
+        // The table's rows as the variant's own: no baseline row, no pair.
+        assert!(paired_sites(&exp, &ours, &ours).is_empty());
+        let got: Vec<_> = paired_sites(&exp, &ours, &base)
+            .into_iter()
+            .map(|s| {
+                (
+                    s.site.to_string(),
+                    s.baseline_from.to_string(),
+                    s.fewer,
+                    s.ties,
+                    s.more,
+                )
+            })
+            .collect();
+        let row = |site: &str, fewer, ties, more| {
+            (site.to_string(), "table".to_string(), fewer, ties, more)
+        };
+        assert_eq!(
+            got,
+            [
+                row("2", 1, 1, 1),
+                row("5", 3, 0, 0),
+                row("7", 3, 0, 0),
+                row("10", 3, 0, 0),
+                row("15", 3, 0, 0),
+                row("all", 13, 1, 1),
+            ]
+        );
     }
 }
