@@ -123,6 +123,19 @@ pub fn code_tex() -> String {
     ] {
         values.push((name.to_string(), v.to_string()));
     }
+    // The goal-conditioned chain's defaults (`[phase2.goal_conditioned]`, no preset writes
+    // them): `code:goal_conditioned:<field>`.
+    let gc = crate::phase2::goal_conditioned::GoalConditioned::default();
+    for (name, v) in [
+        ("spacing", gc.spacing.to_string()),
+        ("radius", gc.radius.to_string()),
+        ("steps_per_goal", gc.steps_per_goal.to_string()),
+        ("window", gc.window.to_string()),
+        ("test_every", gc.test_every.to_string()),
+        ("test_episodes", gc.test_episodes.to_string()),
+    ] {
+        values.push((format!("goal_conditioned:{name}"), v));
+    }
     let mut s = String::new();
     for (name, v) in values {
         let _ = writeln!(

@@ -25,10 +25,48 @@ pub fn headline_markdown(results: &Path) -> Result<String> {
         results,
         ExperimentName::new("goal_conditioned")?,
     ))?;
-    let mut s = maze_table(&table, &chained)?;
+    let strict = read_table(&table_path(
+        results,
+        ExperimentName::new("goal_conditioned_strict")?,
+    ))?;
+    let mut s = maze_table(&table, &chained, &strict)?;
+    s.push('\n');
+    s.push_str(&paired_line(results)?);
     s.push('\n');
     s.push_str(&pointmaze_table(results)?);
     Ok(s)
+}
+
+/// The registered paired comparisons of the goal-conditioned chains with the table's `fast`,
+/// pooled over the mazes (`<experiment>.paired.csv`), as one sentence; `–` for a grid not yet
+/// paired.
+fn paired_line(results: &Path) -> Result<String> {
+    let pooled = |name: &str| -> Result<String> {
+        let path = super::paired::paired_path(results, ExperimentName::new(name)?);
+        if !path.exists() {
+            return Ok("–".into());
+        }
+        let rows: Vec<super::paired::PairedSite> = crate::record::read_records(&path)?;
+        let all = rows
+            .iter()
+            .find(|r| r.site == super::scope::Scope::Pooled)
+            .ok_or_else(|| Error::parse(&path, "no pooled row (`all`)"))?;
+        let p = match all.p_value {
+            p if p < 1e-3 => format!("{p:.1e}"),
+            p => super::paired::two_digits(p),
+        };
+        Ok(format!(
+            "fewer in {} of {} pairs ({} more, {} ties), p = {p}",
+            all.fewer, all.pairs, all.more, all.ties
+        ))
+    };
+    Ok(format!(
+        "Seed by seed against `fast`'s run of the same maze and seed (env steps, phase 1 \
+         included;\ntwo-sided exact sign test, registered before the runs):\n\
+         GC chain: {};\nGC, 100 tests: {}.\n",
+        pooled("goal_conditioned")?,
+        pooled("goal_conditioned_strict")?
+    ))
 }
 
 /// The cell of `method` at `site` in `stats`, or an error naming both.
@@ -63,14 +101,15 @@ fn solved_steps_so_far(stats: &[CellStats], method: Method, site: Site) -> Strin
 }
 
 /// The maze table: the `table` experiment's cells, and the goal-conditioned chain's
-/// (`goal_conditioned`, `chained`).
-fn maze_table(stats: &[CellStats], chained: &[CellStats]) -> Result<String> {
+/// (`goal_conditioned`, `chained`; tested on 100 episodes, `goal_conditioned_strict`,
+/// `strict`).
+fn maze_table(stats: &[CellStats], chained: &[CellStats], strict: &[CellStats]) -> Result<String> {
     let sizes = super::distinct(stats.iter().map(|c| c.site));
-    let gc = Method::new("gc")?;
+    let (gc, gc100) = (Method::new("gc")?, Method::new("gc100")?);
     let mut s = String::from(
-        "| maze | the paper's PBCS (1 run) | DDPG, 1M | TD3, 1M | PBCS `paper` | PBCS `fast` | \
-         GC chain |\n\
-         | --- | --- | --- | --- | --- | --- | --- |\n",
+        "| maze | paper, 1 run | DDPG, 1M | TD3, 1M | PBCS `paper` | PBCS `fast` | GC chain | \
+         GC, 100 tests |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     let [pbcs, ddpg, td3, fast] = ["pbcs", "ddpg", "td3", "pbcs_fast"].map(Method::new);
     let (pbcs, ddpg, td3, fast) = (pbcs?, ddpg?, td3?, fast?);
@@ -84,12 +123,13 @@ fn maze_table(stats: &[CellStats], chained: &[CellStats]) -> Result<String> {
         let label = site.size().map_or(site.to_string(), |n| format!("{n}×{n}"));
         let _ = writeln!(
             s,
-            "| {label} | {paper} | {} | {} | {} | **{}** | {} |",
+            "| {label} | {paper} | {} | {} | {} | **{}** | {} | {} |",
             solved(cell(stats, ddpg, site)?),
             solved(cell(stats, td3, site)?),
             solved_steps(pbcs),
             solved_steps(cell(stats, fast, site)?),
             solved_steps_so_far(chained, gc, site),
+            solved_steps_so_far(strict, gc100, site),
         );
     }
     Ok(s)
