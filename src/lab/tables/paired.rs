@@ -240,28 +240,20 @@ mod known {
         assert!(paired_sites(&exp, &ours, &ours).is_empty());
         let got: Vec<_> = paired_sites(&exp, &ours, &base)
             .into_iter()
-            .map(|s| {
-                (
-                    s.site.to_string(),
-                    s.baseline_from.to_string(),
-                    s.fewer,
-                    s.ties,
-                    s.more,
-                )
-            })
+            .map(|s| (s.site, s.baseline_from, s.fewer, s.ties, s.more))
             .collect();
-        let row = |site: &str, fewer, ties, more| {
-            (site.to_string(), "table".to_string(), fewer, ties, more)
-        };
+        let table = ExperimentName::new("table").unwrap();
+        let row = |site: Scope<Site>, fewer, ties, more| (site, table, fewer, ties, more);
+        let maze = |n| Scope::One(Site::Maze(n));
         assert_eq!(
             got,
             [
-                row("2", 1, 1, 1),
-                row("5", 3, 0, 0),
-                row("7", 3, 0, 0),
-                row("10", 3, 0, 0),
-                row("15", 3, 0, 0),
-                row("all", 13, 1, 1),
+                row(maze(2), 1, 1, 1),
+                row(maze(5), 3, 0, 0),
+                row(maze(7), 3, 0, 0),
+                row(maze(10), 3, 0, 0),
+                row(maze(15), 3, 0, 0),
+                row(Scope::Pooled, 13, 1, 1),
             ]
         );
     }
