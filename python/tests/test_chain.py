@@ -42,8 +42,9 @@ def test_python_rollouts_equal_pbcs_eval(chain_dir, tmp_path, pbcs_bin):
     assert [int(n) for _, n in rows] == ours["steps"].tolist()
 
 
-def test_act_switches_skills_like_the_core(chain_dir):
-    chain = pbcs.load_chain(chain_dir / "chain")
+def assert_acts_like_the_core(chain):
+    """``chain.act`` stepped through its Gymnasium env chooses the core rollout's skills and
+    ends in its last state, to the byte."""
     core = chain.core_rollout()
     env = chain.make_env()
     obs, _ = env.reset()
@@ -55,6 +56,11 @@ def test_act_switches_skills_like_the_core(chain_dir):
         obs, *_ = env.step(a)
     assert used == core["skill_used"].tolist()
     assert obs.tobytes() == core["states"][-1].tobytes()
+
+
+def test_act_switches_skills_like_the_core(chain_dir):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    assert_acts_like_the_core(chain)
     assert len(chain) == len(chain.balls) >= 1
 
 
@@ -175,14 +181,4 @@ def test_a_goal_conditioned_chain_acts_in_python_as_in_the_core(tmp_path):
     core = chain.evaluate_in_core(episodes=20, seed=3)
     assert ours["success"].tolist() == core["success"].tolist()
     assert ours["steps"].tolist() == core["steps"].tolist()
-    r = chain.core_rollout()
-    env = chain.make_env()
-    obs, _ = env.reset()
-    chain.reset()
-    used = []
-    for _ in range(r["steps"]):
-        a = chain.act(obs)
-        used.append(chain.active_skill)
-        obs, *_ = env.step(a)
-    assert used == r["skill_used"].tolist()
-    assert obs.tobytes() == r["states"][-1].tobytes()
+    assert_acts_like_the_core(chain)
