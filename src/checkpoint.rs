@@ -1,6 +1,6 @@
 //! A run's checkpoint: one file, one envelope, for every kind of run that saves itself (a
 //! vanilla run, [`crate::vanilla::resume`]; a PBCS run between two learning problems of phase
-//! 2, [`crate::runs::pbcs_resume`]), so that a run cut short (a session's end, a cluster job's
+//! 2, or two tests of its goal-conditioned chain, [`crate::runs::pbcs_resume`]), so that a run cut short (a session's end, a cluster job's
 //! limit, a killed process) goes on where it was saved and ends with the bytes of a run never
 //! cut.
 //!
@@ -43,6 +43,11 @@ pub const VANILLA: &str = "pbcs vanilla run checkpoint, version 3";
 /// The format of a PBCS run's checkpoint ([`crate::runs::pbcs_resume`]). Bump the version with
 /// any change to what a PBCS run computes or to its saved state's layout.
 pub const PBCS: &str = "pbcs PBCS run checkpoint, version 1";
+
+/// The format of a PBCS run's checkpoint whose phase 2 is the goal-conditioned chain
+/// ([`crate::runs::pbcs_resume`], saved between two of its tests). Bump the version with any
+/// change to what such a run computes or to its saved state's layout.
+pub const PBCS_GOAL_CONDITIONED: &str = "pbcs goal-conditioned PBCS run checkpoint, version 1";
 
 /// What the messages refusing a file end with.
 const AFRESH: &str = "delete it to start the run afresh";
@@ -185,7 +190,10 @@ impl Checkpoint {
             .ok()
             .map(|(h, _)| h);
         match head {
-            Some(h) if [VANILLA, PBCS].contains(&h.format.as_str()) && h.job == self.job => {
+            Some(h)
+                if [VANILLA, PBCS, PBCS_GOAL_CONDITIONED].contains(&h.format.as_str())
+                    && h.job == self.job =>
+            {
                 Ok(Some(Saved {
                     steps: h.steps,
                     seconds: h.seconds,

@@ -239,6 +239,20 @@ impl HerReplay {
         2 * self.obs_dim + self.act_dim + 3 + 3 * self.goal_dim
     }
 
+    /// Whether `other` holds transitions of this buffer's sizes and capacity (a checkpoint's
+    /// buffer is checked against the run's before it replaces it).
+    pub fn same_shape(&self, other: &HerReplay) -> bool {
+        let sizes = |h: &HerReplay| (h.capacity, h.obs_dim, h.act_dim, h.goal_dim);
+        let whole = |h: &HerReplay| {
+            h.rows.len() == h.len * h.width()
+                && h.ep_start.len() == h.len
+                && h.ep_len.len() == h.len
+                && h.len <= h.capacity
+                && h.next < h.capacity.max(1)
+        };
+        sizes(self) == sizes(other) && whole(other)
+    }
+
     /// Transitions that can be sampled (those of finished episodes still whole in the ring).
     pub fn sampleable(&self) -> usize {
         self.sampleable

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::nn::kernel::Kernel;
 use crate::phase1::{explore, Exploration};
 use crate::phase2::{
-    ArchiveStarts, ChainStrategy, Failure, Phase2Inputs, Phase2Outcome, Phase2Run, Progress, Ready,
+    ArchiveStarts, ChainStrategy, Failure, Phase2Inputs, Phase2Outcome, Progress, Ready,
     SkillChain, StartMode, Variant,
 };
 use crate::picture::{Draw, PictureData, RunPicture};
@@ -157,35 +157,37 @@ impl<E: Planar> PbcsRun<E> {
         // Backplay's starts from the archive, where `phase2.start = "archive"` asks.
         let archived = (job.phase2.start == StartMode::Archive)
             .then(|| ArchiveStarts::new(&env, &found.archive, job.phase2.epsilon));
-        let (from, mut saver) = match checkpoint {
-            None => (None, None),
-            Some(c) => {
-                let hash = pbcs_resume::tau_sha256(&crate::env::observations(&env, &tau));
-                let (from, earlier) = match pbcs_resume::load(c, &hash, kernel)? {
-                    Some((state, seconds)) => (Some(state), seconds),
-                    None => (None, 0.0),
-                };
-                (
-                    from,
-                    Some(pbcs_resume::Saver::new(c, hash, kernel, earlier, clock)),
-                )
-            }
-        };
+        let hash =
+            checkpoint.map(|_| pbcs_resume::tau_sha256(&crate::env::observations(&env, &tau)));
         let inputs = Phase2Inputs::new(&env, &tau, ready, &job.learner, &seeds, kernel)
             .after(found.env_steps)
             .with_starts(archived.as_ref().map(|a| a as &dyn SampleBall<E::State>));
         let mut progress = progress;
-        let phase2 = match &job.phase2.chain {
+        let (phase2, saver) = match &job.phase2.chain {
             ChainStrategy::PerSkill => {
-                match per_skill(inputs, from, saver.as_mut(), &mut progress)? {
-                    Some(outcome) => outcome,
-                    None => return Ok(None),
-                }
+                let (from, earlier) =
+                    pbcs_resume::loaded(checkpoint, &hash, |c, h| pbcs_resume::load(c, h, kernel))?;
+                let mut saver = pbcs_resume::saver_for(checkpoint, &hash, kernel, earlier, clock);
+                let outcome = pbcs_resume::per_skill(inputs, from, saver.as_mut(), &mut progress)?;
+                (outcome, saver)
             }
-            // Not cut between learning problems: one run to its end.
             ChainStrategy::GoalConditioned(settings) => {
-                crate::phase2::chain_goal_conditioned(inputs, settings, &mut progress)?
+                let (from, earlier) = pbcs_resume::loaded(checkpoint, &hash, |c, h| {
+                    pbcs_resume::load_goal_conditioned(c, h, kernel)
+                })?;
+                let mut saver = pbcs_resume::saver_for(checkpoint, &hash, kernel, earlier, clock);
+                let outcome = pbcs_resume::goal_conditioned(
+                    inputs,
+                    settings,
+                    from,
+                    saver.as_mut(),
+                    &mut progress,
+                )?;
+                (outcome, saver)
             }
+        };
+        let Some(phase2) = phase2 else {
+            return Ok(None);
         };
         // Evaluation: episodes from starts uniform in B_ε(s_0) (or drawn: `first_starts`),
         // stream Eval.
@@ -544,27 +546,4 @@ impl Phase2Progress {
     pub fn finish(self) {
         self.bar.finish_and_clear();
     }
-}
-
-/// The paper's per-skill phase 2 ([`Phase2Run`]) from `from` (a saved state) or from its start,
-/// saved by `saver` between learning problems: `None` where it stopped at the checkpoint's
-/// deadline.
-fn per_skill<E: crate::env::Env>(
-    inputs: Phase2Inputs<'_, E>,
-    from: Option<crate::phase2::Phase2State>,
-    mut saver: Option<&mut pbcs_resume::Saver<'_>>,
-    progress: &mut dyn FnMut(usize, Progress),
-) -> Result<Option<Phase2Outcome>> {
-    let mut run = match from {
-        None => Phase2Run::new(inputs)?,
-        Some(state) => Phase2Run::resume(inputs, state)?,
-    };
-    while run.next_problem(progress)?.is_continue() {
-        if let Some(saver) = saver.as_mut() {
-            if saver.pause(&run)? {
-                return Ok(None);
-            }
-        }
-    }
-    run.finish(progress).map(Some)
 }

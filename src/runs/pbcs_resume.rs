@@ -1,5 +1,7 @@
 //! Checkpoints of a PBCS run: phase 2 saved between two learning problems
-//! ([`crate::phase2::run`]), so that a run of hours (AntMaze) cut by a session's end or a
+//! ([`crate::phase2::run`]), or with the goal-conditioned chain between two of its tests
+//! ([`crate::phase2::goal_conditioned::GoalConditionedRun`], format
+//! [`GOAL_CONDITIONED`]: its learner, replay, streams, curriculum and episode in flight), so that a run of hours (AntMaze) cut by a session's end or a
 //! cluster job's limit goes on from its last save and ends with the bytes of a run never cut.
 //!
 //! The file is a [`Checkpoint`] (`s<seed>.resume` in an experiment, as a vanilla run's: the
@@ -16,13 +18,20 @@ use crate::checkpoint::{Checkpoint, Saves};
 use crate::error::{Error, Result};
 use crate::learner::load_policy;
 use crate::nn::kernel::Kernel;
-use crate::phase2::{Between, Phase2Run, Phase2State, StepCounts, TraceRow};
+use crate::phase2::goal_conditioned::{GoalConditionedRun, GoalConditionedState};
+use crate::phase2::{
+    Between, Phase2Inputs, Phase2Outcome, Phase2Run, Phase2State, Progress, StepCounts, TraceRow,
+};
 use crate::policy::Policy;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// The format of a PBCS run's checkpoint ([`crate::checkpoint::PBCS`]).
 pub use crate::checkpoint::PBCS as FORMAT;
+
+/// The format of a PBCS run's checkpoint with the goal-conditioned chain
+/// ([`crate::checkpoint::PBCS_GOAL_CONDITIONED`]).
+pub use crate::checkpoint::PBCS_GOAL_CONDITIONED as GOAL_CONDITIONED;
 
 /// One skill found so far.
 #[derive(Serialize, Deserialize)]
@@ -56,6 +65,21 @@ struct Saved {
     /// Each trace row's wall clock (not in `trace`'s encoding).
     trace_seconds: Vec<f64>,
     warm: Option<(usize, Vec<u8>)>,
+}
+
+/// [`GoalConditionedState`] as saved.
+#[derive(Serialize, Deserialize)]
+struct SavedGoalConditioned {
+    /// As [`Saved`]'s.
+    tau_sha256: String,
+    kernel: String,
+    learner: Vec<u8>,
+    progress: Vec<u8>,
+    spent: u64,
+    train: u64,
+    test: u64,
+    trace: Vec<TraceRow>,
+    trace_seconds: Vec<f64>,
 }
 
 /// The SHA-256 of τ's observations: what a checkpoint is checked against.
@@ -143,41 +167,14 @@ pub fn load(
     let refused = |m: String| checkpoint.refused(m);
     let saved: Saved = postcard::from_bytes(&opened.body)
         .map_err(|e| refused(format!("does not decode ({e})")))?;
-    if saved.tau_sha256 != tau {
-        return Err(refused(
-            "was saved on another τ than phase 1 found now (another build or machine?)".into(),
-        ));
-    }
-    if !Kernel::same_bytes(&saved.kernel, kernel.name()) {
-        return Err(Error::parse(
-            &checkpoint.path,
-            format!(
-                "this checkpoint was computed on the `{}` kernel, whose bytes the `{}` kernel \
-                 does not compute: go on with PBCS_KERNEL={}, or delete it to start the run \
-                 afresh",
-                saved.kernel,
-                kernel.name(),
-                saved.kernel
-            ),
-        ));
-    }
-    if saved.trace_seconds.len() != saved.trace.len() {
-        return Err(refused(
-            "holds a trace whose wall clock does not match it".into(),
-        ));
-    }
+    same_origin(checkpoint, (&saved.tau_sha256, &saved.kernel), tau, kernel)?;
+    let trace = with_seconds(checkpoint, saved.trace, saved.trace_seconds)?;
     let found = saved
         .found
         .iter()
         .map(|s| Ok((s.k, s.t, policy_from(s)?)))
         .collect::<Result<Vec<_>>>()
         .map_err(|e| refused(format!("holds a skill that does not load ({e})")))?;
-    let trace = saved
-        .trace
-        .into_iter()
-        .zip(saved.trace_seconds)
-        .map(|(r, seconds)| TraceRow { seconds, ..r })
-        .collect();
     let state = Phase2State {
         between: Between {
             found,
@@ -193,6 +190,101 @@ pub fn load(
         },
         trace,
         warm: saved.warm,
+    };
+    Ok(Some((state, opened.seconds)))
+}
+
+/// Refuses a checkpoint saved (`saved`: τ's hash, the kernel's name) on another τ than `tau`
+/// or on a kernel whose bytes `kernel`'s are not.
+fn same_origin(
+    checkpoint: &Checkpoint,
+    saved: (&str, &str),
+    tau: &str,
+    kernel: Kernel,
+) -> Result<()> {
+    let (saved_tau, saved_kernel) = saved;
+    if saved_tau != tau {
+        return Err(checkpoint
+            .refused("was saved on another τ than phase 1 found now (another build or machine?)"));
+    }
+    if !Kernel::same_bytes(saved_kernel, kernel.name()) {
+        return Err(Error::parse(
+            &checkpoint.path,
+            format!(
+                "this checkpoint was computed on the `{saved_kernel}` kernel, whose bytes the \
+                 `{}` kernel does not compute: go on with PBCS_KERNEL={saved_kernel}, or delete \
+                 it to start the run afresh",
+                kernel.name(),
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The saved trace with each row's wall clock put back; refused where they do not match.
+fn with_seconds(
+    checkpoint: &Checkpoint,
+    trace: Vec<TraceRow>,
+    seconds: Vec<f64>,
+) -> Result<Vec<TraceRow>> {
+    if seconds.len() != trace.len() {
+        return Err(checkpoint.refused("holds a trace whose wall clock does not match it"));
+    }
+    Ok(trace
+        .into_iter()
+        .zip(seconds)
+        .map(|(r, seconds)| TraceRow { seconds, ..r })
+        .collect())
+}
+
+/// Saves a goal-conditioned `state` as [`save`] saves Algorithm 1's (format
+/// [`GOAL_CONDITIONED`]).
+pub fn save_goal_conditioned(
+    checkpoint: &Checkpoint,
+    state: &GoalConditionedState,
+    tau: &str,
+    kernel: Kernel,
+    seconds: f64,
+) -> Result<()> {
+    let saved = SavedGoalConditioned {
+        tau_sha256: tau.into(),
+        kernel: kernel.name().into(),
+        learner: state.learner.clone(),
+        progress: state.progress.clone(),
+        spent: state.spent,
+        train: state.steps.train,
+        test: state.steps.test,
+        trace: state.trace.clone(),
+        trace_seconds: state.trace.iter().map(|r| r.seconds).collect(),
+    };
+    let body = postcard::to_stdvec(&saved)
+        .map_err(|e| Error::invalid("goal-conditioned run state", e.to_string()))?;
+    checkpoint.write(GOAL_CONDITIONED, state.spent, seconds, &body)
+}
+
+/// The goal-conditioned PBCS run saved at `checkpoint`'s file, with its wall-clock seconds,
+/// refused as [`load`] refuses; whether the state fits the run is
+/// [`GoalConditionedRun::resume`]'s check.
+pub fn load_goal_conditioned(
+    checkpoint: &Checkpoint,
+    tau: &str,
+    kernel: Kernel,
+) -> Result<Option<(GoalConditionedState, f64)>> {
+    let Some(opened) = checkpoint.read(GOAL_CONDITIONED)? else {
+        return Ok(None);
+    };
+    let saved: SavedGoalConditioned = postcard::from_bytes(&opened.body)
+        .map_err(|e| checkpoint.refused(format!("does not decode ({e})")))?;
+    same_origin(checkpoint, (&saved.tau_sha256, &saved.kernel), tau, kernel)?;
+    let state = GoalConditionedState {
+        learner: saved.learner,
+        progress: saved.progress,
+        spent: saved.spent,
+        steps: StepCounts {
+            train: saved.train,
+            test: saved.test,
+        },
+        trace: with_seconds(checkpoint, saved.trace, saved.trace_seconds)?,
     };
     Ok(Some((state, opened.seconds)))
 }
@@ -246,4 +338,92 @@ impl<'c> Saver<'c> {
             save(checkpoint, &state, tau, kernel, seconds)
         })
     }
+
+    /// Whether the goal-conditioned run stops here (saved), between two of its tests.
+    pub fn pause_goal_conditioned<E: crate::env::Env>(
+        &mut self,
+        run: &GoalConditionedRun<'_, E>,
+    ) -> Result<bool> {
+        let seconds = self.seconds();
+        let (checkpoint, tau, kernel) = (self.checkpoint, &self.tau, self.kernel);
+        self.saves.due("", || {
+            let state = run.state()?;
+            save_goal_conditioned(checkpoint, &state, tau, kernel, seconds)
+        })
+    }
+}
+
+/// The state `load` reads from `checkpoint` (τ's hash `hash`) and the wall-clock seconds saved
+/// with it: none and 0 without a checkpoint or a file.
+pub(super) fn loaded<T>(
+    checkpoint: Option<&Checkpoint>,
+    hash: &Option<String>,
+    load: impl FnOnce(&Checkpoint, &str) -> Result<Option<(T, f64)>>,
+) -> Result<(Option<T>, f64)> {
+    let (Some(c), Some(hash)) = (checkpoint, hash) else {
+        return Ok((None, 0.0));
+    };
+    Ok(match load(c, hash)? {
+        Some((state, seconds)) => (Some(state), seconds),
+        None => (None, 0.0),
+    })
+}
+
+/// The saver of a run with a checkpoint (τ's hash `hash`), none without one.
+pub(super) fn saver_for<'c>(
+    checkpoint: Option<&'c Checkpoint>,
+    hash: &Option<String>,
+    kernel: Kernel,
+    earlier_seconds: f64,
+    clock: Instant,
+) -> Option<Saver<'c>> {
+    let (c, hash) = (checkpoint?, hash.clone()?);
+    Some(Saver::new(c, hash, kernel, earlier_seconds, clock))
+}
+
+/// The goal-conditioned phase 2, from `from` where a checkpoint held one, paused by `saver`
+/// between two of its tests: `None` where it stopped there, saved.
+pub(super) fn goal_conditioned<E: crate::env::Env>(
+    inputs: Phase2Inputs<'_, E>,
+    settings: &crate::phase2::goal_conditioned::GoalConditioned,
+    from: Option<crate::phase2::goal_conditioned::GoalConditionedState>,
+    mut saver: Option<&mut Saver<'_>>,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<Option<Phase2Outcome>> {
+    use crate::phase2::goal_conditioned::GoalConditionedRun;
+    let mut run = match from {
+        None => GoalConditionedRun::start(inputs, settings)?,
+        Some(state) => GoalConditionedRun::resume(inputs, settings, state)?,
+    };
+    while run.next_test(progress).is_continue() {
+        if let Some(saver) = saver.as_mut() {
+            if saver.pause_goal_conditioned(&run)? {
+                return Ok(None);
+            }
+        }
+    }
+    Ok(Some(run.finish(progress)))
+}
+
+/// The paper's per-skill phase 2 ([`Phase2Run`]) from `from` (a saved state) or from its start,
+/// saved by `saver` between learning problems: `None` where it stopped at the checkpoint's
+/// deadline.
+pub(super) fn per_skill<E: crate::env::Env>(
+    inputs: Phase2Inputs<'_, E>,
+    from: Option<crate::phase2::Phase2State>,
+    mut saver: Option<&mut Saver<'_>>,
+    progress: &mut dyn FnMut(usize, Progress),
+) -> Result<Option<Phase2Outcome>> {
+    let mut run = match from {
+        None => Phase2Run::new(inputs)?,
+        Some(state) => Phase2Run::resume(inputs, state)?,
+    };
+    while run.next_problem(progress)?.is_continue() {
+        if let Some(saver) = saver.as_mut() {
+            if saver.pause(&run)? {
+                return Ok(None);
+            }
+        }
+    }
+    run.finish(progress).map(Some)
 }

@@ -1,5 +1,6 @@
-//! A PBCS run cut between two of phase 2's learning problems goes on from its checkpoint
-//! (`runs::pbcs_resume`) to the bytes of the run never cut; a checkpoint that cannot be this
+//! A PBCS run cut between two of phase 2's learning problems, or two tests of its
+//! goal-conditioned chain, goes on from its checkpoint (`runs::pbcs_resume`) to the bytes of
+//! the run never cut; a checkpoint that cannot be this
 //! run's is refused and left as it is.
 
 use super::backplay::DeadTarget;
@@ -55,19 +56,19 @@ fn clockless(trace: &[TraceRow]) -> Vec<TraceRow> {
         .collect()
 }
 
-/// Cut after every learning problem in turn, each process resuming from the last one's
-/// checkpoint: the record, chain, trace, evaluation and picture are the uncut run's, the
-/// wall clock counts every process, and each cut moved on (no learning problem repeated).
-#[test]
-fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
-    let job = job();
-    let whole = compute(&job, None).unwrap();
+/// `job` run whole, and run again cut at every pause (a checkpoint that saves at each, its
+/// deadline past), each process resuming from the last one's: the resumed run, the whole
+/// one, the cuts, and the last save's head. Each cut moved on (no work repeated).
+fn whole_and_cut_everywhere(
+    job: &Valid<PbcsJob>,
+) -> (PbcsRun<Maze>, PbcsRun<Maze>, usize, pbcs::checkpoint::Saved) {
+    let whole = compute(job, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s1.resume");
     let checkpoint = cutting(&path, "maze 3, seed 1");
     let (mut cuts, mut last) = (0, None::<pbcs::checkpoint::Saved>);
     let resumed = loop {
-        if let Some(run) = compute(&job, Some(&checkpoint)) {
+        if let Some(run) = compute(job, Some(&checkpoint)) {
             break run;
         }
         cuts += 1;
@@ -79,17 +80,14 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
         last = Some(saved);
         assert!(cuts < 100, "no end");
     };
-    // One cut after each learning problem of the main section but its last (the problems
-    // before the chain's verification; none of them a hand-over try).
-    let main: Vec<&TraceRow> = whole
-        .phase2
-        .trace
-        .iter()
-        .take_while(|r| r.event != pbcs::phase2::EventKind::ChainVerify)
-        .collect();
-    let problems = main.last().unwrap().skill + 1;
-    assert!(problems >= 5, "{problems} learning problems");
-    assert_eq!(cuts, problems - 1);
+    // Once the results are written the caller deletes the checkpoint: left in place until then.
+    assert!(path.exists());
+    (resumed, whole, cuts, last.expect("the run was cut"))
+}
+
+/// The resumed run is the uncut one: record, chain, trace, evaluation and picture; the wall
+/// clock counts the earlier processes' (up to their saves) and never runs back.
+fn assert_same_run(resumed: &PbcsRun<Maze>, whole: &PbcsRun<Maze>, last: &pbcs::checkpoint::Saved) {
     assert_eq!(resumed.record, whole.record);
     assert_eq!(resumed.phase2.chain, whole.phase2.chain);
     assert_eq!(resumed.phase2.failure, whole.phase2.failure);
@@ -100,13 +98,67 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
     );
     assert_eq!(resumed.evaluation, whole.evaluation);
     assert_eq!(resumed.picture, whole.picture);
-    // The wall clock counts the earlier processes' (up to their saves): the run's is at least
-    // the last save's, and the trace's goes on from theirs, never running back.
-    assert!(resumed.seconds >= last.unwrap().seconds);
+    assert!(resumed.seconds >= last.seconds);
     let seconds: Vec<f64> = resumed.phase2.trace.iter().map(|r| r.seconds).collect();
     assert!(seconds.windows(2).all(|w| w[0] <= w[1]), "{seconds:?}");
-    // Once the results are written the caller deletes the checkpoint: left in place until then.
-    assert!(path.exists());
+}
+
+/// Cut after every learning problem in turn, each process resuming from the last one's
+/// checkpoint: the uncut run, one cut after each learning problem of the main section but its
+/// last (the problems before the chain's verification; none of them a hand-over try).
+#[test]
+fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
+    let job = job();
+    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&job);
+    let main: Vec<&TraceRow> = whole
+        .phase2
+        .trace
+        .iter()
+        .take_while(|r| r.event != pbcs::phase2::EventKind::ChainVerify)
+        .collect();
+    let problems = main.last().unwrap().skill + 1;
+    assert!(problems >= 5, "{problems} learning problems");
+    assert_eq!(cuts, problems - 1);
+    assert_same_run(&resumed, &whole, &last);
+}
+
+/// The goal-conditioned chain (`phase2.chain = "goal_conditioned"`) on the same maze, cut after
+/// every test of the chain but the one that passes, each process resuming from the last one's
+/// checkpoint (the learner, the HER replay, the streams, the curriculum and the episode in
+/// flight): the uncut run. A per-skill run of the same job name refuses its checkpoint.
+#[test]
+fn a_goal_conditioned_run_cut_after_every_test_ends_as_the_uncut_run() {
+    let mut gc = (*job()).clone();
+    gc.phase2.chain = pbcs::phase2::ChainStrategy::GoalConditioned(Box::default());
+    let gc = Check::valid(gc).unwrap();
+    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&gc);
+    let tests = whole
+        .phase2
+        .trace
+        .iter()
+        .filter(|r| r.event == pbcs::phase2::EventKind::Test)
+        .count();
+    assert!(tests >= 3, "{tests} tests");
+    assert!(whole.phase2.failure.is_none(), "{:?}", whole.phase2.failure);
+    assert_eq!(cuts, tests - 1);
+    assert_same_run(&resumed, &whole, &last);
+    // Its checkpoint is not a per-skill run's: refused by one, named.
+    let dir = tempfile::tempdir().unwrap();
+    let checkpoint = cutting(&dir.path().join("s1.resume"), "maze 3, seed 1");
+    assert!(compute(&gc, Some(&checkpoint)).is_none(), "it stopped");
+    let maze = Maze::new(&gc.maze).unwrap();
+    let per_skill = job();
+    let e = match PbcsRun::compute_resumable(
+        maze,
+        &per_skill,
+        Kernel::detect(),
+        &checkpoint,
+        |_, _| {},
+    ) {
+        Ok(_) => panic!("not refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains(pbcs::checkpoint::PBCS), "{e}");
 }
 
 /// A checkpoint of another job, one saved on another τ or computed on another kernel's bytes,

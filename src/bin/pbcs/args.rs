@@ -224,8 +224,9 @@ pub enum Command {
         #[arg(long)]
         exact_starts: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): the run stops at the end of its first
-        /// learning problem of phase 2 at or past it that leaves another to make, saved to
-        /// <OUT>/run.resume, and exits with status 75 (EX_TEMPFAIL); the same command goes on
+        /// learning problem of phase 2 at or past it that leaves another to make (with
+        /// `phase2.chain = "goal_conditioned"`, its first test of the chain that does not pass),
+        /// saved to <OUT>/run.resume, and exits with status 75 (EX_TEMPFAIL); the same command goes on
         /// where it stopped, to the same bytes (phase 1, the last learning problem, the chain's
         /// verification and repairs and its evaluation are not cut: past them the run
         /// finishes). Without it the run still saves itself every ten minutes and goes on from
@@ -356,8 +357,8 @@ pub enum ExpCommand {
         skip_unavailable: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins at or past it, and a
         /// vanilla run in progress stops at its first evaluation at or past it, and a PBCS run
-        /// in progress at the end of its first learning problem at or past it, each saved to
-        /// its checkpoint. With runs unfinished the exit status is 75 (EX_TEMPFAIL); the same
+        /// in progress at the end of its first learning problem (goal-conditioned: test of the
+        /// chain) at or past it, each saved to its checkpoint. With runs unfinished the exit status is 75 (EX_TEMPFAIL); the same
         /// command goes on where it stopped, to the same bytes. Under a cluster's time limit,
         /// leave the time of an evaluation interval's training, the evaluation and the save
         /// (for a PBCS run, of a learning problem and the save) to spare.

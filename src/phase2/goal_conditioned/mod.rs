@@ -24,9 +24,11 @@
 //! chain) and differ by the sub-goal they see ([`Inputs::goal`]); executing it gives the
 //! policy each sub-goal in turn, as training did. Settings: [`GoalConditioned`].
 
+mod curriculum;
 mod run;
 pub mod settings;
 
+pub use run::{GoalConditionedRun, GoalConditionedState};
 pub use settings::{ChainName, ChainStrategy, Curriculum, GoalConditioned};
 
 use super::goal::{ball_center, Inputs};
@@ -42,12 +44,7 @@ pub fn chain_goal_conditioned<E: Env>(
     settings: &GoalConditioned,
     progress: &mut dyn FnMut(usize, Progress),
 ) -> Result<Phase2Outcome> {
-    let env = inputs.env;
-    let goals = env.goals().ok_or_else(|| {
-        crate::env::Capability::Goals.missing("phase2.chain = \"goal_conditioned\"")
-    })?;
-    let sub_goals = SubGoals::cut(env, goals, inputs.tau, settings.spacing)?;
-    run::Training::new(&inputs, settings, goals, sub_goals)?.run(progress)
+    Ok(GoalConditionedRun::start(inputs, settings)?.finish(progress))
 }
 
 /// Rewrites a HER batch (rows of an observation of `obs_dim` then a goal of `goal_dim`) into

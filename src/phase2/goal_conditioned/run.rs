@@ -1,7 +1,16 @@
-//! The goal-conditioned chain's training ([`Training`]): episodes from τ's saved states drawn
-//! by the curriculum, overshooting through the sub-goals, one update per step, and a greedy
-//! test of the chain every `test_every` training steps.
+//! The goal-conditioned chain's training as one owned run ([`GoalConditionedRun`]): episodes
+//! from τ's saved states drawn by the curriculum, overshooting through the sub-goals, one
+//! update per step, and a greedy test of the chain every `test_every` training steps.
+//!
+//! Between two tests a run is its learner's state and the rest of what changes as it goes (the
+//! HER replay, the random streams' positions, the curriculum's tries and frontier, the episode
+//! in flight, the tests so far) and its ledger's (env steps, step counts, the trace):
+//! [`GoalConditionedRun::state`] copies it out, [`GoalConditionedRun::resume`] goes on from
+//! the copy to the bytes of a run never cut, and the caller decides when to save (a
+//! checkpoint writes it: [`crate::runs::pbcs_resume`]). An AntMaze run of hours so outlives a
+//! session's end or a cluster job's limit.
 
+use super::curriculum::Starts;
 use super::settings::{Curriculum, GoalConditioned};
 use super::SubGoals;
 use crate::env::{Env, Goals};
@@ -9,41 +18,108 @@ use crate::error::{Error, Result};
 use crate::learner::her::{GoalTransition, HerReplay};
 use crate::learner::replay::Batch;
 use crate::learner::Learner;
+use crate::nn::kernel::Kernel;
 use crate::phase2::goal::dist;
 use crate::phase2::inputs::Ledger;
+use crate::phase2::StepCounts;
 use crate::phase2::{
     EventKind, Failure, FirstStarts, LastGoal, Phase2Inputs, Phase2Outcome, Progress, SkillChain,
     TraceRow,
 };
 use crate::rng::{Rng, Stream};
 use rand::Rng as _;
-use std::collections::VecDeque;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 
-/// One goal-conditioned phase 2: the learner, its replay, the curriculum's memory, the ledger.
-pub(super) struct Training<'r, 'a, E: Env> {
-    inputs: &'r Phase2Inputs<'a, E>,
-    settings: &'r GoalConditioned,
-    goals: &'r dyn Goals<E::State>,
+/// One goal-conditioned phase 2 on τ, owning what it has learnt and spent: trained one test at
+/// a time ([`GoalConditionedRun::next_test`]), copied out between two tests
+/// ([`GoalConditionedRun::state`]) and resumed from the copy ([`GoalConditionedRun::resume`]),
+/// then finished ([`GoalConditionedRun::finish`]).
+///
+/// ```
+/// use pbcs::config::Preset;
+/// use pbcs::envs::maze::Maze;
+/// use pbcs::phase1::explore;
+/// use pbcs::phase2::goal_conditioned::{GoalConditioned, GoalConditionedRun};
+/// use pbcs::phase2::{chain_goal_conditioned, Phase2Inputs};
+/// use pbcs::rng::{Seeds, Stream};
+/// let mut job = Preset::Fast.job().unwrap();
+/// (job.maze.size, job.seed) = (2, 0);
+/// let maze = Maze::new(&job.maze).unwrap();
+/// let seeds = Seeds::new(job.seed);
+/// let found = explore(&maze, &job.explore, &mut seeds.stream(Stream::Explore), |_, _| {}).unwrap();
+/// let tau = &found.trajectory.states;
+/// let (ready, kernel) = (job.phase2.ready(&maze).unwrap(), pbcs::nn::kernel::Kernel::detect());
+/// let inputs = || Phase2Inputs::new(&maze, tau, ready, &job.learner, &seeds, kernel)
+///     .after(found.env_steps);
+/// let settings = GoalConditioned::default();
+/// // Cut after its first test, its state kept...
+/// let mut run = GoalConditionedRun::start(inputs(), &settings).unwrap();
+/// assert!(run.next_test(&mut |_, _| {}).is_continue());
+/// let kept = run.state().unwrap();
+/// assert_eq!(kept.steps.train, settings.test_every);
+/// // ...it goes on to the outcome of the run never cut.
+/// let resumed = GoalConditionedRun::resume(inputs(), &settings, kept).unwrap();
+/// let resumed = resumed.finish(&mut |_, _| {});
+/// let whole = chain_goal_conditioned(inputs(), &settings, &mut |_, _| {}).unwrap();
+/// assert_eq!((resumed.chain, resumed.failure), (whole.chain, whole.failure));
+/// assert_eq!(resumed.steps, whole.steps);
+/// ```
+pub struct GoalConditionedRun<'a, E: Env> {
+    inputs: Phase2Inputs<'a, E>,
+    settings: GoalConditioned,
+    goals: &'a dyn Goals<E::State>,
     sub: SubGoals,
+    /// The task's own goal (τ_0's desired goal): the last skill's where episodes do not draw one.
+    task_goal: Vec<f32>,
     learner: Box<dyn Learner>,
+    ledger: Ledger,
+    p: Moving<E::State>,
+    /// Once training has ended: why it stopped early, if it did.
+    ended: Option<Option<Failure>>,
+}
+
+/// What changes as a run goes, but its learner and ledger: with them, what
+/// [`GoalConditionedState`] holds.
+#[derive(Serialize, Deserialize)]
+#[serde(bound = "S: Serialize + DeserializeOwned")]
+struct Moving<S> {
     her: HerReplay,
     batch: Batch,
     noise: Rng,
     replay: Rng,
     starts: Rng,
-    ledger: Ledger,
-    /// Per start j (0 … M − 1): its last `window` tries (reached g_{j+1}; with Backplay's
-    /// order, reached the final goal).
-    tries: Vec<VecDeque<bool>>,
-    /// Backplay's frontier: the earliest start drawn.
-    frontier: usize,
-    /// The task's own goal (τ_0's desired goal): the last skill's where episodes do not draw one.
-    task_goal: Vec<f32>,
+    /// The curriculum's memory of each start's tries, and Backplay's frontier.
+    curriculum: Starts,
     /// This round's tries and successes.
     round: (usize, usize),
+    /// Tests run so far (test n draws its starts from substream n).
+    tests: u32,
+    /// The episode in flight.
+    episode: Episode<S>,
+}
+
+/// A goal-conditioned phase 2 between two of its tests: what a run cut there goes on from
+/// ([`GoalConditionedRun::resume`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GoalConditionedState {
+    /// The learner's [`Learner::save_state`] (weights, targets, optimiser moments, its streams).
+    pub learner: Vec<u8>,
+    /// The rest of what changes as the run goes (postcard): the replay, the random streams'
+    /// positions, the curriculum, the tests so far, the episode in flight.
+    pub progress: Vec<u8>,
+    /// Environment steps of the whole run so far (phase 1 included).
+    pub spent: u64,
+    /// Phase 2's steps so far, by purpose.
+    pub steps: StepCounts,
+    /// The trace so far, wall clock included.
+    pub trace: Vec<TraceRow>,
 }
 
 /// The episode being run.
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(bound = "S: Serialize + DeserializeOwned")]
 struct Episode<S> {
     state: S,
     obs: Vec<f32>,
@@ -57,13 +133,26 @@ struct Episode<S> {
     final_goal: Vec<f32>,
 }
 
-impl<'r, 'a, E: Env> Training<'r, 'a, E> {
+impl<'a, E: Env> GoalConditionedRun<'a, E> {
+    /// Phase 2 by this strategy on τ = `inputs.tau` before its first episode: τ cut into
+    /// sub-goals `settings.spacing` apart ([`SubGoals::cut`]), then [`GoalConditionedRun::new`].
+    /// An environment without goals is refused.
+    pub fn start(inputs: Phase2Inputs<'a, E>, settings: &GoalConditioned) -> Result<Self> {
+        let env = inputs.env;
+        let goals = env.goals().ok_or_else(|| {
+            crate::env::Capability::Goals.missing("phase2.chain = \"goal_conditioned\"")
+        })?;
+        let sub = SubGoals::cut(env, goals, inputs.tau, settings.spacing)?;
+        GoalConditionedRun::new(inputs, settings, goals, sub)
+    }
+
     /// Before the first episode: a fresh learner whose networks see the observation and the
-    /// sub-goal, an empty HER replay.
-    pub fn new(
-        inputs: &'r Phase2Inputs<'a, E>,
-        settings: &'r GoalConditioned,
-        goals: &'r dyn Goals<E::State>,
+    /// sub-goal, an empty HER replay, the first episode begun. A replay smaller than the
+    /// longest episode is refused.
+    fn new(
+        inputs: Phase2Inputs<'a, E>,
+        settings: &GoalConditioned,
+        goals: &'a dyn Goals<E::State>,
         sub: SubGoals,
     ) -> Result<Self> {
         let env = inputs.env;
@@ -86,56 +175,144 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
             .build(o + g, &vec![1.0; d], seeds, inputs.kernel)?;
         let mut task_goal = vec![0.0; g];
         goals.desired_goal(&inputs.tau[0], &mut task_goal);
-        Ok(Training {
-            her: HerReplay::new(capacity, o, d, g, settings.her.clone()),
-            batch: Batch::default(),
-            noise: seeds.stream(Stream::Noise),
-            replay: seeds.stream(Stream::Replay),
-            starts: seeds.stream(Stream::Start),
+        let placeholder = Episode {
+            state: inputs.tau[0].clone(),
+            obs: Vec::new(),
+            start: 0,
+            tried: true,
+            aim: 0,
+            on_goal: 0,
+            final_goal: Vec::new(),
+        };
+        let mut run = GoalConditionedRun {
+            p: Moving {
+                her: HerReplay::new(capacity, o, d, g, settings.her.clone()),
+                batch: Batch::default(),
+                noise: seeds.stream(Stream::Noise),
+                replay: seeds.stream(Stream::Replay),
+                starts: seeds.stream(Stream::Start),
+                curriculum: Starts::new(sub.len()),
+                round: (0, 0),
+                tests: 0,
+                episode: placeholder,
+            },
             ledger: Ledger::new(inputs.spent),
-            tries: vec![VecDeque::new(); sub.len()],
-            frontier: sub.len() - 1,
             task_goal,
-            round: (0, 0),
             inputs,
-            settings,
+            settings: settings.clone(),
             goals,
             sub,
             learner,
-        })
+            ended: None,
+        };
+        run.p.episode = run.begin();
+        Ok(run)
     }
 
-    /// Trains until a greedy test of the chain passes (the chain, no failure) or the budget
-    /// `phase2.max_env_steps` is spent (the chain as it stands, [`Failure::Budget`]).
-    pub fn run(mut self, progress: &mut dyn FnMut(usize, Progress)) -> Result<Phase2Outcome> {
+    /// Trains to the next greedy test of the chain and runs it: `Continue` while training
+    /// goes on (a state copied out now goes on from there), `Break` once a test has passed or
+    /// the budget `phase2.max_env_steps` is spent (at once when it had).
+    pub fn next_test(&mut self, progress: &mut dyn FnMut(usize, Progress)) -> ControlFlow<()> {
+        if self.ended.is_some() {
+            return ControlFlow::Break(());
+        }
         let budget = self.inputs.config().max_env_steps;
-        let mut failure = Some(Failure::Budget);
-        let mut episode = self.begin();
-        let mut tests = 0u32;
+        let mut episode = self.p.episode.clone();
+        let mut flow = ControlFlow::Break(());
+        self.ended = Some(Some(Failure::Budget));
         while self.ledger.spent < budget {
             if self.step(&mut episode) {
                 episode = self.begin();
             }
-            if self
-                .ledger
-                .steps
-                .train
-                .is_multiple_of(self.settings.test_every)
-            {
+            let every = self.settings.test_every;
+            if self.ledger.steps.train.is_multiple_of(every) {
                 self.record_round(progress);
+                let tests = self.p.tests;
+                self.p.tests += 1;
                 if self.test(tests, progress) {
-                    failure = None;
-                    break;
+                    self.ended = Some(None);
+                } else {
+                    (self.ended, flow) = (None, ControlFlow::Continue(()));
                 }
-                tests += 1;
+                break;
             }
         }
-        Ok(Phase2Outcome {
+        self.p.episode = episode;
+        flow
+    }
+
+    /// Trains until a greedy test of the chain passes (the chain, no failure) or the budget
+    /// is spent (the chain as it stands, [`Failure::Budget`]).
+    pub fn finish(mut self, progress: &mut dyn FnMut(usize, Progress)) -> Phase2Outcome {
+        while self.next_test(progress).is_continue() {}
+        Phase2Outcome {
             chain: self.chain(),
-            failure,
+            failure: self.ended.flatten(),
             steps: self.ledger.steps,
             trace: self.ledger.trace,
+        }
+    }
+
+    /// The run as it stands between two tests, for [`GoalConditionedRun::resume`].
+    pub fn state(&self) -> Result<GoalConditionedState> {
+        let progress = postcard::to_stdvec(&self.p)
+            .map_err(|e| Error::invalid("goal-conditioned run state", e.to_string()))?;
+        Ok(GoalConditionedState {
+            learner: self.learner.save_state()?,
+            progress,
+            spent: self.ledger.spent,
+            steps: self.ledger.steps,
+            trace: self.ledger.trace.clone(),
         })
+    }
+
+    /// The kernel the learner computes on.
+    pub fn kernel(&self) -> Kernel {
+        self.learner.kernel()
+    }
+
+    /// The run of these inputs where a run of the same inputs stood when `state` was copied
+    /// out of it: it goes on to the outcome of the run never cut (the same chain, failure,
+    /// step counts and trace, its wall clock aside). A state that cannot be this run's (other
+    /// sizes, sub-goals or steps) is refused. The learner goes on on this run's kernel (one of
+    /// the same bytes, `Kernel::same_bytes`, which a checkpoint checks).
+    pub fn resume(
+        inputs: Phase2Inputs<'a, E>,
+        settings: &GoalConditioned,
+        state: GoalConditionedState,
+    ) -> Result<Self> {
+        let mut run = GoalConditionedRun::start(inputs, settings)?;
+        let refused = |why: &str| {
+            Error::invalid(
+                "goal-conditioned run state",
+                format!("it does not fit this run ({why}): it is another run's"),
+            )
+        };
+        let p: Moving<E::State> = postcard::from_bytes(&state.progress)
+            .map_err(|e| refused(&format!("it does not decode: {e}")))?;
+        let (env, m) = (run.inputs.env, run.sub.len());
+        let e = &p.episode;
+        let fits = p.her.same_shape(&run.p.her)
+            && p.curriculum.fits(m)
+            && e.start < m
+            && e.aim < m
+            && e.obs.len() == env.obs_dim()
+            && e.final_goal.len() == run.goals.goal_dim();
+        if !fits {
+            return Err(refused("other sizes or sub-goals"));
+        }
+        if state.spent != run.ledger.spent + state.steps.train + state.steps.test {
+            return Err(refused("its env steps do not add up"));
+        }
+        let kernel = run.learner.kernel();
+        run.learner.restore_state(&state.learner)?;
+        run.learner.set_kernel(kernel);
+        run.ledger.spent = state.spent;
+        run.ledger.steps = state.steps;
+        run.ledger.earlier_seconds = state.trace.last().map_or(0.0, |r| r.seconds);
+        run.ledger.trace = state.trace;
+        run.p = p;
+        Ok(run)
     }
 
     /// The chain of the learner's current policy.
@@ -143,34 +320,7 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
         let policy = self.learner.policy();
         let radius = self.settings.radius;
         self.sub
-            .chain(self.inputs, radius, &self.task_goal, policy.as_ref())
-    }
-
-    /// The curriculum's start j: failure-weighted, or uniform at or after Backplay's frontier.
-    fn draw_start(&mut self) -> usize {
-        let m = self.sub.len();
-        match self.settings.curriculum {
-            Curriculum::Backplay => self.starts.random_range(self.frontier..m),
-            Curriculum::FailureWeighted => {
-                let weight = |tries: &VecDeque<bool>| {
-                    let rate = tries.iter().filter(|&&t| t).count() as f64 / tries.len() as f64;
-                    if tries.is_empty() || rate <= 0.1 {
-                        10.0
-                    } else {
-                        1.0 / rate
-                    }
-                };
-                let weights: Vec<f64> = self.tries.iter().map(weight).collect();
-                let mut u = self.starts.random::<f64>() * weights.iter().sum::<f64>();
-                for (j, w) in weights.iter().enumerate() {
-                    if u < *w {
-                        return j;
-                    }
-                    u -= w;
-                }
-                m - 1
-            }
-        }
+            .chain(&self.inputs, radius, &self.task_goal, policy.as_ref())
     }
 
     /// A new episode: its start drawn, its state B_ε(τ_{k_j}) (at j = 0 with
@@ -178,7 +328,10 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
     /// `phase2.last_goal = "drawn"`.
     fn begin(&mut self) -> Episode<E::State> {
         let (env, config) = (self.inputs.env, self.inputs.config());
-        let j = self.draw_start();
+        let j = self
+            .p
+            .curriculum
+            .draw(self.settings.curriculum, &mut self.p.starts);
         let at = &self.inputs.tau[self.sub.start_index(j)];
         let state = match (
             j,
@@ -186,12 +339,12 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
             env.drawn_starts(),
             env.ball_starts(),
         ) {
-            (0, FirstStarts::Drawn, Some(d), _) => d.drawn_start(at, &mut self.starts),
-            (_, _, _, Some(ball)) => ball.sample_ball(at, config.epsilon, &mut self.starts),
+            (0, FirstStarts::Drawn, Some(d), _) => d.drawn_start(at, &mut self.p.starts),
+            (_, _, _, Some(ball)) => ball.sample_ball(at, config.epsilon, &mut self.p.starts),
             _ => at.clone(),
         };
         let state = match (config.last_goal, env.drawn_goals()) {
-            (LastGoal::Drawn, Some(d)) => d.with_drawn_goal(&state, &mut self.starts),
+            (LastGoal::Drawn, Some(d)) => d.with_drawn_goal(&state, &mut self.p.starts),
             _ => state,
         };
         let mut final_goal = vec![0.0; self.goals.goal_dim()];
@@ -245,7 +398,7 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
             (false, _) => (0.0, failed),
         };
         let desired = self.goal(episode, episode.aim).to_vec();
-        self.her.push(GoalTransition {
+        self.p.her.push(GoalTransition {
             obs: &episode.obs,
             act: &action,
             rew,
@@ -267,7 +420,7 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
             episode.on_goal = 0;
         }
         if ended {
-            self.her.end_episode();
+            self.p.her.end_episode();
         }
         self.learn();
         episode.state = step.state;
@@ -281,13 +434,15 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
         let d = self.inputs.env.action_dim();
         if self.ledger.steps.train < self.settings.learning_starts {
             return (0..d)
-                .map(|_| self.noise.random_range(-1.0..=1.0))
+                .map(|_| self.p.noise.random_range(-1.0..=1.0))
                 .collect();
         }
         let mut input = episode.obs.clone();
         let goal = self.goal(episode, episode.aim);
         input.extend(goal.iter().zip(&episode.obs).map(|(g, x)| g - x));
-        self.learner.explore(&input, &[0], &mut self.noise).to_vec()
+        self.learner
+            .explore(&input, &[0], &mut self.p.noise)
+            .to_vec()
     }
 
     /// Records the episode's try once it is decided: with failure-weighted starts, whether it
@@ -310,21 +465,9 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
             return;
         };
         episode.tried = true;
-        self.round.0 += 1;
-        self.round.1 += usize::from(won);
-        let tries = &mut self.tries[episode.start];
-        tries.push_back(won);
-        if tries.len() > self.settings.window {
-            tries.pop_front();
-        }
-        let rate = tries.iter().filter(|&&t| t).count() as f32 / self.settings.window as f32;
-        let at_frontier = episode.start == self.frontier && self.frontier > 0;
-        if self.settings.curriculum == Curriculum::Backplay
-            && at_frontier
-            && rate >= self.settings.advance_at
-        {
-            self.frontier -= 1;
-        }
+        self.p.round.0 += 1;
+        self.p.round.1 += usize::from(won);
+        self.p.curriculum.record(&self.settings, episode.start, won);
     }
 
     /// One update on a batch of real and relabelled transitions, the networks seeing each
@@ -337,19 +480,20 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
         let reached = |a: &[f32], g: &[f32]| dist(a, g) <= radius;
         let n = self.learner.batch_size();
         if !self
+            .p
             .her
-            .sample_reaching(n, &mut self.replay, &reached, &mut self.batch)
+            .sample_reaching(n, &mut self.p.replay, &reached, &mut self.p.batch)
         {
             return;
         }
         let (o, g) = (self.inputs.env.obs_dim(), self.goals.goal_dim());
-        super::goal_minus_position(&mut self.batch, o, g);
-        self.learner.update(&self.batch);
+        super::goal_minus_position(&mut self.p.batch, o, g);
+        self.learner.update(&self.p.batch);
     }
 
     /// Writes this round's training row (the fraction of its tries that succeeded).
     fn record_round(&mut self, progress: &mut dyn FnMut(usize, Progress)) {
-        let (tries, wins) = std::mem::take(&mut self.round);
+        let (tries, wins) = std::mem::take(&mut self.p.round);
         let success = if tries == 0 {
             0.0
         } else {
@@ -362,7 +506,7 @@ impl<'r, 'a, E: Env> Training<'r, 'a, E> {
     /// failure-weighted starts).
     fn report(&mut self, kind: EventKind, success: f32, progress: &mut dyn FnMut(usize, Progress)) {
         let k = match self.settings.curriculum {
-            Curriculum::Backplay => self.sub.start_index(self.frontier),
+            Curriculum::Backplay => self.sub.start_index(self.p.curriculum.frontier()),
             Curriculum::FailureWeighted => 0,
         };
         let t = self.inputs.tau.len() - 1;
