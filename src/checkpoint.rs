@@ -41,8 +41,9 @@ pub const EVERY: Duration = Duration::from_secs(600);
 pub const VANILLA: &str = "pbcs vanilla run checkpoint, version 3";
 
 /// The format of a PBCS run's checkpoint ([`crate::runs::pbcs_resume`]). Bump the version with
-/// any change to what a PBCS run computes or to its saved state's layout.
-pub const PBCS: &str = "pbcs PBCS run checkpoint, version 1";
+/// any change to what a PBCS run computes or to its saved state's layout (version 2: the
+/// chain's verification and repairs are saved too, a repair under way included).
+pub const PBCS: &str = "pbcs PBCS run checkpoint, version 2";
 
 /// The format of a PBCS run's checkpoint whose phase 2 is the goal-conditioned chain
 /// ([`crate::runs::pbcs_resume`], saved between two of its tests). Bump the version with any

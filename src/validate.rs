@@ -175,6 +175,8 @@ pub mod bounds {
     pub const SAMPLES: u64 = 100_000;
     /// Training rounds, patience and the like: counts of repetitions of a learning step.
     pub const REPEATS: u64 = 1_000_000;
+    /// Learner updates per environment step (DCIL-II's is 1.5, SB3's `gradient_steps` a few).
+    pub const UPDATES_PER_STEP: u64 = 1_000;
     /// Environment steps of one run's budget (`train.steps`, `phase2.max_env_steps`,
     /// `explore.budget`): the paper's largest is 22M, ours 50M.
     pub const ENV_STEPS: u64 = 1_000_000_000;

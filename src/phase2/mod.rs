@@ -51,7 +51,7 @@ pub use algorithm1::{Between, Made, Problems};
 pub use backplay::{handover, verified, MAX_HANDOVER_TRIES, MAX_VERIFIED_CANDIDATES};
 pub use goal_conditioned::{chain_goal_conditioned, ChainStrategy};
 pub use inputs::Phase2Inputs;
-pub use run::{chain_skills, Phase2Run, Phase2State};
+pub use run::{chain_skills, Found, OpenRepair, Phase2Run, Phase2State, RepairsAt};
 use serde::{Deserialize, Serialize};
 pub use starts::ArchiveStarts;
 pub use trajectory::{phase2_trajectory, shorten};

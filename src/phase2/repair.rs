@@ -7,9 +7,10 @@
 use super::algorithm1::Between;
 use super::inputs::{Along, Ledger};
 use super::section::Section;
-use super::{ChainCheck, EventKind, Failure, Progress, Skill, SkillChain, TraceRow};
+use super::{ChainCheck, EventKind, Failure, Progress, SkillChain, TraceRow};
 use crate::env::{Capability, Env, SampleBall};
 use crate::error::Result;
+use crate::policy::Policy;
 use crate::rng::{Rng, Stream};
 use std::ops::ControlFlow;
 
@@ -23,6 +24,52 @@ struct ChainTrial<S> {
     entries: Vec<Vec<S>>,
 }
 
+/// A skill as Algorithm 1 finds it: (K, T, π), its start and target indices and its policy.
+pub type Found = (usize, usize, Box<dyn Policy>);
+
+/// The chain's verification and repairs between two of their steps (a verification, or one
+/// learning problem of a repair): what a run cut there goes on from.
+#[derive(Debug, Clone)]
+pub struct RepairsAt<S> {
+    /// The chain so far, in execution order: (K, T, π), indices on the whole τ.
+    pub chain: Vec<Found>,
+    /// Repairs begun so far.
+    pub repairs: usize,
+    /// The stream the verifications draw their starts from, where it stands.
+    pub rng: Rng,
+    /// The repair under way, if one is.
+    pub open: Option<OpenRepair<S>>,
+}
+
+/// A repair under way: Algorithm 1 again on the section τ_lo … τ_hi of the skill at chain
+/// position `i`, half of the starts at τ_lo drawn from `entries`.
+#[derive(Debug, Clone)]
+pub struct OpenRepair<S> {
+    /// The chain position it replaces.
+    pub i: usize,
+    /// The section's first index on τ: that skill's K.
+    pub lo: usize,
+    /// Its last: that skill's T.
+    pub hi: usize,
+    /// The states where the verification's episodes entered that skill.
+    pub entries: Vec<S>,
+    /// Algorithm 1 on the section (indices on it).
+    pub at: Between<Box<dyn Policy>>,
+}
+
+impl<S> RepairsAt<S> {
+    /// Before the first verification of `chain` (execution order, indices on τ): the
+    /// verifications' starts from stream ChainVerify of `seeds`.
+    pub fn new(chain: Vec<Found>, seeds: &crate::rng::Seeds) -> Self {
+        RepairsAt {
+            chain,
+            repairs: 0,
+            rng: seeds.stream(Stream::ChainVerify),
+            open: None,
+        }
+    }
+}
+
 /// What a repair reads and writes: τ and the settings, the run's ledger, its progress.
 pub(super) struct Repairs<'r, 'a, E: Env> {
     pub along: Along<'r, 'a, E>,
@@ -31,7 +78,7 @@ pub(super) struct Repairs<'r, 'a, E: Env> {
 }
 
 impl<E: Env> Repairs<'_, '_, E> {
-    /// Verification and repair of a finished `chain`:
+    /// One step of the verification and repair of a finished chain `at.chain`, which reads:
     ///
     /// ```text
     /// repeat:
@@ -43,57 +90,97 @@ impl<E: Env> Repairs<'_, '_, E> {
     ///     replace skill i by them (one skill, or several: a split)
     /// ```
     ///
-    /// A repair that finds no skill leaves the chain as it was and ends the repairs; a
-    /// verification or repair that runs out of the step budget ends the run with
-    /// [`Failure::Budget`]. The chain_verify row's `skill` is the chain position of the skill
-    /// blamed (the number of skills when the chain passed), its K and T that skill's (0 and N
-    /// when it passed); the repair's own tests and training rounds follow as the rows of a new
-    /// learning problem.
-    pub fn repair(&mut self, chain: &mut SkillChain, spec: ChainCheck) -> Result<Option<Failure>> {
+    /// A step is one verification or one learning problem of a repair: `Continue` while steps
+    /// are left (`at` copied out now goes on from there), `Break` with why the run failed, if it
+    /// did, once they have ended. A repair that finds no skill leaves the chain as it was and
+    /// ends the repairs; a verification or repair that runs out of the step budget ends the
+    /// run with [`Failure::Budget`]. The chain_verify row's `skill` is the chain position of
+    /// the skill blamed (the number of skills when the chain passed), its K and T that skill's
+    /// (0 and N when it passed); the repair's own tests and training rounds follow as the rows
+    /// of a new learning problem.
+    pub fn step(
+        &mut self,
+        at: &mut RepairsAt<E::State>,
+        spec: ChainCheck,
+    ) -> Result<ControlFlow<Option<Failure>>> {
+        let Some(mut open) = at.open.take() else {
+            return self.verify(at, spec);
+        };
+        let config = self.along.config();
+        let mut problems = Section {
+            along: self.along,
+            ledger: &mut *self.ledger,
+            lo: open.lo,
+            hi: open.hi,
+            entries: &open.entries,
+            progress: &mut *self.progress,
+        };
+        Ok(match open.at.step(config, &mut problems)? {
+            ControlFlow::Continue(()) => {
+                at.open = Some(open);
+                ControlFlow::Continue(())
+            }
+            ControlFlow::Break(Some(Failure::Budget)) => ControlFlow::Break(Some(Failure::Budget)),
+            ControlFlow::Break(Some(_)) => ControlFlow::Break(None),
+            ControlFlow::Break(None) => {
+                let lo = open.lo;
+                let skills = open.at.into_skills().into_iter();
+                let skills = skills.map(|(k, t, policy)| (lo + k, lo + t, policy));
+                at.chain.splice(open.i..=open.i, skills);
+                ControlFlow::Continue(())
+            }
+        })
+    }
+
+    /// A verification of `at.chain`, and where it fails and a repair is left, the repair of
+    /// the skill blamed opened.
+    fn verify(
+        &mut self,
+        at: &mut RepairsAt<E::State>,
+        spec: ChainCheck,
+    ) -> Result<ControlFlow<Option<Failure>>> {
         let setting = "phase2.chain_verify_episodes";
         let env = self.along.inputs.env;
         let ball = env
             .ball_starts()
             .ok_or_else(|| Capability::SampleBall.missing(setting))?;
-        let mut rng = self.along.inputs.seeds.stream(Stream::ChainVerify);
-        let mut repairs = 0;
-        loop {
-            if self.exhausted() {
-                return Ok(Some(Failure::Budget));
-            }
-            let check = self.check(chain, ball, spec.episodes, &mut rng);
-            let success = check.successes as f32 / spec.episodes as f32;
-            // The skill where the most failed episodes stopped (the first among ties).
-            let blamed = (0..chain.skills.len())
-                .filter(|&i| check.stalled[i] > 0)
-                .max_by_key(|&i| (check.stalled[i], std::cmp::Reverse(i)));
-            let (skill, k, t) = match blamed {
-                Some(i) => {
-                    let s = &chain.skills[i];
-                    (i, s.start_index, s.target_index)
-                }
-                None => (chain.skills.len(), 0, self.along.inputs.tau.len() - 1),
-            };
-            self.report(skill, k, t, success);
-            if self.exhausted() {
-                // The verification itself used up the budget: as for any run that reaches it.
-                return Ok(Some(Failure::Budget));
-            }
-            let Some(i) = blamed else {
-                return Ok(None);
-            };
-            if repairs == spec.repairs {
-                return Ok(None);
-            }
-            repairs += 1;
-            match self.section(k, t, &check.entries[i])? {
-                (_, Some(Failure::Budget)) => return Ok(Some(Failure::Budget)),
-                (_, Some(_)) => return Ok(None),
-                (skills, None) => {
-                    chain.skills.splice(i..=i, skills);
-                }
-            }
+        if self.exhausted() {
+            return Ok(ControlFlow::Break(Some(Failure::Budget)));
         }
+        let chain = SkillChain {
+            skills: self.along.skills(0, at.chain.clone()),
+            kernel: self.along.inputs.kernel,
+        };
+        let mut check = self.check(&chain, ball, spec.episodes, &mut at.rng);
+        let success = check.successes as f32 / spec.episodes as f32;
+        // The skill where the most failed episodes stopped (the first among ties).
+        let blamed = (0..at.chain.len())
+            .filter(|&i| check.stalled[i] > 0)
+            .max_by_key(|&i| (check.stalled[i], std::cmp::Reverse(i)));
+        let (skill, k, t) = match blamed {
+            Some(i) => (i, at.chain[i].0, at.chain[i].1),
+            None => (at.chain.len(), 0, self.along.inputs.tau.len() - 1),
+        };
+        self.report(skill, k, t, success);
+        if self.exhausted() {
+            // The verification itself used up the budget: as for any run that reaches it.
+            return Ok(ControlFlow::Break(Some(Failure::Budget)));
+        }
+        let Some(i) = blamed else {
+            return Ok(ControlFlow::Break(None));
+        };
+        if at.repairs == spec.repairs {
+            return Ok(ControlFlow::Break(None));
+        }
+        at.repairs += 1;
+        at.open = Some(OpenRepair {
+            i,
+            lo: k,
+            hi: t,
+            entries: std::mem::take(&mut check.entries[i]),
+            at: Between::start(t - k),
+        });
+        Ok(ControlFlow::Continue(()))
     }
 
     /// The chain_verify trace row and progress report of a verification.
@@ -121,32 +208,6 @@ impl<E: Env> Repairs<'_, '_, E> {
                 steps,
             },
         );
-    }
-
-    /// Algorithm 1 on the section τ_lo … τ_hi with the goal of τ_hi, `entries` drawn for half of
-    /// the starts at τ_lo: the skills in execution order, with indices on the whole τ.
-    fn section(
-        &mut self,
-        lo: usize,
-        hi: usize,
-        entries: &[E::State],
-    ) -> Result<(Vec<Skill>, Option<Failure>)> {
-        let config = self.along.config();
-        let mut problems = Section {
-            along: self.along,
-            ledger: &mut *self.ledger,
-            lo,
-            hi,
-            entries,
-            progress: &mut *self.progress,
-        };
-        let mut at = Between::start(hi - lo);
-        let failure = loop {
-            if let ControlFlow::Break(failure) = at.step(config, &mut problems)? {
-                break failure;
-            }
-        };
-        Ok((self.along.skills(lo, at.into_skills()), failure))
     }
 
     /// Runs `chain` greedily from `episodes` starts uniform in B_ε(s_0) (with

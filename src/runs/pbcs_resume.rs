@@ -20,9 +20,12 @@ use crate::learner::load_policy;
 use crate::nn::kernel::Kernel;
 use crate::phase2::goal_conditioned::{GoalConditionedRun, GoalConditionedState};
 use crate::phase2::{
-    Between, Phase2Inputs, Phase2Outcome, Phase2Run, Phase2State, Progress, StepCounts, TraceRow,
+    Between, Found, OpenRepair, Phase2Inputs, Phase2Outcome, Phase2Run, Phase2State, Progress,
+    RepairsAt, StepCounts, TraceRow,
 };
 use crate::policy::Policy;
+use crate::rng::Rng;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -53,11 +56,12 @@ struct Saved {
     /// The layer kernel the run computed on ([`Kernel::name`]): a resumed run must compute the
     /// same bytes ([`Kernel::same_bytes`]).
     kernel: String,
-    found: Vec<SavedSkill>,
-    t: usize,
+    /// Algorithm 1 on the whole τ.
+    between: SavedBetween,
+    /// The chain's verification and repairs, once begun.
+    repairs: Option<SavedRepairs>,
+    /// Learning problems made so far.
     made: usize,
-    restarts: usize,
-    moves: usize,
     spent: u64,
     train: u64,
     test: u64,
@@ -65,6 +69,37 @@ struct Saved {
     /// Each trace row's wall clock (not in `trace`'s encoding).
     trace_seconds: Vec<f64>,
     warm: Option<(usize, Vec<u8>)>,
+}
+
+/// [`Between`] as saved: the skills found so far and the loop's counters.
+#[derive(Serialize, Deserialize)]
+struct SavedBetween {
+    found: Vec<SavedSkill>,
+    t: usize,
+    made: usize,
+    restarts: usize,
+    moves: usize,
+}
+
+/// [`RepairsAt`] as saved.
+#[derive(Serialize, Deserialize)]
+struct SavedRepairs {
+    /// The chain so far (execution order, indices on τ).
+    chain: Vec<SavedSkill>,
+    repairs: usize,
+    rng: Rng,
+    open: Option<SavedOpenRepair>,
+}
+
+/// [`OpenRepair`] as saved.
+#[derive(Serialize, Deserialize)]
+struct SavedOpenRepair {
+    i: usize,
+    lo: usize,
+    hi: usize,
+    /// The entry states (postcard).
+    entries: Vec<u8>,
+    at: SavedBetween,
 }
 
 /// [`GoalConditionedState`] as saved.
@@ -110,36 +145,38 @@ fn policy_from(skill: &SavedSkill) -> Result<Box<dyn Policy>> {
 
 /// Saves `state` (τ's hash `tau`, `seconds` of wall clock so far) to `checkpoint`'s file,
 /// replacing it at once and whole.
-pub fn save(
+pub fn save<S: Serialize>(
     checkpoint: &Checkpoint,
-    state: &Phase2State,
+    state: &Phase2State<S>,
     tau: &str,
     kernel: Kernel,
     seconds: f64,
 ) -> Result<()> {
-    let b = &state.between;
-    let found = b
-        .found
-        .iter()
-        .map(|(k, t, p)| {
-            Ok(SavedSkill {
-                k: *k,
-                t: *t,
-                kind: p.kind().into(),
-                sizes: p.sizes().to_vec(),
-                bounds: p.action_bounds().to_vec(),
-                weights: policy_bytes(p.as_ref())?,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let repairs = match &state.repairs {
+        None => None,
+        Some(r) => Some(SavedRepairs {
+            chain: saved_skills(&r.chain)?,
+            repairs: r.repairs,
+            rng: r.rng.clone(),
+            open: match &r.open {
+                None => None,
+                Some(o) => Some(SavedOpenRepair {
+                    i: o.i,
+                    lo: o.lo,
+                    hi: o.hi,
+                    entries: postcard::to_stdvec(&o.entries)
+                        .map_err(|e| Error::invalid("phase 2 state", e.to_string()))?,
+                    at: SavedBetween::of(&o.at)?,
+                }),
+            },
+        }),
+    };
     let saved = Saved {
         tau_sha256: tau.into(),
         kernel: kernel.name().into(),
-        found,
-        t: b.t,
-        made: b.made,
-        restarts: b.restarts,
-        moves: b.moves,
+        between: SavedBetween::of(&state.between)?,
+        repairs,
+        made: state.made,
         spent: state.spent,
         train: state.steps.train,
         test: state.steps.test,
@@ -152,15 +189,84 @@ pub fn save(
     checkpoint.write(FORMAT, state.spent, seconds, &body)
 }
 
+/// Skills (K, T, π) as saved.
+fn saved_skills(skills: &[Found]) -> Result<Vec<SavedSkill>> {
+    skills
+        .iter()
+        .map(|(k, t, p)| {
+            Ok(SavedSkill {
+                k: *k,
+                t: *t,
+                kind: p.kind().into(),
+                sizes: p.sizes().to_vec(),
+                bounds: p.action_bounds().to_vec(),
+                weights: policy_bytes(p.as_ref())?,
+            })
+        })
+        .collect()
+}
+
+/// Saved skills read back.
+fn skills_from(saved: &[SavedSkill]) -> Result<Vec<Found>> {
+    saved
+        .iter()
+        .map(|s| Ok((s.k, s.t, policy_from(s)?)))
+        .collect()
+}
+
+impl SavedBetween {
+    fn of(b: &Between<Box<dyn Policy>>) -> Result<Self> {
+        Ok(SavedBetween {
+            found: saved_skills(&b.found)?,
+            t: b.t,
+            made: b.made,
+            restarts: b.restarts,
+            moves: b.moves,
+        })
+    }
+
+    fn read(&self) -> Result<Between<Box<dyn Policy>>> {
+        Ok(Between {
+            found: skills_from(&self.found)?,
+            t: self.t,
+            made: self.made,
+            restarts: self.restarts,
+            moves: self.moves,
+        })
+    }
+}
+
+impl SavedRepairs {
+    fn read<S: DeserializeOwned>(&self) -> Result<RepairsAt<S>> {
+        let open = match &self.open {
+            None => None,
+            Some(o) => Some(OpenRepair {
+                i: o.i,
+                lo: o.lo,
+                hi: o.hi,
+                entries: postcard::from_bytes(&o.entries)
+                    .map_err(|e| Error::invalid("the repair's entry states", e.to_string()))?,
+                at: o.at.read()?,
+            }),
+        };
+        Ok(RepairsAt {
+            chain: skills_from(&self.chain)?,
+            repairs: self.repairs,
+            rng: self.rng.clone(),
+            open,
+        })
+    }
+}
+
 /// The PBCS run saved at `checkpoint`'s file, with its wall-clock seconds, or `None` where
 /// there is no file. A file that does not decode, is damaged, is another job's, was saved on
 /// another τ than `tau` or computed on a kernel whose bytes `kernel`'s are not is refused,
 /// naming it; it is left as it is.
-pub fn load(
+pub fn load<S: DeserializeOwned>(
     checkpoint: &Checkpoint,
     tau: &str,
     kernel: Kernel,
-) -> Result<Option<(Phase2State, f64)>> {
+) -> Result<Option<(Phase2State<S>, f64)>> {
     let Some(opened) = checkpoint.read(FORMAT)? else {
         return Ok(None);
     };
@@ -169,20 +275,12 @@ pub fn load(
         .map_err(|e| refused(format!("does not decode ({e})")))?;
     same_origin(checkpoint, (&saved.tau_sha256, &saved.kernel), tau, kernel)?;
     let trace = with_seconds(checkpoint, saved.trace, saved.trace_seconds)?;
-    let found = saved
-        .found
-        .iter()
-        .map(|s| Ok((s.k, s.t, policy_from(s)?)))
-        .collect::<Result<Vec<_>>>()
-        .map_err(|e| refused(format!("holds a skill that does not load ({e})")))?;
+    let skill = |e: Error| refused(format!("holds a skill that does not load ({e})"));
+    let repairs = saved.repairs.as_ref().map(SavedRepairs::read).transpose();
     let state = Phase2State {
-        between: Between {
-            found,
-            t: saved.t,
-            made: saved.made,
-            restarts: saved.restarts,
-            moves: saved.moves,
-        },
+        between: saved.between.read().map_err(skill)?,
+        repairs: repairs.map_err(skill)?,
+        made: saved.made,
         spent: saved.spent,
         steps: StepCounts {
             train: saved.train,
@@ -410,7 +508,7 @@ pub(super) fn goal_conditioned<E: crate::env::Env>(
 /// deadline.
 pub(super) fn per_skill<E: crate::env::Env>(
     inputs: Phase2Inputs<'_, E>,
-    from: Option<crate::phase2::Phase2State>,
+    from: Option<crate::phase2::Phase2State<E::State>>,
     mut saver: Option<&mut Saver<'_>>,
     progress: &mut dyn FnMut(usize, Progress),
 ) -> Result<Option<Phase2Outcome>> {

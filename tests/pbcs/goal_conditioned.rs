@@ -123,6 +123,24 @@ fn goal_conditioned_settings_round_trip_and_refuse_by_field() {
     assert_eq!(s.spacing, 0.4);
     let again: pbcs::phase2::Phase2Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
     assert_eq!(again, c);
+    // The ablations' switches at their defaults are not written (files written before them keep
+    // their bytes); set, they are, and read back.
+    let written = toml::to_string(&c).unwrap();
+    for key in ["overshoot", "end_on_failure", "updates_per_step"] {
+        assert!(!written.contains(key), "{written}");
+    }
+    let switched = "chain = \"goal_conditioned\"\n[goal_conditioned]\novershoot = false\n\
+                    end_on_failure = false\nupdates_per_step = 2\n";
+    let c: pbcs::phase2::Phase2Config = toml::from_str(switched).unwrap();
+    let ChainStrategy::GoalConditioned(s) = &c.chain else {
+        panic!("{:?}", c.chain)
+    };
+    assert_eq!(
+        (s.overshoot, s.end_on_failure, s.updates_per_step),
+        (false, false, 2)
+    );
+    let again: pbcs::phase2::Phase2Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
+    assert_eq!(again, c);
     let plain = toml::to_string(&pbcs::phase2::Phase2Config::default()).unwrap();
     assert!(
         !plain.contains("chain =") && !plain.contains("goal_conditioned"),
@@ -156,6 +174,22 @@ fn goal_conditioned_settings_round_trip_and_refuse_by_field() {
         (
             "chain = \"goal_conditioned\"\n[goal_conditioned]\nspeed = 1\n",
             "speed",
+        ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned]\nupdates_per_step = 0\n",
+            "updates_per_step",
+        ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned]\nupdates_per_step = 1000000\n",
+            "updates_per_step",
+        ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned]\novershoot = false\ncurriculum = \"backplay\"\n",
+            "overshoot",
+        ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned.her]\ngoal_frame = \"body\"\n",
+            "her.goal_frame",
         ),
         ("chain = \"sideways\"\n", "sideways"),
     ] {

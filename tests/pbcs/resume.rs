@@ -61,6 +61,7 @@ fn clockless(trace: &[TraceRow]) -> Vec<TraceRow> {
 /// one, the cuts, and the last save's head. Each cut moved on (no work repeated).
 fn whole_and_cut_everywhere(
     job: &Valid<PbcsJob>,
+    mut at_cut: impl FnMut(&Checkpoint),
 ) -> (PbcsRun<Maze>, PbcsRun<Maze>, usize, pbcs::checkpoint::Saved) {
     let whole = compute(job, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -72,6 +73,7 @@ fn whole_and_cut_everywhere(
             break run;
         }
         cuts += 1;
+        at_cut(&checkpoint);
         let saved = checkpoint.peek().unwrap().expect("a stopped run is saved");
         assert!(
             last.is_none_or(|l| saved.steps > l.steps && saved.seconds >= l.seconds),
@@ -103,22 +105,73 @@ fn assert_same_run(resumed: &PbcsRun<Maze>, whole: &PbcsRun<Maze>, last: &pbcs::
     assert!(seconds.windows(2).all(|w| w[0] <= w[1]), "{seconds:?}");
 }
 
-/// Cut after every learning problem in turn, each process resuming from the last one's
-/// checkpoint: the uncut run, one cut after each learning problem of the main section but its
-/// last (the problems before the chain's verification; none of them a hand-over try).
+/// The pauses of a per-skill run that ends at a verification of its chain: after each
+/// learning problem of Algorithm 1 (none of them a hand-over try) and of the repairs, and
+/// after each verification but the last.
+fn pauses(run: &PbcsRun<Maze>) -> (usize, usize, usize) {
+    use pbcs::phase2::EventKind::ChainVerify;
+    let trace = &run.phase2.trace;
+    let first_check = trace.iter().position(|r| r.event == ChainVerify).unwrap();
+    assert_eq!(trace.last().unwrap().event, ChainVerify);
+    let main = trace[first_check - 1].skill + 1;
+    let checks = trace.iter().filter(|r| r.event == ChainVerify).count();
+    let mut repairs: Vec<usize> = trace[first_check..]
+        .iter()
+        .filter(|r| r.event != ChainVerify)
+        .map(|r| r.skill)
+        .collect();
+    repairs.dedup();
+    (main, checks, repairs.len())
+}
+
+/// Cut after every learning problem and verification in turn, each process resuming from the
+/// last one's checkpoint: the uncut run.
 #[test]
 fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
     let job = job();
-    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&job);
-    let main: Vec<&TraceRow> = whole
-        .phase2
-        .trace
-        .iter()
-        .take_while(|r| r.event != pbcs::phase2::EventKind::ChainVerify)
-        .collect();
-    let problems = main.last().unwrap().skill + 1;
-    assert!(problems >= 5, "{problems} learning problems");
-    assert_eq!(cuts, problems - 1);
+    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&job, |_| {});
+    let (main, checks, repairs) = pauses(&whole);
+    assert!(main >= 5, "{main} learning problems");
+    assert_eq!(cuts, main + checks - 1 + repairs);
+    assert_same_run(&resumed, &whole, &last);
+}
+
+/// The paper preset's maze-2 chain of seed 0 with the chain's verification and repair (the
+/// run `chain_repair_mends_the_weak_junction_of_a_paper_chain` reads: the first verification
+/// fails and a skill is learned again), cut at every pause, the middle of the repair
+/// included (after the verification that opened it, before its learning problems end): the
+/// uncut run.
+#[test]
+fn a_pbcs_run_cut_in_the_middle_of_a_chain_repair_ends_as_the_uncut_run() {
+    let mut job = pbcs::config::Preset::Paper.job().unwrap();
+    job.maze.size = 2;
+    job.phase2.max_env_steps = 642_000;
+    job.phase2.ideas.chain_check = Some(pbcs::phase2::ChainCheck {
+        episodes: 100,
+        repairs: 5,
+    });
+    let job = Check::valid(job).unwrap();
+    let tau = phase1(&job).4;
+    let mut open_repairs = 0;
+    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&job, |c| {
+        let (state, _) =
+            pbcs::runs::pbcs_resume::load::<parry2d::math::Point<f32>>(c, &tau, Kernel::detect())
+                .unwrap()
+                .unwrap();
+        if state.repairs.is_some_and(|r| r.open.is_some()) {
+            open_repairs += 1;
+        }
+    });
+    let (main, checks, repairs) = pauses(&whole);
+    assert!(
+        checks >= 2 && repairs >= 1,
+        "{checks} checks, {repairs} repairs"
+    );
+    assert_eq!(cuts, main + checks - 1 + repairs);
+    assert_eq!(
+        open_repairs, repairs,
+        "one cut per learning problem of a repair under way"
+    );
     assert_same_run(&resumed, &whole, &last);
 }
 
@@ -131,7 +184,7 @@ fn a_goal_conditioned_run_cut_after_every_test_ends_as_the_uncut_run() {
     let mut gc = (*job()).clone();
     gc.phase2.chain = pbcs::phase2::ChainStrategy::GoalConditioned(Box::default());
     let gc = Check::valid(gc).unwrap();
-    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&gc);
+    let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&gc, |_| {});
     let tests = whole
         .phase2
         .trace

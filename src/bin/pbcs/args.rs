@@ -224,13 +224,13 @@ pub enum Command {
         #[arg(long)]
         exact_starts: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): the run stops at the end of its first
-        /// learning problem of phase 2 at or past it that leaves another to make (with
-        /// `phase2.chain = "goal_conditioned"`, its first test of the chain that does not pass),
-        /// saved to <OUT>/run.resume, and exits with status 75 (EX_TEMPFAIL); the same command goes on
-        /// where it stopped, to the same bytes (phase 1, the last learning problem, the chain's
-        /// verification and repairs and its evaluation are not cut: past them the run
-        /// finishes). Without it the run still saves itself every ten minutes and goes on from
-        /// there when run again after a cut.
+        /// learning problem of phase 2 (or verification of the chain) at or past it that leaves
+        /// another to make (with `phase2.chain = "goal_conditioned"`, its first test of the chain
+        /// that does not pass), saved to <OUT>/run.resume, and exits with status 75
+        /// (EX_TEMPFAIL); the same command goes on where it stopped, to the same bytes (phase 1,
+        /// the last step of phase 2 and the evaluation are not cut: past them the run finishes).
+        /// Without it the run still saves itself every ten minutes and goes on from there when
+        /// run again after a cut.
         #[arg(long, value_parser = parse_stop_after)]
         stop_after: Option<std::time::Duration>,
     },

@@ -11,12 +11,13 @@
 //! repeat until a greedy test passes or the budget is spent:
 //!     j ← the curriculum (failure-weighted, or Backplay's frontier);  s ← B_ε(s_j);  i ← j + 1
 //!     until the final goal, a failure of the body, or steps_per_goal steps on g_i:
+//!     (overshoot = false: also at g_i; end_on_failure = false: not at a failure)
 //!         a ← π(s, g_i) + noise;  s′ ← step(s, a)
 //!         if s′ reaches g_i, i < M:  store (s, g_i, a, r = 1, s′, g_{i+1}, not done)   value chaining
 //!                                    i ← i + 1                                         overshoot
 //!         else if s′ reaches g_M:    store (s, g_M, a, 1, s′, g_M, done)
 //!         else:                      store (s, g_i, a, 0, s′, g_i, failed)
-//!         update π, Q on a batch of real and relabelled transitions
+//!         update π, Q on a batch of real and relabelled transitions (updates_per_step times)
 //! the chain: skill i = (π, A_i = B_radius(g_i), g_{i+1}), the last aiming at the episode's goal
 //! ```
 //!

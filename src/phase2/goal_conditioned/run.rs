@@ -389,7 +389,8 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         let last = episode.aim + 1 == self.sub.len();
         let reached =
             !last && dist(&achieved, self.goal(episode, episode.aim)) <= self.settings.radius;
-        let failed = (step.terminal && !success) || !env.archivable(&step.state);
+        let fallen = self.settings.end_on_failure && !env.archivable(&step.state);
+        let failed = (step.terminal && !success) || fallen;
         let chained = (reached && self.settings.value_chaining)
             .then(|| self.goal(episode, episode.aim + 1).to_vec());
         let (rew, done) = match (success || reached, chained.is_some()) {
@@ -412,8 +413,8 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         self.ledger
             .charge(crate::phase2::StepCounts { train: 1, test: 0 });
         episode.on_goal += 1;
-        let ended =
-            success || failed || (!reached && episode.on_goal >= self.settings.steps_per_goal);
+        let out_of_time = !reached && episode.on_goal >= self.settings.steps_per_goal;
+        let ended = success || failed || out_of_time || (reached && !self.settings.overshoot);
         self.tally(episode, success, reached, ended);
         if reached {
             episode.aim += 1;
@@ -470,8 +471,9 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         self.p.curriculum.record(&self.settings, episode.start, won);
     }
 
-    /// One update on a batch of real and relabelled transitions, the networks seeing each
-    /// goal minus the position, once an episode has ended and `learning_starts` have passed.
+    /// `updates_per_step` updates, each on a batch of real and relabelled transitions, the
+    /// networks seeing each goal minus the position, once an episode has ended and
+    /// `learning_starts` have passed.
     fn learn(&mut self) {
         if self.ledger.steps.train < self.settings.learning_starts {
             return;
@@ -479,16 +481,18 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         let radius = self.settings.radius;
         let reached = |a: &[f32], g: &[f32]| dist(a, g) <= radius;
         let n = self.learner.batch_size();
-        if !self
-            .p
-            .her
-            .sample_reaching(n, &mut self.p.replay, &reached, &mut self.p.batch)
-        {
-            return;
+        for _ in 0..self.settings.updates_per_step {
+            let p = &mut self.p;
+            if !p
+                .her
+                .sample_reaching(n, &mut p.replay, &reached, &mut p.batch)
+            {
+                return;
+            }
+            let (o, g) = (self.inputs.env.obs_dim(), self.goals.goal_dim());
+            super::goal_minus_position(&mut p.batch, o, g);
+            self.learner.update(&p.batch);
         }
-        let (o, g) = (self.inputs.env.obs_dim(), self.goals.goal_dim());
-        super::goal_minus_position(&mut self.p.batch, o, g);
-        self.learner.update(&self.p.batch);
     }
 
     /// Writes this round's training row (the fraction of its tries that succeeded).

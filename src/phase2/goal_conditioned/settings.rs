@@ -73,6 +73,18 @@ pub struct GoalConditioned {
     /// Value chaining: a step that reaches sub-goal i bootstraps through Q(s′, g_{i+1})
     /// instead of ending (`false`: it ends there, reward 1, as the final goal does).
     pub value_chaining: bool,
+    /// Overshoot: once sub-goal i is reached the episode goes on toward g_{i+1} from the state
+    /// it reached (`false`: it ends there, as one skill's episode would; the ablation).
+    #[serde(skip_serializing_if = "is_true")]
+    pub overshoot: bool,
+    /// A failure of the body (the environment's: the ant on its back) ends a training episode,
+    /// a terminal of value 0 (`false`: the episode goes on; an environment's own terminal
+    /// always ends it). Greedy tests and the judges never end an episode for it.
+    #[serde(skip_serializing_if = "is_true")]
+    pub end_on_failure: bool,
+    /// Updates of the learner per training step, once `learning_starts` have passed.
+    #[serde(skip_serializing_if = "is_one")]
+    pub updates_per_step: usize,
     /// Training steps of uniformly random actions before the learner acts and learns.
     pub learning_starts: u64,
     /// A greedy test of the chain after every this many training steps.
@@ -94,6 +106,9 @@ impl Default for GoalConditioned {
             window: 10,
             advance_at: 0.5,
             value_chaining: true,
+            overshoot: true,
+            end_on_failure: true,
+            updates_per_step: 1,
             learning_starts: 1_000,
             test_every: 5_000,
             test_episodes: 20,
@@ -127,6 +142,11 @@ impl Check for GoalConditioned {
             ("window", self.window as u64, bounds::EPISODES),
             ("test_every", self.test_every, bounds::ENV_STEPS),
             ("test_episodes", self.test_episodes as u64, bounds::EPISODES),
+            (
+                "updates_per_step",
+                self.updates_per_step as u64,
+                bounds::UPDATES_PER_STEP,
+            ),
         ] {
             count(&field(name), v, max)?;
         }
@@ -141,6 +161,29 @@ impl Check for GoalConditioned {
                 format!("must be in (0, 1], got {}", self.advance_at),
             ));
         }
+        if !self.overshoot && self.curriculum == Curriculum::Backplay {
+            return Err(Error::invalid(
+                field("overshoot"),
+                "is false, but curriculum = \"backplay\" counts a try only when it reaches the \
+                 final goal, which an episode that ends at its first sub-goal never does \
+                 (use curriculum = \"failure_weighted\", or overshoot)",
+            ));
+        }
+        if self.her.goal_frame != crate::learner::her::GoalFrame::World {
+            return Err(Error::invalid(
+                field("her.goal_frame"),
+                "is not \"world\": the goal-conditioned chain's networks see the sub-goal minus \
+                 the position, and its saved chain acts so (leave goal_frame out)",
+            ));
+        }
         self.her.check()
     }
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
+}
+
+fn is_one(n: &usize) -> bool {
+    *n == 1
 }
