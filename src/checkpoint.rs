@@ -1,6 +1,7 @@
 //! A run's checkpoint: one file, one envelope, for every kind of run that saves itself (a
-//! vanilla run, [`crate::vanilla::resume`]; a PBCS run between two learning problems of phase
-//! 2, or two tests of its goal-conditioned chain, [`crate::runs::pbcs_resume`]), so that a run cut short (a session's end, a cluster job's
+//! vanilla run, [`crate::vanilla::resume`]; a PBCS run between two steps of phase 2 — learning
+//! problems, verifications of the chain, tests of its goal-conditioned chain —,
+//! [`crate::runs::pbcs_resume`]), so that a run cut short (a session's end, a cluster job's
 //! limit, a killed process) goes on where it was saved and ends with the bytes of a run never
 //! cut.
 //!
@@ -82,6 +83,17 @@ struct Envelope {
     body: Vec<u8>,
 }
 
+/// [`Envelope`] as written, its strings and body borrowed.
+#[derive(Serialize)]
+struct WrittenEnvelope<'a> {
+    format: &'a str,
+    job: &'a str,
+    seconds: f64,
+    steps: u64,
+    sha256: String,
+    body: &'a [u8],
+}
+
 /// The head of a checkpoint file: [`Envelope`]'s first fields, which postcard writes first.
 #[derive(Deserialize)]
 struct Head {
@@ -127,13 +139,15 @@ impl Checkpoint {
     /// Saves `body`, the state of a run of `format` after `steps` env steps and `seconds` of
     /// wall clock, replacing the file at once and whole.
     pub fn write(&self, format: &str, steps: u64, seconds: f64, body: &[u8]) -> Result<()> {
-        let envelope = Envelope {
-            format: format.into(),
-            job: self.job.clone(),
+        // The body borrowed, not copied (a goal-conditioned run's holds its replay): serde
+        // writes a slice as it writes a Vec, so the file is `Envelope`'s.
+        let envelope = WrittenEnvelope {
+            format,
+            job: &self.job,
             seconds,
             steps,
             sha256: crate::record::sha256_hex(body),
-            body: body.to_vec(),
+            body,
         };
         crate::record::write_atomic(&self.path, |w| {
             postcard::to_io(&envelope, w)

@@ -244,11 +244,20 @@ impl HerReplay {
     pub fn same_shape(&self, other: &HerReplay) -> bool {
         let sizes = |h: &HerReplay| (h.capacity, h.obs_dim, h.act_dim, h.goal_dim);
         let whole = |h: &HerReplay| {
+            let (start, written) = h.current;
             h.rows.len() == h.len * h.width()
                 && h.ep_start.len() == h.len
                 && h.ep_len.len() == h.len
                 && h.len <= h.capacity
                 && h.next < h.capacity.max(1)
+                && (h.len == h.capacity || h.next == h.len)
+                && h.goal.len() == h.goal_dim
+                && start < h.capacity.max(1)
+                && written <= h.capacity
+                && h.sampleable <= h.len
+                && h.ep_start.iter().all(|&s| s < h.capacity)
+                && h.ep_len.iter().all(|&l| l <= h.capacity)
+                && h.sampleable == h.ep_len.iter().filter(|&&l| l > 0).count()
         };
         sizes(self) == sizes(other) && whole(other)
     }

@@ -169,7 +169,7 @@ impl<E: Env> Repairs<'_, '_, E> {
         let Some(i) = blamed else {
             return Ok(ControlFlow::Break(None));
         };
-        if at.repairs == spec.repairs {
+        if at.repairs >= spec.repairs {
             return Ok(ControlFlow::Break(None));
         }
         at.repairs += 1;

@@ -240,8 +240,12 @@ impl<'a, E: Env> Phase2Run<'a, E> {
                 k <= t && *t <= n && p.obs_dim() == obs_dim && p.action_dim() == action_dim
             })
         };
+        let check = inputs.config().ideas.chain_check;
         let repairs_fit = state.repairs.as_ref().is_none_or(|r| {
-            fit(&r.chain, n)
+            // Repairs begin once Algorithm 1 has found a whole chain, with the check asked for.
+            b.t == 0
+                && check.is_some_and(|c| r.repairs <= c.repairs)
+                && fit(&r.chain, n)
                 && r.open.as_ref().is_none_or(|o| {
                     o.i < r.chain.len()
                         && o.lo < o.hi

@@ -122,9 +122,10 @@ impl<E: Planar> PbcsRun<E> {
         Ok(run.expect("a run without a checkpoint does not stop"))
     }
 
-    /// [`PbcsRun::compute`], saved to `checkpoint` between phase 2's learning problems and
-    /// resumed from it where it holds a run of this job ([`super::pbcs_resume`]): the same
-    /// bytes as an uncut run, the wall clock counting the earlier processes' up to their last save. `None`
+    /// [`PbcsRun::compute`], saved to `checkpoint` between phase 2's steps (learning problems,
+    /// verifications of the chain, tests of a goal-conditioned chain) and resumed from it where
+    /// it holds a run of this job ([`super::pbcs_resume`]): the same bytes as an uncut run, the
+    /// wall clock counting the earlier processes' up to their last save. `None`
     /// when the run stopped at the checkpoint's deadline ([`Checkpoint::stop_at`]), saved: run
     /// it again to go on. The checkpoint is left in place (delete it,
     /// [`Checkpoint::remove`], once the results are written).
@@ -325,10 +326,10 @@ impl RunRecord {
 /// [`crate::picture::no_pictures`]). `progress(skill, report)` is called during phase 2.
 ///
 /// The run saves itself to `out/run.resume` ([`RUN_CHECKPOINT`], [`super::pbcs_resume`])
-/// every ten minutes, between two of phase 2's learning problems, and the same call into the
-/// same folder goes on from there (the bytes of a run never cut); the file goes once the run's
-/// files are written. With a deadline `stop_at` it stops, saved, at the end of its first
-/// learning problem at or past it and returns `None`.
+/// every ten minutes, between two of phase 2's steps, and the same call into the same folder
+/// goes on from there (the bytes of a run never cut); the file goes once the run's files are
+/// written. With a deadline `stop_at` it stops, saved, at the end of its first step at or past
+/// it that leaves another to make, and returns `None`.
 pub fn run_pbcs_until(
     job: &Valid<PbcsJob>,
     kernel: Kernel,

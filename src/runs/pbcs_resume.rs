@@ -1,18 +1,21 @@
-//! Checkpoints of a PBCS run: phase 2 saved between two learning problems
-//! ([`crate::phase2::run`]), or with the goal-conditioned chain between two of its tests
-//! ([`crate::phase2::goal_conditioned::GoalConditionedRun`], format
-//! [`GOAL_CONDITIONED`]: its learner, replay, streams, curriculum and episode in flight), so that a run of hours (AntMaze) cut by a session's end or a
-//! cluster job's limit goes on from its last save and ends with the bytes of a run never cut.
+//! Checkpoints of a PBCS run: phase 2 saved between two of its steps ([`crate::phase2::run`]:
+//! a learning problem of Algorithm 1, a verification of the chain or a learning problem of its
+//! repair), or with the goal-conditioned chain between two of its tests
+//! ([`crate::phase2::goal_conditioned::GoalConditionedRun`], format [`GOAL_CONDITIONED`]: its
+//! learner, replay, streams, curriculum and episode in flight), so that a run of hours
+//! (AntMaze) cut by a session's end or a cluster job's limit goes on from its last save and
+//! ends with the bytes of a run never cut.
 //!
 //! The file is a [`Checkpoint`] (`s<seed>.resume` in an experiment, as a vanilla run's: the
 //! same envelope of format, job, wall clock and env steps, which `pbcs exp list` reads, and a
-//! checksum), with its own [`FORMAT`] and body: Algorithm 1's loop, the skills found so far (each its
-//! policy's kind, sizes, bounds and the chain's own safetensors bytes), the step counts, the
-//! trace, the learner the next skill takes over, and the SHA-256 of τ's observations. A
-//! resumed run does phase 1 again (deterministic, and cheap beside phase 2) and refuses a
-//! checkpoint whose τ is not the τ it found. Saved at the end of a learning problem ten
-//! minutes or more after the last save or the (re)start, and at the first one at or past
-//! the deadline ([`Checkpoint::stop_at`]), where the run stops.
+//! checksum), with its own format and body: for the per-skill chain ([`FORMAT`]) Algorithm 1's
+//! loop, the skills found so far (each its policy's kind, sizes, bounds and the chain's own
+//! safetensors bytes), the repairs' state once begun, the step counts, the trace, the learner
+//! the next skill takes over; for either, the SHA-256 of τ's observations. A resumed run does
+//! phase 1 again (deterministic, and cheap beside phase 2) and refuses a checkpoint whose τ is
+//! not the τ it found. Saved at the end of a step ten minutes or more after the last save or the
+//! (re)start, and at the first one at or past the deadline ([`Checkpoint::stop_at`]) that
+//! leaves another to make, where the run stops.
 
 use crate::checkpoint::{Checkpoint, Saves};
 use crate::error::{Error, Result};
@@ -339,7 +342,7 @@ fn with_seconds(
 /// [`GOAL_CONDITIONED`]).
 pub fn save_goal_conditioned(
     checkpoint: &Checkpoint,
-    state: &GoalConditionedState,
+    state: GoalConditionedState,
     tau: &str,
     kernel: Kernel,
     seconds: f64,
@@ -347,17 +350,17 @@ pub fn save_goal_conditioned(
     let saved = SavedGoalConditioned {
         tau_sha256: tau.into(),
         kernel: kernel.name().into(),
-        learner: state.learner.clone(),
-        progress: state.progress.clone(),
+        trace_seconds: state.trace.iter().map(|r| r.seconds).collect(),
+        learner: state.learner,
+        progress: state.progress,
         spent: state.spent,
         train: state.steps.train,
         test: state.steps.test,
-        trace: state.trace.clone(),
-        trace_seconds: state.trace.iter().map(|r| r.seconds).collect(),
+        trace: state.trace,
     };
     let body = postcard::to_stdvec(&saved)
         .map_err(|e| Error::invalid("goal-conditioned run state", e.to_string()))?;
-    checkpoint.write(GOAL_CONDITIONED, state.spent, seconds, &body)
+    checkpoint.write(GOAL_CONDITIONED, saved.spent, seconds, &body)
 }
 
 /// The goal-conditioned PBCS run saved at `checkpoint`'s file, with its wall-clock seconds,
@@ -387,10 +390,10 @@ pub fn load_goal_conditioned(
     Ok(Some((state, opened.seconds)))
 }
 
-/// The saves of a PBCS run to `checkpoint` between phase 2's learning problems
-/// ([`crate::phase2::Phase2Run`], [`crate::checkpoint::Saves`]: at the end of a learning
-/// problem [`Checkpoint::every`] or more after the last save or the start, and at the first one
-/// at or past the deadline, where the run stops).
+/// The saves of a PBCS run to `checkpoint` between phase 2's steps ([`crate::phase2::Phase2Run`]'s
+/// learning problems and verifications, [`GoalConditionedRun`]'s tests;
+/// [`crate::checkpoint::Saves`]: at the end of a step [`Checkpoint::every`] or more after the
+/// last save or the start, and at the first one at or past the deadline, where the run stops).
 pub struct Saver<'c> {
     saves: Saves<'c>,
     checkpoint: &'c Checkpoint,
@@ -445,8 +448,7 @@ impl<'c> Saver<'c> {
         let seconds = self.seconds();
         let (checkpoint, tau, kernel) = (self.checkpoint, &self.tau, self.kernel);
         self.saves.due("", || {
-            let state = run.state()?;
-            save_goal_conditioned(checkpoint, &state, tau, kernel, seconds)
+            save_goal_conditioned(checkpoint, run.state()?, tau, kernel, seconds)
         })
     }
 }

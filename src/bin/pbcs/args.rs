@@ -357,11 +357,13 @@ pub enum ExpCommand {
         skip_unavailable: bool,
         /// A deadline from now (`90s`, `45m`, `3h 50m`): no run begins at or past it, and a
         /// vanilla run in progress stops at its first evaluation at or past it, and a PBCS run
-        /// in progress at the end of its first learning problem (goal-conditioned: test of the
-        /// chain) at or past it, each saved to its checkpoint. With runs unfinished the exit status is 75 (EX_TEMPFAIL); the same
-        /// command goes on where it stopped, to the same bytes. Under a cluster's time limit,
-        /// leave the time of an evaluation interval's training, the evaluation and the save
-        /// (for a PBCS run, of a learning problem and the save) to spare.
+        /// in progress at the end of its first step of phase 2 at or past it (a learning
+        /// problem, a verification of the chain; goal-conditioned: a test of the chain that does
+        /// not pass), each saved to its checkpoint. With runs unfinished the exit status is 75
+        /// (EX_TEMPFAIL); the same command goes on where it stopped, to the same bytes. Under a
+        /// cluster's time limit, leave the time of an evaluation interval's training, the
+        /// evaluation and the save (for a PBCS run, of a learning problem and the save) to
+        /// spare.
         #[arg(long, value_parser = parse_stop_after)]
         stop_after: Option<std::time::Duration>,
     },

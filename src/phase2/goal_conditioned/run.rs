@@ -1,6 +1,7 @@
 //! The goal-conditioned chain's training as one owned run ([`GoalConditionedRun`]): episodes
-//! from τ's saved states drawn by the curriculum, overshooting through the sub-goals, one
-//! update per step, and a greedy test of the chain every `test_every` training steps.
+//! from τ's saved states drawn by the curriculum, overshooting through the sub-goals (unless
+//! `overshoot = false`), `updates_per_step` updates a step, and a greedy test of the chain every
+//! `test_every` training steps.
 //!
 //! Between two tests a run is its learner's state and the rest of what changes as it goes (the
 //! HER replay, the random streams' positions, the curriculum's tries and frontier, the episode
@@ -228,10 +229,10 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
             if self.ledger.steps.train.is_multiple_of(every) {
                 self.record_round(progress);
                 let tests = self.p.tests;
-                self.p.tests += 1;
+                self.p.tests = tests.saturating_add(1);
                 if self.test(tests, progress) {
                     self.ended = Some(None);
-                } else {
+                } else if self.ledger.spent < budget {
                     (self.ended, flow) = (None, ControlFlow::Continue(()));
                 }
                 break;
@@ -301,7 +302,10 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         if !fits {
             return Err(refused("other sizes or sub-goals"));
         }
-        if state.spent != run.ledger.spent + state.steps.train + state.steps.test {
+        let adds_up = [state.steps.train, state.steps.test]
+            .into_iter()
+            .try_fold(run.ledger.spent, u64::checked_add);
+        if adds_up != Some(state.spent) {
             return Err(refused("its env steps do not add up"));
         }
         let kernel = run.learner.kernel();
@@ -373,7 +377,8 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
     }
 
     /// One training step of `episode`: act, store the transition (value chaining at a reached
-    /// sub-goal), overshoot to the next sub-goal, learn. `true` when the episode has ended.
+    /// sub-goal), overshoot to the next sub-goal (or end there: `overshoot = false`), learn.
+    /// `true` when the episode has ended.
     fn step(&mut self, episode: &mut Episode<E::State>) -> bool {
         let env = self.inputs.env;
         let action = self.act(episode);
