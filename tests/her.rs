@@ -413,3 +413,35 @@ fn a_her_checkpoint_keeps_the_layout_of_runs_saved_before_goal_frame() {
     let back: HerReplay = postcard::from_bytes(&saved).unwrap();
     assert_eq!(postcard::to_stdvec(&back).unwrap(), saved);
 }
+
+/// The goal-conditioned chain's sampler keeps a failure's penalty (`rest`) on a row that does
+/// not reach its goal and pays 1 to one that does: one transition from 0 to 1 that fell (reward
+/// −1, terminal), sampled as stored (goal 5) or relabelled to the goal it achieved (1).
+#[test]
+fn sampling_to_reach_keeps_a_failures_penalty_where_the_goal_is_not_reached() {
+    let mut her = HerReplay::new(10, 1, 1, 1, HerConfig::default());
+    her.push(GoalTransition {
+        obs: &[0.0],
+        act: &[1.0],
+        rew: -1.0,
+        next_obs: &[1.0],
+        done: true,
+        desired: &[5.0],
+        achieved_next: &[1.0],
+        rest: -1.0,
+        chained: None,
+    });
+    her.end_episode();
+    let reached = |a: &[f32], g: &[f32]| (a[0] - g[0]).abs() <= 0.1;
+    let mut rng = Seeds::new(0).stream(Stream::Replay);
+    let mut batch = Batch::default();
+    assert!(her.sample_reaching(64, &mut rng, &reached, &mut batch));
+    // Each row: its goal (the next observation's second number), its reward, its end.
+    let rows: Vec<(f32, f32, f32)> = (0..64)
+        .map(|i| (batch.next_obs[2 * i + 1], batch.rew[i], batch.done[i]))
+        .collect();
+    let reaching = rows.iter().filter(|&&r| r == (1.0, 1.0, 1.0)).count();
+    let penalised = rows.iter().filter(|&&r| r == (5.0, -1.0, 1.0)).count();
+    assert_eq!(reaching + penalised, 64, "{rows:?}");
+    assert!(reaching > 0 && penalised > 0, "{rows:?}");
+}

@@ -357,8 +357,9 @@ impl HerReplay {
 
     /// [`HerReplay::sample`] for a task that ends where its goal is reached (a goal-conditioned
     /// chain's sub-goals): a relabelled transition whose next observation `reached(achieved,
-    /// goal)` gets reward 1 and ends there (its target does not bootstrap), any other reward 0
-    /// and its stored end.
+    /// goal)` gets reward 1 and ends there (its target does not bootstrap), any other its
+    /// reward's part that is not the goal's (`rest`: 0, or a failure's penalty) and its stored
+    /// end.
     ///
     /// ```
     /// use pbcs::learner::her::{GoalTransition, HerConfig, HerReplay};
@@ -381,11 +382,11 @@ impl HerReplay {
         reached: &dyn Fn(&[f32], &[f32]) -> bool,
         out: &mut Batch,
     ) -> bool {
-        let relabel = |achieved: &[f32], goal: &[f32], _rest: f32, done: f32| {
+        let relabel = |achieved: &[f32], goal: &[f32], rest: f32, done: f32| {
             if reached(achieved, goal) {
                 (1.0, 1.0)
             } else {
-                (0.0, done)
+                (rest, done)
             }
         };
         self.sample_with(n, rng, &relabel, out)

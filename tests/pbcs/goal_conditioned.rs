@@ -173,6 +173,10 @@ fn goal_conditioned_settings_round_trip_and_refuse_by_field() {
             "chain = \"goal_conditioned\"\n[goal_conditioned.her]\ngoal_frame = \"body\"\n",
             "her.goal_frame",
         ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned]\nfailure_reward = 1.0\n",
+            "failure_reward",
+        ),
         ("chain = \"sideways\"\n", "sideways"),
     ] {
         let e = toml::from_str::<pbcs::phase2::Phase2Config>(bad)
@@ -189,7 +193,12 @@ fn the_ablations_switches_are_written_only_when_set() {
     let text = "chain = \"goal_conditioned\"\n[goal_conditioned]\nspacing = 0.4\n";
     let c: pbcs::phase2::Phase2Config = toml::from_str(text).unwrap();
     let written = toml::to_string(&c).unwrap();
-    for key in ["overshoot", "end_on_failure", "updates_per_step"] {
+    for key in [
+        "overshoot",
+        "end_on_failure",
+        "failure_reward",
+        "updates_per_step",
+    ] {
         assert!(!written.contains(key), "{written}");
     }
     let switched = "chain = \"goal_conditioned\"\n[goal_conditioned]\novershoot = false\n\

@@ -401,6 +401,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
         let (rew, done) = match (success || reached, chained.is_some()) {
             (true, true) => (1.0, false),
             (true, false) => (1.0, true),
+            (false, _) if fallen => (self.settings.failure_reward, failed),
             (false, _) => (0.0, failed),
         };
         let desired = self.goal(episode, episode.aim).to_vec();
@@ -412,7 +413,11 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
             done,
             desired: &desired,
             achieved_next: &achieved,
-            rest: 0.0,
+            rest: if fallen && !reached && !success {
+                self.settings.failure_reward
+            } else {
+                0.0
+            },
             chained: chained.as_deref(),
         });
         self.ledger

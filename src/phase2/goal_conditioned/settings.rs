@@ -82,6 +82,10 @@ pub struct GoalConditioned {
     /// always ends it). Greedy tests and the judges never end an episode for it.
     #[serde(skip_serializing_if = "is_true")]
     pub end_on_failure: bool,
+    /// The reward of a training step where the body fails (with `end_on_failure`; 0: the
+    /// terminal is worth nothing, as DCIL-II's; below 0, a penalty its relabelled copies keep).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub failure_reward: f32,
     /// Updates of the learner per training step, once `learning_starts` have passed.
     #[serde(skip_serializing_if = "is_one")]
     pub updates_per_step: usize,
@@ -108,6 +112,7 @@ impl Default for GoalConditioned {
             value_chaining: true,
             overshoot: true,
             end_on_failure: true,
+            failure_reward: 0.0,
             updates_per_step: 1,
             learning_starts: 1_000,
             test_every: 5_000,
@@ -161,6 +166,12 @@ impl Check for GoalConditioned {
                 format!("must be in (0, 1], got {}", self.advance_at),
             ));
         }
+        if !(self.failure_reward.is_finite() && (-1e3..=0.0).contains(&self.failure_reward)) {
+            return Err(Error::invalid(
+                field("failure_reward"),
+                format!("must be in [-1000, 0], got {}", self.failure_reward),
+            ));
+        }
         if !self.overshoot && self.curriculum == Curriculum::Backplay {
             return Err(Error::invalid(
                 field("overshoot"),
@@ -182,6 +193,10 @@ impl Check for GoalConditioned {
 
 fn is_true(b: &bool) -> bool {
     *b
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 fn is_one(n: &usize) -> bool {
