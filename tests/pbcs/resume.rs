@@ -143,14 +143,7 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
 /// uncut run.
 #[test]
 fn a_pbcs_run_cut_in_the_middle_of_a_chain_repair_ends_as_the_uncut_run() {
-    let mut job = pbcs::config::Preset::Paper.job().unwrap();
-    job.maze.size = 2;
-    job.phase2.max_env_steps = 642_000;
-    job.phase2.ideas.chain_check = Some(pbcs::phase2::ChainCheck {
-        episodes: 100,
-        repairs: 5,
-    });
-    let job = Check::valid(job).unwrap();
+    let job = Check::valid(super::switches::paper_maze2_with_repair()).unwrap();
     let tau = phase1(&job).4;
     let mut open_repairs = 0;
     let (resumed, whole, cuts, last) = whole_and_cut_everywhere(&job, |c| {

@@ -100,13 +100,10 @@ fn a_chain_verification_past_the_budget_is_a_budget_failure() {
     assert_eq!(last.event, EventKind::ChainVerify);
 }
 
-/// The paper preset's seed 0 on maze 2 builds a chain that reaches the target from 34 of
-/// 100 evaluation starts (the committed table row). With the chain's verification and
-/// repair, the first verification fails, the skill where the episodes stall is learned
-/// again on its section, and the repaired chain passes its verification and solves the
-/// maze.
-#[test]
-fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
+/// The paper preset on maze 2, seed 0, with the table's budget and the chain's verification
+/// (100 episodes) and up to five repairs: the run whose first verification fails and whose
+/// repair mends the chain (tests below, and `tests/pbcs/resume.rs` cutting it mid-repair).
+pub(crate) fn paper_maze2_with_repair() -> PbcsJob {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
     job.phase2.max_env_steps = 642_000;
@@ -114,7 +111,17 @@ fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
         episodes: 100,
         repairs: 5,
     });
-    let run = run_maze(&job);
+    job
+}
+
+/// The paper preset's seed 0 on maze 2 builds a chain that reaches the target from 34 of
+/// 100 evaluation starts (the committed table row). With the chain's verification and
+/// repair, the first verification fails, the skill where the episodes stall is learned
+/// again on its section, and the repaired chain passes its verification and solves the
+/// maze.
+#[test]
+fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
+    let run = run_maze(&paper_maze2_with_repair());
     let checks: Vec<_> = run
         .phase2
         .trace
