@@ -153,6 +153,31 @@ class Chain:
             "steps": np.array([r["steps"] for r in runs]),
         }
 
+    def evaluate_in(self, adapter, episodes=100, seed=0, max_steps=None):
+        """The chain played in a user's Gymnasium environment through the :class:`Adapter` it
+        was trained through (``pbcs.run(env=...)``): ``episodes`` episodes from the env's own
+        resets (seeds ``seed``, ``seed + 1``, ...), each at most ``max_steps`` steps (default:
+        the job's evaluation length), success as the adapter reads it. Returns ``successes``,
+        ``episodes`` and each episode's ``success`` and ``steps``."""
+        limit = max_steps or self._core.eval_max_steps
+        wins, steps = [], []
+        for e in range(episodes):
+            obs, _ = adapter.env.reset(seed=seed + e)
+            obs = adapter._observation(obs)
+            self.reset()
+            won, t = False, 0
+            while t < limit and not won:
+                _, obs, reward, terminal = adapter.step(self.act(obs))
+                t += 1
+                if terminal:
+                    won = reward > 0
+                    break
+            wins.append(won)
+            steps.append(t)
+        wins = np.array(wins)
+        return {"successes": int(wins.sum()), "episodes": episodes, "success": wins,
+                "steps": np.array(steps)}
+
     def evaluate_in_core(self, episodes=100, seed=None):
         """``pbcs eval``'s evaluation computed by the Rust core (the same function as the
         command): ``successes``, ``episodes``, the Wilson 95 % ``interval``, each episode's

@@ -4,7 +4,8 @@
 //! function (no second implementation), phase 1 is `pbcs::phase1`, a PBCS run is
 //! `pbcs::runs::PbcsRun::compute`, a saved chain is `pbcs::phase2::SkillChain::load` run by
 //! `SkillChain::active_skill` and `SkillChain::act`. Every error of the core becomes a Python
-//! exception carrying its message (`ValueError` for bad input, `OSError` for files,
+//! exception carrying its message (`ValueError` for bad input and for a setting that needs a
+//! hook the environment lacks, `OSError` for files,
 //! `RuntimeError` for work that failed); arguments are checked before they reach the core, so
 //! nothing panics across the boundary.
 
@@ -17,9 +18,10 @@ use pyo3::prelude::*;
 /// A core error as the Python exception a Python user expects, with the core's message.
 pub(crate) fn py_err(e: pbcs::Error) -> PyErr {
     match e {
-        pbcs::Error::Invalid { .. } | pbcs::Error::Parse { .. } | pbcs::Error::Csv { .. } => {
-            PyValueError::new_err(e.to_string())
-        }
+        pbcs::Error::Invalid { .. }
+        | pbcs::Error::Parse { .. }
+        | pbcs::Error::Csv { .. }
+        | pbcs::Error::Capability { .. } => PyValueError::new_err(e.to_string()),
         pbcs::Error::Io { .. } => PyOSError::new_err(e.to_string()),
         _ => PyRuntimeError::new_err(e.to_string()),
     }
@@ -107,6 +109,7 @@ pub(crate) fn walls_of(maze: &Maze) -> Vec<(f32, f32, f32, f32)> {
         .collect()
 }
 
+mod adapter;
 mod chain;
 mod env;
 mod named;
@@ -120,6 +123,8 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<named::NamedEnv>()?;
     m.add_function(wrap_pyfunction!(pipeline::explore, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::run, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::run_gym, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::explore_gym, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::evaluation_starts, m)?)?;
     m.add_function(wrap_pyfunction!(env::pendulum_step, m)?)?;
     m.add("MAX_MAZE_SIZE", pbcs::envs::maze::MAX_MAZE_SIZE)?;

@@ -4,7 +4,7 @@ use crate::{count, invalid, maze_of, py_err};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pbcs::config::{ExploreJob, Located, PbcsJob, Preset};
-use pbcs::env::{EvalEpisode, Planar};
+use pbcs::env::{Env as _, EvalEpisode, Planar};
 use pbcs::nn::kernel::Kernel;
 use pbcs::runs::{PbcsRun, RunRecord};
 use pbcs::validate::Check;
@@ -210,4 +210,107 @@ struct RunDone {
     seconds: f64,
     tau: Vec<(f32, f32)>,
     evaluation: Vec<EvalEpisode>,
+}
+
+/// The job of a run on the user's environment: the preset or config file, with `seed` and
+/// `max_env_steps` (checked by the core).
+fn gym_job(
+    seed: i64,
+    preset: &str,
+    config: Option<&std::path::Path>,
+    max_env_steps: Option<i64>,
+) -> PyResult<pbcs::validate::Valid<PbcsJob>> {
+    let mut job: PbcsJob = match config {
+        Some(p) => pbcs::config::load(p),
+        None => Preset::named(preset).and_then(Preset::job),
+    }
+    .map_err(py_err)?;
+    job.seed = count("seed", seed)?;
+    if let Some(m) = max_env_steps {
+        job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
+    }
+    job.valid().map_err(py_err)
+}
+
+/// PBCS (phase 1, phase 2, the chain's evaluation from B_ε(s_0)) on the user's Gymnasium
+/// environment behind `adapter` (a checked `pbcs.adapter.Adapter`), with a preset or a
+/// config file; with `out`, the run's files (no picture) written there as `pbcs run --out`
+/// writes them. A setting that needs a hook the adapter was not given is refused before any
+/// work. With `progress`, phase 2 shows what it does on standard error.
+#[pyfunction]
+#[pyo3(signature = (adapter, seed = 0, preset = "fast", config = None, out = None, max_env_steps = None, progress = true))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_gym<'py>(
+    py: Python<'py>,
+    adapter: &Bound<'py, PyAny>,
+    seed: i64,
+    preset: &str,
+    config: Option<PathBuf>,
+    out: Option<PathBuf>,
+    max_env_steps: Option<i64>,
+    progress: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    use std::io::IsTerminal as _;
+    let job = gym_job(seed, preset, config.as_deref(), max_env_steps)?;
+    let kernel = Kernel::from_env().map_err(py_err)?;
+    let env = crate::adapter::Gym::new(adapter)?;
+    PbcsRun::require_hooks(&env, &job).map_err(py_err)?;
+    let bar = if progress {
+        indicatif::ProgressBar::new_spinner()
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let lines = progress && !std::io::stderr().is_terminal();
+    let mut shown = pbcs::runs::Phase2Progress::new(bar, lines);
+    let run = crate::adapter::catching(py, || {
+        PbcsRun::compute(env, &job, kernel, |skill, p| shown.report(skill, p))
+    })?
+    .map_err(py_err)?;
+    shown.finish();
+    if let Some(dir) = out.as_deref() {
+        run.write(&job, dir, &pbcs::picture::no_pictures)
+            .map_err(py_err)?;
+    }
+    let done = RunDone {
+        tau: run.tau.iter().map(|s| run.env.point(s)).collect(),
+        record: run.record,
+        seconds: run.seconds,
+        evaluation: run.evaluation,
+    };
+    record_dict(py, &done, out)
+}
+
+/// Phase 1 alone on the user's environment behind `adapter`: τ as observations (position
+/// first), the actions between them, the env steps and the archive's size.
+#[pyfunction]
+#[pyo3(signature = (adapter, seed = 0, preset = "fast", config = None))]
+pub(crate) fn explore_gym<'py>(
+    py: Python<'py>,
+    adapter: &Bound<'py, PyAny>,
+    seed: i64,
+    preset: &str,
+    config: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let job = gym_job(seed, preset, config.as_deref(), None)?;
+    let env = crate::adapter::Gym::new(adapter)?;
+    let mut rng = pbcs::rng::Seeds::new(job.seed).stream(pbcs::rng::Stream::Explore);
+    let found = crate::adapter::catching(py, || {
+        pbcs::phase1::explore(&env, &job.explore, &mut rng, |_, _| {})
+    })?
+    .map_err(py_err)?;
+    let t = &found.trajectory;
+    let observations = pbcs::env::observations(&env, &t.states);
+    let rows = |v: &[Vec<f32>], width: usize| {
+        let flat: Vec<f32> = v.iter().flatten().copied().collect();
+        Array2::from_shape_vec((v.len(), width), flat).expect("rows of one width")
+    };
+    let d = PyDict::new(py);
+    d.set_item("tau", rows(&observations, env.obs_dim()).into_pyarray(py))?;
+    d.set_item(
+        "actions",
+        rows(&t.actions, env.action_dim()).into_pyarray(py),
+    )?;
+    d.set_item("env_steps", found.env_steps)?;
+    d.set_item("archive_states", found.archive.len())?;
+    Ok(d)
 }

@@ -1,0 +1,225 @@
+"""PBCS on Gymnasium environments the package did not write (`pbcs.Adapter`): the same bytes
+as the Rust core on our maze when the env is the maze written in numpy, a room with a door
+written here solved, and bad input refused before any work."""
+
+import re
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import pbcs
+from reference_maze import NumpyMaze
+
+ROOT = Path(__file__).resolve().parents[2]
+# Files whose bytes depend on the wall clock; the pictures are not drawn through the adapter.
+CLOCKED = {"timing.toml", "trace.timing.csv", "run.png", "run.svg"}
+
+
+def adapter_job(tmp_path, size):
+    """The fast preset with the settings that need walls (shortening, failure stops,
+    retargets, path limits) off: those need hooks a user's env need not have."""
+    text = (ROOT / "experiments" / "pbcs_fast.toml").read_text()
+    for key, value in [("shorten", "false"), ("stop_at_failure", "false"), ("retargets", "0"),
+                       ("test_path_limit", "0.0"), ("size", str(size))]:
+        text, n = re.subn(rf"(?m)^{key} = [^#\n]*", f"{key} = {value} ", text, count=1)
+        assert n == 1, key
+    path = tmp_path / f"adapter{size}.toml"
+    path.write_text(text)
+    return path
+
+
+class PythonMaze(gym.Env):
+    """The paper's maze as a plain Gymnasium env whose step is `NumpyMaze`'s (numpy, no code
+    of the package), its layout taken from the compiled maze, and a state to get and set."""
+
+    def __init__(self, size):
+        maze = pbcs.ContinuousMaze(size=size).maze
+        self.ref, self.target = NumpyMaze(maze), np.asarray(maze.target, np.float32)
+        self.observation_space = gym.spaces.Box(0.0, float(size), (2,), np.float32)
+        self.action_space = gym.spaces.Box(-0.1, 0.1, (2,), np.float32)
+        self.s = np.array([0.5, 0.5], np.float32)
+
+    def reset(self, seed=None, options=None):
+        super().reset(seed=seed)
+        self.s = np.array([0.5, 0.5], np.float32)
+        return self.s.copy(), {}
+
+    def step(self, action):
+        s, reward, reached = self.ref.step(self.s[None], np.asarray(action, np.float32)[None])
+        self.s = s[0]
+        return self.s.copy(), float(reward[0]), bool(reached[0]), False, {}
+
+    def get_state(self):
+        return self.s.copy()
+
+    def set_state(self, state):
+        self.s = np.asarray(state, np.float32).copy()
+
+
+def folder_bytes(out):
+    return {
+        str(p.relative_to(out)): p.read_bytes()
+        for p in sorted(out.rglob("*"))
+        if p.is_file() and p.name not in CLOCKED
+    }
+
+
+@pytest.mark.parametrize("size", [2, 3])
+def test_pbcs_through_the_adapter_on_a_numpy_maze_writes_the_rust_mazes_bytes(tmp_path, size):
+    job = adapter_job(tmp_path, size)
+    env = PythonMaze(size)
+    gym_run = pbcs.run(env=env, position=slice(0, 2), success="terminated",
+                       success_region=(env.target, 0.2), observation_names=["x", "y"],
+                       config=job, seed=3,
+                       out=tmp_path / "gym", progress=False)
+    rust_run = pbcs.run(config=job, seed=3, out=tmp_path / "rust")
+    assert gym_run["solved"] and rust_run["solved"]
+    got, want = folder_bytes(tmp_path / "gym"), folder_bytes(tmp_path / "rust")
+    assert sorted(got) == sorted(k for k in want if k != "picture.csv" or k in got)
+    differ = [k for k in got if got[k] != want[k]]
+    assert not differ, f"files that differ: {differ}"
+    assert (gym_run["tau"] == rust_run["tau"]).all()
+
+
+class DoorRoom(gym.Env):
+    """A point in the room [0, 2] × [0, 1] cut by a wall at x = 1 with a door at y in
+    [0.8, 1.0]: from (0.3, 0.2) to the disc of radius 0.15 around (1.7, 0.2). Written here,
+    numpy only."""
+
+    observation_space = gym.spaces.Box(np.array([0.0, 0.0], np.float32),
+                                       np.array([2.0, 1.0], np.float32))
+    action_space = gym.spaces.Box(-0.1, 0.1, (2,), np.float32)
+    goal = np.array([1.7, 0.2], np.float32)
+
+    def reset(self, seed=None, options=None):
+        super().reset(seed=seed)
+        self.p = np.array([0.3, 0.2], np.float32)
+        return self.p.copy(), {}
+
+    def step(self, action):
+        a = np.clip(np.asarray(action, np.float32), -0.1, 0.1)
+        q = np.clip(self.p + a, [0.0, 0.0], [2.0, 1.0]).astype(np.float32)
+        crosses = (self.p[0] - 1.0) * (q[0] - 1.0) <= 0 and self.p[0] != q[0]
+        if crosses and not (0.8 <= (self.p[1] + q[1]) / 2 <= 1.0):
+            q = self.p
+        self.p = q
+        won = bool(np.hypot(*(q - self.goal)) < 0.15)
+        return q.copy(), float(won), won, False, {"success": won}
+
+    def get_state(self):
+        return self.p.copy()
+
+    def set_state(self, state):
+        self.p = np.asarray(state, np.float32).copy()
+
+
+def test_pbcs_solves_a_room_with_a_door_written_in_the_test(tmp_path):
+    env = DoorRoom()
+    run = pbcs.run(env=env, position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                   config=adapter_job(tmp_path, 2), seed=0, out=tmp_path / "run", progress=False)
+    assert run["solved"] and run["success_rate"] >= 0.9, run
+    tau = run["tau"]
+    assert np.hypot(*(tau[-1] - DoorRoom.goal)) < 0.15
+    assert (tau[:, 1] >= 0.7).any()  # τ went through the door
+    chain = pbcs.load_chain(tmp_path / "run" / "chain")
+    assert len(chain) == run["skills"]
+    played = chain.evaluate_in(pbcs.Adapter(DoorRoom(), [0, 1]), episodes=20)
+    assert played["successes"] >= 18, played
+    # Phase 1 alone, same job and seed: the τ the run worked on (not shortened in this job).
+    phase1 = pbcs.explore(env=DoorRoom(), position=[0, 1], config=adapter_job(tmp_path, 2))
+    assert phase1["tau"].shape == tau.shape and (phase1["tau"] == tau).all()
+    assert phase1["actions"].shape == (len(tau) - 1, 2) and phase1["env_steps"] >= len(tau) - 1
+
+
+class NoState(DoorRoom):
+    get_state = None
+
+
+class ForgetfulState(DoorRoom):
+    """`set_state` that keeps only x: a restore that does not restore."""
+
+    def set_state(self, state):
+        self.p = np.array([state[0], self.p[1]], np.float32)
+
+
+class Discrete(DoorRoom):
+    action_space = gym.spaces.Discrete(4)
+
+
+class Broken(DoorRoom):
+    """Its step raises after a few hundred steps, in the middle of phase 1."""
+
+    calls = 0
+
+    def step(self, action):
+        Broken.calls += 1
+        if Broken.calls > 300:
+            raise ArithmeticError("the simulator diverged")
+        return super().step(action)
+
+
+@pytest.mark.parametrize(
+    "env, kwargs, message",
+    [
+        (NoState(), {"position": [0, 1]}, "no get_state() method"),
+        (ForgetfulState(), {"position": [0, 1]}, "does not restore"),
+        (Discrete(), {"position": [0, 1]}, "1-D gymnasium.spaces.Box"),
+        (DoorRoom(), {"position": slice(0, 3)}, "reaches past the 2 components"),
+        (DoorRoom(), {"position": [2]}, "out of range"),
+        (DoorRoom(), {}, "needs position="),
+        (DoorRoom(), {"position": [0, 1], "success": "reward"}, "invalid `success`"),
+    ],
+)
+def test_bad_environments_are_refused_before_any_work(tmp_path, env, kwargs, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        pbcs.run(env=env, config=adapter_job(tmp_path, 2), out=tmp_path / "out", **kwargs)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_job_needing_a_hook_the_env_lacks_is_refused_naming_the_setting(tmp_path):
+    with pytest.raises(ValueError, match=r"phase2.stop_at_failure.*clear_balls"):
+        pbcs.run(env=DoorRoom(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                 preset="fast", out=tmp_path / "out", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_exception_in_the_users_step_stops_the_run_naming_the_call(tmp_path):
+    Broken.calls = 0
+    with pytest.raises(RuntimeError, match="environment's step raised ArithmeticError") as e:
+        pbcs.run(env=Broken(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                 config=adapter_job(tmp_path, 2), out=tmp_path / "out", progress=False)
+    assert isinstance(e.value.__cause__, ArithmeticError)
+    assert not (tmp_path / "out").exists()
+
+
+def test_mujoco_state_replays_an_ants_step_where_qpos_and_qvel_do_not():
+    robotics = pytest.importorskip("gymnasium_robotics")
+    gym.register_envs(robotics)
+    env = gym.make("AntMaze_UMaze-v5", continuing_task=False)
+    env.reset(seed=0)
+    ant, whole = env.unwrapped.ant_env, pbcs.MujocoState(env)
+    rng = np.random.default_rng(0)
+    for _ in range(200):  # into contacts with the floor, where the warm start matters
+        env.step(rng.uniform(-1, 1, 8).astype(np.float32))
+    state, qpos, qvel = whole.get_state(), ant.data.qpos.copy(), ant.data.qvel.copy()
+    action = rng.uniform(-1, 1, 8).astype(np.float32)
+    first = env.step(action)[0]["observation"]
+    whole.set_state(state)
+    assert np.array_equal(env.step(action)[0]["observation"], first)
+    ant.set_state(qpos, qvel)
+    assert not np.array_equal(env.step(action)[0]["observation"], first)
+
+
+def test_phase_1_on_gymnasium_roboticss_own_pointmaze_reaches_its_goal():
+    robotics = pytest.importorskip("gymnasium_robotics")
+    gym.register_envs(robotics)
+    env = gym.make("PointMaze_UMaze-v3", continuing_task=False)
+    found = pbcs.explore(env=env, position=slice(0, 2), observation_key="observation", seed=0)
+    tau, goal = found["tau"], env.unwrapped.goal
+    assert tau.shape[1] == 4 and found["env_steps"] >= len(tau) - 1
+    assert np.hypot(*(tau[-1, :2] - goal)) <= 0.45 < np.hypot(*(tau[0, :2] - goal))
+    # A dict observation needs its key, named in the refusal.
+    with pytest.raises(ValueError, match="observation_key"):
+        pbcs.explore(env=gym.make("PointMaze_UMaze-v3"), position=slice(0, 2))
