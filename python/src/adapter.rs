@@ -107,7 +107,8 @@ impl Gym {
             obs_dim: start.obs.len(),
             position_dims: position.len(),
             action_high: f32s("action_high")?,
-            at: RefCell::new(Some(start.clone())),
+            // Unknown: an adapter used before may have left the env anywhere.
+            at: RefCell::new(None),
             start,
             state_position,
             low: f32s("position_low")?,

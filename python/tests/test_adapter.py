@@ -223,3 +223,12 @@ def test_phase_1_on_gymnasium_roboticss_own_pointmaze_reaches_its_goal():
     # A dict observation needs its key, named in the refusal.
     with pytest.raises(ValueError, match="observation_key"):
         pbcs.explore(env=gym.make("PointMaze_UMaze-v3"), position=slice(0, 2))
+
+
+def test_an_adapter_used_twice_gives_the_same_phase_1(tmp_path):
+    adapter = pbcs.Adapter(DoorRoom(), [0, 1])
+    job = adapter_job(tmp_path, 2)
+    first = pbcs.explore(env=adapter, config=job, seed=1)
+    # The env is left where phase 1 ended; the second run must still start from s_0.
+    second = pbcs.explore(env=adapter, config=job, seed=1)
+    assert (first["tau"] == second["tau"]).all() and first["env_steps"] == second["env_steps"]
