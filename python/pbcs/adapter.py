@@ -130,6 +130,8 @@ class Adapter:
                 f"invalid `env`: its action bounds must be finite and symmetric, got {low} .. {high}"
                 "; wrap it in gymnasium.wrappers.RescaleAction(env, -1.0, 1.0)"
             )
+        if not isinstance(reset_seed, int) or not 0 <= reset_seed < 2**63:
+            raise ValueError(f"invalid `reset_seed`: an integer in [0, 2^63), got {reset_seed!r}")
         if success not in ("info", "terminated"):
             raise ValueError(f"invalid `success`: must be \"info\" or \"terminated\", got {success!r}")
         self.env, self.success, self.observation_key = env, success, observation_key
@@ -297,7 +299,7 @@ def _region(region, dims):
         radius = float(radius)
     except (TypeError, ValueError):
         raise ValueError("invalid `success_region`: must be (centre, radius)") from None
-    if centre.shape != (dims,) or not np.isfinite(centre).all() or not radius > 0:
+    if centre.shape != (dims,) or not np.isfinite(centre).all() or not 0 < radius < np.inf:
         raise ValueError(
             f"invalid `success_region`: a centre of {dims} finite numbers and a positive radius"
         )

@@ -159,6 +159,10 @@ class Chain:
         resets (seeds ``seed``, ``seed + 1``, ...), each at most ``max_steps`` steps (default:
         the job's evaluation length), success as the adapter reads it. Returns ``successes``,
         ``episodes`` and each episode's ``success`` and ``steps``."""
+        if not isinstance(episodes, int) or not 1 <= episodes <= 100_000:
+            raise ValueError(f"invalid `episodes`: an integer in 1..100000, got {episodes!r}")
+        if max_steps is not None and not (isinstance(max_steps, int) and 1 <= max_steps <= 10**7):
+            raise ValueError(f"invalid `max_steps`: an integer in 1..10000000, got {max_steps!r}")
         limit = max_steps or self._core.eval_max_steps
         wins, steps = [], []
         for e in range(episodes):

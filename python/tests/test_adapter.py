@@ -127,6 +127,8 @@ def test_pbcs_solves_a_room_with_a_door_written_in_the_test(tmp_path):
     assert len(chain) == run["skills"]
     played = chain.evaluate_in(pbcs.Adapter(DoorRoom(), [0, 1]), episodes=20)
     assert played["successes"] >= 18, played
+    with pytest.raises(ValueError, match="invalid `episodes`"):
+        chain.evaluate_in(pbcs.Adapter(DoorRoom(), [0, 1]), episodes=10**9)
     # Phase 1 alone, same job and seed: the τ the run worked on (not shortened in this job).
     phase1 = pbcs.explore(env=DoorRoom(), position=[0, 1], config=adapter_job(tmp_path, 2))
     assert phase1["tau"].shape == tau.shape and (phase1["tau"] == tau).all()
@@ -170,6 +172,10 @@ class Broken(DoorRoom):
         (DoorRoom(), {"position": [2]}, "out of range"),
         (DoorRoom(), {}, "needs position="),
         (DoorRoom(), {"position": [0, 1], "success": "reward"}, "invalid `success`"),
+        (DoorRoom(), {"position": [0, 1], "reset_seed": -1}, "invalid `reset_seed`"),
+        (DoorRoom(), {"position": [0, 1], "success_region": ([1.7], 0.15)}, "invalid `success_region`"),
+        (DoorRoom(), {"position": [0, 1], "success_region": ([1.7, 0.2], float("inf"))},
+         "invalid `success_region`"),
     ],
 )
 def test_bad_environments_are_refused_before_any_work(tmp_path, env, kwargs, message):
