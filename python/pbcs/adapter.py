@@ -39,21 +39,23 @@ class MujocoState:
     def __init__(self, env):
         import mujoco
 
-        self._mujoco = mujoco
-        self._env = env.unwrapped
+        # The env's model and data, made once by gymnasium's MujocoEnv (a reset keeps them): read
+        # once here, since some envs reach them through properties (PointMaze's).
+        self._model, self._data = env.unwrapped.model, env.unwrapped.data
         self._spec = mujoco.mjtState.mjSTATE_INTEGRATION
-        self._size = mujoco.mj_stateSize(self._env.model, self._spec)
+        self._size = mujoco.mj_stateSize(self._model, self._spec)
+        self._get, self._set, self._forward = mujoco.mj_getState, mujoco.mj_setState, mujoco.mj_forward
 
     def get_state(self):
         state = np.empty(self._size, dtype=np.float64)
-        self._mujoco.mj_getState(self._env.model, self._env.data, state, self._spec)
+        self._get(self._model, self._data, state, self._spec)
         return state
 
     def set_state(self, state):
         state = np.ascontiguousarray(state, dtype=np.float64)
-        self._mujoco.mj_setState(self._env.model, self._env.data, state, self._spec)
+        self._set(self._model, self._data, state, self._spec)
         # Positions changed: recompute what depends on them (sites, contacts) as a reset does.
-        self._mujoco.mj_forward(self._env.model, self._env.data)
+        self._forward(self._model, self._data)
 
     def position_in_state(self, qpos_index):
         """The index in :meth:`get_state`'s vector of ``qpos[qpos_index]`` (after the time)."""
