@@ -8,11 +8,17 @@ from . import _pbcs
 from .envs import ContinuousMaze, RegisteredEnv
 
 
-def load_chain(path):
+def load_chain(path, adapter=None):
     """The chain of skills saved in the folder ``path`` (``<run>/chain`` of ``pbcs run`` or
     of :func:`pbcs.run` with ``out``). A folder without ``manifest.toml`` or ``run.toml``, a
-    malformed manifest or bad weights raise ``OSError`` or ``ValueError`` naming the file."""
-    return Chain(_pbcs.ChainCore(str(path)))
+    malformed manifest or bad weights raise ``OSError`` or ``ValueError`` naming the file.
+    A chain of a user's Gymnasium environment (``pbcs.run(env=...)``): pass its
+    :class:`pbcs.Adapter`, which the skills' lengths are checked against (the job's environment
+    is not the one it ran on); play it with :meth:`Chain.evaluate_in`."""
+    if adapter is None:
+        return Chain(_pbcs.ChainCore(str(path)))
+    dims = (len(adapter.observation_names), len(adapter.action_high))
+    return Chain(_pbcs.ChainCore(str(path), dims))
 
 
 class Chain:

@@ -112,8 +112,12 @@ fn shared_dims(chain: &SkillChain, manifest: &std::path::Path) -> PyResult<(usiz
 
 #[pymethods]
 impl ChainCore {
+    /// The chain saved in `dir`; with `dims` (a user's Gymnasium environment's observation and
+    /// action lengths, `pbcs.load_chain(path, adapter=...)`), checked against those instead of
+    /// the job's environment, which a run through the adapter did not run on.
     #[new]
-    fn new(dir: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (dir, dims = None))]
+    fn new(dir: PathBuf, dims: Option<(usize, usize)>) -> PyResult<Self> {
         let kernel = Kernel::from_env().map_err(py_err)?;
         let (job, chain) = pbcs::runs::load_saved_job(&dir, kernel).map_err(py_err)?;
         let manifest = dir.join("manifest.toml");
@@ -122,6 +126,34 @@ impl ChainCore {
                 "{}: the chain has no skill",
                 manifest.display()
             )));
+        }
+        if let Some(want) = dims {
+            let got = shared_dims(&chain, &manifest)?;
+            if got != want {
+                return Err(PyValueError::new_err(format!(
+                    "{}: the skills take {} observations and give {} actions, the adapter's \
+                     environment {} and {}",
+                    manifest.display(),
+                    got.0,
+                    got.1,
+                    want.0,
+                    want.1
+                )));
+            }
+            return Ok(ChainCore {
+                chain,
+                job,
+                maze: None,
+                env: Err(
+                    "a chain of a Gymnasium environment run through pbcs.Adapter: play it \
+                          with Chain.evaluate_in(adapter)"
+                        .into(),
+                ),
+                dir,
+                active: 0,
+                dims: got,
+                ws: Workspace::with_kernel(kernel),
+            });
         }
         // The maze needs no MuJoCo: a maze chain is checked against it; another environment's
         // chain is checked for consistent skills (`shared_dims`).

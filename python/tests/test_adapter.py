@@ -129,10 +129,41 @@ def test_pbcs_solves_a_room_with_a_door_written_in_the_test(tmp_path):
     assert played["successes"] >= 18, played
     with pytest.raises(ValueError, match="invalid `episodes`"):
         chain.evaluate_in(pbcs.Adapter(DoorRoom(), [0, 1]), episodes=10**9)
+    # Loaded against the adapter (the job's env is not the one it ran on): the same actions.
+    adapter = pbcs.Adapter(DoorRoom(), [0, 1])
+    mine = pbcs.load_chain(tmp_path / "run" / "chain", adapter=adapter)
+    a, b = mine.evaluate_in(adapter, episodes=3), chain.evaluate_in(adapter, episodes=3)
+    assert a["successes"] == b["successes"] and (a["steps"] == b["steps"]).all()
+    assert np.array_equal(mine.act(tau[0]), chain.act(tau[0]))
+    with pytest.raises(ValueError, match="the adapter's environment 3 and 2"):
+        pbcs.load_chain(tmp_path / "run" / "chain", adapter=pbcs.Adapter(WithClock(), [0, 1]))
     # Phase 1 alone, same job and seed: the τ the run worked on (not shortened in this job).
     phase1 = pbcs.explore(env=DoorRoom(), position=[0, 1], config=adapter_job(tmp_path, 2))
     assert phase1["tau"].shape == tau.shape and (phase1["tau"] == tau).all()
     assert phase1["actions"].shape == (len(tau) - 1, 2) and phase1["env_steps"] >= len(tau) - 1
+
+
+class WithClock(DoorRoom):
+    """The room observing a third number, a step count."""
+
+    observation_space = gym.spaces.Box(np.array([0.0, 0.0, 0.0], np.float32),
+                                       np.array([2.0, 1.0, 1e6], np.float32))
+
+    def reset(self, seed=None, options=None):
+        obs, info = super().reset(seed=seed)
+        self.t = 0.0
+        return np.append(obs, self.t).astype(np.float32), info
+
+    def step(self, action):
+        obs, r, term, trunc, info = super().step(action)
+        self.t += 1.0
+        return np.append(obs, self.t).astype(np.float32), r, term, trunc, info
+
+    def get_state(self):
+        return np.append(self.p, self.t)
+
+    def set_state(self, state):
+        self.p, self.t = np.asarray(state[:2], np.float32).copy(), float(state[2])
 
 
 class NoState(DoorRoom):
