@@ -70,6 +70,7 @@ pub(crate) fn catching<T>(py: Python<'_>, work: impl FnOnce() -> T) -> PyResult<
     }
 }
 
+/// The 1-D numpy array `adapter.<name>` as a vector.
 fn vector<'py, T: numpy::Element + Copy>(
     adapter: &Bound<'py, PyAny>,
     name: &str,
