@@ -215,25 +215,32 @@ class Adapter:
         return self._raw_observation(obs)[self._order].astype(np.float32)
 
     def _state_position(self, given, n):
-        size = self.start_state.size
+        """Where the position lies in the state vector: ``given``, checked; else a guess (a
+        MuJoCo env's ``qpos``, or the state's own indices when it is as long as the
+        observation), kept only where s_0 confirms it (else no ball starts: the settings that
+        need them are refused by the core, naming them)."""
+        size, d = self.start_state.size, len(self.position)
         if given is None:
             if isinstance(self._protocol, MujocoState):
-                given = [self._protocol.position_in_state(i) for i in self.position]
+                guess = [self._protocol.position_in_state(i) for i in self.position]
             elif size == n:
-                given = self.position
+                guess = self.position
             else:
                 return None
+            fits = max(guess) < size and (
+                self.start_state[guess].astype(np.float32) == self.start_observation[:d]
+            ).all()
+            return guess if fits else None
         idx = _indices(given, size, "state_position", MAX_POSITION_DIMS)
-        if len(idx) != len(self.position):
+        if len(idx) != d:
             raise ValueError(
-                f"invalid `state_position`: {len(idx)} indices for {len(self.position)} position "
-                "components"
+                f"invalid `state_position`: {len(idx)} indices for {d} position components"
             )
         got = self.start_state[idx].astype(np.float32)
-        if not (got == self.start_observation[: len(idx)]).all():
+        if not (got == self.start_observation[:d]).all():
             raise ValueError(
                 f"invalid `state_position`: the state's components {idx} are {got}, the "
-                f"observation's position is {self.start_observation[: len(idx)]}"
+                f"observation's position is {self.start_observation[:d]}"
             )
         return idx
 

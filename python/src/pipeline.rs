@@ -128,11 +128,7 @@ pub(crate) fn run<'py>(
     map: Option<&Bound<'py, PyAny>>,
     map_file: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut job: PbcsJob = match &config {
-        Some(p) => pbcs::config::load(p),
-        None => Preset::named(preset).and_then(Preset::job),
-    }
-    .map_err(py_err)?;
+    let mut job = job_of(preset, config.as_deref())?;
     let env = env.map(crate::named::env_name).transpose()?;
     let map = crate::named::Map {
         rows: map,
@@ -212,6 +208,15 @@ struct RunDone {
     evaluation: Vec<EvalEpisode>,
 }
 
+/// The job in the config file `config`, else the preset named `preset`.
+fn job_of(preset: &str, config: Option<&std::path::Path>) -> PyResult<PbcsJob> {
+    match config {
+        Some(p) => pbcs::config::load(p),
+        None => Preset::named(preset).and_then(Preset::job),
+    }
+    .map_err(py_err)
+}
+
 /// The job of a run on the user's environment: the preset or config file, with `seed` and
 /// `max_env_steps` (checked by the core).
 fn gym_job(
@@ -220,11 +225,7 @@ fn gym_job(
     config: Option<&std::path::Path>,
     max_env_steps: Option<i64>,
 ) -> PyResult<pbcs::validate::Valid<PbcsJob>> {
-    let mut job: PbcsJob = match config {
-        Some(p) => pbcs::config::load(p),
-        None => Preset::named(preset).and_then(Preset::job),
-    }
-    .map_err(py_err)?;
+    let mut job = job_of(preset, config)?;
     job.seed = count("seed", seed)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
@@ -254,7 +255,6 @@ pub(crate) fn run_gym<'py>(
     let job = gym_job(seed, preset, config.as_deref(), max_env_steps)?;
     let kernel = Kernel::from_env().map_err(py_err)?;
     let env = crate::adapter::Gym::new(adapter)?;
-    PbcsRun::require_hooks(&env, &job).map_err(py_err)?;
     let bar = if progress {
         indicatif::ProgressBar::new_spinner()
     } else {

@@ -166,6 +166,27 @@ class WithClock(DoorRoom):
         self.p, self.t = np.asarray(state[:2], np.float32).copy(), float(state[2])
 
 
+class SwappedState(DoorRoom):
+    """Its state is (y, x): as long as the observation, but not it."""
+
+    def get_state(self):
+        return self.p[::-1].copy()
+
+    def set_state(self, state):
+        self.p = np.asarray(state, np.float32)[::-1].copy()
+
+
+def test_a_state_position_s0_does_not_confirm_offers_no_ball_starts(tmp_path):
+    assert pbcs.Adapter(SwappedState(), [0, 1]).state_position is None
+    with pytest.raises(ValueError, match=r"phase2.start.*ball_starts"):
+        pbcs.run(env=SwappedState(), position=[0, 1], config=adapter_job(tmp_path, 2),
+                 success_region=(DoorRoom.goal, 0.15), progress=False)
+    # Said explicitly, it is checked and refused naming it.
+    with pytest.raises(ValueError, match="invalid `state_position`"):
+        pbcs.Adapter(SwappedState(), [0, 1], state_position=[0, 1])
+    assert pbcs.Adapter(SwappedState(), [0, 1], state_position=[1, 0]).state_position == [1, 0]
+
+
 class NoState(DoorRoom):
     get_state = None
 
