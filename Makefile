@@ -19,13 +19,14 @@ PBCS_POLARS = $(CARGO) run --release --locked --features polars --quiet --
 TARGET_DIR = $(or $(CARGO_TARGET_DIR),target)
 PBCS = $(TARGET_DIR)/release/pbcs
 
-.PHONY: help build bin demo test bench lint ci clean figures results results-parallel cell \
+.PHONY: help build bin demo test test-slow bench lint ci clean figures results results-parallel cell \
         commands paper check-paper smoke python experiments mujoco test-mujoco pointmaze \
         mujoco-experiments
 
 help:
 	@echo "make demo      explore a 10x10 maze and draw it (out/explore/...)"
 	@echo "make test      run the test suite (the README's test command)"
+	@echo "make test-slow the six slow end-to-end tests it leaves out (CI runs both)"
 	@echo "make figures   tables, figures and the report's LaTeX from the committed raw CSVs"
 	@echo "               (results/raw -> results/tables, results/figures, paper/generated)"
 	@echo "make results   re-run every experiment (resumable; JOBS=2; PROFILE=smoke; RESULTS=DIR);"
@@ -57,6 +58,9 @@ demo:
 
 test:
 	$(CARGO) test --release --locked
+
+test-slow:
+	$(CARGO) test --release --locked -- --ignored
 
 bench:
 	$(CARGO) bench --locked --bench phase1

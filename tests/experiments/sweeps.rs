@@ -5,6 +5,7 @@ use super::*;
 /// The smoke profile of every experiment, run twice into two folders with 1 and 2 jobs: the
 /// same bytes; a third sweep finds everything finished; then tables, figures and LaTeX.
 #[test]
+#[ignore = "slow end to end: CI runs it (`cargo test --release --locked -- --ignored`)"]
 fn smoke_profile_runs_end_to_end_deterministically() {
     let a = tempfile::tempdir().unwrap();
     let b = tempfile::tempdir().unwrap();

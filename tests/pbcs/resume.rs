@@ -142,6 +142,7 @@ fn a_pbcs_run_cut_after_every_learning_problem_ends_as_the_uncut_run() {
 /// included (after the verification that opened it, before its learning problems end): the
 /// uncut run.
 #[test]
+#[ignore = "slow end to end: CI runs it (`cargo test --release --locked -- --ignored`)"]
 fn a_pbcs_run_cut_in_the_middle_of_a_chain_repair_ends_as_the_uncut_run() {
     let job = Check::valid(super::switches::paper_maze2_with_repair()).unwrap();
     let tau = phase1(&job).4;

@@ -79,6 +79,7 @@ fn chain_repairs_need_a_chain_verification() {
 /// without verification: the verification draws from a stream of its own), so that the
 /// verification's 100 episodes cannot fit in it.
 #[test]
+#[ignore = "slow end to end: CI runs it (`cargo test --release --locked -- --ignored`)"]
 fn a_chain_verification_past_the_budget_is_a_budget_failure() {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
@@ -120,6 +121,7 @@ pub(crate) fn paper_maze2_with_repair() -> PbcsJob {
 /// again on its section, and the repaired chain passes its verification and solves the
 /// maze.
 #[test]
+#[ignore = "slow end to end: CI runs it (`cargo test --release --locked -- --ignored`)"]
 fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
     let run = run_maze(&paper_maze2_with_repair());
     let checks: Vec<_> = run
@@ -156,6 +158,7 @@ fn chain_repair_mends_the_weak_junction_of_a_paper_chain() {
 /// starts (the table's row) then reaches it from all 100, with two skills again; the rows of
 /// both are `experiments/lookahead.toml`'s.
 #[test]
+#[ignore = "slow end to end: CI runs it (`cargo test --release --locked -- --ignored`)"]
 fn a_lookahead_mends_the_weak_junction_of_a_paper_chain_as_it_is_made() {
     let mut job = pbcs::config::Preset::Paper.job().unwrap();
     job.maze.size = 2;
