@@ -239,6 +239,28 @@ fn epsilon_is_a_radius_in_cells() {
 /// Every enum's name (`name()`, from strum's snake_case rule) is its serde name, the one that
 /// configs, CSVs and `timing.toml` use: the two derive from the variant by the same rule, and
 /// this holds them equal.
+/// `gym` names what a run through the Python adapter ran on: a job that names it is refused
+/// by the command line, saying where it runs, and `--env` does not offer it.
+#[test]
+fn a_job_on_a_users_gymnasium_env_runs_from_python_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (_tmp, path) = write("env = \"gym\"\n");
+    let (code, err) = pbcs(&["run", "--config", path.to_str().unwrap(), "--out", out]);
+    assert!(
+        code != 0 && err.contains("runs from Python only"),
+        "{code} {err}"
+    );
+    let (code, err) = pbcs(&["run", "--env", "gym", "--out", out]);
+    assert!(
+        code != 0 && err.contains("invalid value 'gym'"),
+        "{code} {err}"
+    );
+    assert!(!pbcs::envs::EnvName::all().contains(&pbcs::envs::EnvName::Gym));
+    assert!(!dir.path().join("out").exists());
+}
+
 #[test]
 fn enum_names_are_their_serde_names() {
     use pbcs::config::Preset;

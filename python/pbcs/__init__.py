@@ -36,6 +36,7 @@ __all__ = [
     "MujocoState",
     "ContinuousMaze",
     "ContinuousMazeVec",
+    "Draws",
     "Chain",
     "ENV_NAMES",
     "evaluation_starts",
@@ -49,6 +50,8 @@ __all__ = [
 ]
 
 MAX_MAZE_SIZE = _pbcs.MAX_MAZE_SIZE
+#: The run's random stream as an :class:`Adapter`'s ``sample_ball`` hook draws from it.
+Draws = _pbcs.Draws
 ENV_NAMES = tuple(_pbcs.ENV_NAMES)
 #: Whether this build runs PointMaze and AntMaze (built with the ``mujoco`` feature:
 #: ``MATURIN_PEP517_ARGS="--features mujoco" pip install ./python`` after ``make mujoco``).
@@ -69,7 +72,7 @@ def _adapter(env, position, options):
 
 
 def explore(size=None, layout=0, seed=0, bin_side=None, budget=None, env=None, position=None,
-            preset="fast", config=None, **adapter):
+            preset="fast", config=None, progress=True, **adapter):
     """Phase 1 on the maze of ``size`` × ``size`` cells and layout seed ``layout``, run seed
     ``seed``: a dict with ``tau`` (float32 array of shape (len, 2), from s_0 to the first state
     in the target disc), ``actions`` ((len − 1, 2), the action from each state of τ to the
@@ -77,10 +80,11 @@ def explore(size=None, layout=0, seed=0, bin_side=None, budget=None, env=None, p
 
     With ``env`` a ``gymnasium.Env`` (and ``position``, and any other :class:`Adapter`
     argument), phase 1 of the preset's or config's job on it: ``tau`` as the observations
-    the core sees (position first).
+    the core sees (position first); ``progress``: a spinner on standard error (env steps,
+    archived states, steps per second).
     """
     if env is not None:
-        return _pbcs.explore_gym(_adapter(env, position, adapter), seed, preset, config)
+        return _pbcs.explore_gym(_adapter(env, position, adapter), seed, preset, config, progress)
     if size is None:
         raise ValueError("invalid `size`: give the maze's size, or env= a gymnasium.Env")
     return _pbcs.explore(size, layout, seed, bin_side, budget)

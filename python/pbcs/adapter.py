@@ -109,14 +109,23 @@ class Adapter:
     ``observation_key``: the entry of a dict observation. ``reset_seed``: the seed of the one
     reset that gives s_0. ``success_region``: ``(centre, radius)`` around the position, what
     the last skill aims at (``phase2.last_goal = "success_region"``). ``ball_is_clear``: a
-    callable ``(centre, radius) -> bool`` (``phase2.stop_at_failure``). ``observation_names``:
+    callable ``(centre, radius) -> bool`` (``phase2.stop_at_failure``, ``phase2.retargets``).
+    ``sample_ball``: how a start in B_ε(τ_K) is drawn, a callable ``(state, radius, draws) ->
+    state`` given the centre's whole state (a copy), ε and ``draws``, the run's own random
+    stream (:meth:`Draws.random`: what PBCS's core would draw next), returning the start's
+    whole state; the observation the core sees of it is the centre's with the position read
+    from the state at ``state_position`` (default: the position moved uniformly in the disc
+    of radius ε, clamped to the observation space's bounds). ``observation_names``:
     the env's observation components' names, the CSV headers (default ``o<i>``, ``i`` the
-    env's index, whatever the core's order).
+    env's index, whatever the core's order). ``recorded_as``: what the run's record and its
+    chain's job name as its environment: by default ``gym``, an environment of one's own; or the
+    name of the registry environment (``pbcs.ENV_NAMES``) this env is a copy of, for a
+    comparison with that environment's runs to the byte (python/tests/test_adapter.py).
     """
 
     def __init__(self, env, position, state=None, state_position=None, success="info",
                  observation_key=None, reset_seed=0, success_region=None, ball_is_clear=None,
-                 observation_names=None):
+                 observation_names=None, sample_ball=None, recorded_as=None):
         import gymnasium as gym
 
         if not isinstance(env, gym.Env):
@@ -163,6 +172,26 @@ class Adapter:
         if ball_is_clear is not None and not callable(ball_is_clear):
             raise ValueError("invalid `ball_is_clear`: must be a callable (centre, radius) -> bool")
         self.ball_is_clear = ball_is_clear
+        if sample_ball is not None:
+            if not callable(sample_ball):
+                raise ValueError(
+                    "invalid `sample_ball`: must be a callable (state, radius, draws) -> state"
+                )
+            if self.state_position is None:
+                raise ValueError(
+                    "invalid `sample_ball`: the observation of a drawn start is read from the state "
+                    "at `state_position`, which is not known: give state_position="
+                )
+        self.sample_ball = sample_ball
+        if recorded_as is not None:
+            from . import ENV_NAMES
+
+            if recorded_as not in ENV_NAMES:
+                raise ValueError(
+                    f"invalid `recorded_as`: one of pbcs.ENV_NAMES {ENV_NAMES}, got "
+                    f"{recorded_as!r}"
+                )
+        self.recorded_as = recorded_as
         self._check_restores()
 
     # The calls the core makes.
@@ -198,6 +227,24 @@ class Adapter:
     def set_state(self, state):
         """Puts the environment in ``state`` (a vector :meth:`step` or the start gave)."""
         self._protocol.set_state(np.array(state, dtype=np.float64))
+
+    def ball_start(self, state, observation, radius, draws):
+        """A start in the ball of radius ``radius`` around the state ``state`` (whose observation
+        as the core sees it is ``observation``), drawn by the user's ``sample_ball``:
+        ``(state, observation)``, checked."""
+        start = self.sample_ball(np.array(state, dtype=np.float64), float(radius), draws)
+        try:
+            start = np.asarray(start, dtype=np.float64)
+        except (TypeError, ValueError):
+            start = None
+        if start is None or start.shape != self.start_state.shape or not np.isfinite(start).all():
+            raise ValueError(
+                f"sample_ball must return a state of {self.start_state.size} finite numbers, got "
+                f"{getattr(start, 'shape', None)}"
+            )
+        obs = np.array(observation, dtype=np.float32)
+        obs[: len(self.position)] = start[self.state_position].astype(np.float32)
+        return start, obs
 
     # Construction's checks.
 

@@ -13,8 +13,9 @@ def load_chain(path, adapter=None):
     of :func:`pbcs.run` with ``out``). A folder without ``manifest.toml`` or ``run.toml``, a
     malformed manifest or bad weights raise ``OSError`` or ``ValueError`` naming the file.
     A chain of a user's Gymnasium environment (``pbcs.run(env=...)``): pass its
-    :class:`pbcs.Adapter`, which the skills' lengths are checked against (the job's environment
-    is not the one it ran on); play it with :meth:`Chain.evaluate_in`."""
+    :class:`pbcs.Adapter`, which the skills' lengths are checked against (its job says
+    ``env = "gym"``, which nothing but the adapter builds); play it with
+    :meth:`Chain.evaluate_in`."""
     if adapter is None:
         return Chain(_pbcs.ChainCore(str(path)))
     dims = (len(adapter.observation_names), len(adapter.action_high))

@@ -38,6 +38,8 @@ pub(crate) struct Gym {
     high: Vec<f32>,
     success_region: Option<(Vec<f32>, f32)>,
     ball_is_clear: Option<Py<PyAny>>,
+    /// Whether the user drew ball starts themselves (`Adapter.ball_start` calls the hook).
+    own_ball_starts: bool,
     names: Vec<String>,
     /// The state the Python environment is in now: interior mutability because the core's
     /// `step` is a pure function of `&self` while the Python object it calls is not.
@@ -116,6 +118,7 @@ impl Gym {
             high: f32s("position_high")?,
             success_region,
             ball_is_clear: (!clear.is_none()).then(|| clear.unbind()),
+            own_ball_starts: !adapter.getattr("sample_ball")?.is_none(),
             names: adapter.getattr("observation_names")?.extract()?,
         })
     }
@@ -238,7 +241,12 @@ impl SampleBall<GymState> for Gym {
     /// components (velocities, the warm start) the centre's. In the plane it draws as the
     /// maze does (r = radius·√u, angle uniform), so that a maze written in Python draws the
     /// maze's starts; in other dimensions, uniform in the cube until inside the ball.
+    /// With the user's `sample_ball` hook, its start, drawn from the run's stream
+    /// ([`Draws`]).
     fn sample_ball(&self, center: &GymState, radius: f32, rng: &mut pbcs::rng::Rng) -> GymState {
+        if self.own_ball_starts {
+            return self.hooked_ball_start(center, radius, rng);
+        }
         let d = self.position_dims;
         let c = &center.obs[..d];
         let offset: Vec<f32> = if d == 2 {
@@ -264,6 +272,68 @@ impl SampleBall<GymState> for Gym {
             next.sim[at[i]] = f64::from(p);
         }
         next
+    }
+}
+
+impl Gym {
+    /// `Adapter.ball_start`: the user's `sample_ball` given the centre, ε and the run's stream,
+    /// which it leaves where the hook's draws left it.
+    fn hooked_ball_start(
+        &self,
+        center: &GymState,
+        radius: f32,
+        rng: &mut pbcs::rng::Rng,
+    ) -> GymState {
+        Python::attach(|py| {
+            let draws = match Py::new(py, Draws { rng: rng.clone() }) {
+                Ok(d) => d,
+                Err(e) => self.fail("sample_ball hook", e),
+            };
+            let sim = PyArray1::from_slice(py, &center.sim);
+            let obs = PyArray1::from_slice(py, &center.obs);
+            let answer = self
+                .adapter
+                .bind(py)
+                .call_method1("ball_start", (sim, obs, radius, draws.clone_ref(py)))
+                .and_then(|r| r.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>())
+                .and_then(|(sim, obs)| {
+                    let sim: PyReadonlyArray1<'_, f64> = sim.extract()?;
+                    let obs: PyReadonlyArray1<'_, f32> = obs.extract()?;
+                    Ok(GymState {
+                        sim: sim.as_slice()?.to_vec(),
+                        obs: obs.as_slice()?.to_vec(),
+                    })
+                });
+            match answer {
+                Ok(start) => {
+                    *rng = draws.borrow(py).rng.clone();
+                    start
+                }
+                Err(e) => self.fail("sample_ball hook", e),
+            }
+        })
+    }
+}
+
+/// The run's random stream as a `sample_ball` hook draws from it: the numbers PBCS's core
+/// would draw next, so that a hook written as an environment of ours draws its starts draws
+/// theirs.
+#[pyclass(module = "pbcs._pbcs")]
+pub(crate) struct Draws {
+    rng: pbcs::rng::Rng,
+}
+
+#[pymethods]
+impl Draws {
+    /// A number uniform in [0, 1): 53 bits of the stream's next 64 (`rand`'s `f64` draw).
+    fn random(&mut self) -> f64 {
+        self.rng.random::<f64>()
+    }
+
+    /// A number uniform in [0, 1) in single precision: 24 bits of the stream's next 32
+    /// (`rand`'s `f32` draw), returned as a float.
+    fn random_f32(&mut self) -> f32 {
+        self.rng.random::<f32>()
     }
 }
 

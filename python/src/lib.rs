@@ -121,6 +121,7 @@ fn _pbcs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::MazeVecEnv>()?;
     m.add_class::<chain::ChainCore>()?;
     m.add_class::<named::NamedEnv>()?;
+    m.add_class::<adapter::Draws>()?;
     m.add_function(wrap_pyfunction!(pipeline::explore, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::run, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::run_gym, m)?)?;

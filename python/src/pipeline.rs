@@ -217,15 +217,28 @@ fn job_of(preset: &str, config: Option<&std::path::Path>) -> PyResult<PbcsJob> {
     .map_err(py_err)
 }
 
-/// The job of a run on the user's environment: the preset or config file, with `seed` and
-/// `max_env_steps` (checked by the core).
+/// The job of a run on the user's environment behind `adapter`: the preset or config file,
+/// with `seed` and `max_env_steps` (checked by the core), its environment the adapter's:
+/// recorded as `gym`, the job's `[maze]` and `[pointmaze]` (which describe ours) left at
+/// their defaults, or as the registry's environment the adapter says it copies
+/// (`recorded_as`, whose sections the job keeps).
 fn gym_job(
+    adapter: &Bound<'_, PyAny>,
     seed: i64,
     preset: &str,
     config: Option<&std::path::Path>,
     max_env_steps: Option<i64>,
 ) -> PyResult<pbcs::validate::Valid<PbcsJob>> {
     let mut job = job_of(preset, config)?;
+    let recorded: Option<String> = adapter.getattr("recorded_as")?.extract()?;
+    match recorded {
+        Some(name) => job.env = crate::named::env_name(&name)?,
+        None => {
+            job.env = pbcs::envs::EnvName::Gym;
+            job.maze = Default::default();
+            job.pointmaze = Default::default();
+        }
+    }
     job.seed = count("seed", seed)?;
     if let Some(m) = max_env_steps {
         job.phase2.max_env_steps = count("phase2.max_env_steps", m)?;
@@ -252,7 +265,7 @@ pub(crate) fn run_gym<'py>(
     progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     use std::io::IsTerminal as _;
-    let job = gym_job(seed, preset, config.as_deref(), max_env_steps)?;
+    let job = gym_job(adapter, seed, preset, config.as_deref(), max_env_steps)?;
     let kernel = Kernel::from_env().map_err(py_err)?;
     let env = crate::adapter::Gym::new(adapter)?;
     let bar = if progress {
@@ -261,6 +274,13 @@ pub(crate) fn run_gym<'py>(
         indicatif::ProgressBar::hidden()
     };
     let lines = progress && !std::io::stderr().is_terminal();
+    // Phase 1 reports nothing to a whole run's caller: its spinner says what runs, and ticks.
+    let exploring = "phase 1: exploring from s_0 (returns to archived states, random actions)";
+    bar.set_message(exploring);
+    bar.enable_steady_tick(std::time::Duration::from_millis(250));
+    if lines {
+        eprintln!("{exploring}");
+    }
     let mut shown = pbcs::runs::Phase2Progress::new(bar, lines);
     let run = crate::adapter::catching(py, || {
         PbcsRun::compute(env, &job, kernel, |skill, p| shown.report(skill, p))
@@ -281,23 +301,39 @@ pub(crate) fn run_gym<'py>(
 }
 
 /// Phase 1 alone on the user's environment behind `adapter`: τ as observations (position
-/// first), the actions between them, the env steps and the archive's size.
+/// first), the actions between them, the env steps and the archive's size. With `progress`,
+/// a spinner on standard error with the steps, the archive and the steps per second.
 #[pyfunction]
-#[pyo3(signature = (adapter, seed = 0, preset = "fast", config = None))]
+#[pyo3(signature = (adapter, seed = 0, preset = "fast", config = None, progress = true))]
 pub(crate) fn explore_gym<'py>(
     py: Python<'py>,
     adapter: &Bound<'py, PyAny>,
     seed: i64,
     preset: &str,
     config: Option<PathBuf>,
+    progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let job = gym_job(seed, preset, config.as_deref(), None)?;
+    let job = gym_job(adapter, seed, preset, config.as_deref(), None)?;
     let env = crate::adapter::Gym::new(adapter)?;
     let mut rng = pbcs::rng::Seeds::new(job.seed).stream(pbcs::rng::Stream::Explore);
+    let bar = if progress {
+        indicatif::ProgressBar::new_spinner()
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let clock = std::time::Instant::now();
+    let shown = |steps: u64, archive: usize| {
+        let rate = steps as f64 / clock.elapsed().as_secs_f64().max(1e-9);
+        bar.set_message(format!(
+            "phase 1: {steps} env steps, {archive} states archived ({rate:.0} steps/s)"
+        ));
+        bar.tick();
+    };
     let found = crate::adapter::catching(py, || {
-        pbcs::phase1::explore(&env, &job.explore, &mut rng, |_, _| {})
+        pbcs::phase1::explore(&env, &job.explore, &mut rng, shown)
     })?
     .map_err(py_err)?;
+    bar.finish_and_clear();
     let t = &found.trajectory;
     let observations = pbcs::env::observations(&env, &t.states);
     let rows = |v: &[Vec<f32>], width: usize| {

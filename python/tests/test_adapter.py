@@ -2,6 +2,8 @@
 as the Rust core on our maze when the env is the maze written in numpy, a room with a door
 written here solved, and bad input refused before any work."""
 
+import csv
+import math
 import re
 from pathlib import Path
 
@@ -72,7 +74,7 @@ def test_pbcs_through_the_adapter_on_a_numpy_maze_writes_the_rust_mazes_bytes(tm
     env = PythonMaze(size)
     gym_run = pbcs.run(env=env, position=slice(0, 2), success="terminated",
                        success_region=(env.target, 0.2), observation_names=["x", "y"],
-                       config=job, seed=3,
+                       recorded_as="maze", config=job, seed=3,
                        out=tmp_path / "gym", progress=False)
     rust_run = pbcs.run(config=job, seed=3, out=tmp_path / "rust")
     assert gym_run["solved"] and rust_run["solved"]
@@ -120,6 +122,12 @@ def test_pbcs_solves_a_room_with_a_door_written_in_the_test(tmp_path):
     run = pbcs.run(env=env, position=[0, 1], success_region=(DoorRoom.goal, 0.15),
                    config=adapter_job(tmp_path, 2), seed=0, out=tmp_path / "run", progress=False)
     assert run["solved"] and run["success_rate"] >= 0.9, run
+    # Recorded as an environment of one's own, which nothing but the adapter builds.
+    assert run["env"] == "gym" and 'env = "gym"' in (tmp_path / "run/chain/run.toml").read_text()
+    with open(tmp_path / "run" / "record.csv", newline="") as f:
+        assert [row["env"] for row in csv.DictReader(f)] == ["gym"]
+    with pytest.raises(ValueError, match="runs from Python only"):
+        pbcs.run(env="gym")
     tau = run["tau"]
     assert np.hypot(*(tau[-1] - DoorRoom.goal)) < 0.15
     assert (tau[:, 1] >= 0.7).any()  # τ went through the door
@@ -228,6 +236,10 @@ class Broken(DoorRoom):
         (DoorRoom(), {"position": [0, 1], "success_region": ([1.7], 0.15)}, "invalid `success_region`"),
         (DoorRoom(), {"position": [0, 1], "success_region": ([1.7, 0.2], float("inf"))},
          "invalid `success_region`"),
+        (DoorRoom(), {"position": [0, 1], "sample_ball": 3}, "invalid `sample_ball`"),
+        (SwappedState(), {"position": [0, 1], "sample_ball": lambda s, r, d: s},
+         "not known: give state_position="),
+        (DoorRoom(), {"position": [0, 1], "recorded_as": "gym"}, "invalid `recorded_as`"),
     ],
 )
 def test_bad_environments_are_refused_before_any_work(tmp_path, env, kwargs, message):
@@ -240,6 +252,32 @@ def test_a_job_needing_a_hook_the_env_lacks_is_refused_naming_the_setting(tmp_pa
     with pytest.raises(ValueError, match=r"phase2.stop_at_failure.*clear_balls"):
         pbcs.run(env=DoorRoom(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
                  preset="fast", out=tmp_path / "out", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_sample_ball_hook_draws_from_the_runs_stream_and_is_checked(tmp_path):
+    seen = []
+
+    def centre_itself(state, radius, draws):
+        seen.append((draws.random(), draws.random_f32()))
+        return state
+
+    job = adapter_job(tmp_path, 2)
+    first = pbcs.run(env=DoorRoom(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                     sample_ball=centre_itself, config=job, progress=False)
+    draws, seen[:] = list(seen), []
+    again = pbcs.run(env=DoorRoom(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                     sample_ball=centre_itself, config=job, progress=False)
+    # Called for every start in a ball, the same numbers in the same order for the same seed,
+    # each in [0, 1); and what the hook drew was taken from the stream, not drawn again.
+    assert draws and seen == draws and first["total_steps"] == again["total_steps"]
+    flat = np.array(draws).ravel()
+    assert ((0 <= flat) & (flat < 1)).all() and len(set(flat.tolist())) == flat.size
+    with pytest.raises(RuntimeError, match="sample_ball hook raised ValueError") as e:
+        pbcs.run(env=DoorRoom(), position=[0, 1], success_region=(DoorRoom.goal, 0.15),
+                 sample_ball=lambda s, r, d: s[:1], config=job, out=tmp_path / "out",
+                 progress=False)
+    assert "a state of 2 finite numbers" in str(e.value.__cause__)
     assert not (tmp_path / "out").exists()
 
 
@@ -290,3 +328,93 @@ def test_an_adapter_used_twice_gives_the_same_phase_1(tmp_path):
     # The env is left where phase 1 ended; the second run must still start from s_0.
     second = pbcs.explore(env=adapter, config=job, seed=1)
     assert (first["tau"] == second["tau"]).all() and first["env_steps"] == second["env_steps"]
+
+
+def pointmaze_job(tmp_path):
+    """The PointMaze grid's job (experiments/pointmaze.toml, method pbcs_pm: the fast preset
+    for momentum), on `pointmaze_umaze`."""
+    text = (ROOT / "experiments" / "pbcs_fast.toml").read_text()
+    for key, value in [("seed", '0\nenv = "pointmaze_umaze"'), ("shorten", "false"),
+                       ("test_path_limit", "0.0"), ("max_steps", "150"), ("epsilon", "0.25"),
+                       ("stop_at_failure", "false")]:
+        text, n = re.subn(rf"(?m)^{key} = [^#\n]*", f"{key} = {value} ", text, count=1)
+        assert n == 1, key
+    path = tmp_path / "pointmaze.toml"
+    path.write_text(text)
+    return path
+
+
+class OurPointMazeTask(gym.Wrapper):
+    """gymnasium-robotics' own PointMaze_UMaze-v3 (continuing_task=False) set to our
+    `pointmaze_umaze` task (src/envs/pointmaze/sim.rs): every reset at rest at the centre of
+    cell (1, 1), the goal the centre of cell (3, 1) (the env's reset of those cells with its
+    noise off), and success (reward 1, the end) within 0.45 of every goal its noisy reset may
+    draw: ‖(|Δx| + 0.25, |Δy| + 0.25)‖ ≤ 0.45. The step is the env's own."""
+
+    NOISE = 0.25
+
+    def __init__(self):
+        robotics = pytest.importorskip("gymnasium_robotics")
+        gym.register_envs(robotics)
+        super().__init__(gym.make("PointMaze_UMaze-v3", continuing_task=False))
+        self.unwrapped.add_xy_position_noise = lambda xy: xy
+        maze = self.unwrapped.maze
+        # The wall cells' centres, for the distance to the nearest wall (PointMap::clearance).
+        self.walls = [maze.cell_rowcol_to_xy(np.array([i, j]))
+                      for i, row in enumerate(maze.maze_map) for j, c in enumerate(row) if c == 1]
+
+    def reset(self, *, seed=None, options=None):
+        cells = {"reset_cell": np.array([1, 1]), "goal_cell": np.array([3, 1])}
+        return self.env.reset(seed=seed, options=cells)
+
+    def step(self, action):
+        obs, _, _, truncated, info = self.env.step(action)
+        d = obs["achieved_goal"] - self.unwrapped.goal
+        won = bool(np.hypot(abs(d[0]) + self.NOISE, abs(d[1]) + self.NOISE) <= 0.45)
+        return obs, float(won), won, truncated, dict(info, success=won)
+
+    def clearance(self, x, y):
+        return min(np.hypot(max(abs(x - cx) - 0.5, 0.0), max(abs(y - cy) - 0.5, 0.0))
+                   for cx, cy in self.walls)
+
+    def sample_ball(self, state, radius, draws):
+        """Our PointMaze's ball start: a point uniform in the disc (r = ε√u, angle uniform),
+        redrawn while it would overlap a wall (16 draws, then the centre); the centre's
+        velocity and warm start. qpos lies at 1, 2 of MuJoCo's state (after the time)."""
+        for _ in range(16):
+            r = radius * math.sqrt(draws.random())
+            phi = math.tau * draws.random()
+            x, y = state[1] + r * math.cos(phi), state[2] + r * math.sin(phi)
+            if self.clearance(x, y) >= 0.1:
+                state[1], state[2] = x, y
+                return state
+        return state
+
+    def ball_is_clear(self, centre, radius):
+        return self.clearance(float(centre[0]), float(centre[1])) >= radius + 0.1
+
+
+@pytest.mark.skipif(not pbcs.MUJOCO, reason="a build without MuJoCo has no PointMaze of ours")
+@pytest.mark.parametrize("seed", [1, 2])
+def test_pbcs_through_the_adapter_on_gymnasium_roboticss_pointmaze_writes_our_pointmazes_bytes(
+        tmp_path, seed):
+    env = OurPointMazeTask()
+    job = pointmaze_job(tmp_path)
+    env.reset(seed=0)
+    sure = 0.45 - OurPointMazeTask.NOISE * math.sqrt(2)
+    gym_run = pbcs.run(env=env, position=slice(0, 2), observation_key="observation",
+                       success_region=(env.unwrapped.goal, sure), sample_ball=env.sample_ball,
+                       ball_is_clear=env.ball_is_clear, observation_names=["x", "y", "vx", "vy"],
+                       recorded_as="pointmaze_umaze", config=job, seed=seed, out=tmp_path / "gym", progress=False)
+    rust_run = pbcs.run(config=job, seed=seed, out=tmp_path / "rust")
+    assert rust_run["env"] == "pointmaze_umaze" and gym_run["solved"] and rust_run["solved"]
+    got, want = folder_bytes(tmp_path / "gym"), folder_bytes(tmp_path / "rust")
+    assert sorted(got) == sorted(want)
+    differ = [k for k in got if got[k] != want[k]]
+    # picture.csv holds the picture's points, which our PointMaze draws with the map in
+    # [0, 5] × [0, 5]: the adapter, which knows no map, writes them unshifted.
+    assert differ == ["picture.csv"], f"files that differ: {differ}"
+    rows = [np.loadtxt(tmp_path / f / "picture.csv", delimiter=",", skiprows=1,
+                       usecols=(1, 2, 3, 4)) for f in ("gym", "rust")]
+    shift = np.array([0.0, 2.5, 2.5, 0.0])
+    assert rows[0].shape == rows[1].shape and np.allclose(rows[0] + shift, rows[1], atol=1e-6)

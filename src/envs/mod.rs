@@ -129,6 +129,11 @@ pub enum EnvName {
     /// gymnasium-robotics' AntMaze on a map of one's own (the job's `[pointmaze]`: the same
     /// rows of 0 and 1, in cells of 4 m), the fixed task as on the four named maps.
     Antmaze,
+    /// A Gymnasium environment of the user's, run from Python through the adapter
+    /// (`pbcs.run(env=...)`, python/pbcs/adapter.py): what the record and the chain's job of
+    /// such a run say. Not in the registry ([`EnvName::all`]): nothing here can build it.
+    #[value(skip)]
+    Gym,
 }
 
 /// An environment made from its name ([`EnvSpec::build`]); [`with_env!`](crate::with_env)
@@ -466,6 +471,13 @@ impl EnvSpec {
             | EnvName::AntmazeMediumGoals
             | EnvName::AntmazeLargeGoals
             | EnvName::Antmaze => Built::AntMaze(ant_maze(self.ant_map()?, self.name)?),
+            EnvName::Gym => {
+                return Err(Error::invalid(
+                    "env",
+                    "`gym` is a Gymnasium environment of one's own, which runs from Python only \
+                     (pbcs.run(env=...); its chain: pbcs.load_chain(path, adapter=...))",
+                ))
+            }
         })
     }
 
