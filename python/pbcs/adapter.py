@@ -23,6 +23,8 @@ What the core sees:
 
 import numpy as np
 
+from . import _pbcs
+
 MAX_POSITION_DIMS = 8
 MAX_OBSERVATION_DIMS = 4096
 MAX_STATE_DIMS = 1 << 20
@@ -184,12 +186,10 @@ class Adapter:
                 )
         self.sample_ball = sample_ball
         if recorded_as is not None:
-            from . import ENV_NAMES
-
-            if recorded_as not in ENV_NAMES:
+            if recorded_as not in _pbcs.ENV_NAMES:
                 raise ValueError(
-                    f"invalid `recorded_as`: one of pbcs.ENV_NAMES {ENV_NAMES}, got "
-                    f"{recorded_as!r}"
+                    f"invalid `recorded_as`: one of pbcs.ENV_NAMES "
+                    f"{tuple(_pbcs.ENV_NAMES)}, got {recorded_as!r}"
                 )
         self.recorded_as = recorded_as
         self._check_restores()
