@@ -79,12 +79,14 @@ class Chain:
         """Starts a new episode: π_0 acts next."""
         self._core.reset()
 
-    def act(self, obs, goal=None):
+    def act(self, obs, goal=None, noise=None):
         """The action (float32, the environment's units) at observation ``obs`` (the
         environment's whole observation: (x, y) in the maze, (x, y, vx, vy) in PointMaze);
         ``goal``, the episode's goal (a goal-conditioned env's ``desired_goal``), needed by a
-        chain whose last skill aims at each episode's own (:attr:`needs_goal`)."""
-        return self._core.act(obs, goal)
+        chain whose last skill aims at each episode's own (:attr:`needs_goal`). With
+        ``noise`` (standard normal draws, one per action component), a SAC chain's stochastic
+        action b ⊙ tanh(μ + σ·noise), as its skills explored in training; greedy otherwise."""
+        return self._core.act(obs, goal, noise)
 
     @property
     def needs_goal(self):

@@ -198,12 +198,15 @@ impl ChainCore {
     /// its activation ball), in the environment's units; `goal`, the episode's goal (a
     /// goal-conditioned env's `desired_goal`), for a chain whose last skill aims at each
     /// episode's own (`phase2.last_goal = "drawn"`), which then needs it.
-    #[pyo3(signature = (obs, goal = None))]
+    /// With `noise` (standard normal draws, one per action component), a SAC chain's
+    /// stochastic action b ⊙ tanh(μ + σ·noise), as its skills explored in training.
+    #[pyo3(signature = (obs, goal = None, noise = None))]
     fn act<'py>(
         &mut self,
         py: Python<'py>,
         obs: &Bound<'py, PyAny>,
         goal: Option<&Bound<'py, PyAny>>,
+        noise: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let (n, m) = self.dims;
         let raw = finite_floats(obs, "obs", n, "the environment's observation")?;
@@ -227,6 +230,14 @@ impl ChainCore {
             (_, false) => None,
         };
         self.active = self.chain.active_skill(self.active, &raw);
+        if let Some(noise) = noise {
+            let eps = finite_floats(noise, "noise", m, "the action's components")?;
+            let a = self
+                .chain
+                .sample_toward(self.active, &raw, goal.as_deref(), &eps, &mut self.ws)
+                .map_err(py_err)?;
+            return Ok(PyArray1::from_slice(py, &a));
+        }
         let (mut o, mut a) = (vec![0.0f32; n], vec![0.0f32; m]);
         self.chain.act_toward(
             self.active,

@@ -122,6 +122,23 @@ def test_a_chain_of_sac_skills_runs_and_loads_like_any_other(tmp_path):
     core = chain.evaluate_in_core(episodes=20, seed=3)
     assert ours["success"].tolist() == core["success"].tolist()
     assert ours["steps"].tolist() == core["steps"].tolist()
+    # Sampled as training explored: with ε = 0 the greedy action, else b ⊙ tanh(μ + σ·ε),
+    # within the bound; ε of the wrong length refused, and a DDPG chain does not sample.
+    obs = np.array([0.5, 0.5], np.float32)
+    chain.reset()
+    greedy = chain.act(obs)
+    assert np.array_equal(chain.act(obs, noise=np.zeros(2, np.float32)), greedy)
+    pushed = chain.act(obs, noise=np.full(2, 3.0, np.float32))
+    assert not np.array_equal(pushed, greedy) and (np.abs(pushed) <= 0.1).all()
+    with pytest.raises(ValueError, match="noise"):
+        chain.act(obs, noise=np.zeros(3, np.float32))
+
+
+def test_a_deterministic_chain_refuses_to_sample(chain_dir):
+    chain = pbcs.load_chain(chain_dir / "chain")
+    chain.reset()
+    with pytest.raises(ValueError, match="only SAC's skills sample"):
+        chain.act(np.array([0.5, 0.5], np.float32), noise=np.zeros(2, np.float32))
 
 
 def test_a_chain_aiming_at_each_episodes_goal_needs_the_goal_to_act(chain_dir, tmp_path):

@@ -204,6 +204,40 @@ pub struct SacPolicy {
     pub bounds: Vec<f32>,
 }
 
+impl SacPolicy {
+    /// The actions b ⊙ tanh(μ + σ·ε) of the stochastic policy π that training explores with
+    /// (`Learner::explore`), σ = exp(clamp(ℓ)), for `n` observations and the given standard
+    /// normal draws `eps` (n × dim(A), row-major).
+    ///
+    /// ```
+    /// use pbcs::learner::sac::SacPolicy;
+    /// use pbcs::nn::{Head, Mlp, Workspace};
+    /// use pbcs::rng::{Seeds, Stream};
+    /// let net = Mlp::new(&[2, 4, 2], Head::Linear, &mut Seeds::new(0).stream(Stream::Init));
+    /// let pi = SacPolicy { net, bounds: vec![0.5] };
+    /// let mut ws = Workspace::with_kernel(pbcs::nn::kernel::Kernel::detect());
+    /// // With ε = 0 the sample is the greedy action b ⊙ tanh(μ).
+    /// let greedy = pbcs::policy::Policy::act(&pi, &[0.3, -0.2], 1, &mut ws).to_vec();
+    /// assert_eq!(pi.sample(&[0.3, -0.2], &[0.0], 1, &mut ws), &greedy[..]);
+    /// assert!(pi.sample(&[0.3, -0.2], &[3.0], 1, &mut ws)[0] > greedy[0]);
+    /// ```
+    pub fn sample<'w>(&self, obs: &[f32], eps: &[f32], n: usize, ws: &'w mut Workspace) -> &'w [f32] {
+        let d = self.bounds.len();
+        assert_eq!(eps.len(), n * d, "one draw per action component");
+        let (lo, hi) = LOG_STD_BOUNDS;
+        self.net.forward(obs, n, ws);
+        let (out, actions) = ws.output_and_buffer();
+        actions.clear();
+        for (row, e) in out.chunks_exact(2 * d).zip(eps.chunks_exact(d)) {
+            for (j, b) in self.bounds.iter().enumerate() {
+                let sigma = row[d + j].clamp(lo, hi).exp();
+                actions.push(b * (row[j] + sigma * e[j]).tanh());
+            }
+        }
+        actions
+    }
+}
+
 impl Policy for SacPolicy {
     fn kind(&self) -> &'static str {
         "sac"

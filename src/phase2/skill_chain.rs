@@ -226,6 +226,49 @@ impl SkillChain {
         skill.inputs.env_action(a, action);
     }
 
+    /// [`SkillChain::act_toward`] with the stochastic policy a SAC skill trained with: b ⊙
+    /// tanh(μ + σ·ε) for the standard normal draws `eps` (one per action component,
+    /// [`crate::learner::sac::SacPolicy::sample`]), in the environment's units. Refused for a
+    /// skill that is not SAC's.
+    pub fn sample_toward(
+        &self,
+        i: usize,
+        raw: &[f32],
+        goal: Option<&[f32]>,
+        eps: &[f32],
+        ws: &mut crate::nn::Workspace,
+    ) -> Result<Vec<f32>> {
+        let skill = &self.skills[i];
+        let Some(pi) = skill
+            .policy
+            .as_any()
+            .downcast_ref::<crate::learner::sac::SacPolicy>()
+        else {
+            return Err(Error::invalid(
+                "noise",
+                format!(
+                    "skill {i} is a {} policy, which is deterministic: only SAC's skills sample",
+                    skill.policy.kind()
+                ),
+            ));
+        };
+        if eps.len() != pi.action_dim() {
+            return Err(Error::invalid(
+                "noise",
+                format!(
+                    "{} draws for {} action components",
+                    eps.len(),
+                    pi.action_dim()
+                ),
+            ));
+        }
+        let (mut obs, mut action) = (Vec::new(), vec![0.0; pi.action_dim()]);
+        skill.inputs.observation_toward(raw, goal, &mut obs);
+        let a = pi.sample(&obs, eps, 1, ws);
+        skill.inputs.env_action(a, &mut action);
+        Ok(action)
+    }
+
     /// `start` for one of this chain's episodes in `env`: given a goal drawn as the
     /// environment's reset draws it ([`crate::env::DrawGoals`]) when a skill aims at each
     /// episode's own ([`SkillChain::needs_goal`]); otherwise as it is, `rng` untouched.

@@ -3,7 +3,13 @@ the chain of a `pbcs run` folder played in gymnasium-robotics' AntMaze_UMaze-v5 
 env, `pbcs.antmaze.make_env`), printing per episode the furthest skill it handed over to, the
 fraction of steps with the torso upside down, and the torso's path length.
 
-    python results/dev/issue79/antmaze/play.py <run folder>/chain [episodes]
+    python results/dev/issue79/antmaze/play.py <run folder>/chain [episodes] [--sample | --random]
+
+With ``--random``, the chain only says which skill would act (its activation balls) while the
+ant takes uniform random actions: how far chance alone hands over. With ``--sample``, a SAC
+chain acts as its skills explored in training, b ⊙ tanh(μ + σ·ε)
+(``Chain.act(..., noise=ε)``, ε standard normal from numpy's generator seeded by the episode),
+instead of greedily.
 """
 import sys
 
@@ -12,16 +18,22 @@ import numpy as np
 import pbcs
 import pbcs.antmaze as am
 
-chain = pbcs.load_chain(sys.argv[1])
-episodes = int(sys.argv[2]) if len(sys.argv) > 2 else 20
+sample, chance = "--sample" in sys.argv, "--random" in sys.argv
+args = [a for a in sys.argv[1:] if a not in ("--sample", "--random")]
+chain = pbcs.load_chain(args[0])
+episodes = int(args[1]) if len(args) > 1 else 20
 env = am.make_env(chain)
 for e in range(episodes):
     obs, _ = env.reset(seed=e)
     chain.reset()
     furthest, flipped, path, success = 0, 0, 0.0, False
     xy = obs["observation"][:2].copy()
+    noise = np.random.default_rng(e)
     for t in range(700):
-        action = chain.act(obs["observation"], obs["desired_goal"])
+        eps = noise.standard_normal(8).astype(np.float32) if sample else None
+        action = chain.act(obs["observation"], obs["desired_goal"], noise=eps)
+        if chance:
+            action = noise.uniform(-1.0, 1.0, 8).astype(np.float32)
         obs, _, terminated, truncated, info = env.step(action)
         furthest = max(furthest, chain.active_skill)
         w, x, y, z = obs["observation"][3:7]
