@@ -297,6 +297,7 @@ pub struct Sac {
     updates: u64,
     s: Scratch,
     kernel: Kernel,
+    /// ε of the last [`Learner::explore`] (scratch).
     explored: Vec<f32>,
 }
 
@@ -379,20 +380,14 @@ impl Learner for Sac {
     }
     /// SAC keeps no exploration state.
     fn begin_episodes(&mut self, _lanes: usize) {}
-    /// b ⊙ tanh(μ + σ·ε), ε drawn from `rng`.
+    /// b ⊙ tanh(μ + σ·ε) ([`SacPolicy::sample`]), ε drawn from `rng`, row by row.
     fn explore(&mut self, obs: &[f32], lanes: &[usize], rng: &mut Rng) -> &[f32] {
-        let d = self.dim();
-        let out = self.actor.net.forward(obs, lanes.len(), &mut self.s.ws_act);
-        let (lo, hi) = LOG_STD_BOUNDS;
+        let draws = lanes.len() * self.dim();
         self.explored.clear();
-        for row in out.chunks_exact(2 * d) {
-            for (j, b) in self.actor.bounds.iter().enumerate() {
-                let e: f32 = StandardNormal.sample(rng);
-                let sigma = row[d + j].clamp(lo, hi).exp();
-                self.explored.push(b * (row[j] + sigma * e).tanh());
-            }
-        }
-        &self.explored
+        self.explored
+            .extend((0..draws).map(|_| -> f32 { StandardNormal.sample(rng) }));
+        self.actor
+            .sample(obs, &self.explored, lanes.len(), &mut self.s.ws_act)
     }
     fn update(&mut self, batch: &Batch) -> Losses {
         Sac::update(self, batch)
