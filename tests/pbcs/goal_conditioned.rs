@@ -9,7 +9,7 @@ use pbcs::learner::her::{GoalTransition, HerConfig, HerReplay};
 use pbcs::learner::replay::Batch;
 use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::kernel::Kernel;
-use pbcs::phase2::goal_conditioned::{goal_minus_position, SubGoals};
+use pbcs::phase2::goal_conditioned::{goal_minus_position, shape_rewards, GoalReward, SubGoals};
 use pbcs::phase2::{ChainStrategy, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 
@@ -70,6 +70,72 @@ fn value_chaining_bootstraps_through_the_next_sub_goal() {
     assert_eq!(y[0], through_g2);
     assert_ne!(y[0], through_g1);
     assert_ne!(y[0], 1.0);
+}
+
+/// The paper's shaped reward on a hand-made HER batch (1-D, position = observation = goal):
+/// a real step from 3.0 to 2.0 toward g_1 = 0.0 is paid Φ(s′) − Φ(s) = 1/2 − 1/3 and a
+/// failure's penalty on top; the value-chained step reaching g_1 is paid 10 (not the jump of
+/// Φ toward g_2, which its next observation sees); a relabelled copy that reaches the goal it
+/// was given is paid 10 too.
+#[test]
+fn shaped_rewards_follow_each_rows_own_goal() {
+    let (g1, g2) = ([0.0f32], [5.0f32]);
+    let her_config = HerConfig {
+        n_sampled_goal: 1,
+        ..HerConfig::default()
+    };
+    let mut her = HerReplay::new(10, 1, 1, 1, her_config);
+    let step = |obs, next, rew, rest, chained| GoalTransition {
+        obs,
+        act: &[1.0],
+        rew,
+        next_obs: next,
+        done: false,
+        desired: &g1,
+        achieved_next: next,
+        rest,
+        chained,
+    };
+    her.push(step(&[3.0], &[2.0], -0.5, -0.5, None));
+    her.push(step(&[0.2], &[0.05], 1.0, 0.0, Some(&g2)));
+    her.end_episode();
+    let reached = |a: &[f32], g: &[f32]| (a[0] - g[0]).abs() <= 0.1;
+    let mut rng = Seeds::new(3).stream(Stream::Replay);
+    let mut batch = Batch::default();
+    let (mut far, mut chained, mut relabelled) = (0, 0, 0);
+    for _ in 0..20 {
+        assert!(her.sample_reaching(8, &mut rng, &reached, &mut batch));
+        let sparse = batch.clone();
+        shape_rewards(&mut batch, 1, 1, 0.1);
+        for k in 0..batch.len {
+            let (s, goal, s2) = (
+                sparse.obs[2 * k],
+                sparse.obs[2 * k + 1],
+                sparse.next_obs[2 * k],
+            );
+            let rew = batch.rew[k];
+            if sparse.rew[k] == 1.0 {
+                assert_eq!(rew, 10.0, "row {k}");
+                if goal == g1[0] && sparse.done[k] == 0.0 {
+                    chained += 1;
+                    assert_eq!(sparse.next_obs[2 * k + 1], g2[0]);
+                } else {
+                    relabelled += 1;
+                }
+            } else {
+                let phi = |x: f32| 1.0 / (x - goal).abs().max(0.1);
+                assert_eq!(rew, sparse.rew[k] + phi(s2) - phi(s), "row {k}");
+                if (s, goal) == (3.0, 0.0) {
+                    far += 1;
+                    assert_eq!(rew, -0.5 + (1.0 / 2.0 - 1.0 / 3.0));
+                }
+            }
+        }
+    }
+    assert!(
+        far > 0 && chained > 0 && relabelled > 0,
+        "{far} {chained} {relabelled}"
+    );
 }
 
 /// The sub-goals of a maze-10 τ: increasing indices ending at τ's end, each at least `spacing`
@@ -177,6 +243,10 @@ fn goal_conditioned_settings_round_trip_and_refuse_by_field() {
             "chain = \"goal_conditioned\"\n[goal_conditioned]\nfailure_reward = 1.0\n",
             "failure_reward",
         ),
+        (
+            "chain = \"goal_conditioned\"\n[goal_conditioned]\nreward = \"dense\"\n",
+            "dense",
+        ),
         ("chain = \"sideways\"\n", "sideways"),
     ] {
         let e = toml::from_str::<pbcs::phase2::Phase2Config>(bad)
@@ -197,19 +267,20 @@ fn the_ablations_switches_are_written_only_when_set() {
         "overshoot",
         "end_on_failure",
         "failure_reward",
+        "reward",
         "updates_per_step",
     ] {
         assert!(!written.contains(key), "{written}");
     }
     let switched = "chain = \"goal_conditioned\"\n[goal_conditioned]\novershoot = false\n\
-                    end_on_failure = false\nupdates_per_step = 2\n";
+                    end_on_failure = false\nupdates_per_step = 2\nreward = \"shaped\"\n";
     let c: pbcs::phase2::Phase2Config = toml::from_str(switched).unwrap();
     let ChainStrategy::GoalConditioned(s) = &c.chain else {
         panic!("{:?}", c.chain)
     };
     assert_eq!(
-        (s.overshoot, s.end_on_failure, s.updates_per_step),
-        (false, false, 2)
+        (s.overshoot, s.end_on_failure, s.updates_per_step, s.reward),
+        (false, false, 2, GoalReward::Shaped)
     );
     let again: pbcs::phase2::Phase2Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
     assert_eq!(again, c);

@@ -30,9 +30,9 @@ mod run;
 pub mod settings;
 
 pub use run::{GoalConditionedRun, GoalConditionedState};
-pub use settings::{ChainName, ChainStrategy, Curriculum, GoalConditioned};
+pub use settings::{ChainName, ChainStrategy, Curriculum, GoalConditioned, GoalReward};
 
-use super::goal::{ball_center, Inputs};
+use super::goal::{ball_center, dist, Inputs, REACHED_REWARD};
 use super::{Ball, LastGoal, Phase2Inputs, Phase2Outcome, Progress, Skill, SkillChain};
 use crate::env::{Env, Goals};
 use crate::error::{Error, Result};
@@ -63,6 +63,52 @@ pub fn goal_minus_position(
                 *g -= x;
             }
         }
+    }
+}
+
+/// Rewrites a HER batch's sparse rewards (1 where the step reached the row's goal, else 0 or a
+/// failure's penalty, which is never positive) into the paper's shaped ones
+/// ([`GoalReward::Shaped`]): [`REACHED_REWARD`] where it reached, else the penalty plus
+/// Φ(s′) − Φ(s), Φ = 1 / max(d(position, g), `radius`), g the goal of the row's observation
+/// (the one the step aimed at: a value-chained row's next goal is the following sub-goal's).
+/// Call it before [`goal_minus_position`], on rows of an observation of `obs_dim` whose first
+/// `goal_dim` numbers are the position, then the goal.
+///
+/// ```
+/// use pbcs::learner::replay::Batch;
+/// use pbcs::phase2::goal_conditioned::shape_rewards;
+/// // One-dimensional position and goal: from 3 to 2 toward the goal 0, then a step reaching it.
+/// let mut batch = Batch {
+///     len: 2,
+///     obs: vec![3.0, 0.0, 0.5, 0.0],
+///     act: vec![0.0, 0.0],
+///     rew: vec![0.0, 1.0],
+///     next_obs: vec![2.0, 0.0, 0.05, 0.0],
+///     done: vec![0.0, 1.0],
+/// };
+/// shape_rewards(&mut batch, 1, 1, 0.1);
+/// assert_eq!(batch.rew, [1.0 / 2.0 - 1.0 / 3.0, 10.0]);
+/// ```
+pub fn shape_rewards(
+    batch: &mut crate::learner::replay::Batch,
+    obs_dim: usize,
+    goal_dim: usize,
+    radius: f32,
+) {
+    let width = obs_dim + goal_dim;
+    let potential = |position: &[f32], goal: &[f32]| 1.0 / dist(position, goal).max(radius);
+    for ((row, next), rew) in batch
+        .obs
+        .chunks(width)
+        .zip(batch.next_obs.chunks(width))
+        .zip(batch.rew.iter_mut())
+    {
+        if *rew == 1.0 {
+            *rew = REACHED_REWARD;
+            continue;
+        }
+        let goal = &row[obs_dim..];
+        *rew += potential(&next[..goal_dim], goal) - potential(&row[..goal_dim], goal);
     }
 }
 
@@ -124,12 +170,12 @@ impl SubGoals {
         let mut at: Vec<usize> = Vec::new();
         for i in 1..n {
             let last = at.last().map_or(0, |&k| k);
-            if super::goal::dist(&achieved[i], &achieved[last]) >= spacing {
+            if dist(&achieved[i], &achieved[last]) >= spacing {
                 at.push(i);
             }
         }
         if let Some(&k) = at.last() {
-            if super::goal::dist(&achieved[k], &achieved[n]) < spacing / 2.0 {
+            if dist(&achieved[k], &achieved[n]) < spacing / 2.0 {
                 at.pop();
             }
         }

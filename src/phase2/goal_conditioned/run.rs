@@ -12,7 +12,7 @@
 //! session's end or a cluster job's limit.
 
 use super::curriculum::Starts;
-use super::settings::{Curriculum, GoalConditioned};
+use super::settings::{Curriculum, GoalConditioned, GoalReward};
 use super::SubGoals;
 use crate::env::{Env, Goals};
 use crate::error::{Error, Result};
@@ -500,6 +500,9 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
                 return;
             }
             let (o, g) = (self.inputs.env.obs_dim(), self.goals.goal_dim());
+            if self.settings.reward == GoalReward::Shaped {
+                super::shape_rewards(&mut p.batch, o, g, radius);
+            }
             super::goal_minus_position(&mut p.batch, o, g);
             self.learner.update(&p.batch);
         }

@@ -51,6 +51,27 @@ pub enum Curriculum {
     Backplay,
 }
 
+/// The reward a goal-conditioned learner is trained on (`phase2.goal_conditioned.reward`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalReward {
+    /// DCIL-II's: 1 where a step reaches its goal, else 0 (and a failure's penalty).
+    #[default]
+    Sparse,
+    /// The paper's Algorithm 3 (its Equations 1–2) toward the transition's own goal g (the
+    /// sub-goal it aimed at, or the one HER gave it): 10 where the step reaches g, else
+    /// Φ(s′) − Φ(s) with Φ(s) = 1 / max(d(position, g), radius) (and a failure's penalty).
+    Shaped,
+}
+
+impl GoalReward {
+    /// The default, left out of written files (those written before it existed keep their
+    /// bytes).
+    pub fn is_sparse(&self) -> bool {
+        *self == GoalReward::Sparse
+    }
+}
+
 /// The goal-conditioned chain's settings (`[phase2.goal_conditioned]`). Distances are in the
 /// units of the environment's goal space (the maze's cells are 1 wide; PointMaze's and
 /// AntMaze's in metres).
@@ -86,6 +107,9 @@ pub struct GoalConditioned {
     /// terminal is worth nothing, as DCIL-II's; below 0, a penalty its relabelled copies keep).
     #[serde(skip_serializing_if = "is_zero")]
     pub failure_reward: f32,
+    /// The reward the learner is trained on: sparse (DCIL-II's) or the paper's shaped one.
+    #[serde(skip_serializing_if = "GoalReward::is_sparse")]
+    pub reward: GoalReward,
     /// Updates of the learner per training step, once `learning_starts` have passed.
     #[serde(skip_serializing_if = "is_one")]
     pub updates_per_step: usize,
@@ -113,6 +137,7 @@ impl Default for GoalConditioned {
             overshoot: true,
             end_on_failure: true,
             failure_reward: 0.0,
+            reward: GoalReward::Sparse,
             updates_per_step: 1,
             learning_starts: 1_000,
             test_every: 5_000,
