@@ -298,6 +298,13 @@ fn invalid_hyper_parameters_are_rejected_with_the_field() {
         ),
         (
             Td3Config {
+                action_l2: -1.0,
+                ..Default::default()
+            },
+            "learner.action_l2",
+        ),
+        (
+            Td3Config {
                 actor_update: ActorUpdate::Argmax,
                 argmax_samples: 0,
                 ..Default::default()
@@ -496,4 +503,68 @@ fn a_run_stops_at_its_first_solving_evaluation() {
         let err = Check::check(&schedule(bad)).unwrap_err().to_string();
         assert!(err.contains("train.stop_at_successes"), "{err}");
     }
+}
+
+/// The action penalty (`learner.action_l2`, λ): the actor's loss is Q's plus
+/// λ · mean (π(s)_i / b_i)² exactly (the critic's step is the same with or without it, so the
+/// two losses differ by the penalty at the π(s) the update saw), it is not written at 0, and
+/// many updates with it keep π(s) nearer 0 than without.
+#[test]
+fn the_action_penalty_adds_its_known_value_and_pulls_actions_in() {
+    let bounds = [0.5f32, 2.0];
+    let n = 16;
+    let obs: Vec<f32> = (0..n * 3)
+        .map(|i| ((i * 7919) % 97) as f32 / 97.0 - 0.5)
+        .collect();
+    let batch = Batch {
+        len: n,
+        obs: obs.clone(),
+        act: (0..n * 2)
+            .map(|i| ((i * 31) % 11) as f32 / 11.0 - 0.5)
+            .collect(),
+        rew: (0..n).map(|i| (i % 3) as f32).collect(),
+        next_obs: obs.iter().map(|x| x * 0.9).collect(),
+        done: vec![0.0; n],
+    };
+    let learner = |lambda: f32| {
+        let cfg = Td3Config {
+            action_l2: lambda,
+            ..Td3Config::ddpg()
+        };
+        Td3::new(
+            &cfg,
+            3,
+            &bounds,
+            &Seeds::new(4),
+            pbcs::nn::kernel::Kernel::detect(),
+        )
+        .unwrap()
+    };
+    let (mut plain, mut penalised) = (learner(0.0), learner(0.5));
+    let pi = plain.act(&batch.obs, n).to_vec();
+    let penalty: f32 = pi
+        .chunks(2)
+        .flat_map(|row| row.iter().zip(&bounds).map(|(p, b)| (p / b) * (p / b)))
+        .sum::<f32>()
+        / (2 * n) as f32;
+    let a = plain.update(&batch).actor.unwrap();
+    let b = penalised.update(&batch).actor.unwrap();
+    assert!(
+        (b - a - 0.5 * penalty).abs() <= 1e-5 * (1.0 + a.abs()),
+        "{a} {b} {penalty}"
+    );
+    assert!(penalty > 0.0);
+    for _ in 0..300 {
+        plain.update(&batch);
+        penalised.update(&batch);
+    }
+    let size = |l: &mut Td3| -> f32 {
+        l.act(&batch.obs, n)
+            .chunks(2)
+            .flat_map(|row| row.iter().zip(&bounds).map(|(p, b)| (p / b).abs()))
+            .sum()
+    };
+    assert!(size(&mut penalised) < size(&mut plain));
+    let written = toml::to_string(&Td3Config::td3()).unwrap();
+    assert!(!written.contains("action_l2"), "{written}");
 }

@@ -114,6 +114,16 @@ pub struct Td3Config {
     pub noise_sigma: f32,
     /// θ of the Ornstein–Uhlenbeck process.
     pub noise_theta: f32,
+    /// λ of a penalty on the actor's actions: λ · mean over the batch and the action's
+    /// components of (π(s)_i / b_i)², added to the actor's loss (OpenAI baselines' DDPG+HER,
+    /// `action_l2 = 1`). It keeps π(s) off the bounds, where the tanh head saturates and the
+    /// actor's gradient vanishes. 0 (the default, not written): none.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub action_l2: f32,
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 impl Default for Td3Config {
@@ -136,6 +146,7 @@ impl Default for Td3Config {
             noise: NoiseKind::Gaussian,
             noise_sigma: 0.1,
             noise_theta: 0.15,
+            action_l2: 0.0,
         }
     }
 }
@@ -204,6 +215,7 @@ impl Check for Td3Config {
             ("learner.target_noise_clip", clip),
             ("learner.noise_sigma", self.noise_sigma),
             ("learner.noise_theta", self.noise_theta),
+            ("learner.action_l2", self.action_l2),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::invalid(field, format!("must be ≥ 0, got {v}")));

@@ -77,11 +77,22 @@ impl Td3 {
         s.pi.extend_from_slice(self.actor.forward(&b.obs, n, &mut s.ws_actor));
         s.da.clear();
         s.da.resize(n * a, 0.0);
-        let actor_loss = match self.config.actor_update {
+        let mut actor_loss = match self.config.actor_update {
             ActorUpdate::Gradient => self.q_ascent_gradient(b),
             ActorUpdate::Argmax => self.argmax_gradient(b),
         };
         let s = &mut self.s;
+        let lambda = self.config.action_l2;
+        if lambda > 0.0 {
+            // + λ · mean (π_i / b_i)², whose gradient at π_i is 2λ π_i / (b_i² · n · a).
+            let m = (n * a) as f32;
+            for (row, da) in s.pi.chunks_exact(a).zip(s.da.chunks_exact_mut(a)) {
+                for ((p, d), b) in row.iter().zip(da.iter_mut()).zip(&self.bounds) {
+                    actor_loss += lambda * (p / b) * (p / b) / m;
+                    *d += 2.0 * lambda * p / (b * b * m);
+                }
+            }
+        }
         s.grad_actor.resize(self.actor.params.len(), 0.0);
         self.actor
             .backward(&mut s.ws_actor, &s.da, Some(&mut s.grad_actor), None);
