@@ -22,6 +22,12 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;
 
+/// An unset number (a penalty, a scale whose 0 turns it off), left out of written files so
+/// that files written before its setting existed keep their bytes.
+pub fn is_zero(x: &f32) -> bool {
+    *x == 0.0
+}
+
 /// A validated configuration.
 pub trait Check {
     /// Ok if every field is in range; otherwise an [`Error::Invalid`] naming the field.

@@ -75,6 +75,14 @@ fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
             exp.seed_count >= 10,
             "{name}: the claims need 10 seeds per cell"
         );
+        let raw = read_raw(&exp, Path::new("results")).unwrap();
+        if exp.in_progress && raw.is_empty() {
+            // Registered before its first row: `pbcs aggregate` writes no table for it, and
+            // none may be committed.
+            let path = table_path(Path::new("results"), name.parse().unwrap());
+            assert!(!path.exists(), "{name}: a table without a raw row");
+            continue;
+        }
         let committed = table(name);
         if exp.in_progress {
             // Rows committed as runs finish: the cells and seeds with rows so far, and not yet
@@ -103,7 +111,7 @@ fn committed_tables_hold_every_cell_with_ten_seeds_and_match_the_raw_rows() {
             );
         }
         // The committed table is what the committed raw rows give (recomputed without polars).
-        let plain = cell_stats(&exp, &read_raw(&exp, Path::new("results")).unwrap());
+        let plain = cell_stats(&exp, &raw);
         assert_eq!(plain.len(), committed.len());
         for (p, c) in plain.iter().zip(&committed) {
             assert_eq!((&p.cell, p.n, p.successes), (&c.cell, c.n, c.successes));

@@ -118,12 +118,8 @@ pub struct Td3Config {
     /// components of (π(s)_i / b_i)², added to the actor's loss (OpenAI baselines' DDPG+HER,
     /// `action_l2 = 1`). It keeps π(s) off the bounds, where the tanh head saturates and the
     /// actor's gradient vanishes. 0 (the default, not written): none.
-    #[serde(skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "crate::validate::is_zero")]
     pub action_l2: f32,
-}
-
-fn is_zero(x: &f32) -> bool {
-    *x == 0.0
 }
 
 impl Default for Td3Config {

@@ -46,7 +46,7 @@ pub struct FlatPhase2 {
     pub start: StartMode,
     /// λ of [`super::goal::BallMetric::PositionVelocity`] (0: balls in position, the
     /// default, not written).
-    #[serde(skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "crate::validate::is_zero")]
     pub velocity_scale: f32,
     /// The step of [`super::KWalk`] (its first step when adaptive).
     pub k_step: usize,
@@ -115,11 +115,6 @@ impl Default for FlatPhase2 {
     fn default() -> Self {
         Phase2Config::default().into()
     }
-}
-
-/// An unset λ (`phase2.velocity_scale`), left out of written files.
-fn is_zero(x: &f32) -> bool {
-    *x == 0.0
 }
 
 /// An unset `phase2.patience`, `phase2.lookahead` or `phase2.test_lanes`, left out of written files (those written

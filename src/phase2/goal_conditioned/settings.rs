@@ -105,7 +105,7 @@ pub struct GoalConditioned {
     pub end_on_failure: bool,
     /// The reward of a training step where the body fails (with `end_on_failure`; 0: the
     /// terminal is worth nothing, as DCIL-II's; below 0, a penalty its relabelled copies keep).
-    #[serde(skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "crate::validate::is_zero")]
     pub failure_reward: f32,
     /// The reward the learner is trained on: sparse (DCIL-II's) or the paper's shaped one.
     #[serde(skip_serializing_if = "GoalReward::is_sparse")]
@@ -218,10 +218,6 @@ impl Check for GoalConditioned {
 
 fn is_true(b: &bool) -> bool {
     *b
-}
-
-fn is_zero(x: &f32) -> bool {
-    *x == 0.0
 }
 
 fn is_one(n: &usize) -> bool {
