@@ -1,5 +1,6 @@
 //! The report's AntMaze section: `antmaze_probes.tex`, `antmaze_handover.tex`,
-//! `antmaze_reach.tex` and the numbers `\res{antmaze:…}`, read from the committed development
+//! `antmaze_reach.tex` (and the goal-conditioned chain's `antmaze_gc.tex`,
+//! [`super::antmaze_gc`]) and the numbers `\res{antmaze:…}`, read from the committed development
 //! files of PBCS on gymnasium-robotics' AntMaze (`<results>/dev/issue49/`, described by its
 //! README). None of those runs is a registered grid; the section says so, and every number it
 //! quotes comes from these files.
@@ -248,7 +249,11 @@ pub fn render(results: &Path, tex_dir: &Path, files: &mut Vec<PathBuf>) -> Resul
         ("antmaze_handover.tex", handover_table(&mut numbers, &dev)?),
         ("antmaze_probes.tex", probes_table(&mut numbers, &dev)?),
         ("antmaze_reach.tex", reach_table(&mut numbers, &dev)?),
-    ] {
+    ]
+    .into_iter()
+    .chain(
+        super::antmaze_gc::gc_table(&mut numbers, results)?.map(|table| ("antmaze_gc.tex", table)),
+    ) {
         let path = tex_dir.join(name);
         crate::record::write_atomic(&path, |w| w.write_all(table.as_bytes()))?;
         files.push(path);

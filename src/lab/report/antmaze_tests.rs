@@ -76,7 +76,7 @@ fn the_committed_files_give_the_sections_numbers() {
     let tex = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
     let numbers = render(&results, tex.path(), &mut files).unwrap();
-    assert_eq!(files.len(), 3);
+    assert_eq!(files.len(), 4);
     // Known values of the committed files (their READMEs' tables).
     for (key, value) in [
         ("phase1:solved", "60"),

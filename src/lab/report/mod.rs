@@ -8,6 +8,7 @@ use crate::tables::CellStats;
 use std::fmt::Write as _;
 
 pub mod antmaze;
+pub mod antmaze_gc;
 mod latex;
 pub mod outside;
 pub mod settings;
