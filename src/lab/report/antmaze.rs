@@ -230,7 +230,8 @@ fn one_record<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
     crate::record::read_one_record(path)
 }
 
-fn percent(x: f64) -> String {
+/// A share as a whole percentage (0.67 → `67`).
+pub(super) fn percent(x: f64) -> String {
     format!("{:.0}", 100.0 * x)
 }
 

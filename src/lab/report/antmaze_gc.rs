@@ -8,6 +8,7 @@
 //! of tries that reached their next sub-goal, every greedy test's), and where the arm's chain
 //! was evaluated, `eval-s100.csv` (`pbcs eval`'s episodes).
 
+use super::antmaze::percent;
 use super::{def_res, tex, GENERATED};
 use crate::fmt::human_steps;
 use crate::phase2::{EventKind, TraceRow};
@@ -134,10 +135,6 @@ fn read_arm(dir: &Path) -> Result<Arm> {
         tests: tests.len(),
         chain,
     })
-}
-
-fn percent(x: f64) -> String {
-    format!("{:.0}", 100.0 * x)
 }
 
 /// `antmaze_gc.tex` and per arm `\res{antmaze:gc:<arm>:…}`: `steps`, `first` and `last` (%),
