@@ -4,7 +4,8 @@ ReLU layers, a tanh head scaled by `head.tanh_scale`) played greedily in gymnasi
 AntMaze_UMaze-v5 from its resets to PBCS's cells (start (1, 1), goal (3, 1)), toward the
 chain's sub-goals in turn (the next once the torso is within its radius), printing per
 episode the share of action components with |a| > 0.95 of the bound, the mean |a| over the
-bound, the share of steps upside down, the torso's path and the sub-goals reached.
+bound, the share of steps upside down, the torso's path and the sub-goals reached. A chain
+trained with `normalise` is given its observations shifted and scaled as its manifest says.
 
     python results/dev/issue79/antmaze/saturation.py <run folder>/chain [episodes]
 """
@@ -23,6 +24,12 @@ chain = sys.argv[1]; episodes = int(sys.argv[2]) if len(sys.argv) > 2 else 10
 m = tomllib.load(open(f'{chain}/manifest.toml', 'rb'))
 w = load(f"{chain}/{m['skills'][0]['file']}")
 goals = [s['goal'] for s in m['skills'] if s.get('goal')]
+# The observation as the networks see it: minus `origin`, divided by `scale` and clipped to ±10
+# where the chain was trained with `normalise` (Inputs::observation).
+origin = np.array(m['skills'][0]['origin'], dtype=np.float32)
+scale = m['skills'][0].get('scale')
+def seen(x):
+    return x - origin if scale is None else np.clip((x - origin) / np.array(scale, dtype=np.float32), -10, 10)
 def act(x):
     h = np.maximum(x @ w['l0.weight'] + w['l0.bias'], 0)
     h = np.maximum(h @ w['l1.weight'] + w['l1.bias'], 0)
@@ -37,7 +44,7 @@ for e in range(episodes):
     for t in range(700):
         x = np.concatenate([d.qpos, d.qvel]).astype(np.float32)
         g = np.array(goals[min(aim, len(goals) - 1)], dtype=np.float32) if aim < len(goals) else obs['desired_goal']
-        a = act(np.concatenate([x, g - x[:2]]))
+        a = act(np.concatenate([seen(x), g - x[:2]]).astype(np.float32))
         sat.append(np.mean(np.abs(a) > 0.95 * w['head.tanh_scale']))
         size.append(np.mean(np.abs(a) / w['head.tanh_scale']))
         obs, _, term, trunc, info = env.step(a)
