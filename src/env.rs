@@ -240,6 +240,13 @@ pub trait DrawGoals<S>: Goals<S> {
 pub trait DrawStarts<S> {
     /// A start drawn from the reset's law, with the task (an episode's goal) of `like`.
     fn drawn_start(&self, like: &S, rng: &mut crate::rng::Rng) -> S;
+
+    /// The body at rest as a reset leaves it, where `like` stands (its position and task):
+    /// `phase2.goal_conditioned.rest_starts`. `None` (the default) where the environment has
+    /// no such state.
+    fn at_rest_like(&self, _like: &S) -> Option<S> {
+        None
+    }
 }
 
 /// A capability: a short sequence of actions that takes `from` to (within rounding of) `to`

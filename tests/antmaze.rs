@@ -237,6 +237,22 @@ fn ball_starts_move_the_body_clear_of_the_walls() {
     }
 }
 
+/// The body at rest where a state stands (`rest_starts`): the reset's pose and zero velocity
+/// and warm start, at the state's (x, y) and toward its goal; the same state as a reset at
+/// that position leaves.
+#[test]
+fn a_state_at_rest_keeps_the_position_and_the_task_alone() {
+    let env = AntMaze::named(MapName::UMaze).unwrap();
+    let mut rng = Seeds::new(4).stream(Stream::Start);
+    let s = random_state(&env, &mut rng);
+    let rest = env.drawn_starts().unwrap().at_rest_like(&s).unwrap();
+    assert_eq!(rest, env.at_rest(s.xy(), s.goal));
+    assert_eq!((&rest.qpos[..2], rest.goal), (&s.qpos[..2], s.goal));
+    assert_eq!((rest.qvel, rest.warmstart), ([0.0; NV], [0.0; NV]));
+    assert_eq!(&rest.qpos[2..], &env.start().qpos[2..]);
+    assert_ne!(rest.qpos, s.qpos);
+}
+
 /// PBCS runs on the fixed task through the registry: phase 1 finds the goal cell (τ ends within
 /// 0.45 of its centre, no state of τ upside down), phase 2 runs Backplay from the archive's
 /// states until its budget, and the run writes its record.

@@ -303,6 +303,12 @@ pub struct Inputs {
     /// Absent in a manifest: empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub goal: Vec<f32>,
+    /// Divides each observation number once `origin` is subtracted, the result clipped to
+    /// ±[`Inputs::CLIP`] (a goal-conditioned chain's observation normalisation,
+    /// `phase2.goal_conditioned.normalise`): empty for observations seen unscaled (every
+    /// chain's before it). Absent in a manifest: empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub scale: Vec<f32>,
 }
 
 impl Inputs {
@@ -313,6 +319,53 @@ impl Inputs {
             action_scale,
             episode_goal: false,
             goal: Vec::new(),
+            scale: Vec::new(),
+        }
+    }
+
+    /// Where a scaled observation number is clipped ([`Inputs::scale`]), as Stable-Baselines3's
+    /// `VecNormalize` clips its normalised observations (`clip_obs = 10`).
+    pub const CLIP: f32 = 10.0;
+
+    /// These inputs seeing each observation number x as (x − `shift`) / `scale` clipped to
+    /// ±[`Inputs::CLIP`] (`shift` replaces the origin).
+    ///
+    /// ```
+    /// use pbcs::phase2::goal::Inputs;
+    /// let inputs = Inputs::toward_goal(2, vec![3.0, 1.0], false, vec![0.1, 0.1])
+    ///     .scaled(vec![1.0, 1.0], vec![2.0, 0.1]);
+    /// let mut seen = Vec::new();
+    /// inputs.observation_toward(&[2.0, 3.0], None, &mut seen);
+    /// // (2 − 1) / 2 and (3 − 1) / 0.1 = 20, clipped; the sub-goal minus the raw position.
+    /// assert_eq!(seen, [0.5, 10.0, 1.0, -2.0]);
+    /// ```
+    pub fn scaled(self, shift: Vec<f32>, scale: Vec<f32>) -> Self {
+        Inputs {
+            origin: shift,
+            scale,
+            ..self
+        }
+    }
+
+    /// [`Inputs::observation`] in place on the first [`Inputs::origin`]`.len()` numbers of
+    /// each row of `rows` (rows of `width` numbers): what a batch of raw observations becomes.
+    pub fn observe_rows(&self, rows: &mut [f32], width: usize) {
+        for row in rows.chunks_mut(width) {
+            let seen = &mut row[..self.origin.len()];
+            for (i, x) in seen.iter_mut().enumerate() {
+                *x = self.seen(i, *x);
+            }
+        }
+    }
+
+    /// Observation number `i` as the networks see it: x − origin_i, scaled where
+    /// [`Inputs::scale`] is given.
+    #[inline]
+    fn seen(&self, i: usize, x: f32) -> f32 {
+        let moved = x - self.origin[i];
+        match self.scale.get(i) {
+            Some(s) => (moved / s).clamp(-Inputs::CLIP, Inputs::CLIP),
+            None => moved,
         }
     }
 
@@ -382,9 +435,15 @@ impl Inputs {
     }
 
     /// Writes the network's view of the environment observation `raw` into `out`:
-    /// `raw − origin`.
+    /// `raw − origin` (divided by [`Inputs::scale`] and clipped, where it is given).
     #[inline]
     pub fn observation(&self, raw: &[f32], out: &mut [f32]) {
+        if !self.scale.is_empty() {
+            for (i, (o, r)) in out.iter_mut().zip(raw).enumerate().take(self.origin.len()) {
+                *o = self.seen(i, *r);
+            }
+            return;
+        }
         for ((o, r), c) in out.iter_mut().zip(raw).zip(&self.origin) {
             *o = r - c;
         }

@@ -72,6 +72,9 @@ pub(crate) struct ManifestSkill {
     /// [`Inputs::goal`] (absent: empty, a skill that sees the observation alone).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     goal: Vec<f32>,
+    /// [`Inputs::scale`] (absent: empty, observations seen unscaled).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    scale: Vec<f32>,
 }
 
 fn mlp_kind() -> String {
@@ -144,6 +147,7 @@ impl SkillChain {
                 action_scale: skill.inputs.action_scale.clone(),
                 episode_goal: skill.inputs.episode_goal,
                 goal: skill.inputs.goal.clone(),
+                scale: skill.inputs.scale.clone(),
             });
         }
         let text = crate::validate::to_toml(&manifest, &dir.join("manifest.toml"))?;
@@ -252,6 +256,7 @@ impl ManifestSkill {
             inputs: Inputs {
                 episode_goal: self.episode_goal,
                 goal: self.goal,
+                scale: self.scale,
                 ..Inputs::new(self.origin, self.action_scale)
             },
         }
@@ -491,10 +496,12 @@ impl ManifestSkill {
         let output = crate::learner::policy_action_dim(&self.policy, &self.sizes)
             .unwrap_or(self.sizes[self.sizes.len() - 1]);
         let bounds = (!self.action_bounds.is_empty()).then_some(&self.action_bounds);
+        let scale = (!self.scale.is_empty()).then_some(&self.scale);
         self.check_center(input)?;
         for (field, values, want, positive) in [
             ("center", Some(&self.center), self.center.len(), false),
             ("origin", Some(&self.origin), input, false),
+            ("scale", scale, self.origin.len(), true),
             ("action_scale", Some(&self.action_scale), output, true),
             ("action_bounds", bounds, output, true),
         ] {

@@ -9,7 +9,9 @@ use pbcs::learner::her::{GoalTransition, HerConfig, HerReplay};
 use pbcs::learner::replay::Batch;
 use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::kernel::Kernel;
-use pbcs::phase2::goal_conditioned::{goal_minus_position, shape_rewards, GoalReward, SubGoals};
+use pbcs::phase2::goal_conditioned::{
+    goal_minus_position, shape_rewards, GoalReward, SubGoals, MIN_SCALE,
+};
 use pbcs::phase2::{ChainStrategy, SkillChain};
 use pbcs::rng::{Seeds, Stream};
 
@@ -268,6 +270,8 @@ fn the_ablations_switches_are_written_only_when_set() {
         "end_on_failure",
         "failure_reward",
         "reward",
+        "normalise",
+        "rest_starts",
         "updates_per_step",
     ] {
         assert!(!written.contains(key), "{written}");
@@ -342,6 +346,68 @@ fn the_goal_conditioned_chain_solves_maze_2_to_the_same_bytes() {
             .count();
         assert!(wins >= 19, "seed {seed}: {wins} of 20");
     }
+}
+
+/// With `normalise`, the saved chain's skills see the observation shifted and scaled as
+/// training saw it (one μ and σ for all, σ at least `MIN_SCALE`, μ τ's mean, not the origin
+/// 0), and the chain loaded back succeeds where the record says the evaluated one did.
+#[test]
+fn a_normalised_chain_saves_its_view_and_acts_as_evaluated() {
+    let mut job = maze_job(2, 0);
+    let ChainStrategy::GoalConditioned(s) = &mut job.phase2.chain else {
+        unreachable!()
+    };
+    s.normalise = true;
+    let job = pbcs::validate::Check::valid(job).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (record, _) = pbcs::runs::run_pbcs(
+        &job,
+        Kernel::detect(),
+        dir.path(),
+        &|_, _| Ok(()),
+        |_, _| {},
+    )
+    .unwrap();
+    let manifest = std::fs::read_to_string(dir.path().join("chain/manifest.toml")).unwrap();
+    assert!(manifest.contains("scale = ["), "{manifest}");
+    let chain = SkillChain::load(&dir.path().join("chain"), Kernel::detect()).unwrap();
+    let maze = Maze::new(&job.maze).unwrap();
+    let first = &chain.skills[0].inputs;
+    assert_eq!(first.scale.len(), maze.obs_dim());
+    assert!(first.scale.iter().all(|&s| s >= MIN_SCALE), "{first:?}");
+    assert!(first.origin.iter().any(|&m| m != 0.0), "{first:?}");
+    for skill in &chain.skills {
+        assert_eq!(
+            (&skill.inputs.origin, &skill.inputs.scale),
+            (&first.origin, &first.scale)
+        );
+    }
+    let n = 20;
+    let starts =
+        pbcs::env::evaluation_starts(&maze, job.phase2.epsilon, n, &Seeds::new(0)).unwrap();
+    let wins = starts
+        .into_iter()
+        .filter(|s| chain.run(&maze, *s, job.phase2.eval_max_steps).success)
+        .count();
+    assert!(record.solved, "{record:?}");
+    assert!(wins >= 19, "{wins} of {n}");
+}
+
+/// `rest_starts` on an environment without a state at rest (the maze) is refused before any
+/// work, naming the setting.
+#[test]
+fn rest_starts_without_a_state_at_rest_are_refused() {
+    let mut job = maze_job(2, 0);
+    let ChainStrategy::GoalConditioned(s) = &mut job.phase2.chain else {
+        unreachable!()
+    };
+    s.rest_starts = true;
+    let maze = Maze::new(&job.maze).unwrap();
+    let e = job.phase2.ready(&maze).expect_err("refused").to_string();
+    assert!(
+        e.contains("rest_starts") && e.contains("at_rest_like"),
+        "{e}"
+    );
 }
 
 /// An environment without goals (the plane of these tests) is refused before any work,

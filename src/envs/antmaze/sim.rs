@@ -393,6 +393,11 @@ impl DrawStarts<AntState> for AntMaze {
     fn drawn_start(&self, like: &AntState, rng: &mut crate::rng::Rng) -> AntState {
         self.at_rest(noisy(self.start, rng), like.goal)
     }
+
+    /// `ant.xml`'s pose at rest with the torso moved to `like`'s (x, y) ([`AntMaze::at_rest`]).
+    fn at_rest_like(&self, like: &AntState) -> Option<AntState> {
+        Some(self.at_rest(like.xy(), like.goal))
+    }
 }
 
 /// The goal cell's centre moved as the env's reset moves it ([`noisy`]), whatever this

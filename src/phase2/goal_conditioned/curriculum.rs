@@ -2,6 +2,8 @@
 //! each start's last tries, the draw it weights, and Backplay's frontier.
 
 use super::settings::{Curriculum, GoalConditioned};
+use crate::env::Env;
+use crate::phase2::{FirstStarts, Phase2Inputs};
 use crate::rng::Rng;
 use rand::Rng as _;
 use serde::{Deserialize, Serialize};
@@ -85,6 +87,34 @@ impl Starts {
         {
             self.frontier -= 1;
         }
+    }
+}
+
+/// The state a training episode from start `j` begins in, τ's state `at` there: at j = 0 with
+/// `phase2.first_starts = "drawn"`, the environment's own draw; otherwise `at` (with
+/// `rest_starts` at j ≥ 1, the body at rest where `at` stands) moved in B_ε where the
+/// environment can.
+pub(super) fn start_state<E: Env>(
+    inputs: &Phase2Inputs<'_, E>,
+    settings: &GoalConditioned,
+    j: usize,
+    at: &E::State,
+    rng: &mut Rng,
+) -> E::State {
+    let (env, config) = (inputs.env, inputs.config());
+    let rest = (settings.rest_starts && j > 0)
+        .then(|| env.drawn_starts().and_then(|d| d.at_rest_like(at)))
+        .flatten();
+    let at = rest.as_ref().unwrap_or(at);
+    match (
+        j,
+        config.first_starts,
+        env.drawn_starts(),
+        env.ball_starts(),
+    ) {
+        (0, FirstStarts::Drawn, Some(d), _) => d.drawn_start(at, rng),
+        (_, _, _, Some(ball)) => ball.sample_ball(at, config.epsilon, rng),
+        _ => at.clone(),
     }
 }
 

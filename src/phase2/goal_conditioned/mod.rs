@@ -95,8 +95,50 @@ pub fn shape_rewards(
     goal_dim: usize,
     radius: f32,
 ) {
-    let width = obs_dim + goal_dim;
     let potential = |position: &[f32], goal: &[f32]| 1.0 / dist(position, goal).max(radius);
+    add_potential(batch, obs_dim, goal_dim, REACHED_REWARD, potential);
+}
+
+/// Rewrites a HER batch's sparse rewards as [`shape_rewards`] does, with the linear potential
+/// Φ = −d(position, g) ([`GoalReward::Progress`]): where the step did not reach its row's goal,
+/// the metres it came closer to it (negative where it went away), plus the penalty; where it
+/// reached, 1 as before.
+///
+/// ```
+/// use pbcs::learner::replay::Batch;
+/// use pbcs::phase2::goal_conditioned::progress_rewards;
+/// // From 3 to 2 toward the goal 0, from 1 back to 1.5, then a step reaching it.
+/// let mut batch = Batch {
+///     len: 3,
+///     obs: vec![3.0, 0.0, 1.0, 0.0, 0.5, 0.0],
+///     act: vec![0.0; 3],
+///     rew: vec![0.0, 0.0, 1.0],
+///     next_obs: vec![2.0, 0.0, 1.5, 0.0, 0.05, 0.0],
+///     done: vec![0.0, 0.0, 1.0],
+/// };
+/// progress_rewards(&mut batch, 1, 1);
+/// assert_eq!(batch.rew, [1.0, -0.5, 1.0]);
+/// ```
+pub fn progress_rewards(
+    batch: &mut crate::learner::replay::Batch,
+    obs_dim: usize,
+    goal_dim: usize,
+) {
+    add_potential(batch, obs_dim, goal_dim, 1.0, |position, goal| {
+        -dist(position, goal)
+    });
+}
+
+/// Each row's reward: `reached` where the sparse one is 1, else it plus Φ(s′) − Φ(s), Φ the
+/// `potential` of the position (the first `goal_dim` numbers) toward the row's goal.
+fn add_potential(
+    batch: &mut crate::learner::replay::Batch,
+    obs_dim: usize,
+    goal_dim: usize,
+    reached: f32,
+    potential: impl Fn(&[f32], &[f32]) -> f32,
+) {
+    let width = obs_dim + goal_dim;
     for ((row, next), rew) in batch
         .obs
         .chunks(width)
@@ -104,12 +146,42 @@ pub fn shape_rewards(
         .zip(batch.rew.iter_mut())
     {
         if *rew == 1.0 {
-            *rew = REACHED_REWARD;
+            *rew = reached;
             continue;
         }
         let goal = &row[obs_dim..];
         *rew += potential(&next[..goal_dim], goal) - potential(&row[..goal_dim], goal);
     }
+}
+
+/// The least σ of `phase2.goal_conditioned.normalise`: an observation number nearly constant
+/// along τ is divided by this, not by its spread there.
+pub const MIN_SCALE: f32 = 0.1;
+
+/// The mean μ and standard deviation σ (at least [`MIN_SCALE`]) of each number of the
+/// observations `obs` (computed in f64), what `phase2.goal_conditioned.normalise` divides by.
+///
+/// ```
+/// use pbcs::phase2::goal_conditioned::spread;
+/// let (mu, sigma) = spread(&[vec![0.0, 5.0], vec![2.0, 5.0]]);
+/// assert_eq!((mu, sigma), (vec![1.0, 5.0], vec![1.0, 0.1]));
+/// ```
+pub fn spread(obs: &[Vec<f32>]) -> (Vec<f32>, Vec<f32>) {
+    let dim = obs.first().map_or(0, Vec::len);
+    let n = obs.len().max(1) as f64;
+    let mean: Vec<f64> = (0..dim)
+        .map(|i| obs.iter().map(|o| f64::from(o[i])).sum::<f64>() / n)
+        .collect();
+    let sigma = (0..dim).map(|i| {
+        let var = obs
+            .iter()
+            .map(|o| (f64::from(o[i]) - mean[i]).powi(2))
+            .sum::<f64>()
+            / n;
+        (var.sqrt() as f32).max(MIN_SCALE)
+    });
+    let sigma = sigma.collect();
+    (mean.into_iter().map(|m| m as f32).collect(), sigma)
 }
 
 /// The sub-goals cut from τ: their indices on τ and their points in the goal space.
@@ -184,6 +256,14 @@ impl SubGoals {
         Ok(SubGoals { at, points, obs })
     }
 
+    /// The networks' view of observations with `phase2.goal_conditioned.normalise`: shifted
+    /// and scaled by their [`spread`] along τ.
+    pub fn normalised_view(&self, goal_dim: usize) -> Inputs {
+        let (mu, sigma) = spread(&self.obs);
+        let dim = mu.len();
+        Inputs::toward_goal(dim, vec![0.0; goal_dim], false, Vec::new()).scaled(mu, sigma)
+    }
+
     /// M: how many sub-goals (the last is the final goal).
     pub fn len(&self) -> usize {
         self.at.len()
@@ -207,12 +287,13 @@ impl SubGoals {
     /// The chain that gives `policy` each sub-goal in turn: skill i aims at g_{i+1} and takes
     /// over in A_i = B_radius(g_i) (skill 0 in B_ε(τ_0)); the last sees the episode's own goal
     /// where `phase2.last_goal = "drawn"` draws one per episode, the task's `final_goal`
-    /// otherwise.
+    /// otherwise; with `view` (`normalise`), each skill sees the observation as it does.
     pub(super) fn chain<E: Env>(
         &self,
         inputs: &Phase2Inputs<'_, E>,
         radius: f32,
         final_goal: &[f32],
+        view: Option<&Inputs>,
         policy: &dyn Policy,
     ) -> SkillChain {
         let env = inputs.env;
@@ -229,17 +310,17 @@ impl SubGoals {
                     _ => Ball::new(self.points[i - 1].clone(), radius),
                 };
                 let episode_goal = last && config.last_goal == LastGoal::Drawn;
+                let toward =
+                    Inputs::toward_goal(env.obs_dim(), aim.to_vec(), episode_goal, scale.clone());
                 Skill {
                     policy: policy.boxed(),
                     activation,
                     start_index: start,
                     target_index: self.at[i],
-                    inputs: Inputs::toward_goal(
-                        env.obs_dim(),
-                        aim.to_vec(),
-                        episode_goal,
-                        scale.clone(),
-                    ),
+                    inputs: match view {
+                        Some(v) => toward.scaled(v.origin.clone(), v.scale.clone()),
+                        None => toward,
+                    },
                 }
             })
             .collect();

@@ -11,7 +11,7 @@
 //! checkpoint writes it: [`crate::runs::pbcs_resume`]). An AntMaze run of hours so outlives a
 //! session's end or a cluster job's limit.
 
-use super::curriculum::Starts;
+use super::curriculum::{start_state, Starts};
 use super::settings::{Curriculum, GoalConditioned, GoalReward};
 use super::SubGoals;
 use crate::env::{Env, Goals};
@@ -75,6 +75,8 @@ pub struct GoalConditionedRun<'a, E: Env> {
     /// The task's own goal (τ_0's desired goal): the last skill's where episodes do not draw one.
     task_goal: Vec<f32>,
     learner: Box<dyn Learner>,
+    /// With `normalise`: the networks' view of the observation (its shift and scale).
+    view: Option<crate::phase2::goal::Inputs>,
     ledger: Ledger,
     p: Moving<E::State>,
     /// Once training has ended: why it stopped early, if it did.
@@ -198,6 +200,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
                 episode: placeholder,
             },
             ledger: Ledger::new(inputs.spent),
+            view: settings.normalise.then(|| sub.normalised_view(g)),
             task_goal,
             inputs,
             settings: settings.clone(),
@@ -323,8 +326,9 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
     fn chain(&self) -> SkillChain {
         let policy = self.learner.policy();
         let radius = self.settings.radius;
+        let (goal, view) = (&self.task_goal, self.view.as_ref());
         self.sub
-            .chain(&self.inputs, radius, &self.task_goal, policy.as_ref())
+            .chain(&self.inputs, radius, goal, view, policy.as_ref())
     }
 
     /// A new episode: its start drawn, its state B_ε(τ_{k_j}) (at j = 0 with
@@ -337,16 +341,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
             .curriculum
             .draw(self.settings.curriculum, &mut self.p.starts);
         let at = &self.inputs.tau[self.sub.start_index(j)];
-        let state = match (
-            j,
-            config.first_starts,
-            env.drawn_starts(),
-            env.ball_starts(),
-        ) {
-            (0, FirstStarts::Drawn, Some(d), _) => d.drawn_start(at, &mut self.p.starts),
-            (_, _, _, Some(ball)) => ball.sample_ball(at, config.epsilon, &mut self.p.starts),
-            _ => at.clone(),
-        };
+        let state = start_state(&self.inputs, &self.settings, j, at, &mut self.p.starts);
         let state = match (config.last_goal, env.drawn_goals()) {
             (LastGoal::Drawn, Some(d)) => d.with_drawn_goal(&state, &mut self.p.starts),
             _ => state,
@@ -420,8 +415,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
             },
             chained: chained.as_deref(),
         });
-        self.ledger
-            .charge(crate::phase2::StepCounts { train: 1, test: 0 });
+        self.ledger.charge(StepCounts { train: 1, test: 0 });
         episode.on_goal += 1;
         let out_of_time = !reached && episode.on_goal >= self.settings.steps_per_goal;
         let ended = success || failed || out_of_time || (reached && !self.settings.overshoot);
@@ -449,6 +443,9 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
                 .collect();
         }
         let mut input = episode.obs.clone();
+        if let Some(view) = &self.view {
+            view.observation(&episode.obs, &mut input);
+        }
         let goal = self.goal(episode, episode.aim);
         input.extend(goal.iter().zip(&episode.obs).map(|(g, x)| g - x));
         self.learner
@@ -500,10 +497,16 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
                 return;
             }
             let (o, g) = (self.inputs.env.obs_dim(), self.goals.goal_dim());
-            if self.settings.reward == GoalReward::Shaped {
-                super::shape_rewards(&mut p.batch, o, g, radius);
+            match self.settings.reward {
+                GoalReward::Sparse => {}
+                GoalReward::Shaped => super::shape_rewards(&mut p.batch, o, g, radius),
+                GoalReward::Progress => super::progress_rewards(&mut p.batch, o, g),
             }
             super::goal_minus_position(&mut p.batch, o, g);
+            if let Some(view) = &self.view {
+                view.observe_rows(&mut p.batch.obs, o + g);
+                view.observe_rows(&mut p.batch.next_obs, o + g);
+            }
             self.learner.update(&p.batch);
         }
     }
@@ -570,7 +573,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
             let per_goal = Some(self.settings.steps_per_goal);
             let run = chain.run_limited(env, start, config.eval_max_steps, per_goal);
             let steps = run.states.len() as u64 - 1;
-            self.ledger.charge(crate::phase2::StepCounts {
+            self.ledger.charge(StepCounts {
                 train: 0,
                 test: steps,
             });

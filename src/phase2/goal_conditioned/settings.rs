@@ -62,6 +62,12 @@ pub enum GoalReward {
     /// sub-goal it aimed at, or the one HER gave it): 10 where the step reaches g, else
     /// Φ(s′) − Φ(s) with Φ(s) = 1 / max(d(position, g), radius) (and a failure's penalty).
     Shaped,
+    /// Toward the transition's own goal g, the linear potential Φ(s) = −d(position, g), the
+    /// goal-space analogue of the forward-velocity reward a MuJoCo body learns to walk on: 1
+    /// where the step reaches g, else d(s, g) − d(s′, g), the metres it came closer (and a
+    /// failure's penalty). The paper's 1/d pays 0.026 for a 0.1 m step toward a goal 2 m
+    /// away; this, 0.1.
+    Progress,
 }
 
 impl GoalReward {
@@ -87,6 +93,12 @@ pub struct GoalConditioned {
     pub steps_per_goal: usize,
     /// Where training episodes start.
     pub curriculum: Curriculum,
+    /// Training episodes from a sub-goal start with the body at rest as the env's reset leaves
+    /// it, where τ stands at that sub-goal ([`crate::env::DrawStarts::at_rest_like`]), then
+    /// moved in B_ε; the episodes from τ_0 start as `phase2.first_starts` says (`false`: τ's
+    /// whole saved state, its joints and velocities).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub rest_starts: bool,
     /// Tries per start that the curriculum remembers.
     pub window: usize,
     /// Backplay's frontier moves back once this fraction of its last tries succeeded.
@@ -110,6 +122,12 @@ pub struct GoalConditioned {
     /// The reward the learner is trained on: sparse (DCIL-II's) or the paper's shaped one.
     #[serde(skip_serializing_if = "GoalReward::is_sparse")]
     pub reward: GoalReward,
+    /// Observation normalisation: the networks see each observation number x as
+    /// (x − μ) / σ clipped to ±10, μ and σ its mean and standard deviation along τ (σ at least
+    /// [`super::MIN_SCALE`]), fixed for the run and saved with the chain; the sub-goal minus the
+    /// position stays in the env's units (`false`: the observation as it is).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub normalise: bool,
     /// Updates of the learner per training step, once `learning_starts` have passed.
     #[serde(skip_serializing_if = "is_one")]
     pub updates_per_step: usize,
@@ -131,6 +149,7 @@ impl Default for GoalConditioned {
             radius: 0.1,
             steps_per_goal: 50,
             curriculum: Curriculum::FailureWeighted,
+            rest_starts: false,
             window: 10,
             advance_at: 0.5,
             value_chaining: true,
@@ -138,6 +157,7 @@ impl Default for GoalConditioned {
             end_on_failure: true,
             failure_reward: 0.0,
             reward: GoalReward::Sparse,
+            normalise: false,
             updates_per_step: 1,
             learning_starts: 1_000,
             test_every: 5_000,
