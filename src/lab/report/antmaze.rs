@@ -16,7 +16,7 @@
 //!   its chain judged by gymnasium-robotics;
 //! - `reach/<arm>-s<seed>.csv`: the reach probe's evaluations (100 greedy episodes each).
 
-use super::{def_res, tex, GENERATED};
+use super::{def_res, percent, tex, GENERATED};
 use crate::envs::pointmaze::MapName;
 use crate::fmt::human_steps;
 use crate::{Error, Result};
@@ -228,11 +228,6 @@ fn read_judged(path: &Path) -> Result<(u64, u64)> {
 
 fn one_record<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
     crate::record::read_one_record(path)
-}
-
-/// A share as a whole percentage (0.67 → `67`).
-pub(super) fn percent(x: f64) -> String {
-    format!("{:.0}", 100.0 * x)
 }
 
 /// The AntMaze section's tables (written into `tex_dir`, added to `files`) and its numbers,

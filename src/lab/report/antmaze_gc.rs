@@ -8,8 +8,7 @@
 //! of tries that reached their next sub-goal, every greedy test's), and where the arm's chain
 //! was evaluated, `eval-s100.csv` (`pbcs eval`'s episodes).
 
-use super::antmaze::percent;
-use super::{def_res, tex, GENERATED};
+use super::{def_res, percent, tex, GENERATED};
 use crate::fmt::human_steps;
 use crate::phase2::{EventKind, TraceRow};
 use crate::{Error, Result};
@@ -21,7 +20,7 @@ pub const GC_DEV: &str = "dev/issue79/antmaze";
 
 /// The arms in the table's order: (folder under [`GC_DEV`], `.` for the base job whose files
 /// lie in it, the key of its numbers, what it changes).
-const ARMS: [(&str, &str, &str); 12] = [
+const ARMS: [(&str, &str, &str); 16] = [
     (
         ".",
         "ant_gc",
@@ -62,6 +61,22 @@ const ARMS: [(&str, &str, &str); 12] = [
         "td3_64_2m_l2",
         "the same, the actions penalised (λ = 0.02)",
     ),
+    (
+        "td3_64_2m_norm",
+        "td3_64_2m_norm",
+        "the same, the observations normalised",
+    ),
+    (
+        "td3_64_2m_progress",
+        "td3_64_2m_progress",
+        "the same on the progress reward",
+    ),
+    (
+        "td3_64_2m_rest",
+        "td3_64_2m_rest",
+        "the same, starts at rest where τ stands",
+    ),
+    ("sac_64_2m", "sac_64_2m", "the same with SAC"),
 ];
 
 /// The one column of a run's `record.csv` the table reads.
@@ -453,9 +468,18 @@ mod tests {
             ("gc:chance:2m:random", "30"),
             ("gc:chance:2mrest:random", "13"),
             ("gc:chance:3mrest:random", "9"),
-            ("gc:saturated:lo", "99"),
+            ("gc:saturated:lo", "98"),
             ("gc:saturated:hi", "100"),
-            ("gc:saturated:arms", "9"),
+            ("gc:saturated:arms", "12"),
+            ("gc:td3_64_2m_norm:first", "21"),
+            ("gc:td3_64_2m_norm:last", "36"),
+            ("gc:td3_64_2m_progress:first", "18"),
+            ("gc:td3_64_2m_progress:last", "39"),
+            ("gc:td3_64_2m_progress:chain", "0"),
+            ("gc:td3_64_2m_rest:first", "3"),
+            ("gc:td3_64_2m_rest:last", "20"),
+            ("gc:sac_64_2m:last", "34"),
+            ("gc:arms", "16"),
             ("gc:td3_64_2m_l2:saturated", "0"),
         ] {
             let def = format!("\\csname res:antmaze:{key}\\endcsname{{{value}}}");

@@ -38,6 +38,11 @@ pub fn numbers_tex(tables: &[(ExperimentName, Vec<CellStats>)]) -> String {
     s
 }
 
+/// A share as a whole percentage (0.67 → `67`): the AntMaze sections' tables and numbers.
+fn percent(x: f64) -> String {
+    format!("{:.0}", 100.0 * x)
+}
+
 /// Appends `\res{<prefix>:<key>}` = `value` (TeX-escaped as written: [`tex_code`]) to `s`; the
 /// prefix is an experiment's name or `outside`.
 fn def_res(s: &mut String, prefix: impl std::fmt::Display, key: &str, value: &str) {
