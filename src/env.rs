@@ -280,6 +280,8 @@ pub enum Capability {
     DrawGoals,
     /// [`Env::drawn_starts`] ([`DrawStarts`]).
     DrawStarts,
+    /// [`DrawStarts::at_rest_like`] (of the environment's start).
+    RestStarts,
 }
 
 impl Capability {
@@ -295,6 +297,7 @@ impl Capability {
             Capability::Goals => "Env::goals (Goals)",
             Capability::DrawGoals => "Env::drawn_goals (DrawGoals)",
             Capability::DrawStarts => "Env::drawn_starts (DrawStarts)",
+            Capability::RestStarts => "DrawStarts::at_rest_like",
         }
     }
 
@@ -310,6 +313,9 @@ impl Capability {
             Capability::Goals => env.goals().is_some(),
             Capability::DrawGoals => env.drawn_goals().is_some(),
             Capability::DrawStarts => env.drawn_starts().is_some(),
+            Capability::RestStarts => env
+                .drawn_starts()
+                .is_some_and(|d| d.at_rest_like(&env.start()).is_some()),
         }
     }
 

@@ -40,15 +40,9 @@ impl Phase2Config {
         let i = &self.ideas;
         if let super::ChainStrategy::GoalConditioned(settings) = &self.chain {
             Capability::Goals.require(env, "phase2.chain = \"goal_conditioned\"")?;
-            let rest = env
-                .drawn_starts()
-                .and_then(|d| d.at_rest_like(&env.start()));
-            if settings.rest_starts && rest.is_none() {
-                return Err(crate::error::Error::invalid(
-                    "phase2.goal_conditioned.rest_starts",
-                    "is true, but this environment has no state at rest to start from \
-                     (DrawStarts::at_rest_like)",
-                ));
+            if settings.rest_starts {
+                let setting = "phase2.goal_conditioned.rest_starts = true";
+                Capability::RestStarts.require(env, setting)?;
             }
         }
         match self.start {

@@ -10,7 +10,7 @@ use pbcs::learner::replay::Batch;
 use pbcs::learner::td3::{Td3, Td3Config};
 use pbcs::nn::kernel::Kernel;
 use pbcs::phase2::goal_conditioned::{
-    goal_minus_position, shape_rewards, GoalReward, SubGoals, MIN_SCALE,
+    goal_minus_position, shape_rewards, GoalConditioned, GoalReward, SubGoals, MIN_SCALE,
 };
 use pbcs::phase2::{ChainStrategy, SkillChain};
 use pbcs::rng::{Seeds, Stream};
@@ -292,10 +292,26 @@ fn the_ablations_switches_are_written_only_when_set() {
 
 /// The `fast` preset with the goal-conditioned chain on maze `size`, run seed `seed`.
 fn maze_job(size: usize, seed: u64) -> PbcsJob {
+    maze_job_with(size, seed, GoalConditioned::default())
+}
+
+/// [`maze_job`] with the chain's `settings`.
+fn maze_job_with(size: usize, seed: u64, settings: GoalConditioned) -> PbcsJob {
     let mut job = Preset::Fast.job().unwrap();
     (job.maze.size, job.seed) = (size, seed);
-    job.phase2.chain = ChainStrategy::GoalConditioned(Box::default());
+    job.phase2.chain = ChainStrategy::GoalConditioned(Box::new(settings));
     job
+}
+
+/// How many of `n` episodes from `job`'s evaluation starts of run seed `seed` `chain` brings
+/// to the goal on `maze`.
+fn wins(chain: &SkillChain, maze: &Maze, job: &PbcsJob, seed: u64, n: usize) -> usize {
+    let starts =
+        pbcs::env::evaluation_starts(maze, job.phase2.epsilon, n, &Seeds::new(seed)).unwrap();
+    starts
+        .into_iter()
+        .filter(|s| chain.run(maze, *s, job.phase2.eval_max_steps).success)
+        .count()
 }
 
 /// PBCS with the goal-conditioned chain solves maze 2 (seeds 0 and 1), the same bytes twice;
@@ -338,12 +354,7 @@ fn the_goal_conditioned_chain_solves_maze_2_to_the_same_bytes() {
             .all(|s| s.policy.same(chain.skills[0].policy.as_ref())));
         assert!(chain.skills.iter().all(|s| s.inputs.goal.len() == 2));
         let maze = Maze::new(&job.maze).unwrap();
-        let starts =
-            pbcs::env::evaluation_starts(&maze, job.phase2.epsilon, 20, &Seeds::new(seed)).unwrap();
-        let wins = starts
-            .into_iter()
-            .filter(|s| chain.run(&maze, *s, job.phase2.eval_max_steps).success)
-            .count();
+        let wins = wins(&chain, &maze, &job, seed, 20);
         assert!(wins >= 19, "seed {seed}: {wins} of 20");
     }
 }
@@ -353,12 +364,11 @@ fn the_goal_conditioned_chain_solves_maze_2_to_the_same_bytes() {
 /// 0), and the chain loaded back succeeds where the record says the evaluated one did.
 #[test]
 fn a_normalised_chain_saves_its_view_and_acts_as_evaluated() {
-    let mut job = maze_job(2, 0);
-    let ChainStrategy::GoalConditioned(s) = &mut job.phase2.chain else {
-        unreachable!()
+    let normalise = GoalConditioned {
+        normalise: true,
+        ..GoalConditioned::default()
     };
-    s.normalise = true;
-    let job = pbcs::validate::Check::valid(job).unwrap();
+    let job = pbcs::validate::Check::valid(maze_job_with(2, 0, normalise)).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let (record, _) = pbcs::runs::run_pbcs(
         &job,
@@ -382,26 +392,20 @@ fn a_normalised_chain_saves_its_view_and_acts_as_evaluated() {
             (&first.origin, &first.scale)
         );
     }
-    let n = 20;
-    let starts =
-        pbcs::env::evaluation_starts(&maze, job.phase2.epsilon, n, &Seeds::new(0)).unwrap();
-    let wins = starts
-        .into_iter()
-        .filter(|s| chain.run(&maze, *s, job.phase2.eval_max_steps).success)
-        .count();
     assert!(record.solved, "{record:?}");
-    assert!(wins >= 19, "{wins} of {n}");
+    let wins = wins(&chain, &maze, &job, 0, 20);
+    assert!(wins >= 19, "{wins} of 20");
 }
 
 /// `rest_starts` on an environment without a state at rest (the maze) is refused before any
 /// work, naming the setting.
 #[test]
 fn rest_starts_without_a_state_at_rest_are_refused() {
-    let mut job = maze_job(2, 0);
-    let ChainStrategy::GoalConditioned(s) = &mut job.phase2.chain else {
-        unreachable!()
+    let rest = GoalConditioned {
+        rest_starts: true,
+        ..GoalConditioned::default()
     };
-    s.rest_starts = true;
+    let job = maze_job_with(2, 0, rest);
     let maze = Maze::new(&job.maze).unwrap();
     let e = job.phase2.ready(&maze).expect_err("refused").to_string();
     assert!(

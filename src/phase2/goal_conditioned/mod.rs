@@ -160,6 +160,8 @@ pub const MIN_SCALE: f32 = 0.1;
 
 /// The mean μ and standard deviation σ (at least [`MIN_SCALE`]) of each number of the
 /// observations `obs` (computed in f64), what `phase2.goal_conditioned.normalise` divides by.
+/// σ is the population's (over n, as Stable-Baselines3's `VecNormalize` keeps it), not
+/// [`crate::stats::mean_sd`]'s sample deviation (over n − 1) of an interval's estimate.
 ///
 /// ```
 /// use pbcs::phase2::goal_conditioned::spread;
@@ -257,11 +259,11 @@ impl SubGoals {
     }
 
     /// The networks' view of observations with `phase2.goal_conditioned.normalise`: shifted
-    /// and scaled by their [`spread`] along τ.
-    pub fn normalised_view(&self, goal_dim: usize) -> Inputs {
+    /// and scaled by their [`spread`] along τ (its [`Inputs::observation`] and
+    /// [`Inputs::observe_rows`]; the chain's skills take its shift and scale).
+    pub fn normalised_view(&self) -> Inputs {
         let (mu, sigma) = spread(&self.obs);
-        let dim = mu.len();
-        Inputs::toward_goal(dim, vec![0.0; goal_dim], false, Vec::new()).scaled(mu, sigma)
+        Inputs::new(Vec::new(), Vec::new()).scaled(mu, sigma)
     }
 
     /// M: how many sub-goals (the last is the final goal).

@@ -200,7 +200,7 @@ impl<'a, E: Env> GoalConditionedRun<'a, E> {
                 episode: placeholder,
             },
             ledger: Ledger::new(inputs.spent),
-            view: settings.normalise.then(|| sub.normalised_view(g)),
+            view: settings.normalise.then(|| sub.normalised_view()),
             task_goal,
             inputs,
             settings: settings.clone(),
